@@ -1,0 +1,356 @@
+//! Rigid-body dynamics `M(q) q̈ + C(q,q̇) q̇ + g(q) = τ`, base-frame recursions.
+
+use nalgebra::{DVector, Vector3};
+
+use crate::data::Data;
+use crate::error::{check_len, ModelError};
+use crate::kinematics::{fk_pass, inertia_pass, velocity_pass};
+use crate::model::Model;
+use crate::spatial::{crf, crm, icrf, Force, Inertia, Motion};
+
+fn check_q_qd(model: &Model, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+    check_len("q", model.nv(), q.len())?;
+    check_len("qd", model.nv(), qd.len())
+}
+
+/// Spatial acceleration of the base that stands in for gravity: `(0, −g)`.
+#[inline]
+fn base_acceleration(model: &Model) -> Motion {
+    Motion::new(Vector3::zeros(), -model.gravity)
+}
+
+/// Recursive Newton-Euler: `τ = M q̈ + C q̇ + g` into `data.tau`.
+pub fn rnea<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    check_q_qd(model, q, qd)?;
+    check_len("qdd", model.nv(), qdd.len())?;
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    rnea_pass(model, data, qd, qdd, base_acceleration(model));
+    let n = model.nv();
+    for i in 0..n {
+        data.tau[i] = data.s[i].dot(&data.f[i]);
+    }
+    Ok(&data.tau)
+}
+
+/// RNEA passes after FK and inertias; leaves subtree forces in `data.f`.
+fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64], a0: Motion) {
+    for (i, j) in model.joints.iter().enumerate() {
+        let (vp, ap) = match j.parent {
+            Some(p) => (data.v[p], data.a[p]),
+            None => (Motion::ZERO, a0),
+        };
+        let s = data.s[i];
+        let v = vp + s.scale(qd[i]);
+        let a = ap + s.scale(qdd[i]) + v.cross_motion(&s.scale(qd[i]));
+        let inertia = &data.inertia[i];
+        data.v[i] = v;
+        data.a[i] = a;
+        data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
+    }
+    for i in (0..model.nv()).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let fi = data.f[i];
+            data.f[p] += fi;
+        }
+    }
+}
+
+/// `C(q, q̇) q̇` into `data.c_qd` (RNEA without gravity and with `q̈ = 0`).
+pub fn coriolis_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    check_q_qd(model, q, qd)?;
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    let n = model.nv();
+    // q̈ = 0 without allocating: feed q̇ as q̈ after zeroing its effect is not possible,
+    // so run the passes inline with a zero acceleration term
+    for (i, j) in model.joints.iter().enumerate() {
+        let (vp, ap) = match j.parent {
+            Some(p) => (data.v[p], data.a[p]),
+            None => (Motion::ZERO, Motion::ZERO),
+        };
+        let s = data.s[i];
+        let v = vp + s.scale(qd[i]);
+        let a = ap + v.cross_motion(&s.scale(qd[i]));
+        let inertia = &data.inertia[i];
+        data.v[i] = v;
+        data.a[i] = a;
+        data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
+    }
+    for i in (0..n).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let fi = data.f[i];
+            data.f[p] += fi;
+        }
+        data.c_qd[i] = data.s[i].dot(&data.f[i]);
+    }
+    Ok(&data.c_qd)
+}
+
+/// Gravity torque `g(q)` into `data.g`, O(n) from subtree masses.
+pub fn gravity<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    check_len("q", model.nv(), q.len())?;
+    fk_pass(model, data, q);
+    let a0 = -model.gravity;
+    // subtree mass and first moment, kept in composite[i].m / .h
+    for (i, j) in model.joints.iter().enumerate() {
+        let c = data.body[i].apply(&j.com);
+        data.composite[i].m = j.mass;
+        data.composite[i].h = c * j.mass;
+    }
+    gravity_from_composite_mass(model, data, &a0);
+    Ok(&data.g)
+}
+
+/// Accumulate subtree mass moments (in `data.composite[i].{m,h}`, per body on
+/// entry) and evaluate `g_i = S_iᵀ (h × a0, m a0)`.
+#[inline]
+fn gravity_from_composite_mass(model: &Model, data: &mut Data, a0: &Vector3<f64>) {
+    for i in (0..model.nv()).rev() {
+        let ci = data.composite[i];
+        data.g[i] = data.s[i].dot(&Force { n: ci.h.cross(a0), f: a0 * ci.m });
+        if let Some(p) = model.joints[i].parent {
+            data.composite[p].m += ci.m;
+            data.composite[p].h += ci.h;
+        }
+    }
+}
+
+/// Composite rigid-body algorithm: `M(q)` into `data.m` (both triangles).
+pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
+    check_len("q", model.nv(), q.len())?;
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    crba_pass(model, data);
+    Ok(&data.m)
+}
+
+fn crba_pass(model: &Model, data: &mut Data) {
+    let n = model.nv();
+    data.composite.copy_from_slice(&data.inertia);
+    for i in (0..n).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let ci = data.composite[i];
+            data.composite[p] += ci;
+        }
+    }
+    for i in 0..n {
+        let f = data.composite[i].apply(&data.s[i]);
+        let mut k = Some(i);
+        while let Some(j) = k {
+            let mij = data.s[j].dot(&f);
+            data.m[(i, j)] = mij;
+            data.m[(j, i)] = mij;
+            k = model.joints[j].parent;
+        }
+    }
+    // entries of joints on different branches are zero
+    for i in 0..n {
+        for j in 0..i {
+            if !model.supports(j, i) {
+                data.m[(i, j)] = 0.0;
+                data.m[(j, i)] = 0.0;
+            }
+        }
+    }
+}
+
+/// Christoffel-consistent Coriolis matrix `C(q, q̇)` into `data.c`
+/// (Echeandia & Wensing 2021, composite body-level Coriolis matrices), so
+/// that `Ṁ = C + Cᵀ` and `C q̇` equals the RNEA bias without gravity.
+pub fn coriolis_matrix<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
+    check_q_qd(model, q, qd)?;
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    velocity_pass(model, data, qd);
+    let n = model.nv();
+    for i in 0..n {
+        let ii = data.inertia[i].to_matrix();
+        let v = data.v[i];
+        let iv = data.inertia[i].apply(&v);
+        data.ic6[i] = ii;
+        data.bc6[i] = (crf(&v) * ii + icrf(&iv) - ii * crm(&v)) * 0.5;
+    }
+    for i in (0..n).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let (ic, bc) = (data.ic6[i], data.bc6[i]);
+            data.ic6[p] += ic;
+            data.bc6[p] += bc;
+        }
+    }
+    data.c.fill(0.0);
+    for i in 0..n {
+        let si = data.s[i].to_vector();
+        let sdi = data.s_dot[i].to_vector();
+        let ic = &data.ic6[i];
+        let bc = &data.bc6[i];
+        // column i, rows j ⪯ i:  C_ji = S_jᵀ (I^C_i Ṡ_i + B^C_i S_i)
+        let col = ic * sdi + bc * si;
+        // row i, columns j ⪯ i:  C_ij = (I^C_i S_i)ᵀ Ṡ_j + (B^C_iᵀ S_i)ᵀ S_j
+        let u1 = ic * si;
+        let u2 = bc.transpose() * si;
+        let mut k = Some(i);
+        while let Some(j) = k {
+            let sj = data.s[j].to_vector();
+            let sdj = data.s_dot[j].to_vector();
+            data.c[(j, i)] = sj.dot(&col);
+            data.c[(i, j)] = u1.dot(&sdj) + u2.dot(&sj);
+            k = model.joints[j].parent;
+        }
+    }
+    Ok(&data.c)
+}
+
+/// Generalized momentum `p = M(q) q̇` into `data.p`, O(n).
+pub fn momentum<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    residual_terms(model, data, q, qd)?;
+    Ok(&data.p)
+}
+
+/// `C(q, q̇)ᵀ q̇` into `data.ct_qd`, O(n).
+pub fn coriolis_transpose_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    residual_terms(model, data, q, qd)?;
+    Ok(&data.ct_qd)
+}
+
+/// Everything the momentum residual needs per cycle, in O(n) recursions and
+/// without forming any matrix: `data.p = M q̇`, `data.ct_qd = Cᵀ q̇`,
+/// `data.g = g(q)` and `data.residual_bias = Cᵀ q̇ − g`.
+///
+/// With body momenta `h_k = I_k v_k` summed over subtrees (`H_i`):
+/// `p_i = S_iᵀ H_i` and `(Cᵀ q̇)_i = Ṡ_iᵀ H_i = −S_iᵀ (v_i ×* H_i)`.
+pub fn residual_terms(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+    check_q_qd(model, q, qd)?;
+    fk_pass(model, data, q);
+    let n = model.nv();
+    for (i, j) in model.joints.iter().enumerate() {
+        let vp = match j.parent {
+            Some(p) => data.v[p],
+            None => Motion::ZERO,
+        };
+        let v = vp + data.s[i].scale(qd[i]);
+        data.v[i] = v;
+        // momentum of body i about the base origin without forming its inertia:
+        // linear m v_c, angular R I_c Rᵀ ω + c × m v_c
+        let b = &data.body[i];
+        let c = b.apply(&j.com);
+        let lin = v.velocity_at(&c) * j.mass;
+        let ang = b.r * (j.inertia_com * (b.r.transpose() * v.w)) + c.cross(&lin);
+        data.f[i] = Force { n: ang, f: lin };
+        data.composite[i].m = j.mass;
+        data.composite[i].h = c * j.mass;
+    }
+    let a0 = -model.gravity;
+    for i in (0..n).rev() {
+        let h = data.f[i];
+        let s = &data.s[i];
+        data.p[i] = s.dot(&h);
+        data.ct_qd[i] = -s.dot(&data.v[i].cross_force(&h));
+        let ci = data.composite[i];
+        data.g[i] = s.dot(&Force { n: ci.h.cross(&a0), f: a0 * ci.m });
+        data.residual_bias[i] = data.ct_qd[i] - data.g[i];
+        if let Some(p) = model.joints[i].parent {
+            data.f[p] += h;
+            data.composite[p].m += ci.m;
+            data.composite[p].h += ci.h;
+        }
+    }
+    Ok(())
+}
+
+/// Forward dynamics `q̈ = M⁻¹ (τ − C q̇ − g)` into `data.qdd` (CRBA, RNEA and
+/// an in-place Cholesky solve; nothing allocated).
+pub fn forward_dynamics<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64], tau: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+    check_q_qd(model, q, qd)?;
+    check_len("tau", model.nv(), tau.len())?;
+    let n = model.nv();
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    crba_pass(model, data);
+    // bias = RNEA(q, q̇, 0) with gravity
+    for (i, j) in model.joints.iter().enumerate() {
+        let (vp, ap) = match j.parent {
+            Some(p) => (data.v[p], data.a[p]),
+            None => (Motion::ZERO, base_acceleration(model)),
+        };
+        let s = data.s[i];
+        let v = vp + s.scale(qd[i]);
+        let a = ap + v.cross_motion(&s.scale(qd[i]));
+        let inertia = &data.inertia[i];
+        data.v[i] = v;
+        data.a[i] = a;
+        data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
+    }
+    for i in (0..n).rev() {
+        if let Some(p) = model.joints[i].parent {
+            let fi = data.f[i];
+            data.f[p] += fi;
+        }
+        data.qdd[i] = tau[i] - data.s[i].dot(&data.f[i]);
+    }
+    cholesky_solve_in_place(data)?;
+    Ok(&data.qdd)
+}
+
+/// Solve `M x = data.qdd` in place with a Cholesky factor in `data.chol`.
+fn cholesky_solve_in_place(data: &mut Data) -> Result<(), ModelError> {
+    let n = data.m.nrows();
+    let l = &mut data.chol;
+    for j in 0..n {
+        let mut d = data.m[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if d <= 0.0 || !d.is_finite() {
+            return Err(ModelError::NotPositiveDefinite);
+        }
+        let d = d.sqrt();
+        l[(j, j)] = d;
+        for i in (j + 1)..n {
+            let mut s = data.m[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / d;
+        }
+    }
+    let x = &mut data.qdd;
+    for i in 0..n {
+        let mut s = x[i];
+        for k in 0..i {
+            s -= l[(i, k)] * x[k];
+        }
+        x[i] = s / l[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut s = x[i];
+        for k in (i + 1)..n {
+            s -= l[(k, i)] * x[k];
+        }
+        x[i] = s / l[(i, i)];
+    }
+    Ok(())
+}
+
+/// Kinetic energy `½ q̇ᵀ M q̇` [J].
+pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> Result<f64, ModelError> {
+    residual_terms(model, data, q, qd)?;
+    Ok(0.5 * data.p.iter().zip(qd).map(|(p, v)| p * v).sum::<f64>())
+}
+
+/// Potential energy `−Σ m_k gᵀ c_k` [J] (zero at the base origin).
+pub fn potential_energy(model: &Model, data: &mut Data, q: &[f64]) -> Result<f64, ModelError> {
+    check_len("q", model.nv(), q.len())?;
+    fk_pass(model, data, q);
+    Ok(model.joints.iter().enumerate().map(|(i, j)| -j.mass * model.gravity.dot(&data.body[i].apply(&j.com))).sum())
+}
+
+/// Total spatial inertia of the robot's moving bodies (after any pass that ran FK).
+pub fn total_inertia(model: &Model, data: &mut Data) -> Inertia {
+    inertia_pass(model, data);
+    let mut sum = Inertia::ZERO;
+    for i in 0..model.nv() {
+        sum += data.inertia[i];
+    }
+    sum
+}

@@ -1,0 +1,84 @@
+//! Forward kinematics and Jacobians.
+
+use nalgebra::{Matrix6xX, Vector3};
+
+use crate::data::Data;
+use crate::error::{check_len, ModelError};
+use crate::model::{JointKind, Model, Placement};
+use crate::spatial::{axis_angle, Inertia, Motion};
+
+/// Body placements and base-frame motion subspaces for configuration `q`.
+pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), ModelError> {
+    check_len("q", model.nv(), q.len())?;
+    fk_pass(model, data, q);
+    Ok(())
+}
+
+/// FK without the length check (callers have checked).
+#[inline]
+pub(crate) fn fk_pass(model: &Model, data: &mut Data, q: &[f64]) {
+    for (i, j) in model.joints.iter().enumerate() {
+        let parent = data.body_placement(j.parent);
+        let joint_frame = parent.compose(&j.placement);
+        let axis = joint_frame.r * j.axis;
+        match j.kind {
+            JointKind::Revolute => {
+                data.body[i] = Placement { r: joint_frame.r * axis_angle(&j.axis, q[i]), p: joint_frame.p };
+                data.s[i] = Motion::new(axis, joint_frame.p.cross(&axis));
+            }
+            JointKind::Prismatic => {
+                data.body[i] = Placement { r: joint_frame.r, p: joint_frame.p + axis * q[i] };
+                data.s[i] = Motion::new(Vector3::zeros(), axis);
+            }
+        }
+    }
+}
+
+/// Body spatial inertias in the base frame (after [`fk_pass`]).
+#[inline]
+pub(crate) fn inertia_pass(model: &Model, data: &mut Data) {
+    for (i, j) in model.joints.iter().enumerate() {
+        let b = &data.body[i];
+        let c = b.apply(&j.com);
+        let i_c = b.r * j.inertia_com * b.r.transpose();
+        data.inertia[i] = Inertia::from_com(j.mass, &c, &i_c);
+    }
+}
+
+/// Body velocities and `Ṡ` (after [`fk_pass`]).
+#[inline]
+pub(crate) fn velocity_pass(model: &Model, data: &mut Data, qd: &[f64]) {
+    for (i, j) in model.joints.iter().enumerate() {
+        let vp = match j.parent {
+            Some(p) => data.v[p],
+            None => Motion::ZERO,
+        };
+        data.v[i] = vp + data.s[i].scale(qd[i]);
+        data.s_dot[i] = data.v[i].cross_motion(&data.s[i]);
+    }
+}
+
+/// Placement of link frame `frame` in the base frame (after [`forward_kinematics`]).
+pub fn frame_placement(model: &Model, data: &Data, frame: usize) -> Placement {
+    let f = &model.frames[frame];
+    data.body_placement(f.body).compose(&f.placement)
+}
+
+/// Geometric Jacobian (6×n, linear rows then angular rows, base-frame axes)
+/// of the point `point` [m] fixed in link frame `frame`, after
+/// [`forward_kinematics`]. Columns of joints that do not move the link are zero.
+pub fn point_jacobian(model: &Model, data: &Data, frame: usize, point: &Vector3<f64>, out: &mut Matrix6xX<f64>) -> Result<(), ModelError> {
+    check_len("jacobian columns", model.nv(), out.ncols())?;
+    let f = model.frames.get(frame).ok_or_else(|| ModelError::UnknownLink(format!("#{frame}")))?;
+    out.fill(0.0);
+    let p = data.body_placement(f.body).compose(&f.placement).apply(point);
+    let mut k = f.body;
+    while let Some(j) = k {
+        let s = &data.s[j];
+        let lin = s.velocity_at(&p);
+        out.fixed_view_mut::<3, 1>(0, j).copy_from(&lin);
+        out.fixed_view_mut::<3, 1>(3, j).copy_from(&s.w);
+        k = model.joints[j].parent;
+    }
+    Ok(())
+}
