@@ -1,0 +1,32 @@
+//! Real-time scheduling where the machine permits it.
+
+/// Run the calling process under SCHED_FIFO at `priority` (1-99) and lock its
+/// memory. Returns a description of what could not be done (the process then
+/// runs under the normal scheduler), never fails hard.
+pub fn make_realtime(priority: i32) -> Result<(), String> {
+    if priority <= 0 {
+        return Err("real-time priority 0: normal scheduler".into());
+    }
+    let param = libc::sched_param { sched_priority: priority.min(99) };
+    // SAFETY: plain syscalls with valid arguments.
+    let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
+    if rc != 0 {
+        return Err(format!("SCHED_FIFO {priority} refused: {}", std::io::Error::last_os_error()));
+    }
+    // SAFETY: as above.
+    let rc = unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) };
+    if rc != 0 {
+        return Err(format!("mlockall refused: {}", std::io::Error::last_os_error()));
+    }
+    Ok(())
+}
+
+/// The calling process's scheduling policy name.
+pub fn policy() -> &'static str {
+    // SAFETY: plain syscall.
+    match unsafe { libc::sched_getscheduler(0) } {
+        libc::SCHED_FIFO => "SCHED_FIFO",
+        libc::SCHED_RR => "SCHED_RR",
+        _ => "SCHED_OTHER",
+    }
+}

@@ -1,0 +1,28 @@
+//! Shutdown on SIGINT / SIGTERM through signal-hook.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Set once SIGINT or SIGTERM arrived.
+#[derive(Clone)]
+pub struct Shutdown(Arc<AtomicBool>);
+
+impl Shutdown {
+    /// Install the handlers.
+    pub fn install() -> Result<Shutdown, std::io::Error> {
+        let flag = Arc::new(AtomicBool::new(false));
+        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+            signal_hook::flag::register(sig, Arc::clone(&flag))?;
+        }
+        Ok(Shutdown(flag))
+    }
+
+    #[inline]
+    pub fn requested(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+
+    pub fn request(&self) {
+        self.0.store(true, Ordering::Relaxed)
+    }
+}

@@ -1,0 +1,85 @@
+//! Quality of service of every channel, and the only functions that open them,
+//! so that every process opens a service with the same settings.
+
+use std::fmt::Debug;
+
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::{event, publish_subscribe};
+
+use crate::names::*;
+
+/// Settings of one publish-subscribe service.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Qos {
+    /// publishers allowed at once (1 for every channel: one source of truth, one commander)
+    pub max_publishers: usize,
+    pub max_subscribers: usize,
+    /// largest queue a subscriber may ask for (evaluation readers drain at ~100 Hz)
+    pub subscriber_max_buffer: usize,
+    /// samples a late subscriber receives on connecting
+    pub history: usize,
+}
+
+/// The QoS table.
+pub fn qos(name: &str) -> Qos {
+    let one_publisher = Qos { max_publishers: 1, max_subscribers: 16, subscriber_max_buffer: 256, history: 1 };
+    match name {
+        // the robot and its commander: exactly one publisher each
+        ROBOT_STATE | ROBOT_COMMAND | DYNAMICS_RESIDUAL | CONTROL_STATUS | SIM_TRUTH => one_publisher,
+        ROBOT_STATS | SUPERVISOR_HEALTH => Qos { subscriber_max_buffer: 8, ..one_publisher },
+        _ => one_publisher,
+    }
+}
+
+/// Queue length a subscriber asks for: 1 (latest value) for control, deep for evaluation.
+pub const LATEST: usize = 1;
+pub const DRAIN: usize = 256;
+
+/// Error opening a channel, naming it.
+#[derive(Debug)]
+pub struct IpcError {
+    pub channel: String,
+    pub what: String,
+}
+
+impl std::fmt::Display for IpcError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "channel '{}': {}", self.channel, self.what)
+    }
+}
+
+impl std::error::Error for IpcError {}
+
+pub fn ipc_err(channel: &str, e: impl Debug) -> IpcError {
+    IpcError { channel: channel.to_string(), what: format!("{e:?}") }
+}
+
+/// Create a node whose shared-memory resources carry `prefix` (one per run, so
+/// that parallel runs never collide). Signals are left to the process (signal-hook).
+pub fn node(name: &str, prefix: &str) -> Result<Node<ipc::Service>, IpcError> {
+    let mut config = Config::default();
+    config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| ipc_err("<node>", format!("invalid prefix '{prefix}': {e:?}")))?;
+    let node_name = NodeName::new(name).map_err(|e| ipc_err("<node>", e))?;
+    NodeBuilder::new().name(&node_name).config(&config).signal_handling_mode(SignalHandlingMode::Disabled).create::<ipc::Service>().map_err(|e| ipc_err("<node>", e))
+}
+
+/// Open (or create) the publish-subscribe service `name` with its QoS.
+pub fn open_pubsub<T: Debug + ZeroCopySend>(node: &Node<ipc::Service>, name: &str) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcError> {
+    let q = qos(name);
+    let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
+    node.service_builder(&service_name)
+        .publish_subscribe::<T>()
+        .max_publishers(q.max_publishers)
+        .max_subscribers(q.max_subscribers)
+        .subscriber_max_buffer_size(q.subscriber_max_buffer)
+        .history_size(q.history)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Open (or create) the event service `name` (wakes readers of the channel of the same name).
+pub fn open_event(node: &Node<ipc::Service>, name: &str) -> Result<event::PortFactory<ipc::Service>, IpcError> {
+    let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
+    node.service_builder(&service_name).event().max_notifiers(4).max_listeners(16).open_or_create().map_err(|e| ipc_err(name, e))
+}

@@ -1,0 +1,59 @@
+//! Joint velocity from encoder positions: backward difference through a
+//! first-order low-pass (the paper measures positions only).
+
+/// Filtered finite-difference velocity estimator, preallocated.
+#[derive(Clone, Debug)]
+pub struct VelocityEstimator {
+    cutoff_hz: f64,
+    last_q: Vec<f64>,
+    qd: Vec<f64>,
+    primed: bool,
+}
+
+impl VelocityEstimator {
+    pub fn new(n: usize, cutoff_hz: f64) -> Self {
+        VelocityEstimator { cutoff_hz, last_q: vec![0.0; n], qd: vec![0.0; n], primed: false }
+    }
+
+    /// Forget the history (next update starts from rest).
+    pub fn reset(&mut self) {
+        self.primed = false;
+        self.qd.fill(0.0);
+    }
+
+    /// Feed positions `q` [rad] taken `dt` [s] after the previous ones; returns q̇ [rad/s].
+    pub fn update(&mut self, q: &[f64], dt: f64) -> &[f64] {
+        if !self.primed || dt <= 0.0 {
+            self.last_q.copy_from_slice(q);
+            self.primed = true;
+            return &self.qd;
+        }
+        let alpha = (-2.0 * std::f64::consts::PI * self.cutoff_hz * dt).exp();
+        for i in 0..q.len() {
+            let raw = (q[i] - self.last_q[i]) / dt;
+            self.qd[i] = alpha * self.qd[i] + (1.0 - alpha) * raw;
+            self.last_q[i] = q[i];
+        }
+        &self.qd
+    }
+
+    pub fn velocity(&self) -> &[f64] {
+        &self.qd
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tracks_a_constant_velocity() {
+        let mut e = VelocityEstimator::new(2, 50.0);
+        for k in 0..500 {
+            let t = k as f64 * 1e-3;
+            e.update(&[0.3 * t, -1.2 * t], 1e-3);
+        }
+        assert!((e.velocity()[0] - 0.3).abs() < 1e-9);
+        assert!((e.velocity()[1] + 1.2).abs() < 1e-9);
+    }
+}
