@@ -27,8 +27,11 @@ pub mod robot_status {
 #[type_name("phri::JointState")]
 pub struct JointState {
     pub seq: u64,
-    /// measurement time [ns, CLOCK_MONOTONIC]
+    /// measurement time [ns]: the robot's cycle clock (CLOCK_MONOTONIC at
+    /// start, then exactly one period per state)
     pub stamp_ns: u64,
+    /// when the robot published it [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
     pub dof: u32,
     /// [`robot_status`] bits
     pub status: u32,
@@ -155,6 +158,8 @@ pub struct ControlStatus {
     pub ee: [f64; 3],
     /// time spent computing [ns]
     pub compute_ns: u64,
+    /// state published → this controller woke [ns]
+    pub wake_latency_ns: u64,
 }
 
 /// One contact in [`Truth`].
@@ -238,7 +243,11 @@ pub struct ServiceHealth {
 
 impl ServiceHealth {
     pub fn name_str(&self) -> &str {
-        let end = self.name.iter().position(|&b| b == 0).unwrap_or(self.name.len());
+        let end = self
+            .name
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(self.name.len());
         std::str::from_utf8(&self.name[..end]).unwrap_or("?")
     }
 }

@@ -17,4 +17,12 @@ pub const CONTROL_STATUS: &str = "control/status";
 pub const SUPERVISOR_HEALTH: &str = "supervisor/health";
 
 /// Every publish-subscribe service of the cell, for tools that list or record them.
-pub const ALL: &[&str] = &[ROBOT_STATE, ROBOT_COMMAND, ROBOT_STATS, SIM_TRUTH, DYNAMICS_RESIDUAL, CONTROL_STATUS, SUPERVISOR_HEALTH];
+pub const ALL: &[&str] = &[
+    ROBOT_STATE,
+    ROBOT_COMMAND,
+    ROBOT_STATS,
+    SIM_TRUTH,
+    DYNAMICS_RESIDUAL,
+    CONTROL_STATUS,
+    SUPERVISOR_HEALTH,
+];

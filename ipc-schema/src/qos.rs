@@ -22,11 +22,21 @@ pub struct Qos {
 
 /// The QoS table.
 pub fn qos(name: &str) -> Qos {
-    let one_publisher = Qos { max_publishers: 1, max_subscribers: 16, subscriber_max_buffer: 256, history: 1 };
+    let one_publisher = Qos {
+        max_publishers: 1,
+        max_subscribers: 16,
+        subscriber_max_buffer: 256,
+        history: 1,
+    };
     match name {
         // the robot and its commander: exactly one publisher each
-        ROBOT_STATE | ROBOT_COMMAND | DYNAMICS_RESIDUAL | CONTROL_STATUS | SIM_TRUTH => one_publisher,
-        ROBOT_STATS | SUPERVISOR_HEALTH => Qos { subscriber_max_buffer: 8, ..one_publisher },
+        ROBOT_STATE | ROBOT_COMMAND | DYNAMICS_RESIDUAL | CONTROL_STATUS | SIM_TRUTH => {
+            one_publisher
+        }
+        ROBOT_STATS | SUPERVISOR_HEALTH => Qos {
+            subscriber_max_buffer: 8,
+            ..one_publisher
+        },
         _ => one_publisher,
     }
 }
@@ -51,20 +61,32 @@ impl std::fmt::Display for IpcError {
 impl std::error::Error for IpcError {}
 
 pub fn ipc_err(channel: &str, e: impl Debug) -> IpcError {
-    IpcError { channel: channel.to_string(), what: format!("{e:?}") }
+    IpcError {
+        channel: channel.to_string(),
+        what: format!("{e:?}"),
+    }
 }
 
 /// Create a node whose shared-memory resources carry `prefix` (one per run, so
 /// that parallel runs never collide). Signals are left to the process (signal-hook).
 pub fn node(name: &str, prefix: &str) -> Result<Node<ipc::Service>, IpcError> {
     let mut config = Config::default();
-    config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| ipc_err("<node>", format!("invalid prefix '{prefix}': {e:?}")))?;
+    config.global.prefix = FileName::new(prefix.as_bytes())
+        .map_err(|e| ipc_err("<node>", format!("invalid prefix '{prefix}': {e:?}")))?;
     let node_name = NodeName::new(name).map_err(|e| ipc_err("<node>", e))?;
-    NodeBuilder::new().name(&node_name).config(&config).signal_handling_mode(SignalHandlingMode::Disabled).create::<ipc::Service>().map_err(|e| ipc_err("<node>", e))
+    NodeBuilder::new()
+        .name(&node_name)
+        .config(&config)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| ipc_err("<node>", e))
 }
 
 /// Open (or create) the publish-subscribe service `name` with its QoS.
-pub fn open_pubsub<T: Debug + ZeroCopySend>(node: &Node<ipc::Service>, name: &str) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcError> {
+pub fn open_pubsub<T: Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcError> {
     let q = qos(name);
     let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
     node.service_builder(&service_name)
@@ -79,7 +101,88 @@ pub fn open_pubsub<T: Debug + ZeroCopySend>(node: &Node<ipc::Service>, name: &st
 }
 
 /// Open (or create) the event service `name` (wakes readers of the channel of the same name).
-pub fn open_event(node: &Node<ipc::Service>, name: &str) -> Result<event::PortFactory<ipc::Service>, IpcError> {
+pub fn open_event(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<event::PortFactory<ipc::Service>, IpcError> {
     let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
-    node.service_builder(&service_name).event().max_notifiers(4).max_listeners(16).open_or_create().map_err(|e| ipc_err(name, e))
+    node.service_builder(&service_name)
+        .event()
+        .max_notifiers(4)
+        .max_listeners(16)
+        .open_or_create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Subscriber port type of this project's channels.
+pub type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
+/// Publisher port type of this project's channels.
+pub type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>;
+pub type Listener = iceoryx2::port::listener::Listener<ipc::Service>;
+pub type Notifier = iceoryx2::port::notifier::Notifier<ipc::Service>;
+
+/// Subscribe to `name` with a queue of `buffer` samples ([`LATEST`] or [`DRAIN`]).
+pub fn subscriber<T: Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+    buffer: usize,
+) -> Result<Sub<T>, IpcError> {
+    open_pubsub::<T>(node, name)?
+        .subscriber_builder()
+        .buffer_size(buffer)
+        .create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Publish on `name` (refused when the channel already has its publisher).
+pub fn publisher<T: Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<Pub<T>, IpcError> {
+    open_pubsub::<T>(node, name)?
+        .publisher_builder()
+        .create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Wake on new samples of `name`.
+pub fn listener(node: &Node<ipc::Service>, name: &str) -> Result<Listener, IpcError> {
+    open_event(node, name)?
+        .listener_builder()
+        .create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Announce new samples of `name`.
+pub fn notifier(node: &Node<ipc::Service>, name: &str) -> Result<Notifier, IpcError> {
+    open_event(node, name)?
+        .notifier_builder()
+        .create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Copy `value` into a loaned sample and send it.
+pub fn publish<T: Debug + ZeroCopySend + Copy>(
+    publisher: &Pub<T>,
+    name: &str,
+    value: &T,
+) -> Result<(), IpcError> {
+    let sample = publisher.loan_uninit().map_err(|e| ipc_err(name, e))?;
+    sample
+        .write_payload(*value)
+        .send()
+        .map(|_| ())
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// The newest sample of `name` (older queued ones are consumed), or `None`.
+pub fn latest<T: Debug + ZeroCopySend + Copy>(
+    subscriber: &Sub<T>,
+    name: &str,
+) -> Result<Option<T>, IpcError> {
+    let mut out = None;
+    while let Some(s) = subscriber.receive().map_err(|e| ipc_err(name, e))? {
+        out = Some(*s);
+    }
+    Ok(out)
 }

@@ -20,7 +20,13 @@ fn base_acceleration(model: &Model) -> Motion {
 }
 
 /// Recursive Newton-Euler: `τ = M q̈ + C q̇ + g` into `data.tau`.
-pub fn rnea<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn rnea<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     check_q_qd(model, q, qd)?;
     check_len("qdd", model.nv(), qdd.len())?;
     fk_pass(model, data, q);
@@ -57,7 +63,12 @@ fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64], a0: Motion
 }
 
 /// `C(q, q̇) q̇` into `data.c_qd` (RNEA without gravity and with `q̈ = 0`).
-pub fn coriolis_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn coriolis_times_qd<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     check_q_qd(model, q, qd)?;
     fk_pass(model, data, q);
     inertia_pass(model, data);
@@ -88,7 +99,11 @@ pub fn coriolis_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &
 }
 
 /// Gravity torque `g(q)` into `data.g`, O(n) from subtree masses.
-pub fn gravity<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn gravity<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     check_len("q", model.nv(), q.len())?;
     fk_pass(model, data, q);
     let a0 = -model.gravity;
@@ -108,7 +123,10 @@ pub fn gravity<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a D
 fn gravity_from_composite_mass(model: &Model, data: &mut Data, a0: &Vector3<f64>) {
     for i in (0..model.nv()).rev() {
         let ci = data.composite[i];
-        data.g[i] = data.s[i].dot(&Force { n: ci.h.cross(a0), f: a0 * ci.m });
+        data.g[i] = data.s[i].dot(&Force {
+            n: ci.h.cross(a0),
+            f: a0 * ci.m,
+        });
         if let Some(p) = model.joints[i].parent {
             data.composite[p].m += ci.m;
             data.composite[p].h += ci.h;
@@ -117,7 +135,11 @@ fn gravity_from_composite_mass(model: &Model, data: &mut Data, a0: &Vector3<f64>
 }
 
 /// Composite rigid-body algorithm: `M(q)` into `data.m` (both triangles).
-pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
+pub fn crba<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
     check_len("q", model.nv(), q.len())?;
     fk_pass(model, data, q);
     inertia_pass(model, data);
@@ -158,7 +180,12 @@ fn crba_pass(model: &Model, data: &mut Data) {
 /// Christoffel-consistent Coriolis matrix `C(q, q̇)` into `data.c`
 /// (Echeandia & Wensing 2021, composite body-level Coriolis matrices), so
 /// that `Ṁ = C + Cᵀ` and `C q̇` equals the RNEA bias without gravity.
-pub fn coriolis_matrix<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
+pub fn coriolis_matrix<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a nalgebra::DMatrix<f64>, ModelError> {
     check_q_qd(model, q, qd)?;
     fk_pass(model, data, q);
     inertia_pass(model, data);
@@ -202,13 +229,23 @@ pub fn coriolis_matrix<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f
 }
 
 /// Generalized momentum `p = M(q) q̇` into `data.p`, O(n).
-pub fn momentum<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn momentum<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     residual_terms(model, data, q, qd)?;
     Ok(&data.p)
 }
 
 /// `C(q, q̇)ᵀ q̇` into `data.ct_qd`, O(n).
-pub fn coriolis_transpose_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn coriolis_transpose_times_qd<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     residual_terms(model, data, q, qd)?;
     Ok(&data.ct_qd)
 }
@@ -219,7 +256,12 @@ pub fn coriolis_transpose_times_qd<'a>(model: &Model, data: &'a mut Data, q: &[f
 ///
 /// With body momenta `h_k = I_k v_k` summed over subtrees (`H_i`):
 /// `p_i = S_iᵀ H_i` and `(Cᵀ q̇)_i = Ṡ_iᵀ H_i = −S_iᵀ (v_i ×* H_i)`.
-pub fn residual_terms(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+pub fn residual_terms(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<(), ModelError> {
     check_q_qd(model, q, qd)?;
     fk_pass(model, data, q);
     let n = model.nv();
@@ -247,7 +289,10 @@ pub fn residual_terms(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> 
         data.p[i] = s.dot(&h);
         data.ct_qd[i] = -s.dot(&data.v[i].cross_force(&h));
         let ci = data.composite[i];
-        data.g[i] = s.dot(&Force { n: ci.h.cross(&a0), f: a0 * ci.m });
+        data.g[i] = s.dot(&Force {
+            n: ci.h.cross(&a0),
+            f: a0 * ci.m,
+        });
         data.residual_bias[i] = data.ct_qd[i] - data.g[i];
         if let Some(p) = model.joints[i].parent {
             data.f[p] += h;
@@ -260,7 +305,13 @@ pub fn residual_terms(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> 
 
 /// Forward dynamics `q̈ = M⁻¹ (τ − C q̇ − g)` into `data.qdd` (CRBA, RNEA and
 /// an in-place Cholesky solve; nothing allocated).
-pub fn forward_dynamics<'a>(model: &Model, data: &'a mut Data, q: &[f64], qd: &[f64], tau: &[f64]) -> Result<&'a DVector<f64>, ModelError> {
+pub fn forward_dynamics<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+    tau: &[f64],
+) -> Result<&'a DVector<f64>, ModelError> {
     check_q_qd(model, q, qd)?;
     check_len("tau", model.nv(), tau.len())?;
     let n = model.nv();
@@ -333,7 +384,12 @@ fn cholesky_solve_in_place(data: &mut Data) -> Result<(), ModelError> {
 }
 
 /// Kinetic energy `½ q̇ᵀ M q̇` [J].
-pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> Result<f64, ModelError> {
+pub fn kinetic_energy(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<f64, ModelError> {
     residual_terms(model, data, q, qd)?;
     Ok(0.5 * data.p.iter().zip(qd).map(|(p, v)| p * v).sum::<f64>())
 }
@@ -342,7 +398,12 @@ pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> 
 pub fn potential_energy(model: &Model, data: &mut Data, q: &[f64]) -> Result<f64, ModelError> {
     check_len("q", model.nv(), q.len())?;
     fk_pass(model, data, q);
-    Ok(model.joints.iter().enumerate().map(|(i, j)| -j.mass * model.gravity.dot(&data.body[i].apply(&j.com))).sum())
+    Ok(model
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| -j.mass * model.gravity.dot(&data.body[i].apply(&j.com)))
+        .sum())
 }
 
 /// Total spatial inertia of the robot's moving bodies (after any pass that ran FK).

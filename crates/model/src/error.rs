@@ -6,7 +6,10 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{origin}: malformed URDF: {message}")]
     Parse { origin: String, message: String },
     #[error("joint '{joint}': {kind} joints are not supported (only revolute, continuous, prismatic and fixed)")]
@@ -30,11 +33,19 @@ pub enum ModelError {
     #[error("link '{link}': invalid inertial data: {reason}")]
     Inertia { link: String, reason: String },
     #[error("joint '{joint}': lower limit {lower} is above upper limit {upper}")]
-    Limits { joint: String, lower: f64, upper: f64 },
+    Limits {
+        joint: String,
+        lower: f64,
+        upper: f64,
+    },
     #[error("unknown link '{0}'")]
     UnknownLink(String),
     #[error("{what}: expected length {expected}, got {got}")]
-    Dimension { what: &'static str, expected: usize, got: usize },
+    Dimension {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     #[error("the joint-space inertia matrix is not positive definite")]
     NotPositiveDefinite,
 }
@@ -45,6 +56,10 @@ pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), 
     if expected == got {
         Ok(())
     } else {
-        Err(ModelError::Dimension { what, expected, got })
+        Err(ModelError::Dimension {
+            what,
+            expected,
+            got,
+        })
     }
 }

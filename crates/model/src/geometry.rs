@@ -38,19 +38,37 @@ impl Shape {
     pub fn to_parry(&self) -> (SharedShape, Isometry3<f64>) {
         let id = Isometry3::identity();
         match *self {
-            Shape::Capsule { radius, half_length } => (SharedShape::capsule_z(half_length, radius), id),
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => (SharedShape::capsule_z(half_length, radius), id),
             Shape::Sphere { radius } => (SharedShape::ball(radius), id),
-            Shape::Box { half_extents } => (SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z), id),
+            Shape::Box { half_extents } => (
+                SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
+                id,
+            ),
             // parry's cylinder is along y: rotate +90° about x to map y onto z
-            Shape::Cylinder { radius, half_length } => (SharedShape::cylinder(half_length, radius), Isometry3::rotation(Vector3::x() * std::f64::consts::FRAC_PI_2)),
+            Shape::Cylinder {
+                radius,
+                half_length,
+            } => (
+                SharedShape::cylinder(half_length, radius),
+                Isometry3::rotation(Vector3::x() * std::f64::consts::FRAC_PI_2),
+            ),
         }
     }
 
     /// Radius of the smallest sphere around the shape's origin that holds it [m].
     pub fn bounding_radius(&self) -> f64 {
         match *self {
-            Shape::Capsule { radius, half_length } => radius + half_length,
-            Shape::Cylinder { radius, half_length } => (radius * radius + half_length * half_length).sqrt(),
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length,
+            Shape::Cylinder {
+                radius,
+                half_length,
+            } => (radius * radius + half_length * half_length).sqrt(),
             Shape::Sphere { radius } => radius,
             Shape::Box { half_extents } => half_extents.norm(),
         }

@@ -23,11 +23,17 @@ pub(crate) fn fk_pass(model: &Model, data: &mut Data, q: &[f64]) {
         let axis = joint_frame.r * j.axis;
         match j.kind {
             JointKind::Revolute => {
-                data.body[i] = Placement { r: joint_frame.r * axis_angle(&j.axis, q[i]), p: joint_frame.p };
+                data.body[i] = Placement {
+                    r: joint_frame.r * axis_angle(&j.axis, q[i]),
+                    p: joint_frame.p,
+                };
                 data.s[i] = Motion::new(axis, joint_frame.p.cross(&axis));
             }
             JointKind::Prismatic => {
-                data.body[i] = Placement { r: joint_frame.r, p: joint_frame.p + axis * q[i] };
+                data.body[i] = Placement {
+                    r: joint_frame.r,
+                    p: joint_frame.p + axis * q[i],
+                };
                 data.s[i] = Motion::new(Vector3::zeros(), axis);
             }
         }
@@ -67,11 +73,23 @@ pub fn frame_placement(model: &Model, data: &Data, frame: usize) -> Placement {
 /// Geometric Jacobian (6×n, linear rows then angular rows, base-frame axes)
 /// of the point `point` [m] fixed in link frame `frame`, after
 /// [`forward_kinematics`]. Columns of joints that do not move the link are zero.
-pub fn point_jacobian(model: &Model, data: &Data, frame: usize, point: &Vector3<f64>, out: &mut Matrix6xX<f64>) -> Result<(), ModelError> {
+pub fn point_jacobian(
+    model: &Model,
+    data: &Data,
+    frame: usize,
+    point: &Vector3<f64>,
+    out: &mut Matrix6xX<f64>,
+) -> Result<(), ModelError> {
     check_len("jacobian columns", model.nv(), out.ncols())?;
-    let f = model.frames.get(frame).ok_or_else(|| ModelError::UnknownLink(format!("#{frame}")))?;
+    let f = model
+        .frames
+        .get(frame)
+        .ok_or_else(|| ModelError::UnknownLink(format!("#{frame}")))?;
     out.fill(0.0);
-    let p = data.body_placement(f.body).compose(&f.placement).apply(point);
+    let p = data
+        .body_placement(f.body)
+        .compose(&f.placement)
+        .apply(point);
     let mut k = f.body;
     while let Some(j) = k {
         let s = &data.s[j];

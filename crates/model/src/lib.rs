@@ -18,7 +18,10 @@ pub mod model;
 pub mod spatial;
 
 pub use data::Data;
-pub use dynamics::{coriolis_matrix, coriolis_times_qd, coriolis_transpose_times_qd, crba, forward_dynamics, gravity, kinetic_energy, momentum, potential_energy, residual_terms, rnea};
+pub use dynamics::{
+    coriolis_matrix, coriolis_times_qd, coriolis_transpose_times_qd, crba, forward_dynamics,
+    gravity, kinetic_energy, momentum, potential_energy, residual_terms, rnea,
+};
 pub use error::ModelError;
 pub use geometry::{parry_shapes, CollisionObject, Shape};
 pub use kinematics::{forward_kinematics, frame_placement, point_jacobian};

@@ -28,12 +28,18 @@ pub struct Placement {
 }
 
 impl Placement {
-    pub const IDENTITY: Placement = Placement { r: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), p: Vector3::new(0.0, 0.0, 0.0) };
+    pub const IDENTITY: Placement = Placement {
+        r: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+        p: Vector3::new(0.0, 0.0, 0.0),
+    };
 
     /// `self ∘ other`: `other` expressed in `self`'s parent frame.
     #[inline]
     pub fn compose(&self, other: &Placement) -> Placement {
-        Placement { r: self.r * other.r, p: self.p + self.r * other.p }
+        Placement {
+            r: self.r * other.r,
+            p: self.p + self.r * other.p,
+        }
     }
 
     /// Transform a point from the child frame to the parent frame.
@@ -53,7 +59,10 @@ impl Placement {
     /// As a nalgebra isometry (re-orthonormalised rotation).
     pub fn to_isometry(&self) -> nalgebra::Isometry3<f64> {
         let rot = nalgebra::Rotation3::from_matrix(&self.r);
-        nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(self.p), nalgebra::UnitQuaternion::from_rotation_matrix(&rot))
+        nalgebra::Isometry3::from_parts(
+            nalgebra::Translation3::from(self.p),
+            nalgebra::UnitQuaternion::from_rotation_matrix(&rot),
+        )
     }
 }
 
@@ -119,21 +128,30 @@ fn finite3(v: &[f64; 3], element: &str, field: &str) -> Result<Vector3<f64>, Mod
     if v.iter().all(|x| x.is_finite()) {
         Ok(Vector3::new(v[0], v[1], v[2]))
     } else {
-        Err(ModelError::NotFinite { element: element.to_string(), field: field.to_string() })
+        Err(ModelError::NotFinite {
+            element: element.to_string(),
+            field: field.to_string(),
+        })
     }
 }
 
 fn pose(p: &urdf_rs::Pose, element: &str) -> Result<Placement, ModelError> {
     let xyz = finite3(&p.xyz.0, element, "origin xyz")?;
     let rpy = finite3(&p.rpy.0, element, "origin rpy")?;
-    Ok(Placement { r: rpy_to_matrix(rpy.x, rpy.y, rpy.z), p: xyz })
+    Ok(Placement {
+        r: rpy_to_matrix(rpy.x, rpy.y, rpy.z),
+        p: xyz,
+    })
 }
 
 fn finite(x: f64, element: &str, field: &str) -> Result<f64, ModelError> {
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(ModelError::NotFinite { element: element.to_string(), field: field.to_string() })
+        Err(ModelError::NotFinite {
+            element: element.to_string(),
+            field: field.to_string(),
+        })
     }
 }
 
@@ -148,7 +166,11 @@ struct MassProps {
 }
 
 impl MassProps {
-    const ZERO: MassProps = MassProps { m: 0.0, h: Vector3::new(0.0, 0.0, 0.0), i_o: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0) };
+    const ZERO: MassProps = MassProps {
+        m: 0.0,
+        h: Vector3::new(0.0, 0.0, 0.0),
+        i_o: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+    };
 
     fn add(&mut self, m: f64, c: &Vector3<f64>, i_c: &Matrix3<f64>) {
         self.m += m;
@@ -171,7 +193,10 @@ impl Model {
     /// Build from a URDF file.
     pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<Model, ModelError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::from_urdf_str_named(&text, &path.display().to_string())
     }
 
@@ -182,40 +207,82 @@ impl Model {
 
     fn from_urdf_str_named(text: &str, origin: &str) -> Result<Model, ModelError> {
         // urdf-rs sorts elements with a string pass before parsing; guard against panics deep in it
-        let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text)).map_err(|_| ModelError::Parse { origin: origin.to_string(), message: "parser failed".into() })?;
-        let robot = parsed.map_err(|e| ModelError::Parse { origin: origin.to_string(), message: e.to_string() })?;
+        let parsed =
+            std::panic::catch_unwind(|| urdf_rs::read_from_string(text)).map_err(|_| {
+                ModelError::Parse {
+                    origin: origin.to_string(),
+                    message: "parser failed".into(),
+                }
+            })?;
+        let robot = parsed.map_err(|e| ModelError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
         Self::from_urdf(&robot)
     }
 
     /// Build from a parsed URDF.
     pub fn from_urdf(robot: &urdf_rs::Robot) -> Result<Model, ModelError> {
-        let link_index: HashMap<&str, usize> = robot.links.iter().enumerate().map(|(i, l)| (l.name.as_str(), i)).collect();
+        let link_index: HashMap<&str, usize> = robot
+            .links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.name.as_str(), i))
+            .collect();
         // children per link in file order, parent joint per link
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
         let mut parent_joint: Vec<Option<usize>> = vec![None; robot.links.len()];
         for (ji, j) in robot.joints.iter().enumerate() {
-            let p = *link_index.get(j.parent.link.as_str()).ok_or_else(|| ModelError::MissingLink { joint: j.name.clone(), link: j.parent.link.clone() })?;
-            let c = *link_index.get(j.child.link.as_str()).ok_or_else(|| ModelError::MissingLink { joint: j.name.clone(), link: j.child.link.clone() })?;
+            let p =
+                *link_index
+                    .get(j.parent.link.as_str())
+                    .ok_or_else(|| ModelError::MissingLink {
+                        joint: j.name.clone(),
+                        link: j.parent.link.clone(),
+                    })?;
+            let c =
+                *link_index
+                    .get(j.child.link.as_str())
+                    .ok_or_else(|| ModelError::MissingLink {
+                        joint: j.name.clone(),
+                        link: j.child.link.clone(),
+                    })?;
             if parent_joint[c].is_some() {
-                return Err(ModelError::SeveralParents { link: j.child.link.clone() });
+                return Err(ModelError::SeveralParents {
+                    link: j.child.link.clone(),
+                });
             }
             parent_joint[c] = Some(ji);
             children[p].push(ji);
             match j.joint_type {
-                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous | urdf_rs::JointType::Prismatic | urdf_rs::JointType::Fixed => {}
+                urdf_rs::JointType::Revolute
+                | urdf_rs::JointType::Continuous
+                | urdf_rs::JointType::Prismatic
+                | urdf_rs::JointType::Fixed => {}
                 ref other => {
-                    return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() });
+                    return Err(ModelError::UnsupportedJoint {
+                        joint: j.name.clone(),
+                        kind: format!("{other:?}").to_lowercase(),
+                    });
                 }
             }
             if j.mimic.is_some() {
-                return Err(ModelError::Mimic { joint: j.name.clone() });
+                return Err(ModelError::Mimic {
+                    joint: j.name.clone(),
+                });
             }
         }
-        let roots: Vec<usize> = (0..robot.links.len()).filter(|&i| parent_joint[i].is_none()).collect();
+        let roots: Vec<usize> = (0..robot.links.len())
+            .filter(|&i| parent_joint[i].is_none())
+            .collect();
         let root = match roots.as_slice() {
             [] => return Err(ModelError::NoRoot),
             [r] => *r,
-            _ => return Err(ModelError::SeveralRoots { roots: roots.iter().map(|&i| robot.links[i].name.clone()).collect() }),
+            _ => {
+                return Err(ModelError::SeveralRoots {
+                    roots: roots.iter().map(|&i| robot.links[i].name.clone()).collect(),
+                })
+            }
         };
 
         let mut joints: Vec<Joint> = Vec::new();
@@ -228,7 +295,8 @@ impl Model {
         // depth-first preorder, children in file order. A stack entry is a link, the URDF
         // joint that leads to it when that joint is actuated, the body its parent rides on and
         // its placement in that body (for an actuated joint: the joint frame at q = 0).
-        let mut stack: Vec<(usize, Option<usize>, Option<usize>, Placement)> = vec![(root, None, None, Placement::IDENTITY)];
+        let mut stack: Vec<(usize, Option<usize>, Option<usize>, Placement)> =
+            vec![(root, None, None, Placement::IDENTITY)];
         let mut visited = 0usize;
         while let Some((li, via, parent_body, placement)) = stack.pop() {
             visited += 1;
@@ -243,7 +311,9 @@ impl Model {
                     let axis = finite3(&j.axis.xyz.0, &el, "axis")?;
                     let norm = axis.norm();
                     if norm < 1e-12 {
-                        return Err(ModelError::ZeroAxis { joint: j.name.clone() });
+                        return Err(ModelError::ZeroAxis {
+                            joint: j.name.clone(),
+                        });
                     }
                     let (kind, continuous) = match j.joint_type {
                         urdf_rs::JointType::Prismatic => (JointKind::Prismatic, false),
@@ -251,9 +321,20 @@ impl Model {
                         _ => (JointKind::Revolute, false),
                     };
                     let lim = &j.limit;
-                    let (lower, upper) = if continuous { (f64::NEG_INFINITY, f64::INFINITY) } else { (finite(lim.lower, &el, "limit lower")?, finite(lim.upper, &el, "limit upper")?) };
+                    let (lower, upper) = if continuous {
+                        (f64::NEG_INFINITY, f64::INFINITY)
+                    } else {
+                        (
+                            finite(lim.lower, &el, "limit lower")?,
+                            finite(lim.upper, &el, "limit upper")?,
+                        )
+                    };
                     if lower > upper {
-                        return Err(ModelError::Limits { joint: j.name.clone(), lower, upper });
+                        return Err(ModelError::Limits {
+                            joint: j.name.clone(),
+                            lower,
+                            upper,
+                        });
                     }
                     let positive_or_inf = |x: f64, f: &str| -> Result<f64, ModelError> {
                         let x = finite(x, &el, f)?;
@@ -279,24 +360,39 @@ impl Model {
                 }
             };
             let link = &robot.links[li];
-            frames.push(Frame { name: link.name.clone(), body, placement: in_body });
+            frames.push(Frame {
+                name: link.name.clone(),
+                body,
+                placement: in_body,
+            });
             // inertial data of this link, into the body frame
             let inertial = &link.inertial;
             let el = format!("link '{}' inertial", link.name);
             let m = finite(inertial.mass.value, &el, "mass")?;
             if m < 0.0 {
-                return Err(ModelError::Inertia { link: link.name.clone(), reason: format!("negative mass {m}") });
+                return Err(ModelError::Inertia {
+                    link: link.name.clone(),
+                    reason: format!("negative mass {m}"),
+                });
             }
             let it = &inertial.inertia;
             let vals = [it.ixx, it.ixy, it.ixz, it.iyy, it.iyz, it.izz];
             if vals.iter().any(|v| !v.is_finite()) {
-                return Err(ModelError::NotFinite { element: el, field: "inertia".into() });
+                return Err(ModelError::NotFinite {
+                    element: el,
+                    field: "inertia".into(),
+                });
             }
-            let i_local = Matrix3::new(it.ixx, it.ixy, it.ixz, it.ixy, it.iyy, it.iyz, it.ixz, it.iyz, it.izz);
+            let i_local = Matrix3::new(
+                it.ixx, it.ixy, it.ixz, it.ixy, it.iyy, it.iyz, it.ixz, it.iyz, it.izz,
+            );
             if m > 0.0 || i_local.norm() > 0.0 {
                 let eig = i_local.symmetric_eigenvalues();
                 if eig.iter().any(|&e| e < -1e-12) {
-                    return Err(ModelError::Inertia { link: link.name.clone(), reason: "rotational inertia is not positive semidefinite".into() });
+                    return Err(ModelError::Inertia {
+                        link: link.name.clone(),
+                        reason: "rotational inertia is not positive semidefinite".into(),
+                    });
                 }
                 let io = in_body.compose(&pose(&inertial.origin, &el)?);
                 let c = io.p;
@@ -310,14 +406,29 @@ impl Model {
                 let el = format!("link '{}' collision {}", link.name, ci);
                 let place = in_body.compose(&pose(&col.origin, &el)?);
                 let shape = match &col.geometry {
-                    urdf_rs::Geometry::Box { size } => Some(Shape::Box { half_extents: finite3(&size.0, &el, "size")? * 0.5 }),
-                    urdf_rs::Geometry::Cylinder { radius, length } => Some(Shape::Cylinder { radius: finite(*radius, &el, "radius")?, half_length: finite(*length, &el, "length")? * 0.5 }),
-                    urdf_rs::Geometry::Capsule { radius, length } => Some(Shape::Capsule { radius: finite(*radius, &el, "radius")?, half_length: finite(*length, &el, "length")? * 0.5 }),
-                    urdf_rs::Geometry::Sphere { radius } => Some(Shape::Sphere { radius: finite(*radius, &el, "radius")? }),
+                    urdf_rs::Geometry::Box { size } => Some(Shape::Box {
+                        half_extents: finite3(&size.0, &el, "size")? * 0.5,
+                    }),
+                    urdf_rs::Geometry::Cylinder { radius, length } => Some(Shape::Cylinder {
+                        radius: finite(*radius, &el, "radius")?,
+                        half_length: finite(*length, &el, "length")? * 0.5,
+                    }),
+                    urdf_rs::Geometry::Capsule { radius, length } => Some(Shape::Capsule {
+                        radius: finite(*radius, &el, "radius")?,
+                        half_length: finite(*length, &el, "length")? * 0.5,
+                    }),
+                    urdf_rs::Geometry::Sphere { radius } => Some(Shape::Sphere {
+                        radius: finite(*radius, &el, "radius")?,
+                    }),
                     urdf_rs::Geometry::Mesh { .. } => None,
                 };
                 match shape {
-                    Some(shape) => collisions.push(CollisionObject { link: link.name.clone(), body, placement: place, shape }),
+                    Some(shape) => collisions.push(CollisionObject {
+                        link: link.name.clone(),
+                        body,
+                        placement: place,
+                        shape,
+                    }),
                     None => skipped_meshes.push(link.name.clone()),
                 }
             }
@@ -327,7 +438,12 @@ impl Model {
                 let origin = pose(&j.origin, &format!("joint '{}'", j.name))?;
                 let child = link_index[j.child.link.as_str()];
                 let actuated = j.joint_type != urdf_rs::JointType::Fixed;
-                stack.push((child, actuated.then_some(ji), body, in_body.compose(&origin)));
+                stack.push((
+                    child,
+                    actuated.then_some(ji),
+                    body,
+                    in_body.compose(&origin),
+                ));
             }
         }
         if visited != robot.links.len() {
@@ -338,15 +454,31 @@ impl Model {
             return Err(ModelError::NoActuatedJoint);
         }
         // depth-first order from a stack may interleave subtrees; the algorithms need only parent < child
-        debug_assert!(joints.iter().enumerate().all(|(i, j)| j.parent.is_none_or(|p| p < i)));
+        debug_assert!(joints
+            .iter()
+            .enumerate()
+            .all(|(i, j)| j.parent.is_none_or(|p| p < i)));
         for (j, p) in joints.iter_mut().zip(props.iter()) {
             let (m, c, i_c) = p.split();
             j.mass = m;
             j.com = c;
             j.inertia_com = i_c;
         }
-        let frame_index = frames.iter().enumerate().map(|(i, f)| (f.name.clone(), i)).collect();
-        Ok(Model { name: robot.name.clone(), joints, frames, collisions, skipped_meshes, gravity: Vector3::new(0.0, 0.0, -9.81), root_mass: root_props.m, frame_index })
+        let frame_index = frames
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (f.name.clone(), i))
+            .collect();
+        Ok(Model {
+            name: robot.name.clone(),
+            joints,
+            frames,
+            collisions,
+            skipped_meshes,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            root_mass: root_props.m,
+            frame_index,
+        })
     }
 
     /// Number of actuated joints (= configuration and velocity dimension).
@@ -357,7 +489,10 @@ impl Model {
 
     /// Index of a link frame by name.
     pub fn frame_id(&self, link: &str) -> Result<usize, ModelError> {
-        self.frame_index.get(link).copied().ok_or_else(|| ModelError::UnknownLink(link.to_string()))
+        self.frame_index
+            .get(link)
+            .copied()
+            .ok_or_else(|| ModelError::UnknownLink(link.to_string()))
     }
 
     /// Actuated joint names, in array order.

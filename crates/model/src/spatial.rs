@@ -26,7 +26,10 @@ pub struct Force {
 }
 
 impl Motion {
-    pub const ZERO: Motion = Motion { w: Vector3::new(0.0, 0.0, 0.0), v: Vector3::new(0.0, 0.0, 0.0) };
+    pub const ZERO: Motion = Motion {
+        w: Vector3::new(0.0, 0.0, 0.0),
+        v: Vector3::new(0.0, 0.0, 0.0),
+    };
 
     #[inline]
     pub fn new(w: Vector3<f64>, v: Vector3<f64>) -> Self {
@@ -35,19 +38,28 @@ impl Motion {
 
     #[inline]
     pub fn scale(&self, s: f64) -> Motion {
-        Motion { w: self.w * s, v: self.v * s }
+        Motion {
+            w: self.w * s,
+            v: self.v * s,
+        }
     }
 
     /// Motion cross motion: `self × m`.
     #[inline]
     pub fn cross_motion(&self, m: &Motion) -> Motion {
-        Motion { w: self.w.cross(&m.w), v: self.w.cross(&m.v) + self.v.cross(&m.w) }
+        Motion {
+            w: self.w.cross(&m.w),
+            v: self.w.cross(&m.v) + self.v.cross(&m.w),
+        }
     }
 
     /// Motion cross force: `self ×* f`.
     #[inline]
     pub fn cross_force(&self, f: &Force) -> Force {
-        Force { n: self.w.cross(&f.n) + self.v.cross(&f.f), f: self.w.cross(&f.f) }
+        Force {
+            n: self.w.cross(&f.n) + self.v.cross(&f.f),
+            f: self.w.cross(&f.f),
+        }
     }
 
     /// Power pairing `selfᵀ f` (motion · force).
@@ -72,16 +84,25 @@ impl std::ops::Add for Motion {
     type Output = Motion;
     #[inline]
     fn add(self, o: Motion) -> Motion {
-        Motion { w: self.w + o.w, v: self.v + o.v }
+        Motion {
+            w: self.w + o.w,
+            v: self.v + o.v,
+        }
     }
 }
 
 impl Force {
-    pub const ZERO: Force = Force { n: Vector3::new(0.0, 0.0, 0.0), f: Vector3::new(0.0, 0.0, 0.0) };
+    pub const ZERO: Force = Force {
+        n: Vector3::new(0.0, 0.0, 0.0),
+        f: Vector3::new(0.0, 0.0, 0.0),
+    };
 
     #[inline]
     pub fn from_vector(x: &nalgebra::Vector6<f64>) -> Self {
-        Force { n: Vector3::new(x[0], x[1], x[2]), f: Vector3::new(x[3], x[4], x[5]) }
+        Force {
+            n: Vector3::new(x[0], x[1], x[2]),
+            f: Vector3::new(x[3], x[4], x[5]),
+        }
     }
 }
 
@@ -89,7 +110,10 @@ impl std::ops::Add for Force {
     type Output = Force;
     #[inline]
     fn add(self, o: Force) -> Force {
-        Force { n: self.n + o.n, f: self.f + o.f }
+        Force {
+            n: self.n + o.n,
+            f: self.f + o.f,
+        }
     }
 }
 
@@ -121,20 +145,31 @@ pub struct Inertia {
 }
 
 impl Inertia {
-    pub const ZERO: Inertia = Inertia { m: 0.0, h: Vector3::new(0.0, 0.0, 0.0), i: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0) };
+    pub const ZERO: Inertia = Inertia {
+        m: 0.0,
+        h: Vector3::new(0.0, 0.0, 0.0),
+        i: Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+    };
 
     /// From mass, centre of mass `c` and rotational inertia about the centre of
     /// mass `i_c`, all in base-frame coordinates.
     #[inline]
     pub fn from_com(m: f64, c: &Vector3<f64>, i_c: &Matrix3<f64>) -> Self {
         let cc = skew(c);
-        Inertia { m, h: c * m, i: i_c - cc * cc * m }
+        Inertia {
+            m,
+            h: c * m,
+            i: i_c - cc * cc * m,
+        }
     }
 
     /// `I · m` (momentum of a body moving with `m`).
     #[inline]
     pub fn apply(&self, x: &Motion) -> Force {
-        Force { n: self.i * x.w + self.h.cross(&x.v), f: x.v * self.m - self.h.cross(&x.w) }
+        Force {
+            n: self.i * x.w + self.h.cross(&x.v),
+            f: x.v * self.m - self.h.cross(&x.w),
+        }
     }
 
     /// The 6×6 matrix, ordering (angular, linear).
@@ -144,7 +179,8 @@ impl Inertia {
         out.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.i);
         out.fixed_view_mut::<3, 3>(0, 3).copy_from(&hx);
         out.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-hx));
-        out.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * self.m));
+        out.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(Matrix3::identity() * self.m));
         out
     }
 
@@ -237,22 +273,35 @@ mod tests {
 
     #[test]
     fn icrf_is_skew_and_matches_cross_force() {
-        let f = Force { n: Vector3::new(0.3, -1.0, 2.0), f: Vector3::new(-0.5, 0.7, 1.1) };
+        let f = Force {
+            n: Vector3::new(0.3, -1.0, 2.0),
+            f: Vector3::new(-0.5, 0.7, 1.1),
+        };
         let x = Motion::new(Vector3::new(0.1, 0.2, -0.3), Vector3::new(1.0, -2.0, 0.5));
         let m = icrf(&f);
         assert!((m + m.transpose()).norm() < 1e-15);
         let lhs = m * x.to_vector();
         let rhs = x.cross_force(&f);
-        assert!((lhs - nalgebra::Vector6::new(rhs.n.x, rhs.n.y, rhs.n.z, rhs.f.x, rhs.f.y, rhs.f.z)).norm() < 1e-14);
+        assert!(
+            (lhs - nalgebra::Vector6::new(rhs.n.x, rhs.n.y, rhs.n.z, rhs.f.x, rhs.f.y, rhs.f.z))
+                .norm()
+                < 1e-14
+        );
     }
 
     #[test]
     fn inertia_matrix_matches_apply() {
-        let i = Inertia::from_com(2.0, &Vector3::new(0.1, -0.2, 0.3), &Matrix3::new(0.1, 0.01, 0.0, 0.01, 0.2, 0.02, 0.0, 0.02, 0.3));
+        let i = Inertia::from_com(
+            2.0,
+            &Vector3::new(0.1, -0.2, 0.3),
+            &Matrix3::new(0.1, 0.01, 0.0, 0.01, 0.2, 0.02, 0.0, 0.02, 0.3),
+        );
         let x = Motion::new(Vector3::new(0.4, 0.2, -0.3), Vector3::new(1.0, 0.0, 0.5));
         let a = i.apply(&x);
         let b = i.to_matrix() * x.to_vector();
-        assert!((nalgebra::Vector6::new(a.n.x, a.n.y, a.n.z, a.f.x, a.f.y, a.f.z) - b).norm() < 1e-14);
+        assert!(
+            (nalgebra::Vector6::new(a.n.x, a.n.y, a.n.z, a.f.x, a.f.y, a.f.z) - b).norm() < 1e-14
+        );
         assert!((i.to_matrix() - i.to_matrix().transpose()).norm() < 1e-15);
     }
 

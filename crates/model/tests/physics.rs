@@ -17,9 +17,15 @@ fn mass_matrix_is_symmetric_positive_definite() {
         for _ in 0..STATES {
             let q = random_vec(&mut r, model.nv(), 3.0);
             let m = crba(&model, &mut d, &q).unwrap().clone();
-            assert!((&m - m.transpose()).amax() < 1e-12, "{name}: M not symmetric");
+            assert!(
+                (&m - m.transpose()).amax() < 1e-12,
+                "{name}: M not symmetric"
+            );
             let eig = m.symmetric_eigenvalues();
-            assert!(eig.min() > 0.0, "{name}: M not positive definite, eigenvalues {eig}");
+            assert!(
+                eig.min() > 0.0,
+                "{name}: M not positive definite, eigenvalues {eig}"
+            );
         }
     }
 }
@@ -41,14 +47,26 @@ fn mdot_minus_2c_is_skew_and_c_qd_matches_rnea() {
             let mdot = (mp - mm) / (2.0 * h);
             let n2c = &mdot - &c * 2.0;
             let skew_err = (&n2c + n2c.transpose()).amax();
-            assert!(skew_err < 1e-6 * (1.0 + mdot.amax()), "{name}: Ṁ − 2C not skew ({skew_err})");
+            assert!(
+                skew_err < 1e-6 * (1.0 + mdot.amax()),
+                "{name}: Ṁ − 2C not skew ({skew_err})"
+            );
             let qdv = DVector::from_column_slice(&qd);
             let c_qd = coriolis_times_qd(&model, &mut d, &q, &qd).unwrap().clone();
-            assert!((&c * &qdv - &c_qd).amax() < 1e-10 * (1.0 + c_qd.amax()), "{name}: C q̇ ≠ RNEA bias");
+            assert!(
+                (&c * &qdv - &c_qd).amax() < 1e-10 * (1.0 + c_qd.amax()),
+                "{name}: C q̇ ≠ RNEA bias"
+            );
             residual_terms(&model, &mut d, &q, &qd).unwrap();
-            assert!((c.transpose() * &qdv - &d.ct_qd).amax() < 1e-10 * (1.0 + d.ct_qd.amax()), "{name}: Cᵀ q̇ (O(n)) ≠ Cᵀ q̇ (matrix)");
+            assert!(
+                (c.transpose() * &qdv - &d.ct_qd).amax() < 1e-10 * (1.0 + d.ct_qd.amax()),
+                "{name}: Cᵀ q̇ (O(n)) ≠ Cᵀ q̇ (matrix)"
+            );
             // Cᵀ q̇ = Ṁ q̇ − C q̇
-            assert!((&mdot * &qdv - &c_qd - &d.ct_qd).amax() < 1e-6 * (1.0 + d.ct_qd.amax()), "{name}: Cᵀq̇ ≠ Ṁq̇ − Cq̇");
+            assert!(
+                (&mdot * &qdv - &c_qd - &d.ct_qd).amax() < 1e-6 * (1.0 + d.ct_qd.amax()),
+                "{name}: Cᵀq̇ ≠ Ṁq̇ − Cq̇"
+            );
         }
     }
 }
@@ -68,18 +86,35 @@ fn rnea_equals_m_qdd_plus_c_qd_plus_g_and_forward_dynamics_inverts_it() {
             let c_qd = coriolis_times_qd(&model, &mut d, &q, &qd).unwrap().clone();
             let g = gravity(&model, &mut d, &q).unwrap().clone();
             let rhs = &m * DVector::from_column_slice(&qdd) + c_qd + &g;
-            assert!((&tau - &rhs).amax() < 1e-10 * (1.0 + tau.amax()), "{name}: RNEA ≠ Mq̈ + Cq̇ + g");
+            assert!(
+                (&tau - &rhs).amax() < 1e-10 * (1.0 + tau.amax()),
+                "{name}: RNEA ≠ Mq̈ + Cq̇ + g"
+            );
             // gravity from RNEA at rest
             let zero = vec![0.0; n];
             let g_rnea = rnea(&model, &mut d, &q, &zero, &zero).unwrap().clone();
-            assert!((&g_rnea - &g).amax() < 1e-10 * (1.0 + g.amax()), "{name}: g (O(n)) ≠ RNEA at rest");
+            assert!(
+                (&g_rnea - &g).amax() < 1e-10 * (1.0 + g.amax()),
+                "{name}: g (O(n)) ≠ RNEA at rest"
+            );
             residual_terms(&model, &mut d, &q, &qd).unwrap();
-            assert!((&d.g - &g).amax() < 1e-12 * (1.0 + g.amax()), "{name}: residual g ≠ g");
+            assert!(
+                (&d.g - &g).amax() < 1e-12 * (1.0 + g.amax()),
+                "{name}: residual g ≠ g"
+            );
             let p = &m * DVector::from_column_slice(&qd);
-            assert!((&d.p - &p).amax() < 1e-10 * (1.0 + p.amax()), "{name}: p ≠ M q̇");
+            assert!(
+                (&d.p - &p).amax() < 1e-10 * (1.0 + p.amax()),
+                "{name}: p ≠ M q̇"
+            );
             assert!((&d.residual_bias - (&d.ct_qd - &d.g)).amax() == 0.0);
-            let back = forward_dynamics(&model, &mut d, &q, &qd, tau.as_slice()).unwrap().clone();
-            assert!((back - DVector::from_column_slice(&qdd)).amax() < 1e-8, "{name}: FD does not invert RNEA");
+            let back = forward_dynamics(&model, &mut d, &q, &qd, tau.as_slice())
+                .unwrap()
+                .clone();
+            assert!(
+                (back - DVector::from_column_slice(&qdd)).amax() < 1e-8,
+                "{name}: FD does not invert RNEA"
+            );
         }
     }
 }
@@ -108,10 +143,20 @@ fn jacobians_match_finite_differences_of_forward_kinematics() {
                 // angular: vee(Ṙ Rᵀ)
                 let rdot = (tp.r - tm.r) / (2.0 * h);
                 let w = rdot * ((tp.r + tm.r) * 0.5).transpose();
-                let ang = Vector3::new(w[(2, 1)] - w[(1, 2)], w[(0, 2)] - w[(2, 0)], w[(1, 0)] - w[(0, 1)]) * 0.5;
+                let ang = Vector3::new(
+                    w[(2, 1)] - w[(1, 2)],
+                    w[(0, 2)] - w[(2, 0)],
+                    w[(1, 0)] - w[(0, 1)],
+                ) * 0.5;
                 let col = j.column(k);
-                assert!((col.fixed_rows::<3>(0) - lin).amax() < 1e-7, "{name}: frame {frame} joint {k} linear column");
-                assert!((col.fixed_rows::<3>(3) - ang).amax() < 1e-7, "{name}: frame {frame} joint {k} angular column");
+                assert!(
+                    (col.fixed_rows::<3>(0) - lin).amax() < 1e-7,
+                    "{name}: frame {frame} joint {k} linear column"
+                );
+                assert!(
+                    (col.fixed_rows::<3>(3) - ang).amax() < 1e-7,
+                    "{name}: frame {frame} joint {k} angular column"
+                );
             }
         }
     }
@@ -130,8 +175,14 @@ fn gravity_is_the_gradient_of_potential_energy() {
             for k in 0..n {
                 let mut e = vec![0.0; n];
                 e[k] = 1.0;
-                let du = (potential_energy(&model, &mut d, &axpy(&q, h, &e)).unwrap() - potential_energy(&model, &mut d, &axpy(&q, -h, &e)).unwrap()) / (2.0 * h);
-                assert!((du - g[k]).abs() < 1e-6 * (1.0 + g.amax()), "{name}: ∂U/∂q{k} = {du} but g = {}", g[k]);
+                let du = (potential_energy(&model, &mut d, &axpy(&q, h, &e)).unwrap()
+                    - potential_energy(&model, &mut d, &axpy(&q, -h, &e)).unwrap())
+                    / (2.0 * h);
+                assert!(
+                    (du - g[k]).abs() < 1e-6 * (1.0 + g.amax()),
+                    "{name}: ∂U/∂q{k} = {du} but g = {}",
+                    g[k]
+                );
             }
         }
     }
@@ -141,7 +192,15 @@ fn gravity_is_the_gradient_of_potential_energy() {
 fn rk4(model: &Model, d: &mut Data, q: &mut [f64], qd: &mut [f64], dt: f64) {
     let n = q.len();
     let zero = vec![0.0; n];
-    let f = |d: &mut Data, q: &[f64], qd: &[f64]| -> (Vec<f64>, Vec<f64>) { (qd.to_vec(), forward_dynamics(model, d, q, qd, &zero).unwrap().as_slice().to_vec()) };
+    let f = |d: &mut Data, q: &[f64], qd: &[f64]| -> (Vec<f64>, Vec<f64>) {
+        (
+            qd.to_vec(),
+            forward_dynamics(model, d, q, qd, &zero)
+                .unwrap()
+                .as_slice()
+                .to_vec(),
+        )
+    };
     let (k1q, k1v) = f(d, q, qd);
     let (k2q, k2v) = f(d, &axpy(q, dt / 2.0, &k1q), &axpy(qd, dt / 2.0, &k1v));
     let (k3q, k3v) = f(d, &axpy(q, dt / 2.0, &k2q), &axpy(qd, dt / 2.0, &k2v));
@@ -160,7 +219,9 @@ fn energy_is_conserved_without_torque() {
         let mut r = rng(6);
         let mut q = random_vec(&mut r, n, 1.5);
         let mut qd = random_vec(&mut r, n, 1.0);
-        let energy = |d: &mut Data, q: &[f64], qd: &[f64]| kinetic_energy(&model, d, q, qd).unwrap() + potential_energy(&model, d, q).unwrap();
+        let energy = |d: &mut Data, q: &[f64], qd: &[f64]| {
+            kinetic_energy(&model, d, q, qd).unwrap() + potential_energy(&model, d, q).unwrap()
+        };
         let e0 = energy(&mut d, &q, &qd);
         let ke0 = kinetic_energy(&model, &mut d, &q, &qd).unwrap();
         let mut worst: f64 = 0.0;
@@ -170,7 +231,10 @@ fn energy_is_conserved_without_torque() {
         }
         // 0.4 s of free motion: drift below 1e-6 of the energy scale
         let scale = ke0.abs() + model.joints.iter().map(|j| j.mass).sum::<f64>() * 9.81;
-        assert!(worst < 1e-6 * scale, "{name}: energy drift {worst} J (scale {scale})");
+        assert!(
+            worst < 1e-6 * scale,
+            "{name}: energy drift {worst} J (scale {scale})"
+        );
     }
 }
 
@@ -209,7 +273,10 @@ fn default_robot_matches_the_dh_table() {
     assert_eq!(model.joints[5].effort, 38.0);
     // one capsule per moving link plus the base
     assert_eq!(model.collisions.len(), 8);
-    assert!(model.collisions.iter().all(|c| matches!(c.shape, Shape::Capsule { .. })));
+    assert!(model
+        .collisions
+        .iter()
+        .all(|c| matches!(c.shape, Shape::Capsule { .. })));
 }
 
 #[test]
@@ -224,14 +291,22 @@ fn collision_shapes_convert_to_parry_with_urdf_axes() {
         let pose = c.pose(&d);
         // the point at the end of the shape's own z extent lies on the surface
         let z = match c.shape {
-            Shape::Capsule { radius, half_length } => radius + half_length,
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length,
             Shape::Cylinder { half_length, .. } => half_length,
             Shape::Sphere { radius } => radius,
             Shape::Box { half_extents } => half_extents.z,
         };
         let p = pose.apply(&Vector3::new(0.0, 0.0, z));
         let dist = shape.distance_to_point(&iso, &p.into(), true);
-        assert!(dist.abs() < 1e-9, "{}: {:?} surface point at distance {dist}", c.link, c.shape);
+        assert!(
+            dist.abs() < 1e-9,
+            "{}: {:?} surface point at distance {dist}",
+            c.link,
+            c.shape
+        );
         let outside = pose.apply(&Vector3::new(0.0, 0.0, z + 0.01));
         assert!((shape.distance_to_point(&iso, &outside.into(), true) - 0.01).abs() < 1e-9);
     }

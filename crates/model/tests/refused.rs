@@ -7,7 +7,9 @@ use phri_model::*;
 const LINK: &str = "<link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link>";
 
 fn robot(body: &str) -> Result<Model, ModelError> {
-    Model::from_urdf_str(&format!("<robot name=\"r\"><link name=\"base\"/>{LINK}{body}</robot>"))
+    Model::from_urdf_str(&format!(
+        "<robot name=\"r\"><link name=\"base\"/>{LINK}{body}</robot>"
+    ))
 }
 
 fn joint(kind: &str, extra: &str) -> String {
@@ -40,11 +42,20 @@ fn structural_errors() {
     // two roots: "a" is nobody's child
     assert!(matches!(robot(""), Err(ModelError::SeveralRoots { .. })));
     // a cycle: base -> a -> base
-    let cycle = format!("{}<joint name=\"k\" type=\"fixed\"><parent link=\"a\"/><child link=\"base\"/></joint>", joint("revolute", ""));
+    let cycle = format!(
+        "{}<joint name=\"k\" type=\"fixed\"><parent link=\"a\"/><child link=\"base\"/></joint>",
+        joint("revolute", "")
+    );
     assert!(matches!(robot(&cycle), Err(ModelError::NoRoot)));
-    let two_parents = format!("{}<joint name=\"k\" type=\"fixed\"><parent link=\"base\"/><child link=\"a\"/></joint>", joint("revolute", ""));
+    let two_parents = format!(
+        "{}<joint name=\"k\" type=\"fixed\"><parent link=\"base\"/><child link=\"a\"/></joint>",
+        joint("revolute", "")
+    );
     assert!(matches!(robot(&two_parents), Err(ModelError::SeveralParents { link }) if link == "a"));
-    assert!(matches!(robot(&joint("fixed", "")), Err(ModelError::NoActuatedJoint)));
+    assert!(matches!(
+        robot(&joint("fixed", "")),
+        Err(ModelError::NoActuatedJoint)
+    ));
 }
 
 #[test]
@@ -52,20 +63,40 @@ fn bad_values_are_refused() {
     let zero_axis = joint("revolute", "").replace("0 0 1", "0 0 0");
     assert!(matches!(robot(&zero_axis), Err(ModelError::ZeroAxis { joint }) if joint == "j"));
     let nan = joint("revolute", "<origin xyz=\"0 NaN 0\"/>");
-    assert!(matches!(robot(&nan), Err(ModelError::NotFinite { element, .. }) if element.contains("'j'")));
-    let limits = joint("revolute", "").replace("lower=\"-1\" upper=\"1\"", "lower=\"1\" upper=\"-1\"");
+    assert!(
+        matches!(robot(&nan), Err(ModelError::NotFinite { element, .. }) if element.contains("'j'"))
+    );
+    let limits =
+        joint("revolute", "").replace("lower=\"-1\" upper=\"1\"", "lower=\"1\" upper=\"-1\"");
     assert!(matches!(robot(&limits), Err(ModelError::Limits { .. })));
-    let neg_mass = format!("<robot name=\"r\"><link name=\"base\"/>{}{}</robot>", LINK.replace("value=\"1\"", "value=\"-1\""), joint("revolute", ""));
-    assert!(matches!(Model::from_urdf_str(&neg_mass), Err(ModelError::Inertia { link, .. }) if link == "a"));
+    let neg_mass = format!(
+        "<robot name=\"r\"><link name=\"base\"/>{}{}</robot>",
+        LINK.replace("value=\"1\"", "value=\"-1\""),
+        joint("revolute", "")
+    );
+    assert!(
+        matches!(Model::from_urdf_str(&neg_mass), Err(ModelError::Inertia { link, .. }) if link == "a")
+    );
 }
 
 #[test]
 fn malformed_xml_and_missing_files() {
-    assert!(matches!(Model::from_urdf_str("<robot name=\"r\"><link name="), Err(ModelError::Parse { .. })));
-    assert!(matches!(Model::from_urdf_str("not xml at all"), Err(ModelError::Parse { .. })));
-    assert!(matches!(Model::from_urdf_str(""), Err(ModelError::Parse { .. })));
+    assert!(matches!(
+        Model::from_urdf_str("<robot name=\"r\"><link name="),
+        Err(ModelError::Parse { .. })
+    ));
+    assert!(matches!(
+        Model::from_urdf_str("not xml at all"),
+        Err(ModelError::Parse { .. })
+    ));
+    assert!(matches!(
+        Model::from_urdf_str(""),
+        Err(ModelError::Parse { .. })
+    ));
     match Model::from_urdf_file("/nonexistent/robot.urdf") {
-        Err(e @ ModelError::Io { .. }) => assert!(e.to_string().contains("/nonexistent/robot.urdf")),
+        Err(e @ ModelError::Io { .. }) => {
+            assert!(e.to_string().contains("/nonexistent/robot.urdf"))
+        }
         other => panic!("{other:?}"),
     }
 }
@@ -74,18 +105,39 @@ fn malformed_xml_and_missing_files() {
 fn wrong_lengths_and_unknown_links() {
     let model = common::lwr4();
     let mut d = Data::new(&model);
-    assert!(matches!(crba(&model, &mut d, &[0.0; 6]), Err(ModelError::Dimension { what: "q", expected: 7, got: 6 })));
-    assert!(matches!(rnea(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 8]), Err(ModelError::Dimension { what: "qdd", .. })));
-    assert!(matches!(residual_terms(&model, &mut d, &[0.0; 7], &[0.0; 3]), Err(ModelError::Dimension { what: "qd", .. })));
-    assert!(matches!(forward_dynamics(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 2]), Err(ModelError::Dimension { what: "tau", .. })));
-    assert!(matches!(model.frame_id("no_such_link"), Err(ModelError::UnknownLink(l)) if l == "no_such_link"));
+    assert!(matches!(
+        crba(&model, &mut d, &[0.0; 6]),
+        Err(ModelError::Dimension {
+            what: "q",
+            expected: 7,
+            got: 6
+        })
+    ));
+    assert!(matches!(
+        rnea(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 8]),
+        Err(ModelError::Dimension { what: "qdd", .. })
+    ));
+    assert!(matches!(
+        residual_terms(&model, &mut d, &[0.0; 7], &[0.0; 3]),
+        Err(ModelError::Dimension { what: "qd", .. })
+    ));
+    assert!(matches!(
+        forward_dynamics(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 2]),
+        Err(ModelError::Dimension { what: "tau", .. })
+    ));
+    assert!(
+        matches!(model.frame_id("no_such_link"), Err(ModelError::UnknownLink(l)) if l == "no_such_link")
+    );
     let mut j = nalgebra::Matrix6xX::zeros(3);
     assert!(point_jacobian(&model, &d, 0, &nalgebra::Vector3::zeros(), &mut j).is_err());
 }
 
 #[test]
 fn continuous_joints_have_no_position_limits_and_meshes_are_skipped() {
-    let body = joint("continuous", "").replace("<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>", "");
+    let body = joint("continuous", "").replace(
+        "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>",
+        "",
+    );
     let m = Model::from_urdf_str(&format!("<robot name=\"r\"><link name=\"base\"><collision><geometry><mesh filename=\"x.stl\"/></geometry></collision></link>{LINK}{body}</robot>")).unwrap();
     assert_eq!(m.joints[0].lower, f64::NEG_INFINITY);
     assert_eq!(m.joints[0].velocity, f64::INFINITY);

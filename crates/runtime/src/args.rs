@@ -8,7 +8,11 @@ pub struct Args {
 
 impl Args {
     /// Parse `args`; `switches` take no value, `valued` take one (and may repeat).
-    pub fn parse(args: impl IntoIterator<Item = String>, valued: &[&str], switches: &[&str]) -> Result<Args, String> {
+    pub fn parse(
+        args: impl IntoIterator<Item = String>,
+        valued: &[&str],
+        switches: &[&str],
+    ) -> Result<Args, String> {
         let mut pairs = Vec::new();
         let mut it = args.into_iter();
         while let Some(a) = it.next() {
@@ -26,12 +30,20 @@ impl Args {
 
     /// Last value of `name`.
     pub fn get(&self, name: &str) -> Option<&str> {
-        self.pairs.iter().rev().find(|(n, _)| n == name).and_then(|(_, v)| v.as_deref())
+        self.pairs
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .and_then(|(_, v)| v.as_deref())
     }
 
     /// Every value of a repeatable flag, in order.
     pub fn all(&self, name: &str) -> Vec<&str> {
-        self.pairs.iter().filter(|(n, _)| n == name).filter_map(|(_, v)| v.as_deref()).collect()
+        self.pairs
+            .iter()
+            .filter(|(n, _)| n == name)
+            .filter_map(|(_, v)| v.as_deref())
+            .collect()
     }
 
     pub fn has(&self, name: &str) -> bool {
@@ -42,7 +54,10 @@ impl Args {
     pub fn parse_value<T: std::str::FromStr>(&self, name: &str) -> Result<Option<T>, String> {
         match self.get(name) {
             None => Ok(None),
-            Some(v) => v.parse::<T>().map(Some).map_err(|_| format!("{name}: cannot parse '{v}'")),
+            Some(v) => v
+                .parse::<T>()
+                .map(Some)
+                .map_err(|_| format!("{name}: cannot parse '{v}'")),
         }
     }
 }

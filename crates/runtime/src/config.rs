@@ -10,7 +10,10 @@ use toml::{Table, Value};
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Parse { path: String, message: String },
     #[error("--set '{0}': expected section.key=value")]
@@ -22,8 +25,16 @@ pub enum ConfigError {
 /// Read `path`, merge `extra` tables (in order: scenario config, then `--set`s)
 /// over it and return the merged table.
 pub fn load_config(path: &Path, extra: &[Table], sets: &[&str]) -> Result<Table, ConfigError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: path.display().to_string(), source })?;
-    let mut table: Table = text.parse().map_err(|e: toml::de::Error| ConfigError::Parse { path: path.display().to_string(), message: e.message().to_string() })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    let mut table: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| ConfigError::Parse {
+            path: path.display().to_string(),
+            message: e.message().to_string(),
+        })?;
     for t in extra {
         merge(&mut table, t);
     }
@@ -47,16 +58,24 @@ pub fn merge(base: &mut Table, over: &Table) {
 
 /// Apply one `section.key=value` (any depth; the value is TOML, or a bare string).
 pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
-    let (path, value) = set.split_once('=').ok_or_else(|| ConfigError::Override(set.to_string()))?;
+    let (path, value) = set
+        .split_once('=')
+        .ok_or_else(|| ConfigError::Override(set.to_string()))?;
     let keys: Vec<&str> = path.trim().split('.').collect();
     if keys.len() < 2 || keys.iter().any(|k| k.is_empty()) {
         return Err(ConfigError::Override(set.to_string()));
     }
     let value = value.trim();
-    let parsed: Value = format!("v = {value}").parse::<Table>().ok().and_then(|mut t| t.remove("v")).unwrap_or_else(|| Value::String(value.to_string()));
+    let parsed: Value = format!("v = {value}")
+        .parse::<Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| Value::String(value.to_string()));
     let mut cur = table;
     for k in &keys[..keys.len() - 1] {
-        let entry = cur.entry(k.to_string()).or_insert_with(|| Value::Table(Table::new()));
+        let entry = cur
+            .entry(k.to_string())
+            .or_insert_with(|| Value::Table(Table::new()));
         cur = match entry {
             Value::Table(t) => t,
             _ => return Err(ConfigError::Override(set.to_string())),
@@ -68,8 +87,15 @@ pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
 
 /// Deserialize `[name]` of the merged table (missing section: defaults).
 pub fn section<T: DeserializeOwned>(table: &Table, name: &str) -> Result<T, ConfigError> {
-    let v = table.get(name).cloned().unwrap_or_else(|| Value::Table(Table::new()));
-    v.try_into().map_err(|e: toml::de::Error| ConfigError::Section { section: name.to_string(), message: e.message().to_string() })
+    let v = table
+        .get(name)
+        .cloned()
+        .unwrap_or_else(|| Value::Table(Table::new()));
+    v.try_into()
+        .map_err(|e: toml::de::Error| ConfigError::Section {
+            section: name.to_string(),
+            message: e.message().to_string(),
+        })
 }
 
 #[cfg(test)]
@@ -78,7 +104,9 @@ mod tests {
 
     #[test]
     fn set_overrides_typed_values_and_creates_sections() {
-        let mut t: Table = "[control]\nreaction = \"reflex\"\nk = 1.0\n".parse().unwrap();
+        let mut t: Table = "[control]\nreaction = \"reflex\"\nk = 1.0\n"
+            .parse()
+            .unwrap();
         apply_set(&mut t, "control.reaction=stop").unwrap();
         apply_set(&mut t, "control.k=2.5").unwrap();
         apply_set(&mut t, "sim.q0=[0.0, 1.0]").unwrap();

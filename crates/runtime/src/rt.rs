@@ -7,16 +7,24 @@ pub fn make_realtime(priority: i32) -> Result<(), String> {
     if priority <= 0 {
         return Err("real-time priority 0: normal scheduler".into());
     }
-    let param = libc::sched_param { sched_priority: priority.min(99) };
+    let param = libc::sched_param {
+        sched_priority: priority.min(99),
+    };
     // SAFETY: plain syscalls with valid arguments.
     let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
     if rc != 0 {
-        return Err(format!("SCHED_FIFO {priority} refused: {}", std::io::Error::last_os_error()));
+        return Err(format!(
+            "SCHED_FIFO {priority} refused: {}",
+            std::io::Error::last_os_error()
+        ));
     }
     // SAFETY: as above.
     let rc = unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) };
     if rc != 0 {
-        return Err(format!("mlockall refused: {}", std::io::Error::last_os_error()));
+        return Err(format!(
+            "mlockall refused: {}",
+            std::io::Error::last_os_error()
+        ));
     }
     Ok(())
 }

@@ -19,7 +19,13 @@ pub enum Reaction {
 }
 
 impl Reaction {
-    pub const ALL: [Reaction; 5] = [Reaction::Reflex, Reaction::Admittance, Reaction::Stop, Reaction::Float, Reaction::Retreat];
+    pub const ALL: [Reaction; 5] = [
+        Reaction::Reflex,
+        Reaction::Admittance,
+        Reaction::Stop,
+        Reaction::Float,
+        Reaction::Retreat,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -61,6 +67,8 @@ pub struct ControlConfig {
     pub velocity_scale: f64,
     /// largest end-effector speed when approaching the path [m/s]
     pub approach_speed: f64,
+    /// after the approach, the path's time law ṡ ramps smoothly from 0 to 1 over this [s]
+    pub path_ramp_s: f64,
     /// end-effector distance within which a waypoint counts as reached [m]
     pub waypoint_tolerance: f64,
     /// reaction to a detected collision
@@ -100,6 +108,7 @@ impl Default for ControlConfig {
             kd: 40.0,
             velocity_scale: 0.8,
             approach_speed: 0.15,
+            path_ramp_s: 0.5,
             waypoint_tolerance: 0.03,
             reaction: Reaction::Reflex,
             reflex_gain: 2.0,

@@ -60,7 +60,12 @@ struct History {
 
 impl History {
     fn new(n: usize, cap: usize) -> History {
-        History { n, cap, data: vec![0.0; cap * (n + 1)], count: 0 }
+        History {
+            n,
+            cap,
+            data: vec![0.0; cap * (n + 1)],
+            count: 0,
+        }
     }
 
     fn push(&mut self, s: f64, q: &[f64]) {
@@ -120,6 +125,8 @@ pub struct Controller {
     history: History,
     retreat_u: f64,
     retreat_total: f64,
+    /// progress of the path's time-law ramp, 0 → 1
+    ramp_u: f64,
     last_target: usize,
     // outputs and counters
     tau: Vec<f64>,
@@ -146,21 +153,54 @@ impl Controller {
         if cfg.waypoints.iter().flatten().any(|x| !x.is_finite()) {
             return Err(err("waypoints: not finite".into()));
         }
-        let positive = [("segment_time_s", cfg.segment_time_s), ("kp", cfg.kp), ("kd", cfg.kd), ("velocity_scale", cfg.velocity_scale), ("approach_speed", cfg.approach_speed), ("residual_max_age_ms", cfg.residual_max_age_ms)];
+        let positive = [
+            ("segment_time_s", cfg.segment_time_s),
+            ("kp", cfg.kp),
+            ("kd", cfg.kd),
+            ("velocity_scale", cfg.velocity_scale),
+            ("approach_speed", cfg.approach_speed),
+            ("residual_max_age_ms", cfg.residual_max_age_ms),
+        ];
         if let Some((name, _)) = positive.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
             return Err(err(format!("{name}: must be positive")));
         }
         if !cfg.posture.is_empty() && cfg.posture.len() != n {
-            return Err(err(format!("posture: expected {n} values, got {}", cfg.posture.len())));
+            return Err(err(format!(
+                "posture: expected {n} values, got {}",
+                cfg.posture.len()
+            )));
         }
-        let ee_frame = if cfg.ee_link.is_empty() { model.frames.len() - 1 } else { model.frame_id(&cfg.ee_link).map_err(|_| err(format!("ee_link: unknown link '{}'", cfg.ee_link)))? };
+        let ee_frame = if cfg.ee_link.is_empty() {
+            model.frames.len() - 1
+        } else {
+            model
+                .frame_id(&cfg.ee_link)
+                .map_err(|_| err(format!("ee_link: unknown link '{}'", cfg.ee_link)))?
+        };
         let limits = Limits::from_model(&model, cfg.position_margin);
-        let vmax_ref = limits.velocity.iter().map(|v| if v.is_finite() { v * cfg.velocity_scale } else { 2.0 }).collect();
+        let vmax_ref = limits
+            .velocity
+            .iter()
+            .map(|v| {
+                if v.is_finite() {
+                    v * cfg.velocity_scale
+                } else {
+                    2.0
+                }
+            })
+            .collect();
         let history_len = ((cfg.retreat_path_s.max(0.0) + 0.5) / 0.001).ceil() as usize + 2;
         Ok(Controller {
             data: Data::new(&model),
             clik: Clik::new(&model, ee_frame),
-            path: Path { waypoints: cfg.waypoints.iter().map(|w| Vector3::new(w[0], w[1], w[2])).collect(), segment_time: cfg.segment_time_s },
+            path: Path {
+                waypoints: cfg
+                    .waypoints
+                    .iter()
+                    .map(|w| Vector3::new(w[0], w[1], w[2]))
+                    .collect(),
+                segment_time: cfg.segment_time_s,
+            },
             velocity: VelocityEstimator::new(n, 60.0),
             n,
             vmax_ref,
@@ -179,6 +219,7 @@ impl Controller {
             history: History::new(n, history_len),
             retreat_u: 0.0,
             retreat_total: 0.0,
+            ramp_u: 0.0,
             last_target: 0,
             tau: vec![0.0; n],
             zeros: vec![0.0; n],
@@ -241,6 +282,7 @@ impl Controller {
         let (to, _) = self.path.sample(self.s);
         self.approach = Some(Approach::new(from, to, self.cfg.approach_speed));
         self.history.clear();
+        self.ramp_u = 0.0;
         self.last_target = self.path.target_index(self.s);
         self.mode = mode::TASK;
     }
@@ -251,7 +293,8 @@ impl Controller {
         self.quiet_since = None;
         self.hold_here(q);
         self.retreat_u = 0.0;
-        self.retreat_total = (self.cfg.retreat_path_s / 0.001).min((self.history.available().max(1) - 1) as f64);
+        self.retreat_total =
+            (self.cfg.retreat_path_s / 0.001).min((self.history.available().max(1) - 1) as f64);
         self.mode = mode::REACTION;
     }
 
@@ -268,10 +311,19 @@ impl Controller {
         if q.len() != n || q.iter().any(|x| !x.is_finite()) {
             // never act on a malformed state: hold the last reference with gravity only
             self.tau.copy_from_slice(&self.gravity);
-            return ControlOutput { tau: &self.tau, mode: self.mode, limits: LimitActivity { non_finite: true, ..Default::default() } };
+            return ControlOutput {
+                tau: &self.tau,
+                mode: self.mode,
+                limits: LimitActivity {
+                    non_finite: true,
+                    ..Default::default()
+                },
+            };
         }
         let dt = match self.last_stamp {
-            Some(t0) if input.state_stamp_ns > t0 => ((input.state_stamp_ns - t0) as f64 * 1e-9).min(0.01),
+            Some(t0) if input.state_stamp_ns > t0 => {
+                ((input.state_stamp_ns - t0) as f64 * 1e-9).min(0.01)
+            }
             _ => 0.0,
         };
         self.last_stamp = Some(input.state_stamp_ns);
@@ -289,7 +341,8 @@ impl Controller {
         let (fresh, collision, contact) = match &input.residual {
             Some(r) if r.r.len() == n => {
                 self.residual_age_ns = input.state_stamp_ns.saturating_sub(r.state_stamp_ns);
-                let fresh = r.valid && (self.residual_age_ns as f64) <= self.cfg.residual_max_age_ms * 1e6;
+                let fresh =
+                    r.valid && (self.residual_age_ns as f64) <= self.cfg.residual_max_age_ms * 1e6;
                 (fresh, fresh && r.collision, fresh && r.contact)
             }
             _ => {
@@ -336,7 +389,8 @@ impl Controller {
             }
             mode::REACTION => {
                 let min_done = self.t - self.reaction_t0 >= self.cfg.reaction_min_s;
-                let retreat_done = self.cfg.reaction != Reaction::Retreat || self.retreat_total - self.retreat_u < 0.5;
+                let retreat_done = self.cfg.reaction != Reaction::Retreat
+                    || self.retreat_total - self.retreat_u < 0.5;
                 if min_done && retreat_done && !contact {
                     self.enter_recover(q);
                 }
@@ -371,12 +425,20 @@ impl Controller {
                         out
                     }
                     None => {
-                        self.s += dt;
+                        // time scaling: ṡ = smoothstep(u) ramps 0 → 1, so that a path resumed
+                        // mid-segment starts without a jump in velocity or acceleration
+                        self.ramp_u = (self.ramp_u + dt / self.cfg.path_ramp_s.max(1e-3)).min(1.0);
+                        let u = self.ramp_u;
+                        let rate = u * u * (3.0 - 2.0 * u);
+                        self.s += dt * rate;
                         let (x, dx) = self.path.sample(self.s);
+                        let dx = dx * rate;
                         // waypoint reached: the segment ended with the end effector there
                         let target = self.path.target_index(self.s);
                         if target != self.last_target {
-                            if (self.ee - self.path.waypoints[self.last_target]).norm() <= self.cfg.waypoint_tolerance {
+                            if (self.ee - self.path.waypoints[self.last_target]).norm()
+                                <= self.cfg.waypoint_tolerance
+                            {
                                 self.waypoints_reached += 1;
                             }
                             self.last_target = target;
@@ -384,21 +446,41 @@ impl Controller {
                         (x, dx)
                     }
                 };
-                let gains = ClikGains { clik: self.cfg.clik_gain, posture: self.cfg.posture_gain, damping: self.cfg.damping };
-                let qd_ref = self.clik.step(&self.model, &mut self.data, &mut self.q_ref, &x_d, &xd_d, dt, gains, &self.posture, &self.vmax_ref);
+                let gains = ClikGains {
+                    clik: self.cfg.clik_gain,
+                    posture: self.cfg.posture_gain,
+                    damping: self.cfg.damping,
+                };
+                let qd_ref = self.clik.step(
+                    &self.model,
+                    &mut self.data,
+                    &mut self.q_ref,
+                    &x_d,
+                    &xd_d,
+                    dt,
+                    gains,
+                    &self.posture,
+                    &self.vmax_ref,
+                );
                 self.qd_ref.copy_from_slice(qd_ref);
                 self.limits.clamp_position(&mut self.q_ref);
                 self.history.push(self.s, &self.q_ref);
                 for i in 0..n {
-                    let qdd_ref = if dt > 0.0 { (self.qd_ref[i] - self.qd_ref_prev[i]) / dt } else { 0.0 };
-                    self.accel[i] = qdd_ref + kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
+                    let qdd_ref = if dt > 0.0 {
+                        (self.qd_ref[i] - self.qd_ref_prev[i]) / dt
+                    } else {
+                        0.0
+                    };
+                    self.accel[i] =
+                        qdd_ref + kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
                 }
                 self.qd_ref_prev.copy_from_slice(&self.qd_ref);
             }
             mode::REACTION => match (self.cfg.reaction, &input.residual) {
                 (Reaction::Reflex, Some(r)) => {
                     for i in 0..n {
-                        self.accel[i] = self.cfg.reflex_gain * r.r[i] - self.cfg.reflex_damping * qd[i];
+                        self.accel[i] =
+                            self.cfg.reflex_gain * r.r[i] - self.cfg.reflex_damping * qd[i];
                     }
                     minus_r = true;
                 }
@@ -424,7 +506,10 @@ impl Controller {
                     // ṡ = −1) and back to 0 at the end; u counts history entries (one per period)
                     let ramp = self.cfg.retreat_ramp_s.max(1e-3);
                     let left_s = (self.retreat_total - self.retreat_u) * 0.001;
-                    let sigma = ((self.t - self.reaction_t0) / ramp).min(1.0).min(left_s / (0.5 * ramp)).max(0.05);
+                    let sigma = ((self.t - self.reaction_t0) / ramp)
+                        .min(1.0)
+                        .min(left_s / (0.5 * ramp))
+                        .max(0.05);
                     self.retreat_u = (self.retreat_u + sigma * dt * 1000.0).min(self.retreat_total);
                     let prev: [f64; phri_ipc::MAX_DOF] = {
                         let mut a = [0.0; phri_ipc::MAX_DOF];
@@ -433,7 +518,11 @@ impl Controller {
                     };
                     self.s = self.history.at(self.retreat_u, &mut self.q_ref);
                     for i in 0..n {
-                        self.qd_ref[i] = if dt > 0.0 { (self.q_ref[i] - prev[i]) / dt } else { 0.0 };
+                        self.qd_ref[i] = if dt > 0.0 {
+                            (self.q_ref[i] - prev[i]) / dt
+                        } else {
+                            0.0
+                        };
                         self.accel[i] = kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
                     }
                 }
@@ -454,8 +543,14 @@ impl Controller {
             }
             self.tau[i] = t;
         }
-        let limits = self.limits.apply(q, qd, &self.m_diag, &self.gravity, &mut self.tau);
-        ControlOutput { tau: &self.tau, mode: self.mode, limits }
+        let limits = self
+            .limits
+            .apply(q, qd, &self.m_diag, &self.gravity, &mut self.tau);
+        ControlOutput {
+            tau: &self.tau,
+            mode: self.mode,
+            limits,
+        }
     }
 
     fn hold_accel(&mut self, q: &[f64], qd: &[f64]) {

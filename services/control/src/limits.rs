@@ -47,7 +47,14 @@ impl Limits {
     /// Enforce the limits on `tau` for a robot at `q` moving at `qd`, with
     /// joint-space inertia diagonal `m_diag` scaling the virtual end stops;
     /// `fallback` replaces a non-finite command (e.g. gravity torque).
-    pub fn apply(&self, q: &[f64], qd: &[f64], m_diag: &[f64], fallback: &[f64], tau: &mut [f64]) -> LimitActivity {
+    pub fn apply(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        m_diag: &[f64],
+        fallback: &[f64],
+        tau: &mut [f64],
+    ) -> LimitActivity {
         let mut act = LimitActivity::default();
         if tau.iter().any(|t| !t.is_finite()) {
             act.non_finite = true;
@@ -59,7 +66,10 @@ impl Limits {
         const D_STOP: f64 = 40.0; // [1/s]
         const K_VEL: f64 = 50.0; // [1/s]
         for i in 0..tau.len() {
-            let (lo, hi) = (self.lower[i] + 0.5 * self.margin, self.upper[i] - 0.5 * self.margin);
+            let (lo, hi) = (
+                self.lower[i] + 0.5 * self.margin,
+                self.upper[i] - 0.5 * self.margin,
+            );
             // virtual end stops: push back inside, damping only motion outwards
             if q[i] > hi {
                 tau[i] += m_diag[i] * (K_STOP * (hi - q[i]) - D_STOP * qd[i].max(0.0));
@@ -89,7 +99,13 @@ mod tests {
     use super::*;
 
     fn limits() -> Limits {
-        Limits { lower: vec![-1.0; 2], upper: vec![1.0; 2], velocity: vec![2.0; 2], effort: vec![10.0; 2], margin: 0.1 }
+        Limits {
+            lower: vec![-1.0; 2],
+            upper: vec![1.0; 2],
+            velocity: vec![2.0; 2],
+            effort: vec![10.0; 2],
+            margin: 0.1,
+        }
     }
 
     #[test]
@@ -109,7 +125,13 @@ mod tests {
     fn end_stops_push_inwards_and_overspeed_is_braked() {
         let l = limits();
         let mut tau = [0.0, 0.0];
-        l.apply(&[0.99, -0.99], &[0.5, -0.5], &[0.01; 2], &[0.0; 2], &mut tau);
+        l.apply(
+            &[0.99, -0.99],
+            &[0.5, -0.5],
+            &[0.01; 2],
+            &[0.0; 2],
+            &mut tau,
+        );
         assert!(tau[0] < 0.0 && tau[1] > 0.0);
         let mut tau = [0.0, 0.0];
         l.apply(&[0.0, 0.0], &[3.0, -3.0], &[0.1; 2], &[0.0; 2], &mut tau);

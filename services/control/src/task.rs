@@ -10,7 +10,10 @@ use phri_model::{Data, Model};
 pub fn min_jerk(u: f64) -> (f64, f64) {
     let u = u.clamp(0.0, 1.0);
     let (u2, u3) = (u * u, u * u * u);
-    (u3 * (10.0 - 15.0 * u + 6.0 * u2), 30.0 * u2 * (1.0 - 2.0 * u + u2))
+    (
+        u3 * (10.0 - 15.0 * u + 6.0 * u2),
+        30.0 * u2 * (1.0 - 2.0 * u + u2),
+    )
 }
 
 /// Cyclic path through waypoints, parametrised by path time `s` [s].
@@ -57,7 +60,12 @@ impl Approach {
     pub fn new(from: Vector3<f64>, to: Vector3<f64>, speed: f64) -> Approach {
         // a minimum-jerk move peaks at 1.875× its mean speed
         let duration = ((to - from).norm() * 1.875 / speed.max(1e-3)).max(0.5);
-        Approach { from, to, duration, t: 0.0 }
+        Approach {
+            from,
+            to,
+            duration,
+            t: 0.0,
+        }
     }
 
     pub fn done(&self) -> bool {
@@ -68,7 +76,10 @@ impl Approach {
     pub fn step(&mut self, dt: f64) -> (Vector3<f64>, Vector3<f64>) {
         self.t = (self.t + dt).min(self.duration);
         let (p, dp) = min_jerk(self.t / self.duration);
-        (self.from + (self.to - self.from) * p, (self.to - self.from) * (dp / self.duration))
+        (
+            self.from + (self.to - self.from) * p,
+            (self.to - self.from) * (dp / self.duration),
+        )
     }
 }
 
@@ -81,7 +92,10 @@ fn pinv_apply(jac: &Matrix6xX<f64>, v: &Vector3<f64>, damping: f64, out: &mut [f
             jjt[(r, c)] += (0..n).map(|k| jac[(r, k)] * jac[(c, k)]).sum::<f64>();
         }
     }
-    let y = jjt.cholesky().map(|ch| ch.solve(v)).unwrap_or_else(Vector3::zeros);
+    let y = jjt
+        .cholesky()
+        .map(|ch| ch.solve(v))
+        .unwrap_or_else(Vector3::zeros);
     for (k, o) in out.iter_mut().enumerate() {
         *o = jac[(0, k)] * y.x + jac[(1, k)] * y.y + jac[(2, k)] * y.z;
     }
@@ -111,7 +125,13 @@ pub struct ClikGains {
 impl Clik {
     pub fn new(model: &Model, frame: usize) -> Clik {
         let n = model.nv();
-        Clik { frame, jac: Data::jacobian_buffer(model), qd: vec![0.0; n], z: vec![0.0; n], proj: vec![0.0; n] }
+        Clik {
+            frame,
+            jac: Data::jacobian_buffer(model),
+            qd: vec![0.0; n],
+            z: vec![0.0; n],
+            proj: vec![0.0; n],
+        }
     }
 
     pub fn frame(&self) -> usize {
@@ -130,9 +150,28 @@ impl Clik {
     /// redundancy pulling towards `posture`; velocities scaled uniformly into
     /// `vmax`. Returns the reference velocity [rad/s].
     #[allow(clippy::too_many_arguments)]
-    pub fn step(&mut self, model: &Model, data: &mut Data, q_ref: &mut [f64], x_d: &Vector3<f64>, xd_d: &Vector3<f64>, dt: f64, gains: ClikGains, posture: &[f64], vmax: &[f64]) -> &[f64] {
+    pub fn step(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q_ref: &mut [f64],
+        x_d: &Vector3<f64>,
+        xd_d: &Vector3<f64>,
+        dt: f64,
+        gains: ClikGains,
+        posture: &[f64],
+        vmax: &[f64],
+    ) -> &[f64] {
         let n = q_ref.len();
-        let ok = phri_model::forward_kinematics(model, data, q_ref).is_ok() && phri_model::point_jacobian(model, data, self.frame, &Vector3::zeros(), &mut self.jac).is_ok();
+        let ok = phri_model::forward_kinematics(model, data, q_ref).is_ok()
+            && phri_model::point_jacobian(
+                model,
+                data,
+                self.frame,
+                &Vector3::zeros(),
+                &mut self.jac,
+            )
+            .is_ok();
         if !ok {
             self.qd.fill(0.0);
             return &self.qd;
@@ -153,7 +192,15 @@ impl Clik {
             self.qd[k] += self.z[k] - self.proj[k];
         }
         // uniform scaling into the velocity limits keeps the direction
-        let scale = (0..n).map(|k| if self.qd[k].abs() > vmax[k] { vmax[k] / self.qd[k].abs() } else { 1.0 }).fold(1.0, f64::min);
+        let scale = (0..n)
+            .map(|k| {
+                if self.qd[k].abs() > vmax[k] {
+                    vmax[k] / self.qd[k].abs()
+                } else {
+                    1.0
+                }
+            })
+            .fold(1.0, f64::min);
         for k in 0..n {
             self.qd[k] *= scale;
             q_ref[k] += self.qd[k] * dt;
@@ -179,7 +226,14 @@ mod tests {
 
     #[test]
     fn path_is_continuous_and_cyclic() {
-        let p = Path { waypoints: vec![Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0)], segment_time: 1.0 };
+        let p = Path {
+            waypoints: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(0.0, 1.0, 0.0),
+            ],
+            segment_time: 1.0,
+        };
         for k in 0..300 {
             let s = k as f64 * 0.01;
             let (a, _) = p.sample(s);

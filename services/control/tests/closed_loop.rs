@@ -8,7 +8,11 @@ use phri_ipc::control_mode as mode;
 use phri_model::{Data, Model};
 
 fn lwr4() -> Model {
-    Model::from_urdf_file(concat!(env!("CARGO_MANIFEST_DIR"), "/../../deploy/robots/kuka_lwr4.urdf")).unwrap()
+    Model::from_urdf_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../deploy/robots/kuka_lwr4.urdf"
+    ))
+    .unwrap()
 }
 
 const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
@@ -34,8 +38,15 @@ struct Cell {
 impl Cell {
     fn new(reaction: Reaction) -> Cell {
         let model = lwr4();
-        let cfg = ControlConfig { reaction, ..ControlConfig::default() };
-        let rcfg = ResidualConfig { viscous_friction: vec![0.0], coulomb_friction: vec![0.0], ..ResidualConfig::default() };
+        let cfg = ControlConfig {
+            reaction,
+            ..ControlConfig::default()
+        };
+        let rcfg = ResidualConfig {
+            viscous_friction: vec![0.0],
+            coulomb_friction: vec![0.0],
+            ..ResidualConfig::default()
+        };
         Cell {
             data: Data::new(&model),
             q: Q0.to_vec(),
@@ -43,7 +54,10 @@ impl Cell {
             t_ns: 1_000_000_000,
             observer: ResidualObserver::new(model.clone(), &rcfg).unwrap(),
             controller: Controller::new(model.clone(), cfg).unwrap(),
-            tau: phri_model::gravity(&model, &mut Data::new(&model), &Q0).unwrap().as_slice().to_vec(),
+            tau: phri_model::gravity(&model, &mut Data::new(&model), &Q0)
+                .unwrap()
+                .as_slice()
+                .to_vec(),
             ext: None,
             residual_alive: true,
             last_r: vec![0.0; 7],
@@ -74,7 +88,15 @@ impl Cell {
                 }
             }
             let total: Vec<f64> = self.tau.iter().zip(&te).map(|(a, b)| a + b).collect();
-            let qdd = phri_model::forward_dynamics(&self.model, &mut self.data, &self.q, &self.qd, &total).unwrap().clone();
+            let qdd = phri_model::forward_dynamics(
+                &self.model,
+                &mut self.data,
+                &self.q,
+                &self.qd,
+                &total,
+            )
+            .unwrap()
+            .clone();
             for i in 0..7 {
                 self.qd[i] += 1e-4 * qdd[i];
                 self.q[i] += 1e-4 * self.qd[i];
@@ -82,14 +104,32 @@ impl Cell {
         }
         self.t_ns += 1_000_000;
         if self.residual_alive {
-            let out = self.observer.step(self.t_ns as f64 * 1e-9, &self.q, &self.tau, None).unwrap();
+            let out = self
+                .observer
+                .step(self.t_ns as f64 * 1e-9, &self.q, &self.tau, None)
+                .unwrap();
             self.last_r.copy_from_slice(out.r);
             self.last_flags = (out.valid, out.detection.contact, out.detection.collision);
             self.last_r_stamp = self.t_ns;
         }
-        let residual = ResidualView { state_stamp_ns: self.last_r_stamp, r: &self.last_r, valid: self.last_flags.0, contact: self.last_flags.1, collision: self.last_flags.2 };
-        let out = self.controller.step(&ControlInput { state_stamp_ns: self.t_ns, q: &self.q, residual: Some(residual) });
-        let jump = out.tau.iter().zip(&self.tau).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let residual = ResidualView {
+            state_stamp_ns: self.last_r_stamp,
+            r: &self.last_r,
+            valid: self.last_flags.0,
+            contact: self.last_flags.1,
+            collision: self.last_flags.2,
+        };
+        let out = self.controller.step(&ControlInput {
+            state_stamp_ns: self.t_ns,
+            q: &self.q,
+            residual: Some(residual),
+        });
+        let jump = out
+            .tau
+            .iter()
+            .zip(&self.tau)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         self.max_tau_jump = self.max_tau_jump.max(jump);
         self.tau.copy_from_slice(out.tau);
         out.mode
@@ -112,9 +152,17 @@ fn free_motion_cycles_through_the_waypoints_without_detections() {
     assert_eq!(cell.controller.detections, 0);
     assert_eq!(cell.controller.protective_stops, 0);
     // approach (≈2 s) then 4 s per cycle of 3 waypoints: at least 2 full cycles
-    assert!(cell.controller.waypoints_reached >= 6, "reached {}", cell.controller.waypoints_reached);
+    assert!(
+        cell.controller.waypoints_reached >= 6,
+        "reached {}",
+        cell.controller.waypoints_reached
+    );
     // the first command re-synced: no jump from the gravity torque it started with
-    assert!(cell.max_tau_jump < 20.0, "torque jumped by {} Nm", cell.max_tau_jump);
+    assert!(
+        cell.max_tau_jump < 20.0,
+        "torque jumped by {} Nm",
+        cell.max_tau_jump
+    );
 }
 
 /// Push on the forearm with a growing force while the task runs; stop
@@ -140,7 +188,11 @@ fn collision_scenario(reaction: Reaction) -> (Cell, bool) {
         let here = phri_model::frame_placement(&cell.model, &cell.data, link).apply(&point);
         // a wall that pushes back where the arm enters it (50 N/cm), until released
         let depth = (contact - here).dot(&dir) + 0.01;
-        cell.ext = if !released && depth > 0.0 { Some((link, point, dir * (5000.0 * depth))) } else { None };
+        cell.ext = if !released && depth > 0.0 {
+            Some((link, point, dir * (5000.0 * depth)))
+        } else {
+            None
+        };
         if depth > 0.0 && first_contact.is_none() {
             first_contact = Some(k);
         }
@@ -169,7 +221,10 @@ fn every_reaction_ends_the_contact_and_the_task_resumes() {
         // every strategy but stop moves the arm out of the contact by itself
         assert_eq!(pushed_away, reaction != Reaction::Stop, "{reaction:?}");
         let m = cell.run(4000);
-        assert!(cell.controller.resumes >= 1, "{reaction:?}: never resumed (mode {m})");
+        assert!(
+            cell.controller.resumes >= 1,
+            "{reaction:?}: never resumed (mode {m})"
+        );
         assert_eq!(m, mode::TASK, "{reaction:?}");
         assert!(cell.ext.is_none() || cell.controller.mode() == mode::TASK);
     }
@@ -184,19 +239,35 @@ fn stale_residual_holds_a_protective_stop_and_recovers() {
     assert_eq!(m, mode::PROTECTIVE_STOP);
     let q_stop = cell.q.clone();
     cell.run(1500);
-    let drift = cell.q.iter().zip(&q_stop).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let drift = cell
+        .q
+        .iter()
+        .zip(&q_stop)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     // it was moving when stopped: it comes to rest close by and stays
     assert!(drift < 0.1, "moved {drift} rad while stopped");
     let speed = cell.qd.iter().map(|v| v.abs()).fold(0.0, f64::max);
     assert!(speed < 0.01, "still moving at {speed} rad/s");
     assert_eq!(cell.controller.protective_stops, 1);
     // the residual comes back (a restarted service starts from scratch)
-    cell.observer = ResidualObserver::new(cell.model.clone(), &ResidualConfig { viscous_friction: vec![0.0], coulomb_friction: vec![0.0], ..ResidualConfig::default() }).unwrap();
+    cell.observer = ResidualObserver::new(
+        cell.model.clone(),
+        &ResidualConfig {
+            viscous_friction: vec![0.0],
+            coulomb_friction: vec![0.0],
+            ..ResidualConfig::default()
+        },
+    )
+    .unwrap();
     cell.residual_alive = true;
     let m = cell.run(3000);
     assert_eq!(m, mode::TASK);
     assert_eq!(cell.controller.resumes, 1);
-    assert_eq!(cell.controller.detections, 0, "restart of the residual caused a false detection");
+    assert_eq!(
+        cell.controller.detections, 0,
+        "restart of the residual caused a false detection"
+    );
 }
 
 #[test]
@@ -212,8 +283,15 @@ fn a_restarted_controller_resyncs_without_a_jump() {
         cell.tick();
         max_dev = max_dev.max((cell.ee() - ee_before).norm());
     }
-    assert!(cell.max_tau_jump < 30.0, "first commands jumped by {} Nm", cell.max_tau_jump);
-    assert!(max_dev < 0.15, "end effector strayed {max_dev} m after the restart");
+    assert!(
+        cell.max_tau_jump < 30.0,
+        "first commands jumped by {} Nm",
+        cell.max_tau_jump
+    );
+    assert!(
+        max_dev < 0.15,
+        "end effector strayed {max_dev} m after the restart"
+    );
     let m = cell.run(5000);
     assert_eq!(m, mode::TASK);
     assert!(cell.controller.waypoints_reached >= 2);
@@ -222,13 +300,26 @@ fn a_restarted_controller_resyncs_without_a_jump() {
 #[test]
 fn malformed_state_never_panics() {
     let mut c = Controller::new(lwr4(), ControlConfig::default()).unwrap();
-    let out = c.step(&ControlInput { state_stamp_ns: 1, q: &[f64::NAN; 7], residual: None });
+    let out = c.step(&ControlInput {
+        state_stamp_ns: 1,
+        q: &[f64::NAN; 7],
+        residual: None,
+    });
     assert!(out.tau.iter().all(|t| t.is_finite()));
-    let out = c.step(&ControlInput { state_stamp_ns: 2, q: &[0.0; 3], residual: None });
+    let out = c.step(&ControlInput {
+        state_stamp_ns: 2,
+        q: &[0.0; 3],
+        residual: None,
+    });
     assert_eq!(out.tau.len(), 7);
-    let bad = ControlConfig { waypoints: vec![[0.0; 3]], ..ControlConfig::default() };
+    let bad = ControlConfig {
+        waypoints: vec![[0.0; 3]],
+        ..ControlConfig::default()
+    };
     assert!(Controller::new(lwr4(), bad).is_err());
-    let bad = ControlConfig { ee_link: "nope".into(), ..ControlConfig::default() };
+    let bad = ControlConfig {
+        ee_link: "nope".into(),
+        ..ControlConfig::default()
+    };
     assert!(Controller::new(lwr4(), bad).is_err());
 }
-

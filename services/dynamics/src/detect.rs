@@ -47,7 +47,11 @@ mod tests {
 
     #[test]
     fn levels_and_isolation() {
-        let d = Detector { contact: vec![1.0; 4], collision: vec![3.0; 4], norm: 10.0 };
+        let d = Detector {
+            contact: vec![1.0; 4],
+            collision: vec![3.0; 4],
+            norm: 10.0,
+        };
         assert_eq!(d.classify(&[0.5, 0.0, 0.0, 0.0]), Detection::default());
         let c = d.classify(&[2.0, 1.5, 0.2, 0.0]);
         assert!(c.contact && !c.collision);

@@ -9,5 +9,5 @@ pub mod velocity;
 
 pub use config::ResidualConfig;
 pub use detect::{Detection, Detector};
-pub use observer::{ResidualObserver, ResidualError};
+pub use observer::{ResidualError, ResidualObserver};
 pub use velocity::VelocityEstimator;

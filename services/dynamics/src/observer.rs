@@ -21,7 +21,11 @@ pub enum ResidualError {
     #[error("config [dynamics]: {0}")]
     Config(String),
     #[error("{what}: expected {expected} values, got {got}")]
-    Dimension { what: &'static str, expected: usize, got: usize },
+    Dimension {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     #[error("{0}: not a finite number")]
     NotFinite(&'static str),
     #[error(transparent)]
@@ -82,10 +86,18 @@ impl ResidualObserver {
             collision: per_joint("collision_threshold", &cfg.collision_threshold, n).map_err(e)?,
             norm: cfg.collision_norm_threshold,
         };
-        let ft_link = if cfg.ft_link.is_empty() { model.joints[n - 1].child_link.clone() } else { cfg.ft_link.clone() };
-        let ft_frame = model.frame_id(&ft_link).map_err(|_| ResidualError::Config(format!("ft_link: unknown link '{ft_link}'")))?;
+        let ft_link = if cfg.ft_link.is_empty() {
+            model.joints[n - 1].child_link.clone()
+        } else {
+            cfg.ft_link.clone()
+        };
+        let ft_frame = model
+            .frame_id(&ft_link)
+            .map_err(|_| ResidualError::Config(format!("ft_link: unknown link '{ft_link}'")))?;
         if !(cfg.velocity_cutoff_hz > 0.0) {
-            return Err(ResidualError::Config("velocity_cutoff_hz: must be positive".into()));
+            return Err(ResidualError::Config(
+                "velocity_cutoff_hz: must be positive".into(),
+            ));
         }
         Ok(ResidualObserver {
             data: Data::new(&model),
@@ -131,13 +143,27 @@ impl ResidualObserver {
     /// One sample: time `t` [s], measured positions `q`, the torque `tau`
     /// applied since the previous sample, and an optional wrist wrench
     /// (force, moment; base frame, at the F/T link's origin).
-    pub fn step(&mut self, t: f64, q: &[f64], tau: &[f64], wrench: Option<&[f64; 6]>) -> Result<ResidualOutput<'_>, ResidualError> {
+    pub fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        tau: &[f64],
+        wrench: Option<&[f64; 6]>,
+    ) -> Result<ResidualOutput<'_>, ResidualError> {
         let n = self.model.nv();
         if q.len() != n {
-            return Err(ResidualError::Dimension { what: "q", expected: n, got: q.len() });
+            return Err(ResidualError::Dimension {
+                what: "q",
+                expected: n,
+                got: q.len(),
+            });
         }
         if tau.len() != n {
-            return Err(ResidualError::Dimension { what: "tau", expected: n, got: tau.len() });
+            return Err(ResidualError::Dimension {
+                what: "tau",
+                expected: n,
+                got: tau.len(),
+            });
         }
         if !t.is_finite() || q.iter().any(|x| !x.is_finite()) {
             return Err(ResidualError::NotFinite("q"));
@@ -160,11 +186,18 @@ impl ResidualObserver {
         let ft_used = self.use_ft && wrench.is_some();
         if ft_used {
             phri_model::forward_kinematics(&self.model, &mut self.data, q)?;
-            phri_model::point_jacobian(&self.model, &self.data, self.ft_frame, &Vector3::zeros(), &mut self.jac)?;
+            phri_model::point_jacobian(
+                &self.model,
+                &self.data,
+                self.ft_frame,
+                &Vector3::zeros(),
+                &mut self.jac,
+            )?;
         }
         for i in 0..n {
             let v = qd[i];
-            let friction = self.viscous[i] * v + self.coulomb[i] * (v / self.coulomb_velocity).tanh();
+            let friction =
+                self.viscous[i] * v + self.coulomb[i] * (v / self.coulomb_velocity).tanh();
             let mut x = self.data.residual_bias[i] - friction;
             if let (true, Some(w)) = (ft_used, wrench) {
                 let col = self.jac.column(i);
@@ -181,14 +214,26 @@ impl ResidualObserver {
         } else {
             for i in 0..n {
                 // the applied torque is held over the period; the state-dependent terms are averaged
-                self.integral[i] += dt * (tau[i] + 0.5 * (self.integrand[i] + self.last_integrand[i]) + self.r[i]);
+                self.integral[i] +=
+                    dt * (tau[i] + 0.5 * (self.integrand[i] + self.last_integrand[i]) + self.r[i]);
                 self.r[i] = self.gain[i] * (self.data.p[i] - self.p0[i] - self.integral[i]);
             }
         }
         self.last_integrand.copy_from_slice(&self.integrand);
         let valid = self.samples > self.warmup;
-        let detection = if valid { self.detector.classify(&self.r) } else { Detection::default() };
+        let detection = if valid {
+            self.detector.classify(&self.r)
+        } else {
+            Detection::default()
+        };
         let norm = self.r.iter().map(|x| x * x).sum::<f64>().sqrt();
-        Ok(ResidualOutput { r: &self.r, qd: self.velocity.velocity(), norm, detection, valid, ft_used })
+        Ok(ResidualOutput {
+            r: &self.r,
+            qd: self.velocity.velocity(),
+            norm,
+            detection,
+            valid,
+            ft_used,
+        })
     }
 }

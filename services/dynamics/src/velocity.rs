@@ -12,7 +12,12 @@ pub struct VelocityEstimator {
 
 impl VelocityEstimator {
     pub fn new(n: usize, cutoff_hz: f64) -> Self {
-        VelocityEstimator { cutoff_hz, last_q: vec![0.0; n], qd: vec![0.0; n], primed: false }
+        VelocityEstimator {
+            cutoff_hz,
+            last_q: vec![0.0; n],
+            qd: vec![0.0; n],
+            primed: false,
+        }
     }
 
     /// Forget the history (next update starts from rest).

@@ -7,7 +7,11 @@ use phri_dynamics::{ResidualConfig, ResidualObserver};
 use phri_model::{Data, Model};
 
 fn lwr4() -> Model {
-    Model::from_urdf_file(concat!(env!("CARGO_MANIFEST_DIR"), "/../../deploy/robots/kuka_lwr4.urdf")).unwrap()
+    Model::from_urdf_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../deploy/robots/kuka_lwr4.urdf"
+    ))
+    .unwrap()
 }
 
 /// Exact-model simulation of the arm at 10 kHz, sampled at 1 kHz.
@@ -22,7 +26,13 @@ struct Arm {
 impl Arm {
     fn new(model: Model) -> Arm {
         let data = Data::new(&model);
-        Arm { q: vec![0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0], qd: vec![0.0; 7], t: 0.0, model, data }
+        Arm {
+            q: vec![0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0],
+            qd: vec![0.0; 7],
+            t: 0.0,
+            model,
+            data,
+        }
     }
 
     /// τ_ext of force `f` [N] at `point` [m] fixed on `link`.
@@ -31,7 +41,9 @@ impl Arm {
         let mut j = Data::jacobian_buffer(&self.model);
         phri_model::forward_kinematics(&self.model, &mut self.data, &self.q).unwrap();
         phri_model::point_jacobian(&self.model, &self.data, frame, &point, &mut j).unwrap();
-        (0..7).map(|i| (0..3).map(|k| j[(k, i)] * f[k]).sum()).collect()
+        (0..7)
+            .map(|i| (0..3).map(|k| j[(k, i)] * f[k]).sum())
+            .collect()
     }
 
     /// Advance 1 ms with motor torque `tau` plus external force `f` on `link`.
@@ -43,7 +55,15 @@ impl Arm {
                 None => vec![0.0; 7],
             };
             let total: Vec<f64> = tau.iter().zip(&te).map(|(a, b)| a + b).collect();
-            let qdd = phri_model::forward_dynamics(&self.model, &mut self.data, &self.q, &self.qd, &total).unwrap().clone();
+            let qdd = phri_model::forward_dynamics(
+                &self.model,
+                &mut self.data,
+                &self.q,
+                &self.qd,
+                &total,
+            )
+            .unwrap()
+            .clone();
             for i in 0..7 {
                 self.qd[i] += 1e-4 * qdd[i];
                 self.q[i] += 1e-4 * self.qd[i];
@@ -55,12 +75,17 @@ impl Arm {
 
     /// Gravity compensation plus an inertia-scaled joint PD towards a moving sinusoidal reference.
     fn controller(&mut self) -> Vec<f64> {
-        let g: DVector<f64> = phri_model::gravity(&self.model, &mut self.data, &self.q).unwrap().clone();
-        let m = phri_model::crba(&self.model, &mut self.data, &self.q).unwrap().clone();
+        let g: DVector<f64> = phri_model::gravity(&self.model, &mut self.data, &self.q)
+            .unwrap()
+            .clone();
+        let m = phri_model::crba(&self.model, &mut self.data, &self.q)
+            .unwrap()
+            .clone();
         let acc = DVector::from_iterator(
             7,
             (0..7).map(|i| {
-                let r = 0.3 * (1.5 * self.t + i as f64).sin() + [0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0][i];
+                let r =
+                    0.3 * (1.5 * self.t + i as f64).sin() + [0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0][i];
                 100.0 * (r - self.q[i]) - 20.0 * self.qd[i]
             }),
         );
@@ -69,7 +94,11 @@ impl Arm {
 }
 
 fn frictionless() -> ResidualConfig {
-    ResidualConfig { viscous_friction: vec![0.0], coulomb_friction: vec![0.0], ..ResidualConfig::default() }
+    ResidualConfig {
+        viscous_friction: vec![0.0],
+        coulomb_friction: vec![0.0],
+        ..ResidualConfig::default()
+    }
 }
 
 #[test]
@@ -122,31 +151,53 @@ fn follows_a_step_as_a_first_order_low_pass_and_detects_within_the_bound() {
         if k >= onset && detected_at.is_none() && out.detection.collision {
             detected_at = Some(k - onset + 1);
             // a force on link 4 cannot show in components 5..7 (paper eq. 3)
-            assert!(out.detection.isolated_joint.unwrap() <= 3, "isolated {:?}", out.detection.isolated_joint);
+            assert!(
+                out.detection.isolated_joint.unwrap() <= 3,
+                "isolated {:?}",
+                out.detection.isolated_joint
+            );
         }
         if k == onset + 300 {
             // settled: the isolated joint is the link's own joint
-            assert!(te[3].abs() > contact[3], "test force must load joint 4: {te:?}");
+            assert!(
+                te[3].abs() > contact[3],
+                "test force must load joint 4: {te:?}"
+            );
             assert_eq!(out.detection.isolated_joint, Some(3));
             // 300 ms after the step the residual equals τ_ext
             for i in 0..7 {
-                assert!((out.r[i] - te[i]).abs() < 0.05 * (1.0 + te[i].abs()), "joint {i}: r {} vs τ_ext {}", out.r[i], te[i]);
+                assert!(
+                    (out.r[i] - te[i]).abs() < 0.05 * (1.0 + te[i].abs()),
+                    "joint {i}: r {} vs τ_ext {}",
+                    out.r[i],
+                    te[i]
+                );
             }
         }
         if k == onset + 10 {
             // after 10 ms: r ≈ τ_ext (1 − e^{−K t}) within a sample
             for i in 0..4 {
                 let expect = te[i] * (1.0 - (-k_i * 0.010).exp());
-                assert!((out.r[i] - expect).abs() < 0.15 * te[i].abs() + 0.2, "joint {i}: {} vs {expect}", out.r[i]);
+                assert!(
+                    (out.r[i] - expect).abs() < 0.15 * te[i].abs() + 0.2,
+                    "joint {i}: {} vs {expect}",
+                    out.r[i]
+                );
             }
         }
     }
     // first-order bound: −ln(1 − θ/F)/K_I + 2 ms, for the joint with the largest F/θ
-    let (i, ratio) = (0..7).map(|i| (i, tau_ext[i].abs() / theta[i])).max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    let (i, ratio) = (0..7)
+        .map(|i| (i, tau_ext[i].abs() / theta[i]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
     assert!(ratio > 1.5, "test force too small: joint {i} F/θ = {ratio}");
     let bound_ms = -(1.0 - 1.0 / ratio).ln() / k_i * 1000.0 + 2.0;
     let got = detected_at.expect("collision not detected") as f64;
-    assert!(got <= bound_ms, "detected after {got} ms, bound {bound_ms:.1} ms");
+    assert!(
+        got <= bound_ms,
+        "detected after {got} ms, bound {bound_ms:.1} ms"
+    );
 }
 
 #[test]
@@ -160,15 +211,27 @@ fn ft_sensor_reading_removes_tool_forces_from_the_residual() {
         let tau = arm.controller();
         // a contact force ramping up over 50 ms at the tool
         let f = f_max * ((k as f64 - 500.0) / 50.0).clamp(0.0, 1.0);
-        let e = if k >= 500 { Some(("lwr_link_7", Vector3::zeros(), f)) } else { None };
+        let e = if k >= 500 {
+            Some(("lwr_link_7", Vector3::zeros(), f))
+        } else {
+            None
+        };
         arm.step(&tau, e);
         // the sensor measures the wrench at the link-7 origin: force, and zero moment there
         phri_model::forward_kinematics(&model, &mut data, &arm.q).unwrap();
-        let w = if k >= 500 { [f.x, f.y, f.z, 0.0, 0.0, 0.0] } else { [0.0; 6] };
+        let w = if k >= 500 {
+            [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+        } else {
+            [0.0; 6]
+        };
         let out = obs.step(arm.t, &arm.q, &tau, Some(&w)).unwrap();
         assert!(out.ft_used);
         if k > 500 {
-            assert!(out.norm < 0.5, "k {k}: residual {} with the tool force measured", out.norm);
+            assert!(
+                out.norm < 0.5,
+                "k {k}: residual {} with the tool force measured",
+                out.norm
+            );
         }
     }
 }
@@ -181,8 +244,14 @@ fn bad_inputs_are_errors_not_panics() {
     assert!(obs.step(0.0, &[0.0; 7], &[0.0; 8], None).is_err());
     assert!(obs.step(0.0, &[f64::NAN; 7], &[0.0; 7], None).is_err());
     assert!(obs.step(f64::INFINITY, &[0.0; 7], &[0.0; 7], None).is_err());
-    let bad = ResidualConfig { ft_link: "nope".into(), ..ResidualConfig::default() };
+    let bad = ResidualConfig {
+        ft_link: "nope".into(),
+        ..ResidualConfig::default()
+    };
     assert!(ResidualObserver::new(model.clone(), &bad).is_err());
-    let bad = ResidualConfig { gain: vec![], ..ResidualConfig::default() };
+    let bad = ResidualConfig {
+        gain: vec![],
+        ..ResidualConfig::default()
+    };
     assert!(ResidualObserver::new(model, &bad).is_err());
 }

@@ -18,7 +18,11 @@ fn random_state(model: &Model, rng: &mut impl Rng) -> (Vec<f64>, Vec<f64>) {
         .joints
         .iter()
         .map(|j| {
-            let (lo, hi) = if j.lower.is_finite() && j.upper.is_finite() && j.upper > j.lower { (j.lower, j.upper) } else { (-3.0, 3.0) };
+            let (lo, hi) = if j.lower.is_finite() && j.upper.is_finite() && j.upper > j.lower {
+                (j.lower, j.upper)
+            } else {
+                (-3.0, 3.0)
+            };
             rng.gen_range(lo..=hi)
         })
         .collect();
@@ -26,9 +30,17 @@ fn random_state(model: &Model, rng: &mut impl Rng) -> (Vec<f64>, Vec<f64>) {
     (q, qd)
 }
 
-fn median_ns(samples: usize, model: &Model, data: &mut Data, seed: u64, mut f: impl FnMut(&Model, &mut Data, &[f64], &[f64])) -> f64 {
+fn median_ns(
+    samples: usize,
+    model: &Model,
+    data: &mut Data,
+    seed: u64,
+    mut f: impl FnMut(&Model, &mut Data, &[f64], &[f64]),
+) -> f64 {
     let mut rng = rand::rngs::SmallRng::seed_from_u64(seed);
-    let states: Vec<(Vec<f64>, Vec<f64>)> = (0..samples).map(|_| random_state(model, &mut rng)).collect();
+    let states: Vec<(Vec<f64>, Vec<f64>)> = (0..samples)
+        .map(|_| random_state(model, &mut rng))
+        .collect();
     // warm-up
     for (q, qd) in states.iter().take(50) {
         for _ in 0..CALLS_PER_BATCH {
@@ -53,7 +65,11 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
     let path = args.first().ok_or("bench needs a URDF file")?;
     let flags = Flags::parse(&args[1..], &["--samples"])?;
     let samples = match flags.get("--samples") {
-        Some(s) => s.parse::<usize>().ok().filter(|&n| n > 0).ok_or_else(|| format!("--samples: '{s}' is not a positive integer"))?,
+        Some(s) => s
+            .parse::<usize>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("--samples: '{s}' is not a positive integer"))?,
         None => 500,
     };
     let model = load(path)?;
@@ -68,7 +84,16 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
     });
     let jacobian = median_ns(samples, &model, &mut data, 2, |m, d, q, _| {
         black_box(phri_model::forward_kinematics(m, d, q).is_ok());
-        black_box(phri_model::point_jacobian(m, d, last, &nalgebra::Vector3::new(0.0, 0.0, 0.05), &mut jac).is_ok());
+        black_box(
+            phri_model::point_jacobian(
+                m,
+                d,
+                last,
+                &nalgebra::Vector3::new(0.0, 0.0, 0.05),
+                &mut jac,
+            )
+            .is_ok(),
+        );
     });
     let crba = median_ns(samples, &model, &mut data, 3, |m, d, q, _| {
         black_box(phri_model::crba(m, d, q).is_ok());

@@ -6,8 +6,14 @@ use serde_json::{json, Map, Value};
 
 use crate::{parse_vector, Flags};
 
-fn matrix_json<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(m: &nalgebra::Matrix<f64, R, C, S>) -> Value {
-    Value::Array((0..m.nrows()).map(|i| Value::Array((0..m.ncols()).map(|j| json!(m[(i, j)])).collect())).collect())
+fn matrix_json<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
+    m: &nalgebra::Matrix<f64, R, C, S>,
+) -> Value {
+    Value::Array(
+        (0..m.nrows())
+            .map(|i| Value::Array((0..m.ncols()).map(|j| json!(m[(i, j)])).collect()))
+            .collect(),
+    )
 }
 
 fn vector_json(v: &nalgebra::DVector<f64>) -> Value {
@@ -24,7 +30,10 @@ fn state(flags: &Flags, name: &str, n: usize, required: bool) -> Result<Vec<f64>
         Some(text) => {
             let v = parse_vector(name, text)?;
             if v.len() != n {
-                return Err(format!("{name}: expected {n} values (one per actuated joint), got {}", v.len()));
+                return Err(format!(
+                    "{name}: expected {n} values (one per actuated joint), got {}",
+                    v.len()
+                ));
             }
             Ok(v)
         }
@@ -35,7 +44,9 @@ fn state(flags: &Flags, name: &str, n: usize, required: bool) -> Result<Vec<f64>
 
 /// `LINK:x,y,z`
 fn parse_point(model: &Model, text: &str) -> Result<(usize, Vector3<f64>), String> {
-    let (link, xyz) = text.rsplit_once(':').ok_or_else(|| format!("--point: expected LINK:x,y,z, got '{text}'"))?;
+    let (link, xyz) = text
+        .rsplit_once(':')
+        .ok_or_else(|| format!("--point: expected LINK:x,y,z, got '{text}'"))?;
     let v = parse_vector("--point", xyz)?;
     if v.len() != 3 {
         return Err(format!("--point: expected 3 coordinates, got {}", v.len()));
@@ -52,20 +63,32 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
     let q = state(&flags, "--q", n, true)?;
     let qd = state(&flags, "--qd", n, false)?;
     let qdd = state(&flags, "--qdd", n, false)?;
-    let point = flags.get("--point").map(|p| parse_point(&model, p)).transpose()?;
+    let point = flags
+        .get("--point")
+        .map(|p| parse_point(&model, p))
+        .transpose()?;
 
     let mut data = Data::new(&model);
     let e = |e: phri_model::ModelError| e.to_string();
     let m: DMatrix<f64> = phri_model::crba(&model, &mut data, &q).map_err(e)?.clone();
-    let c = phri_model::coriolis_matrix(&model, &mut data, &q, &qd).map_err(e)?.clone();
-    let c_qd = phri_model::coriolis_times_qd(&model, &mut data, &q, &qd).map_err(e)?.clone();
+    let c = phri_model::coriolis_matrix(&model, &mut data, &q, &qd)
+        .map_err(e)?
+        .clone();
+    let c_qd = phri_model::coriolis_times_qd(&model, &mut data, &q, &qd)
+        .map_err(e)?
+        .clone();
     phri_model::residual_terms(&model, &mut data, &q, &qd).map_err(e)?;
     let (ct_qd, g, p) = (data.ct_qd.clone(), data.g.clone(), data.p.clone());
-    let tau = phri_model::rnea(&model, &mut data, &q, &qd, &qdd).map_err(e)?.clone();
+    let tau = phri_model::rnea(&model, &mut data, &q, &qd, &qdd)
+        .map_err(e)?
+        .clone();
     phri_model::forward_kinematics(&model, &mut data, &q).map_err(e)?;
     let mut fk = Map::new();
     for (i, f) in model.frames.iter().enumerate() {
-        fk.insert(f.name.clone(), matrix_json(&phri_model::frame_placement(&model, &data, i).to_homogeneous()));
+        fk.insert(
+            f.name.clone(),
+            matrix_json(&phri_model::frame_placement(&model, &data, i).to_homogeneous()),
+        );
     }
     let mut out = Map::new();
     out.insert("robot".into(), json!(model.name));

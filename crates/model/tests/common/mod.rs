@@ -5,7 +5,9 @@ use phri_model::Model;
 use rand::{Rng, SeedableRng};
 
 pub fn repo_path(rel: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
 }
 
 pub fn lwr4() -> Model {
@@ -13,7 +15,8 @@ pub fn lwr4() -> Model {
 }
 
 pub fn tree() -> Model {
-    Model::from_urdf_file(repo_path("crates/model/tests/data/tree_prismatic.urdf")).expect("tree loads")
+    Model::from_urdf_file(repo_path("crates/model/tests/data/tree_prismatic.urdf"))
+        .expect("tree loads")
 }
 
 /// A random tree of `n` joints (revolute, prismatic, continuous and fixed ones
@@ -21,11 +24,27 @@ pub fn tree() -> Model {
 pub fn random_tree(seed: u64, n: usize) -> Model {
     let mut rng = rand::rngs::SmallRng::seed_from_u64(seed);
     let mut s = String::from("<robot name=\"random\"><link name=\"l0\"/>");
-    let v3 = |rng: &mut rand::rngs::SmallRng, a: f64| format!("{} {} {}", rng.gen_range(-a..a), rng.gen_range(-a..a), rng.gen_range(-a..a));
+    let v3 = |rng: &mut rand::rngs::SmallRng, a: f64| {
+        format!(
+            "{} {} {}",
+            rng.gen_range(-a..a),
+            rng.gen_range(-a..a),
+            rng.gen_range(-a..a)
+        )
+    };
     for i in 1..=n {
-        let parent = if i > 2 && rng.gen_bool(0.3) { rng.gen_range(0..i - 1) } else { i - 1 };
-        let kind = ["revolute", "prismatic", "continuous", "fixed"][if i == 1 { 0 } else { rng.gen_range(0..4) }];
-        let (a, b, c) = (rng.gen_range(0.01..0.1), rng.gen_range(0.01..0.1), rng.gen_range(0.01..0.1));
+        let parent = if i > 2 && rng.gen_bool(0.3) {
+            rng.gen_range(0..i - 1)
+        } else {
+            i - 1
+        };
+        let kind = ["revolute", "prismatic", "continuous", "fixed"]
+            [if i == 1 { 0 } else { rng.gen_range(0..4) }];
+        let (a, b, c) = (
+            rng.gen_range(0.01..0.1),
+            rng.gen_range(0.01..0.1),
+            rng.gen_range(0.01..0.1),
+        );
         s += &format!(
             "<link name=\"l{i}\"><inertial><origin xyz=\"{}\" rpy=\"{}\"/><mass value=\"{}\"/><inertia ixx=\"{}\" ixy=\"0\" ixz=\"0\" iyy=\"{}\" iyz=\"0\" izz=\"{}\"/></inertial></link>",
             v3(&mut rng, 0.1),
@@ -56,7 +75,12 @@ pub fn rng(seed: u64) -> rand::rngs::SmallRng {
 
 /// Every model the identities are checked on.
 pub fn models() -> Vec<(&'static str, Model)> {
-    vec![("lwr4", lwr4()), ("tree", tree()), ("random12", random_tree(11, 12)), ("random5", random_tree(5, 5))]
+    vec![
+        ("lwr4", lwr4()),
+        ("tree", tree()),
+        ("random12", random_tree(11, 12)),
+        ("random5", random_tree(5, 5)),
+    ]
 }
 
 pub fn axpy(x: &[f64], a: f64, d: &[f64]) -> Vec<f64> {

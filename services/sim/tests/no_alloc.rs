@@ -1,0 +1,80 @@
+//! `Simulator::step` allocates nothing: counted with a global allocator
+//! (this file holds a single test so no other thread allocates meanwhile).
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use phri_sim::{Scenario, SimConfig, Simulator};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Through the whole collision scenario with the robot held in the human's
+/// way (contacts, sensor, brake on and off), and report the cost of a step.
+#[test]
+fn step_does_not_allocate() {
+    let model = common::model();
+    let q = common::ik(&model, common::P2);
+    let sc = Scenario::from_file(common::scenario_path("collision.toml")).expect("scenario");
+    let cfg = SimConfig {
+        q0: q.clone(),
+        ft_sensor: true,
+        ..SimConfig::default()
+    };
+    let mut sim = Simulator::from_scenario(model, cfg, &sc, Some(1)).expect("sim");
+    let tau = [0.0, 20.0, 0.0, 10.0, 0.0, 1.0, 0.0];
+    let mut contacts = 0usize;
+    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let t0 = std::time::Instant::now();
+    for k in 0..16_000 {
+        if k % 50 == 0 {
+            sim.reset_state(&q).expect("pose");
+        }
+        let m = sim.step(&tau, k % 3000 > 2500);
+        contacts += usize::from(m.wrench.is_some_and(|w| w.iter().any(|x| *x != 0.0)));
+        contacts += sim.truth().contacts.len();
+    }
+    let elapsed = t0.elapsed();
+    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    println!(
+        "16 000 steps with a human: {:.1} µs per step, {contacts} contacts seen",
+        elapsed.as_secs_f64() * 1e6 / 16_000.0
+    );
+    assert!(contacts > 1000, "the run had contacts");
+    assert_eq!(allocated, 0, "step allocated {allocated} times");
+
+    let mut empty =
+        Simulator::new(common::model(), SimConfig::default(), None, &[], None).expect("sim");
+    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let t0 = std::time::Instant::now();
+    for _ in 0..10_000 {
+        empty.step(&[0.0; 7], false);
+    }
+    let elapsed = t0.elapsed();
+    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    println!(
+        "10 000 steps without a human: {:.1} µs per step",
+        elapsed.as_secs_f64() * 1e6 / 10_000.0
+    );
+    assert_eq!(allocated, 0, "step allocated {allocated} times");
+}

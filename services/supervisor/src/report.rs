@@ -1,0 +1,604 @@
+//! The run report, built from what flowed on the channels (pure: feed it
+//! messages, ask for the report).
+
+use std::collections::BTreeMap;
+
+use phri_ipc::{
+    control_mode, residual_flags, ControlStatus, Residual, RobotStats, Truth, LATENCY_BINS,
+};
+use serde::Serialize;
+
+/// `torque_loop.latency_us`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Percentiles {
+    pub p50: f64,
+    pub p99: f64,
+    pub max: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TorqueLoop {
+    pub cycles: u64,
+    pub missed_deadlines: u64,
+    /// state published → command received [µs]
+    pub latency_us: Percentiles,
+    pub braked_cycles: u64,
+    pub overruns: u64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ServiceReport {
+    pub restarts: u32,
+    pub alive_at_end: bool,
+}
+
+/// One ground-truth contact episode.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactReport {
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    /// robot link touched
+    pub link: String,
+    /// human body part
+    pub part: String,
+    pub peak_force_n: f64,
+    pub intended: bool,
+    /// first collision flag of the residual after the contact began [ms], null if none
+    pub detected_after_ms: Option<f64>,
+    /// when some joint's true τ_ext first reached twice its collision threshold [ms after start], null if never
+    pub reached_twice_threshold_after_ms: Option<f64>,
+    /// detection delay counted from that moment [ms]
+    pub detected_after_twice_threshold_ms: Option<f64>,
+    /// first-order bound −ln(1 − θ/F)/K_I + 2 ms for F = 2θ [ms]
+    pub bound_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Event {
+    pub t_s: f64,
+    pub kind: String,
+    pub service: String,
+    pub detail: String,
+}
+
+/// What happened right after a controller (re)started.
+#[derive(Clone, Debug, Serialize)]
+pub struct Resync {
+    /// first status of the new controller [s]
+    pub t_s: f64,
+    /// largest true joint speed in the following 0.5 s [rad/s]
+    pub max_joint_speed_rad_s: f64,
+    /// largest change of the true joint positions in the following 0.5 s [rad]
+    pub max_joint_travel_rad: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TaskReport {
+    pub waypoints_reached: u64,
+}
+
+/// `--report` JSON.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub duration_s: f64,
+    pub scenario: String,
+    pub torque_loop: TorqueLoop,
+    pub services: BTreeMap<String, ServiceReport>,
+    pub contacts: Vec<ContactReport>,
+    pub false_detections: u64,
+    pub detections: u64,
+    pub protective_stops: u64,
+    pub events: Vec<Event>,
+    pub task: TaskReport,
+    /// smallest human-robot surface distance (ground truth) [m], null without a human
+    pub min_distance_m: Option<f64>,
+    /// controller (re)starts after the first, and how the arm moved right after
+    pub resyncs: Vec<Resync>,
+}
+
+/// What the evaluator needs to know about the detector.
+#[derive(Clone, Debug)]
+pub struct DetectorInfo {
+    /// per-joint collision thresholds [Nm]
+    pub collision_threshold: Vec<f64>,
+    /// observer gain [1/s] (the smallest, for the bound)
+    pub gain: f64,
+}
+
+struct Episode {
+    robot_object: i32,
+    part: i32,
+    t_start: f64,
+    t_last: f64,
+    peak: f64,
+    intended: bool,
+    t_twice: Option<f64>,
+    t_detect: Option<f64>,
+    closed: bool,
+}
+
+/// Counters of a stream whose publisher may restart (then its counters restart at 0).
+#[derive(Default)]
+struct Restartable<T> {
+    last_seq: u64,
+    base: T,
+    last: T,
+}
+
+/// Builds the [`Report`].
+pub struct Evaluator {
+    t0_ns: u64,
+    det: DetectorInfo,
+    link_names: Vec<String>,
+    part_names: Vec<String>,
+    episodes: Vec<Episode>,
+    collision_edges: Vec<f64>,
+    last_collision: bool,
+    min_distance: f64,
+    events: Vec<Event>,
+    stats: Restartable<(u64, u64, u64, u64, u64)>,
+    hist_base: Vec<u64>,
+    hist_last: Vec<u64>,
+    latency_max_ns: u64,
+    status: Restartable<(u64, u64, u64, u64)>,
+    last_mode: u32,
+    resyncs: Vec<(Resync, Vec<f64>)>,
+    seen_status: bool,
+}
+
+/// Episodes end after this long without the contact [s].
+const CONTACT_GAP_S: f64 = 0.05;
+/// A collision flag within this long after a contact ended still belongs to it [s].
+const DETECTION_GRACE_S: f64 = 0.5;
+
+impl Evaluator {
+    pub fn new(
+        t0_ns: u64,
+        det: DetectorInfo,
+        link_names: Vec<String>,
+        part_names: Vec<String>,
+    ) -> Evaluator {
+        Evaluator {
+            t0_ns,
+            det,
+            link_names,
+            part_names,
+            episodes: Vec::new(),
+            collision_edges: Vec::new(),
+            last_collision: false,
+            min_distance: f64::INFINITY,
+            events: Vec::new(),
+            stats: Restartable::default(),
+            hist_base: vec![0; LATENCY_BINS],
+            hist_last: vec![0; LATENCY_BINS],
+            latency_max_ns: 0,
+            status: Restartable::default(),
+            last_mode: u32::MAX,
+            resyncs: Vec::new(),
+            seen_status: false,
+        }
+    }
+
+    fn t(&self, ns: u64) -> f64 {
+        (ns as f64 - self.t0_ns as f64) * 1e-9
+    }
+
+    pub fn event(&mut self, t_ns: u64, kind: &str, service: &str, detail: impl Into<String>) {
+        let t_s = self.t(t_ns);
+        self.events.push(Event {
+            t_s,
+            kind: kind.into(),
+            service: service.into(),
+            detail: detail.into(),
+        });
+    }
+
+    pub fn on_truth(&mut self, m: &Truth) {
+        let t = self.t(m.stamp_ns);
+        if m.min_distance.is_finite() {
+            self.min_distance = self.min_distance.min(m.min_distance);
+        }
+        let n = (m.dof as usize).min(m.tau_ext.len());
+        let twice = (0..n).any(|i| {
+            self.det
+                .collision_threshold
+                .get(i)
+                .is_some_and(|th| m.tau_ext[i].abs() >= 2.0 * th)
+        });
+        for c in m
+            .contacts
+            .iter()
+            .take((m.n_contacts as usize).min(m.contacts.len()))
+        {
+            let f = (c.force[0].powi(2) + c.force[1].powi(2) + c.force[2].powi(2)).sqrt();
+            let open = self
+                .episodes
+                .iter_mut()
+                .find(|e| !e.closed && e.robot_object == c.robot_object && e.part == c.human_part);
+            match open {
+                Some(e) => {
+                    e.t_last = t;
+                    e.peak = e.peak.max(f);
+                    if twice && e.t_twice.is_none() {
+                        e.t_twice = Some(t);
+                    }
+                }
+                None => self.episodes.push(Episode {
+                    robot_object: c.robot_object,
+                    part: c.human_part,
+                    t_start: t,
+                    t_last: t,
+                    peak: f,
+                    intended: c.intended != 0,
+                    t_twice: twice.then_some(t),
+                    t_detect: None,
+                    closed: false,
+                }),
+            }
+        }
+        for e in self.episodes.iter_mut().filter(|e| !e.closed) {
+            if t - e.t_last > CONTACT_GAP_S {
+                e.closed = true;
+            }
+        }
+        for (r, q0) in self.resyncs.iter_mut() {
+            if t >= r.t_s && t <= r.t_s + 0.5 {
+                if q0.is_empty() {
+                    q0.extend_from_slice(&m.q[..n]);
+                }
+                r.max_joint_speed_rad_s = m.qd[..n]
+                    .iter()
+                    .fold(r.max_joint_speed_rad_s, |a, v| a.max(v.abs()));
+                r.max_joint_travel_rad = m.q[..n]
+                    .iter()
+                    .zip(q0.iter())
+                    .fold(r.max_joint_travel_rad, |a, (x, y)| a.max((x - y).abs()));
+            }
+        }
+    }
+
+    pub fn on_residual(&mut self, m: &Residual) {
+        if m.flags & residual_flags::VALID == 0 {
+            return;
+        }
+        let t = self.t(m.state_stamp_ns);
+        let collision = m.flags & residual_flags::COLLISION != 0;
+        if collision {
+            for e in self.episodes.iter_mut() {
+                if e.t_detect.is_none() && t >= e.t_start && t <= e.t_last + DETECTION_GRACE_S {
+                    e.t_detect = Some(t);
+                }
+            }
+            if !self.last_collision {
+                self.collision_edges.push(t);
+                let detail = if m.isolated_joint >= 0 {
+                    format!(
+                        "isolated joint {} (link {} or beyond), |r| = {:.1} Nm",
+                        m.isolated_joint + 1,
+                        m.isolated_joint + 1,
+                        m.norm
+                    )
+                } else {
+                    format!("|r| = {:.1} Nm", m.norm)
+                };
+                self.events.push(Event {
+                    t_s: t,
+                    kind: "detection".into(),
+                    service: "dynamics".into(),
+                    detail,
+                });
+            }
+        }
+        self.last_collision = collision;
+    }
+
+    pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
+        let t = self.t(m.stamp_ns);
+        let now = (
+            m.waypoints_reached,
+            m.detections,
+            m.protective_stops,
+            m.resumes,
+        );
+        if self.seen_status && m.seq < self.status.last_seq {
+            self.resyncs.push((
+                Resync {
+                    t_s: t,
+                    max_joint_speed_rad_s: 0.0,
+                    max_joint_travel_rad: 0.0,
+                },
+                Vec::new(),
+            ));
+        }
+        self.seen_status = true;
+        if m.seq < self.status.last_seq {
+            // the controller restarted: keep what its predecessor counted
+            let l = self.status.last;
+            self.status.base = (
+                self.status.base.0 + l.0,
+                self.status.base.1 + l.1,
+                self.status.base.2 + l.2,
+                self.status.base.3 + l.3,
+            );
+            self.status.last = (0, 0, 0, 0);
+            self.last_mode = u32::MAX;
+        }
+        if now.3 > self.status.last.3 {
+            self.events.push(Event {
+                t_s: t,
+                kind: "resume".into(),
+                service: "control".into(),
+                detail: "task resumed".into(),
+            });
+        }
+        if m.mode != self.last_mode {
+            match m.mode {
+                control_mode::REACTION => self.events.push(Event {
+                    t_s: t,
+                    kind: "reaction".into(),
+                    service: "control".into(),
+                    detail: reaction_name.into(),
+                }),
+                control_mode::PROTECTIVE_STOP => self.events.push(Event {
+                    t_s: t,
+                    kind: "protective_stop".into(),
+                    service: "control".into(),
+                    detail: "residual stale or invalid".into(),
+                }),
+                control_mode::TASK
+                    if self.last_mode == control_mode::SYNC || self.last_mode == u32::MAX =>
+                {
+                    self.events.push(Event {
+                        t_s: t,
+                        kind: "sync".into(),
+                        service: "control".into(),
+                        detail: "re-synced to the measured state, task started".into(),
+                    })
+                }
+                _ => {}
+            }
+            self.last_mode = m.mode;
+        }
+        self.status.last_seq = m.seq;
+        self.status.last = now;
+    }
+
+    pub fn on_stats(&mut self, m: &RobotStats) {
+        let t = self.t(m.stamp_ns);
+        let now = (
+            m.cycles,
+            m.missed_deadlines,
+            m.braked_cycles,
+            m.brake_events,
+            m.overruns,
+        );
+        if m.seq < self.stats.last_seq {
+            let l = self.stats.last;
+            self.stats.base = (
+                self.stats.base.0 + l.0,
+                self.stats.base.1 + l.1,
+                self.stats.base.2 + l.2,
+                self.stats.base.3 + l.3,
+                self.stats.base.4 + l.4,
+            );
+            for (b, l) in self.hist_base.iter_mut().zip(self.hist_last.iter_mut()) {
+                *b += *l;
+                *l = 0;
+            }
+            self.stats.last = (0, 0, 0, 0, 0);
+        }
+        if now.3 > self.stats.last.3 {
+            self.events.push(Event {
+                t_s: t,
+                kind: "brake".into(),
+                service: "sim".into(),
+                detail: "more than 20 consecutive commands missing: brakes engaged".into(),
+            });
+        }
+        self.stats.last_seq = m.seq;
+        self.stats.last = now;
+        for (l, &h) in self.hist_last.iter_mut().zip(m.latency_hist.iter()) {
+            *l = h as u64;
+        }
+        self.latency_max_ns = self.latency_max_ns.max(m.latency_max_ns);
+    }
+
+    fn percentile(hist: &[u64], p: f64) -> f64 {
+        let total: u64 = hist.iter().sum();
+        if total == 0 {
+            return 0.0;
+        }
+        let target = (p * total as f64).ceil().max(1.0) as u64;
+        let mut acc = 0;
+        for (i, &h) in hist.iter().enumerate() {
+            acc += h;
+            if acc >= target {
+                // upper edge of the 1 µs bin
+                return (i + 1) as f64;
+            }
+        }
+        hist.len() as f64
+    }
+
+    /// The report at the end of the run.
+    pub fn report(
+        &self,
+        end_ns: u64,
+        scenario: &str,
+        services: BTreeMap<String, ServiceReport>,
+    ) -> Report {
+        let (s, b) = (self.stats.last, self.stats.base);
+        let hist: Vec<u64> = self
+            .hist_base
+            .iter()
+            .zip(&self.hist_last)
+            .map(|(a, b)| a + b)
+            .collect();
+        let bound_ms = -(0.5f64).ln() / self.det.gain * 1000.0 + 2.0;
+        let contacts: Vec<ContactReport> = self
+            .episodes
+            .iter()
+            .map(|e| {
+                let ms = |x: Option<f64>, from: f64| {
+                    x.map(|t| ((t - from) * 1e3 * 1000.0).round() / 1000.0)
+                };
+                ContactReport {
+                    t_start_s: e.t_start,
+                    t_end_s: e.t_last,
+                    link: self
+                        .link_names
+                        .get(e.robot_object as usize)
+                        .cloned()
+                        .unwrap_or_else(|| format!("#{}", e.robot_object)),
+                    part: self
+                        .part_names
+                        .get(e.part as usize)
+                        .cloned()
+                        .unwrap_or_else(|| format!("#{}", e.part)),
+                    peak_force_n: e.peak,
+                    intended: e.intended,
+                    detected_after_ms: ms(e.t_detect, e.t_start),
+                    reached_twice_threshold_after_ms: ms(e.t_twice, e.t_start),
+                    detected_after_twice_threshold_ms: e.t_twice.and_then(|t2| ms(e.t_detect, t2)),
+                    bound_ms,
+                }
+            })
+            .collect();
+        let false_detections = self
+            .collision_edges
+            .iter()
+            .filter(|&&t| {
+                !self
+                    .episodes
+                    .iter()
+                    .any(|e| t >= e.t_start && t <= e.t_last + DETECTION_GRACE_S)
+            })
+            .count() as u64;
+        let st = (
+            self.status.base.0 + self.status.last.0,
+            self.status.base.1 + self.status.last.1,
+            self.status.base.2 + self.status.last.2,
+        );
+        let mut events = self.events.clone();
+        events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        Report {
+            duration_s: self.t(end_ns),
+            scenario: scenario.to_string(),
+            torque_loop: TorqueLoop {
+                cycles: s.0 + b.0,
+                missed_deadlines: s.1 + b.1,
+                latency_us: Percentiles {
+                    p50: Self::percentile(&hist, 0.5),
+                    p99: Self::percentile(&hist, 0.99),
+                    max: self.latency_max_ns as f64 / 1000.0,
+                },
+                braked_cycles: s.2 + b.2,
+                overruns: s.4 + b.4,
+            },
+            services,
+            contacts,
+            false_detections,
+            detections: st.1,
+            protective_stops: st.2,
+            events,
+            task: TaskReport {
+                waypoints_reached: st.0,
+            },
+            min_distance_m: self.min_distance.is_finite().then_some(self.min_distance),
+            resyncs: self.resyncs.iter().map(|(r, _)| r.clone()).collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    fn eval() -> Evaluator {
+        Evaluator::new(
+            0,
+            DetectorInfo {
+                collision_threshold: vec![5.0; 7],
+                gain: 100.0,
+            },
+            vec!["link_a".into()],
+            vec!["hand".into()],
+        )
+    }
+
+    fn truth(t_ms: u64, force: f64, tau: f64) -> Truth {
+        let mut m = Truth::zeroed();
+        m.stamp_ns = t_ms * 1_000_000;
+        m.dof = 7;
+        m.tau_ext[0] = tau;
+        if force > 0.0 {
+            m.n_contacts = 1;
+            m.contacts[0].force = [force, 0.0, 0.0];
+        }
+        m.min_distance = if force > 0.0 { -0.01 } else { 0.2 };
+        m
+    }
+
+    fn residual(t_ms: u64, collision: bool) -> Residual {
+        let mut r = Residual::zeroed();
+        r.state_stamp_ns = t_ms * 1_000_000;
+        r.flags = residual_flags::VALID
+            | if collision {
+                residual_flags::COLLISION
+            } else {
+                0
+            };
+        r
+    }
+
+    #[test]
+    fn contact_episode_detection_delay_and_false_detections() {
+        let mut e = eval();
+        for t in 0..100 {
+            e.on_truth(&truth(t, 0.0, 0.0));
+            e.on_residual(&residual(t, false));
+        }
+        // contact from 100 to 200 ms; τ_ext reaches 2θ = 10 at 110 ms; flag at 115 ms
+        for t in 100..200 {
+            e.on_truth(&truth(t, 50.0, (t - 100) as f64));
+            e.on_residual(&residual(t, t >= 115 && t < 150));
+        }
+        for t in 200..1000 {
+            e.on_truth(&truth(t, 0.0, 0.0));
+            e.on_residual(&residual(t, (900..910).contains(&t)));
+        }
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.contacts.len(), 1);
+        let c = &r.contacts[0];
+        assert_eq!(c.link, "link_a");
+        assert_eq!(c.detected_after_ms, Some(15.0));
+        assert_eq!(c.reached_twice_threshold_after_ms, Some(10.0));
+        assert_eq!(c.detected_after_twice_threshold_ms, Some(5.0));
+        assert!((c.bound_ms - 8.93).abs() < 0.01);
+        assert_eq!(r.false_detections, 1);
+        assert_eq!(r.min_distance_m, Some(-0.01));
+        assert_eq!(r.events.iter().filter(|e| e.kind == "detection").count(), 2);
+    }
+
+    #[test]
+    fn counters_survive_publisher_restarts() {
+        let mut e = eval();
+        let mut s = RobotStats::zeroed();
+        s.seq = 10;
+        s.cycles = 1000;
+        s.missed_deadlines = 2;
+        s.latency_hist[50] = 1000;
+        e.on_stats(&s);
+        let mut s2 = RobotStats::zeroed();
+        s2.seq = 1;
+        s2.cycles = 500;
+        s2.latency_hist[100] = 500;
+        e.on_stats(&s2);
+        let r = e.report(0, "x", BTreeMap::new());
+        assert_eq!(r.torque_loop.cycles, 1500);
+        assert_eq!(r.torque_loop.missed_deadlines, 2);
+        assert_eq!(r.torque_loop.latency_us.p50, 51.0);
+        assert_eq!(r.torque_loop.latency_us.p99, 101.0);
+    }
+}

@@ -1,0 +1,301 @@
+//! System tests: the real processes of the cell, started by the real
+//! supervisor, with processes really killed. Each run has its own iceoryx2
+//! prefix; runs are serialised so that two cells never share the 2 cores.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+static SERIAL: Mutex<()> = Mutex::new(());
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+fn bin(name: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_BIN_EXE_phri-supervisor"))
+        .parent()
+        .unwrap()
+        .join(name);
+    assert!(
+        p.is_file(),
+        "{} not built (cargo test --workspace builds it)",
+        p.display()
+    );
+    p
+}
+
+struct Cell {
+    child: Child,
+    prefix: String,
+    run_dir: PathBuf,
+    report: PathBuf,
+}
+
+impl Cell {
+    fn start(test: &str, scenario: &str, duration: Option<f64>, sets: &[&str]) -> Cell {
+        for b in ["phri-sim", "phri-dynamics", "phri-control"] {
+            bin(b);
+        }
+        let prefix = format!("t{}{}_", std::process::id(), test);
+        let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
+        let _ = std::fs::remove_dir_all(&run_dir);
+        std::fs::create_dir_all(&run_dir).unwrap();
+        let report = run_dir.join("report.json");
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
+        cmd.current_dir(repo())
+            .arg("--config")
+            .arg(repo().join("deploy/phri.toml"))
+            .arg("--scenario")
+            .arg(scenario)
+            .arg("--prefix")
+            .arg(&prefix)
+            .arg("--run-dir")
+            .arg(&run_dir)
+            .arg("--report")
+            .arg(&report);
+        if let Some(d) = duration {
+            cmd.arg("--duration").arg(d.to_string());
+        }
+        for s in sets {
+            cmd.arg("--set").arg(s);
+        }
+        cmd.stdout(Stdio::null()).stderr(Stdio::inherit());
+        Cell {
+            child: cmd.spawn().unwrap(),
+            prefix,
+            run_dir,
+            report,
+        }
+    }
+
+    fn pid_of(&self, service: &str) -> i32 {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            if let Ok(text) = std::fs::read_to_string(self.run_dir.join("state.json")) {
+                if let Ok(v) = serde_json::from_str::<Value>(&text) {
+                    if let Some(pid) = v["services"][service]["pid"].as_i64() {
+                        return pid as i32;
+                    }
+                }
+            }
+            assert!(Instant::now() < deadline, "no pid for {service}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn kill(&self, service: &str, sig: i32) -> i32 {
+        let pid = self.pid_of(service);
+        // SAFETY: kill(2) on a pid the supervisor reported as its child.
+        assert_eq!(unsafe { libc::kill(pid, sig) }, 0, "kill {service} ({pid})");
+        pid
+    }
+
+    fn finish(mut self) -> Value {
+        let status = self.child.wait().unwrap();
+        assert!(status.success(), "supervisor failed: {status}");
+        let v: Value =
+            serde_json::from_str(&std::fs::read_to_string(&self.report).unwrap()).unwrap();
+        assert_nothing_left(&self.prefix);
+        eprintln!("{}", serde_json::to_string(&v["torque_loop"]).unwrap());
+        v
+    }
+}
+
+/// No process of the run and no shared-memory file of its prefix remain.
+fn assert_nothing_left(prefix: &str) {
+    let out = Command::new("pgrep")
+        .arg("-f")
+        .arg(format!("--prefix {prefix}"))
+        .output()
+        .unwrap();
+    assert!(
+        out.stdout.is_empty(),
+        "processes left: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    for dir in ["/tmp/iceoryx2", "/dev/shm"] {
+        let mut stack = vec![PathBuf::from(dir)];
+        while let Some(d) = stack.pop() {
+            let Ok(rd) = std::fs::read_dir(&d) else {
+                continue;
+            };
+            for e in rd.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    assert!(
+                        !e.file_name().to_string_lossy().starts_with(prefix),
+                        "left behind: {}",
+                        p.display()
+                    );
+                }
+            }
+        }
+    }
+}
+
+fn events<'a>(r: &'a Value, kind: &str, service: &str) -> Vec<&'a Value> {
+    r["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == kind && (service.is_empty() || e["service"] == service))
+        .collect()
+}
+
+fn wait(s: f64) {
+    std::thread::sleep(Duration::from_secs_f64(s));
+}
+
+#[test]
+fn free_motion_cycles_without_false_detections() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let r = Cell::start("free", "free-motion", Some(10.0), &[]).finish();
+    let tl = &r["torque_loop"];
+    let cycles = tl["cycles"].as_u64().unwrap();
+    assert!(cycles >= 9000, "{cycles} cycles in 10 s");
+    // deadlines are the benchmark's business; here: the loop holds
+    assert!(
+        tl["missed_deadlines"].as_u64().unwrap() * 100 <= cycles,
+        "missed {}",
+        tl["missed_deadlines"]
+    );
+    assert_eq!(r["false_detections"], 0);
+    assert_eq!(r["detections"], 0);
+    assert!(
+        r["task"]["waypoints_reached"].as_u64().unwrap() >= 3,
+        "waypoints {}",
+        r["task"]["waypoints_reached"]
+    );
+    for s in ["sim", "dynamics", "control"] {
+        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
+        assert_eq!(r["services"][s]["restarts"], 0, "{s}");
+    }
+}
+
+#[test]
+fn collisions_are_detected_within_the_bound_and_the_reaction_ends_them() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let r = Cell::start("coll", "collision", None, &[]).finish();
+    let contacts = r["contacts"].as_array().unwrap();
+    let strong: Vec<&Value> = contacts
+        .iter()
+        .filter(|c| c["intended"] == false && !c["reached_twice_threshold_after_ms"].is_null())
+        .collect();
+    assert!(
+        !strong.is_empty(),
+        "the scenario produced no contact reaching twice the threshold: {contacts:?}"
+    );
+    for c in &strong {
+        let after = c["detected_after_twice_threshold_ms"]
+            .as_f64()
+            .unwrap_or(f64::INFINITY);
+        assert!(
+            after <= c["bound_ms"].as_f64().unwrap(),
+            "detected {after} ms after 2θ, bound {}: {c}",
+            c["bound_ms"]
+        );
+        // the reaction ends the contact while the person still reaches (1.5 s)
+        let dur = c["t_end_s"].as_f64().unwrap() - c["t_start_s"].as_f64().unwrap();
+        assert!(dur < 1.0, "contact lasted {dur} s: {c}");
+    }
+    assert!(!events(&r, "reaction", "control").is_empty());
+    assert_eq!(r["false_detections"], 0, "{}", r["events"]);
+}
+
+#[test]
+fn killing_dynamics_means_protective_stop_restart_and_resume() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("kdyn", "free-motion", Some(12.0), &[]);
+    wait(5.0);
+    cell.kill("dynamics", libc::SIGKILL);
+    let r = cell.finish();
+    assert_eq!(r["services"]["dynamics"]["restarts"], 1);
+    assert_eq!(r["services"]["dynamics"]["alive_at_end"], true);
+    let stop = events(&r, "protective_stop", "control");
+    assert!(!stop.is_empty(), "no protective stop: {}", r["events"]);
+    let t_stop = stop[0]["t_s"].as_f64().unwrap();
+    assert!(events(&r, "restart", "dynamics")
+        .iter()
+        .any(|e| e["t_s"].as_f64().unwrap() >= t_stop - 0.5));
+    assert!(
+        events(&r, "resume", "control")
+            .iter()
+            .any(|e| e["t_s"].as_f64().unwrap() > t_stop),
+        "no resume: {}",
+        r["events"]
+    );
+    assert_eq!(r["false_detections"], 0);
+    // the torque loop itself never stopped: the controller kept answering
+    assert!(r["torque_loop"]["braked_cycles"].as_u64().unwrap() < 100);
+}
+
+#[test]
+fn killing_the_controller_brakes_then_resumes_without_a_jump() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start(
+        "kctl",
+        "free-motion",
+        Some(12.0),
+        &["supervisor.restart_backoff_min_ms=300"],
+    );
+    wait(5.0);
+    cell.kill("control", libc::SIGKILL);
+    let r = cell.finish();
+    assert_eq!(r["services"]["control"]["restarts"], 1);
+    assert!(
+        !events(&r, "brake", "sim").is_empty(),
+        "no brake: {}",
+        r["events"]
+    );
+    let resync = &r["resyncs"][0];
+    assert!(
+        resync["max_joint_speed_rad_s"].as_f64().unwrap() < 0.3,
+        "jump after restart: {resync}"
+    );
+    assert!(
+        resync["max_joint_travel_rad"].as_f64().unwrap() < 0.05,
+        "jump after restart: {resync}"
+    );
+    let t_restart = resync["t_s"].as_f64().unwrap();
+    assert!(events(&r, "sync", "control")
+        .iter()
+        .any(|e| e["t_s"].as_f64().unwrap() >= t_restart - 0.01));
+    assert_eq!(r["false_detections"], 0);
+}
+
+#[test]
+fn sigint_stops_everything_and_leaves_nothing_behind() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("sigint", "free-motion", None, &[]);
+    wait(3.0);
+    let ctl = cell.pid_of("control");
+    // a second commander is refused: the command channel has one publisher
+    let out = Command::new(bin("phri-control"))
+        .arg("--config")
+        .arg(cell.run_dir.join("config.toml"))
+        .arg("--prefix")
+        .arg(&cell.prefix)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("robot/command") && err.lines().count() == 1,
+        "{err}"
+    );
+    // SAFETY: signal to our own child.
+    unsafe { libc::kill(cell.child.id() as i32, libc::SIGINT) };
+    let r = cell.finish();
+    assert_eq!(r["services"]["control"]["restarts"], 0);
+    // SAFETY: probing a pid with signal 0.
+    assert_ne!(unsafe { libc::kill(ctl, 0) }, 0, "controller still running");
+}
