@@ -6,10 +6,12 @@
 //! across processes); every message carries a sequence number. Joint arrays
 //! hold `dof` valid entries in the order `phri-model` prints.
 
+pub mod cleanup;
 pub mod messages;
 pub mod names;
 pub mod qos;
 
+pub use cleanup::*;
 pub use messages::*;
 pub use names::*;
 pub use qos::*;

@@ -139,8 +139,11 @@ pub struct Residual {
 #[type_name("phri::ControlStatus")]
 pub struct ControlStatus {
     pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
     pub state_seq: u64,
+    /// measurement time of the state answered [ns, robot clock]
+    pub state_stamp_ns: u64,
     /// [`control_mode`]
     pub mode: u32,
     /// configured reaction strategy (index into the controller's list)

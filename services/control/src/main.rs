@@ -87,6 +87,7 @@ fn body() -> Result<(), String> {
         status.seq = seq;
         status.stamp_ns = cmd.stamp_ns;
         status.state_seq = state.seq;
+        status.state_stamp_ns = state.stamp_ns;
         status.mode = controller.mode();
         status.reaction = controller.reaction().index();
         status.waypoints_reached = controller.waypoints_reached;

@@ -111,38 +111,6 @@ fn write_state(run_dir: &Path, prefix: &str, list: &[Supervised]) {
     }
 }
 
-/// Remove iceoryx2 files of `prefix` that dead processes left (after every node is gone).
-fn remove_leftovers(prefix: &str) -> usize {
-    let mut removed = 0;
-    let root = iceoryx2::prelude::Config::default()
-        .global
-        .root_path()
-        .to_string();
-    for dir in [
-        PathBuf::from(root.trim_end_matches('/')),
-        PathBuf::from("/dev/shm"),
-    ] {
-        let Ok(rd) = std::fs::read_dir(&dir) else {
-            continue;
-        };
-        let mut stack: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
-        while let Some(p) = stack.pop() {
-            let name = p
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            if p.is_dir() {
-                if let Ok(rd) = std::fs::read_dir(&p) {
-                    stack.extend(rd.filter_map(|e| e.ok().map(|e| e.path())));
-                }
-            } else if name.starts_with(prefix) && std::fs::remove_file(&p).is_ok() {
-                removed += 1;
-            }
-        }
-    }
-    removed
-}
-
 fn body() -> Result<(), String> {
     let args = Args::parse(
         std::env::args().skip(1),
@@ -305,6 +273,22 @@ fn body() -> Result<(), String> {
             .stdin(Stdio::null());
         // own process group: a terminal's Ctrl-C reaches the supervisor only, which stops the rest in order
         cmd.process_group(0);
+        let online = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let cpus: Vec<usize> = spec.cpus.iter().copied().filter(|&c| c < online).collect();
+        if !cpus.is_empty() {
+            // SAFETY: between fork and exec only async-signal-safe calls: CPU_SET on a
+            // stack value and sched_setaffinity.
+            unsafe {
+                cmd.pre_exec(move || {
+                    let mut set: libc::cpu_set_t = std::mem::zeroed();
+                    for &c in &cpus {
+                        libc::CPU_SET(c, &mut set);
+                    }
+                    libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
+                    Ok(())
+                });
+            }
+        }
         cmd.spawn()
             .map_err(|e| format!("[services.{name}]: cannot start {}: {e}", spec.binary))
     };
@@ -546,9 +530,10 @@ fn body() -> Result<(), String> {
     let _ = node.try_cleanup_dead_nodes();
     drop((health_pub, stats_sub, truth_sub, residual_sub, status_sub));
     drop(node);
-    let removed = remove_leftovers(&prefix);
-    if removed > 0 {
-        eprintln!("phri-supervisor: removed {removed} shared-memory files left by dead processes");
+    match phri_ipc::remove_leftovers(&prefix) {
+        Ok(0) => {}
+        Ok(n) => eprintln!("phri-supervisor: removed {n} shared-memory files the run left"),
+        Err(alive) => eprintln!("phri-supervisor: {alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
     }
     let _ = std::fs::remove_file(run_dir.join("state.json"));
     if let Some(path) = args.get("--report") {

@@ -53,6 +53,10 @@ pub struct ContactReport {
     pub bound_ms: f64,
 }
 
+/// Times of the torque loop's events (detection, reaction, resume, …) are on
+/// the robot's clock (state stamps); the supervisor's own (restart, exit) on
+/// CLOCK_MONOTONIC. Both start at the run's start and differ only by the time
+/// the robot's loop slipped when this machine stalled it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Event {
     pub t_s: f64,
@@ -293,7 +297,12 @@ impl Evaluator {
     }
 
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
-        let t = self.t(m.stamp_ns);
+        // the robot's clock, as truth and residual: one time base for the loop's events
+        let t = self.t(if m.state_stamp_ns > 0 {
+            m.state_stamp_ns
+        } else {
+            m.stamp_ns
+        });
         let now = (
             m.waypoints_reached,
             m.detections,

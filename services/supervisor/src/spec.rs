@@ -66,6 +66,10 @@ pub struct ServiceSpec {
     /// services whose silence explains this one's (it is not judged while they are silent)
     #[serde(default)]
     pub depends_on: Vec<String>,
+    /// CPUs the service may run on (empty: any); the torque loop shares one
+    /// so that a stall of that CPU pauses the robot and its controller alike
+    #[serde(default)]
+    pub cpus: Vec<usize>,
 }
 
 fn yes() -> bool {

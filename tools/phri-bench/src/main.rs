@@ -124,7 +124,14 @@ fn body() -> Result<(), String> {
             }
         }
     }
+    drop((states, residuals, commands, status));
+    drop(node);
     let st = sup.wait().map_err(|e| e.to_string())?;
+    if let Err(alive) = phri_ipc::remove_leftovers(&prefix) {
+        eprintln!(
+            "phri-bench: {alive} node(s) of {prefix} still attached: their shared memory stays"
+        );
+    }
     if !st.success() {
         return Err(format!("phri-supervisor failed: {st}"));
     }
