@@ -10,6 +10,10 @@ pub const MAX_CONTACTS: usize = 8;
 pub const LATENCY_BINS: usize = 2000;
 /// Services tracked in [`Health`].
 pub const MAX_SERVICES: usize = 16;
+/// Human capsules in [`WorldState`].
+pub const MAX_HUMAN_CAPSULES: usize = 16;
+/// Control points one repulsion worker may own.
+pub const MAX_POINTS_PER_WORKER: usize = 8;
 
 /// Bits of [`JointState::status`].
 pub mod robot_status {
@@ -283,3 +287,116 @@ impl Zeroed for ControlStatus {}
 impl Zeroed for Truth {}
 impl Zeroed for RobotStats {}
 impl Zeroed for Health {}
+
+/// One capsule of the simulated world: segment `a`–`b` swept by `radius` [m], base frame.
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::WorldCapsule")]
+pub struct WorldCapsule {
+    pub a: [f64; 3],
+    pub b: [f64; 3],
+    pub radius: f64,
+    /// human body part index (simulator's numbering)
+    pub part: i32,
+    pub _pad: u32,
+}
+
+/// The simulated world a simulated camera sees: the arm's true joints and the
+/// human's capsules, on the robot's clock. Simulation only.
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::WorldState")]
+pub struct WorldState {
+    pub seq: u64,
+    /// [ns, robot clock]
+    pub stamp_ns: u64,
+    pub dof: u32,
+    pub n_human: u32,
+    /// true joint positions [rad]
+    pub q: [f64; MAX_DOF],
+    pub human: [WorldCapsule; MAX_HUMAN_CAPSULES],
+}
+
+/// Header of a depth frame (`camera/depth`, `perception/depth`): the payload
+/// is `width × height` `u16` depths in millimetres, row-major, 0 = no reading.
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::FrameHeader")]
+pub struct FrameHeader {
+    /// camera frame number
+    pub seq: u64,
+    /// capture time [ns, robot clock]
+    pub capture_ns: u64,
+    /// when this sample was published [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
+    pub width: u32,
+    pub height: u32,
+    /// pinhole intrinsics [px]
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    /// metres per depth unit (0.001: millimetres)
+    pub depth_scale: f64,
+    /// camera pose in the base frame: rotation (row-major 3×3, camera axes:
+    /// x right, y down, z forward) then translation [m]
+    pub pose_r: [f64; 9],
+    pub pose_t: [f64; 3],
+    /// joint state used to remove the robot's own pixels (perception/depth only)
+    pub q: [f64; MAX_DOF],
+    /// stamp of that joint state [ns, robot clock] (0: none)
+    pub q_stamp_ns: u64,
+    pub dof: u32,
+    /// pixels removed as the robot's own
+    pub removed_pixels: u32,
+    /// valid pixels left
+    pub valid_pixels: u32,
+    pub _pad: u32,
+}
+
+/// Result for one control point.
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::PointRepulsion")]
+pub struct PointRepulsion {
+    /// control point index (in the configured list)
+    pub point: u32,
+    /// 1 when something was within the surveillance region
+    pub active: u32,
+    /// repulsive velocity V_Call [m/s], base frame (eqs. 16-18)
+    pub v_call: [f64; 3],
+    /// minimum distance to an obstacle pixel [m] (ρ when none)
+    pub min_distance: f64,
+    /// the closest obstacle point [m], base frame
+    pub obstacle: [f64; 3],
+    /// the control point at the frame's joint state [m], base frame
+    pub position: [f64; 3],
+}
+
+/// One repulsion worker's result for one frame (`perception/repulsion`).
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::RepulsionResult")]
+pub struct RepulsionResult {
+    pub seq: u64,
+    /// the frame this answers
+    pub frame_seq: u64,
+    /// the frame's capture time [ns, robot clock]
+    pub capture_ns: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
+    /// frame published by the camera [ns, CLOCK_MONOTONIC]
+    pub frame_published_ns: u64,
+    pub worker: u32,
+    /// workers in the configuration
+    pub workers: u32,
+    pub n_points: u32,
+    pub _pad: u32,
+    /// processing time [ns]
+    pub compute_ns: u64,
+    pub points: [PointRepulsion; MAX_POINTS_PER_WORKER],
+}
+
+impl Zeroed for WorldState {}
+impl Zeroed for FrameHeader {}
+impl Zeroed for RepulsionResult {}

@@ -25,4 +25,17 @@ pub const ALL: &[&str] = &[
     DYNAMICS_RESIDUAL,
     CONTROL_STATUS,
     SUPERVISOR_HEALTH,
+    SIM_WORLD,
+    CAMERA_DEPTH,
+    PERCEPTION_DEPTH,
+    PERCEPTION_REPULSION,
 ];
+
+/// [`crate::WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
+pub const SIM_WORLD: &str = "sim/world";
+/// Raw depth frames from the camera (`[u16]` with a [`crate::FrameHeader`]), 30 Hz.
+pub const CAMERA_DEPTH: &str = "camera/depth";
+/// Validated depth frames without the robot's own pixels (`[u16]` with a [`crate::FrameHeader`]). Event: new frame.
+pub const PERCEPTION_DEPTH: &str = "perception/depth";
+/// [`crate::RepulsionResult`] from every repulsion worker (one publisher each).
+pub const PERCEPTION_REPULSION: &str = "perception/repulsion";

@@ -37,6 +37,17 @@ pub fn qos(name: &str) -> Qos {
             subscriber_max_buffer: 8,
             ..one_publisher
         },
+        // frames: a latest-value queue (the newest replaces an unread one)
+        CAMERA_DEPTH | PERCEPTION_DEPTH => Qos {
+            subscriber_max_buffer: 2,
+            history: 0,
+            ..one_publisher
+        },
+        // one publisher per repulsion worker
+        PERCEPTION_REPULSION => Qos {
+            max_publishers: 16,
+            ..one_publisher
+        },
         _ => one_publisher,
     }
 }
@@ -185,4 +196,52 @@ pub fn latest<T: Debug + ZeroCopySend + Copy>(
         out = Some(*s);
     }
     Ok(out)
+}
+
+/// Size of one 640×480 frame's payload, for frame channels.
+pub const FRAME_PIXELS: usize = 640 * 480;
+
+/// Frame publisher port type: `[u16]` depths with a [`crate::FrameHeader`].
+pub type FramePub = iceoryx2::port::publisher::Publisher<ipc::Service, [u16], crate::FrameHeader>;
+/// Frame subscriber port type.
+pub type FrameSub = iceoryx2::port::subscriber::Subscriber<ipc::Service, [u16], crate::FrameHeader>;
+
+fn open_frames(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<publish_subscribe::PortFactory<ipc::Service, [u16], crate::FrameHeader>, IpcError> {
+    let q = qos(name);
+    let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
+    node.service_builder(&service_name)
+        .publish_subscribe::<[u16]>()
+        .user_header::<crate::FrameHeader>()
+        .max_publishers(q.max_publishers)
+        .max_subscribers(q.max_subscribers)
+        .subscriber_max_buffer_size(q.subscriber_max_buffer)
+        .history_size(q.history)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Publish frames of up to `max_pixels` on `name`.
+pub fn frame_publisher(
+    node: &Node<ipc::Service>,
+    name: &str,
+    max_pixels: usize,
+) -> Result<FramePub, IpcError> {
+    open_frames(node, name)?
+        .publisher_builder()
+        .initial_max_slice_len(max_pixels)
+        .create()
+        .map_err(|e| ipc_err(name, e))
+}
+
+/// Subscribe to frames on `name` (latest-value queue).
+pub fn frame_subscriber(node: &Node<ipc::Service>, name: &str) -> Result<FrameSub, IpcError> {
+    open_frames(node, name)?
+        .subscriber_builder()
+        .buffer_size(1)
+        .create()
+        .map_err(|e| ipc_err(name, e))
 }

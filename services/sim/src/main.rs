@@ -61,6 +61,7 @@ fn body() -> Result<(), String> {
     let state_event = notifier(&node, ROBOT_STATE).map_err(s)?;
     let truth_pub = publisher::<Truth>(&node, SIM_TRUTH).map_err(s)?;
     let stats_pub = publisher::<RobotStats>(&node, ROBOT_STATS).map_err(s)?;
+    let world_pub = publisher::<WorldState>(&node, SIM_WORLD).map_err(s)?;
     let commands = subscriber::<TorqueCommand>(&node, ROBOT_COMMAND, LATEST).map_err(s)?;
     ctx.go_realtime();
 
@@ -88,6 +89,8 @@ fn body() -> Result<(), String> {
     state.dof = n as u32;
     let mut truth = Truth::zeroed();
     truth.dof = n as u32;
+    let mut world = WorldState::zeroed();
+    world.dof = n as u32;
     let mut stats = RobotStats::zeroed();
     let mut tau_cmd = vec![0.0; n];
     let mut command_seq = 0u64;
@@ -101,6 +104,7 @@ fn body() -> Result<(), String> {
     let publish_state = |sim: &Simulator,
                          state: &mut JointState,
                          truth: &mut Truth,
+                         world: &mut WorldState,
                          seq: u64,
                          stamp_ns: u64,
                          status: u32,
@@ -146,6 +150,22 @@ fn body() -> Result<(), String> {
             dst.depth = c.depth;
         }
         publish(&truth_pub, SIM_TRUTH, truth).map_err(|x| x.to_string())?;
+        // the world the simulated camera renders
+        world.seq = seq;
+        world.stamp_ns = stamp_ns;
+        world.q[..n].copy_from_slice(&t.q);
+        let humans = sim.human_capsules();
+        world.n_human = humans.len().min(MAX_HUMAN_CAPSULES) as u32;
+        for (dst, h) in world.human.iter_mut().zip(humans) {
+            dst.a = [h.a.x, h.a.y, h.a.z];
+            dst.b = [h.b.x, h.b.y, h.b.z];
+            dst.radius = h.radius;
+            dst.part = BodyPart::ALL
+                .iter()
+                .position(|p| *p == h.part)
+                .map_or(-1, |i| i as i32);
+        }
+        publish(&world_pub, SIM_WORLD, world).map_err(|x| x.to_string())?;
         Ok(published)
     };
 
@@ -158,6 +178,7 @@ fn body() -> Result<(), String> {
         &sim,
         &mut state,
         &mut truth,
+        &mut world,
         seq,
         epoch,
         robot_status::BRAKING,
@@ -239,6 +260,7 @@ fn body() -> Result<(), String> {
             &sim,
             &mut state,
             &mut truth,
+            &mut world,
             seq,
             epoch + (seq - 1) * period_ns,
             status,

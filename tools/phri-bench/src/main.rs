@@ -1,8 +1,12 @@
+//! `phri-bench transport`: see [`transport`].
+//!
 //! `phri-bench loop [--duration S] [--scenario NAME]`: starts the cell with its
 //! own prefix, listens to the torque loop's channels and prints the latency
 //! distribution of each hop of one cycle (JSON, microseconds):
 //! state published → residual published → controller woke → command
 //! published → command received by the robot.
+
+mod transport;
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -25,16 +29,31 @@ fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
     json!({"n": v.len(), "p50": at(0.5), "p99": at(0.99), "p999": at(0.999), "max": v[v.len() - 1]})
 }
 
+const USAGE: &str = "usage: phri-bench loop [--duration SECONDS] [--scenario NAME] [--config FILE]\n       phri-bench transport [--iterations N]";
+
 fn body() -> Result<(), String> {
     let mut argv = std::env::args().skip(1);
     match argv.next().as_deref() {
         Some("loop") => {}
-        _ => {
-            return Err(
-                "usage: phri-bench loop [--duration SECONDS] [--scenario NAME] [--config FILE]"
-                    .into(),
-            )
+        Some("transport") => {
+            let args = Args::parse(argv, &["--iterations"], &[])?;
+            let n = args
+                .parse_value::<usize>("--iterations")?
+                .unwrap_or(2000)
+                .max(10);
+            let out = transport::run(n)?;
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+            );
+            return Ok(());
         }
+        Some("transport-peer") => {
+            let prefix = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
+            let socket = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
+            return transport::peer(&prefix, &socket);
+        }
+        _ => return Err(USAGE.into()),
     }
     let args = Args::parse(argv, &["--duration", "--scenario", "--config"], &[])?;
     let duration = args.parse_value::<f64>("--duration")?.unwrap_or(30.0);
