@@ -299,3 +299,77 @@ fn sigint_stops_everything_and_leaves_nothing_behind() {
     // SAFETY: probing a pid with signal 0.
     assert_ne!(unsafe { libc::kill(ctl, 0) }, 0, "controller still running");
 }
+
+#[test]
+fn coexistence_avoids_the_person_without_deadline_misses() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let r = Cell::start("coex", "coexistence", Some(24.0), &[]).finish();
+    let unintended: Vec<&Value> = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["intended"] == false)
+        .collect();
+    assert!(unintended.is_empty(), "contacts: {unintended:?}");
+    assert!(r["min_distance_m"].as_f64().unwrap() > 0.0);
+    let p = &r["perception"];
+    assert!(
+        p["frames"].as_u64().unwrap() >= 24 * 25,
+        "frames {}",
+        p["frames"]
+    );
+    assert!(
+        p["dropped_frames"].as_u64().unwrap() * 20 <= p["frames"].as_u64().unwrap(),
+        "dropped {}",
+        p["dropped_frames"]
+    );
+    let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
+    assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+    assert_eq!(r["false_detections"], 0);
+    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 3);
+}
+
+#[test]
+fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start(
+        "kperc",
+        "coexistence",
+        Some(20.0),
+        &["supervisor.restart_backoff_min_ms=400"],
+    );
+    // the person's hand is in the end effector's path from t = 10 s
+    wait(13.0);
+    cell.kill("perception", libc::SIGKILL);
+    cell.kill("repulsion1", libc::SIGKILL);
+    let r = cell.finish();
+    assert_eq!(r["services"]["perception"]["restarts"], 1);
+    assert_eq!(r["services"]["repulsion1"]["restarts"], 1);
+    assert_eq!(r["services"]["perception"]["alive_at_end"], true);
+    let kill_t = events(&r, "exit", "perception")[0]["t_s"].as_f64().unwrap();
+    // blind with the person near: a protective stop, then the task resumes
+    let stop = events(&r, "protective_stop", "control");
+    assert!(
+        stop.iter()
+            .any(|e| e["t_s"].as_f64().unwrap() >= kill_t - 0.2),
+        "no protective stop after the kill: {}",
+        r["events"]
+    );
+    assert!(
+        events(&r, "resume", "control")
+            .iter()
+            .any(|e| e["t_s"].as_f64().unwrap() > kill_t),
+        "no resume: {}",
+        r["events"]
+    );
+    // the torque loop did not notice: no brake, no contact, no false detection
+    assert!(events(&r, "brake", "sim").is_empty());
+    let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
+    assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+    assert!(
+        r["contacts"].as_array().unwrap().is_empty(),
+        "{}",
+        r["contacts"]
+    );
+    assert_eq!(r["false_detections"], 0);
+}

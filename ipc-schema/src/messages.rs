@@ -167,6 +167,14 @@ pub struct ControlStatus {
     pub compute_ns: u64,
     /// state published → this controller woke [ns]
     pub wake_latency_ns: u64,
+    /// age of the perception results used [ns] (u64::MAX: none)
+    pub perception_age_ns: u64,
+    /// smallest obstacle distance of the control points last seen [m]
+    pub min_distance: f64,
+    /// largest repulsion risk ‖V_Call‖/V_max over the control points [0, 1]
+    pub risk: f64,
+    /// SNS task scale [0, 1]
+    pub task_scale: f64,
 }
 
 /// One contact in [`Truth`].
@@ -319,7 +327,7 @@ pub struct WorldState {
 
 /// Header of a depth frame (`camera/depth`, `perception/depth`): the payload
 /// is `width × height` `u16` depths in millimetres, row-major, 0 = no reading.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
 #[repr(C)]
 #[type_name("phri::FrameHeader")]
 pub struct FrameHeader {
@@ -327,6 +335,8 @@ pub struct FrameHeader {
     pub seq: u64,
     /// capture time [ns, robot clock]
     pub capture_ns: u64,
+    /// capture time [ns, CLOCK_MONOTONIC]
+    pub capture_wall_ns: u64,
     /// when this sample was published [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
     pub width: u32,
@@ -385,8 +395,8 @@ pub struct RepulsionResult {
     pub capture_ns: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
-    /// frame published by the camera [ns, CLOCK_MONOTONIC]
-    pub frame_published_ns: u64,
+    /// the frame's capture time [ns, CLOCK_MONOTONIC]
+    pub frame_capture_wall_ns: u64,
     pub worker: u32,
     /// workers in the configuration
     pub workers: u32,

@@ -43,10 +43,13 @@ pub fn qos(name: &str) -> Qos {
             history: 0,
             ..one_publisher
         },
-        // one publisher per repulsion worker
+        // one publisher per repulsion worker; small queues keep each worker's
+        // segment small (readers map it when a worker (re)starts)
         PERCEPTION_REPULSION => Qos {
             max_publishers: 16,
-            ..one_publisher
+            max_subscribers: 8,
+            subscriber_max_buffer: 32,
+            history: 0,
         },
         _ => one_publisher,
     }
@@ -132,12 +135,14 @@ pub type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>;
 pub type Listener = iceoryx2::port::listener::Listener<ipc::Service>;
 pub type Notifier = iceoryx2::port::notifier::Notifier<ipc::Service>;
 
-/// Subscribe to `name` with a queue of `buffer` samples ([`LATEST`] or [`DRAIN`]).
+/// Subscribe to `name` with a queue of `buffer` samples ([`LATEST`] or
+/// [`DRAIN`]; at most the channel's `subscriber_max_buffer`).
 pub fn subscriber<T: Debug + ZeroCopySend>(
     node: &Node<ipc::Service>,
     name: &str,
     buffer: usize,
 ) -> Result<Sub<T>, IpcError> {
+    let buffer = buffer.clamp(1, qos(name).subscriber_max_buffer);
     open_pubsub::<T>(node, name)?
         .subscriber_builder()
         .buffer_size(buffer)

@@ -1,8 +1,12 @@
 //! Real-time scheduling where the machine permits it.
 
-/// Run the calling process under SCHED_FIFO at `priority` (1-99) and lock its
-/// memory. Returns a description of what could not be done (the process then
-/// runs under the normal scheduler), never fails hard.
+/// Run the calling process under SCHED_FIFO at `priority` (1-99) and lock the
+/// memory it has mapped so far (call it after creating its ports). Not
+/// MCL_FUTURE: a real-time loop would then stall while the kernel faults in
+/// and locks every shared-memory segment of a publisher that appears later
+/// (a restarted perception worker, a monitor), milliseconds per segment.
+/// Returns a description of what could not be done (the process then runs
+/// under the normal scheduler), never fails hard.
 pub fn make_realtime(priority: i32) -> Result<(), String> {
     if priority <= 0 {
         return Err("real-time priority 0: normal scheduler".into());
@@ -19,7 +23,7 @@ pub fn make_realtime(priority: i32) -> Result<(), String> {
         ));
     }
     // SAFETY: as above.
-    let rc = unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) };
+    let rc = unsafe { libc::mlockall(libc::MCL_CURRENT) };
     if rc != 0 {
         return Err(format!(
             "mlockall refused: {}",

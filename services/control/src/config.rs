@@ -2,6 +2,8 @@
 
 use serde::Deserialize;
 
+use crate::avoidance::AvoidanceParams;
+
 /// Reaction strategies of the paper's portfolio (Sect. IV, Fig. 2).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -92,6 +94,26 @@ pub struct ControlConfig {
     pub residual_max_age_ms: f64,
     /// keep this far inside the position limits [rad]
     pub position_margin: f64,
+    /// collision avoidance from perception (paper Sect. V); off: the task ignores perception
+    pub avoidance: bool,
+    /// SNS and velocity-bound settings of the avoidance
+    pub avoidance_params: AvoidanceParams,
+    /// the end effector's position feedback is capped at this speed [m/s], below
+    /// the repulsion's V_max, so that repulsion always wins near an obstacle
+    pub feedback_max_speed: f64,
+    /// perception results older than this are stale [ms]: with an obstacle last
+    /// seen nearer than `near_distance_m` a protective stop, otherwise the task slows down
+    pub perception_max_age_ms: f64,
+    pub near_distance_m: f64,
+    /// stale this long: protective stop whatever was seen last [ms]
+    pub perception_stop_after_ms: f64,
+    /// speed scale while perception is stale
+    pub slow_scale: f64,
+    /// repulsive vectors arrive at the frame rate: low-pass them with this time constant [s]
+    pub repulsion_filter_s: f64,
+    /// under avoidance the reference velocity changes by at most this per second [rad/s²]
+    /// (no jerk from frame-rate steps, which the residual would see)
+    pub reference_accel_limit: f64,
 }
 
 impl Default for ControlConfig {
@@ -122,6 +144,15 @@ impl Default for ControlConfig {
             resume_quiet_s: 1.0,
             residual_max_age_ms: 5.0,
             position_margin: 0.05,
+            avoidance: true,
+            avoidance_params: AvoidanceParams::default(),
+            feedback_max_speed: 0.1,
+            perception_max_age_ms: 100.0,
+            perception_stop_after_ms: 2000.0,
+            near_distance_m: 0.5,
+            slow_scale: 0.3,
+            repulsion_filter_s: 0.05,
+            reference_accel_limit: 10.0,
         }
     }
 }

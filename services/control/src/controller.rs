@@ -5,6 +5,7 @@ use phri_dynamics::VelocityEstimator;
 use phri_ipc::control_mode as mode;
 use phri_model::{Data, Model};
 
+use crate::avoidance::Avoidance;
 use crate::config::{ControlConfig, Reaction};
 use crate::limits::{LimitActivity, Limits};
 use crate::task::{Approach, Clik, ClikGains, Path};
@@ -27,11 +28,23 @@ pub struct ResidualView<'a> {
 /// One control period's inputs.
 #[derive(Clone, Copy, Debug)]
 pub struct ControlInput<'a> {
-    /// measurement time of `q` [ns, CLOCK_MONOTONIC]
+    /// measurement time of `q` [ns, robot clock]
     pub state_stamp_ns: u64,
     /// measured joint positions [rad]
     pub q: &'a [f64],
     pub residual: Option<ResidualView<'a>>,
+    /// newest repulsion results; `None`: this controller runs without perception
+    pub perception: Option<PerceptionView<'a>>,
+}
+
+/// The newest perception results, as the controller sees them.
+#[derive(Clone, Copy, Debug)]
+pub struct PerceptionView<'a> {
+    /// capture time of the oldest of the workers' newest results [ns, robot
+    /// clock]; 0 while some worker has not answered yet
+    pub capture_ns: u64,
+    /// newest result per control point, indexed by point (0: the end effector)
+    pub points: &'a [phri_ipc::PointRepulsion],
 }
 
 /// One control period's outputs (borrowed from the controller).
@@ -141,6 +154,20 @@ pub struct Controller {
     pub resumes: u64,
     ee: Vector3<f64>,
     residual_age_ns: u64,
+    // avoidance
+    avoidance: Avoidance,
+    /// control points: (link frame, point in it); 0 is the end effector
+    points: Vec<(usize, Vector3<f64>)>,
+    jac_ee: nalgebra::Matrix6xX<f64>,
+    jac_point: nalgebra::Matrix6xX<f64>,
+    perception_age_ns: u64,
+    last_min_distance: f64,
+    /// largest risk ‖V_Call‖/V_max over the control points in the last step
+    pub risk: f64,
+    /// task scale of the last SNS solution
+    pub task_scale: f64,
+    /// low-passed repulsive vectors per control point [m/s]
+    v_call_filtered: Vec<Vector3<f64>>,
 }
 
 impl Controller {
@@ -233,6 +260,15 @@ impl Controller {
             resumes: 0,
             ee: Vector3::zeros(),
             residual_age_ns: u64::MAX,
+            avoidance: Avoidance::new(&model, cfg.avoidance_params),
+            points: Vec::new(),
+            jac_ee: phri_model::Data::jacobian_buffer(&model),
+            jac_point: phri_model::Data::jacobian_buffer(&model),
+            perception_age_ns: u64::MAX,
+            last_min_distance: 0.0,
+            risk: 0.0,
+            task_scale: 1.0,
+            v_call_filtered: Vec::new(),
             limits,
             model,
             cfg,
@@ -258,6 +294,36 @@ impl Controller {
     /// End-effector position at the measured joints [m], base frame.
     pub fn ee(&self) -> Vector3<f64> {
         self.ee
+    }
+
+    /// The control points of the repulsion workers, in their configured order
+    /// (the first is the end effector): link name and point in the link frame [m].
+    pub fn set_control_points(
+        &mut self,
+        points: &[(String, [f64; 3])],
+    ) -> Result<(), ControlError> {
+        self.points = points
+            .iter()
+            .enumerate()
+            .map(|(i, (link, xyz))| {
+                let f = self.model.frame_id(link).map_err(|_| {
+                    ControlError::Config(format!("control point {i}: unknown link '{link}'"))
+                })?;
+                Ok((f, Vector3::from(*xyz)))
+            })
+            .collect::<Result<_, _>>()?;
+        self.v_call_filtered = vec![Vector3::zeros(); points.len()];
+        Ok(())
+    }
+
+    /// Age of the perception results used in the last step [ns] (u64::MAX: none).
+    pub fn perception_age_ns(&self) -> u64 {
+        self.perception_age_ns
+    }
+
+    /// Smallest obstacle distance of the control points last seen [m].
+    pub fn last_min_distance(&self) -> f64 {
+        self.last_min_distance
     }
 
     /// Age of the residual used in the last step [ns] (u64::MAX: none).
@@ -364,17 +430,65 @@ impl Controller {
         }
         self.ee = self.clik.position(&self.model, &mut self.data, q);
 
+        // perception: fresh, stale (slow down), or stale with a person last seen near (stop)
+        let v_max_rep = self.cfg.avoidance_params.v_max_repulsion.max(1e-9);
+        let (p_fresh, p_stop) = match &input.perception {
+            None => {
+                self.perception_age_ns = u64::MAX;
+                (true, false)
+            }
+            Some(v) => {
+                self.perception_age_ns = if v.capture_ns == 0 {
+                    u64::MAX
+                } else {
+                    input.state_stamp_ns.saturating_sub(v.capture_ns)
+                };
+                let age_ms = self.perception_age_ns as f64 * 1e-6;
+                let fresh = age_ms <= self.cfg.perception_max_age_ms;
+                if fresh {
+                    self.last_min_distance = v
+                        .points
+                        .iter()
+                        .filter(|p| p.active != 0)
+                        .map(|p| p.min_distance)
+                        .fold(f64::INFINITY, f64::min);
+                }
+                // blind with a person last seen near: stop at once; blind for long: stop anyway
+                let near = self.last_min_distance < self.cfg.near_distance_m;
+                (
+                    fresh,
+                    !fresh && (near || age_ms > self.cfg.perception_stop_after_ms),
+                )
+            }
+        };
+        let perception = input.perception.filter(|_| p_fresh);
+        self.risk = perception.map_or(0.0, |v| {
+            v.points
+                .iter()
+                .map(|p| Vector3::from(p.v_call).norm() / v_max_rep)
+                .fold(0.0, f64::max)
+                .min(1.0)
+        });
+        let ee_risk = perception.and_then(|v| v.points.first()).map_or(0.0, |p| {
+            (Vector3::from(p.v_call).norm() / v_max_rep).min(1.0)
+        });
+        let speed_scale = if p_fresh {
+            1.0
+        } else {
+            self.cfg.slow_scale.clamp(0.0, 1.0)
+        };
+
         // transitions
         match self.mode {
             mode::SYNC => {
                 if self.last_stamp.is_some() && self.t == 0.0 {
                     self.hold_here(q);
                 }
-                if fresh {
+                if fresh && p_fresh {
                     self.start_task(q);
                 }
             }
-            _ if !fresh => {
+            _ if !fresh || p_stop => {
                 if self.mode != mode::PROTECTIVE_STOP {
                     self.protective_stops += 1;
                     self.hold_here(q);
@@ -382,9 +496,11 @@ impl Controller {
                 }
             }
             mode::PROTECTIVE_STOP => self.enter_recover(q),
-            mode::TASK => {
+            mode::TASK | mode::SLOW => {
                 if collision {
                     self.enter_reaction(q);
+                } else {
+                    self.mode = if p_fresh { mode::TASK } else { mode::SLOW };
                 }
             }
             mode::REACTION => {
@@ -415,10 +531,13 @@ impl Controller {
         let (kp, kd) = (self.cfg.kp, self.cfg.kd);
         let mut minus_r = false;
         match self.mode {
-            mode::TASK => {
+            mode::TASK | mode::SLOW => {
+                // time scaling: slower when perception is stale, and near obstacles in
+                // front of the end effector (risk f: ṡ scaled by 1 − f)
+                let time_scale = speed_scale * (1.0 - ee_risk);
                 let (x_d, xd_d) = match self.approach.as_mut() {
                     Some(a) => {
-                        let out = a.step(dt);
+                        let out = a.step(dt * time_scale);
                         if a.done() {
                             self.approach = None;
                         }
@@ -429,7 +548,7 @@ impl Controller {
                         // mid-segment starts without a jump in velocity or acceleration
                         self.ramp_u = (self.ramp_u + dt / self.cfg.path_ramp_s.max(1e-3)).min(1.0);
                         let u = self.ramp_u;
-                        let rate = u * u * (3.0 - 2.0 * u);
+                        let rate = u * u * (3.0 - 2.0 * u) * time_scale;
                         self.s += dt * rate;
                         let (x, dx) = self.path.sample(self.s);
                         let dx = dx * rate;
@@ -446,23 +565,27 @@ impl Controller {
                         (x, dx)
                     }
                 };
-                let gains = ClikGains {
-                    clik: self.cfg.clik_gain,
-                    posture: self.cfg.posture_gain,
-                    damping: self.cfg.damping,
-                };
-                let qd_ref = self.clik.step(
-                    &self.model,
-                    &mut self.data,
-                    &mut self.q_ref,
-                    &x_d,
-                    &xd_d,
-                    dt,
-                    gains,
-                    &self.posture,
-                    &self.vmax_ref,
-                );
-                self.qd_ref.copy_from_slice(qd_ref);
+                if input.perception.is_some() {
+                    self.avoid_step(&x_d, &xd_d, dt, perception, speed_scale);
+                } else {
+                    let gains = ClikGains {
+                        clik: self.cfg.clik_gain,
+                        posture: self.cfg.posture_gain,
+                        damping: self.cfg.damping,
+                    };
+                    let qd_ref = self.clik.step(
+                        &self.model,
+                        &mut self.data,
+                        &mut self.q_ref,
+                        &x_d,
+                        &xd_d,
+                        dt,
+                        gains,
+                        &self.posture,
+                        &self.vmax_ref,
+                    );
+                    self.qd_ref.copy_from_slice(qd_ref);
+                }
                 self.limits.clamp_position(&mut self.q_ref);
                 self.history.push(self.s, &self.q_ref);
                 for i in 0..n {
@@ -550,6 +673,102 @@ impl Controller {
             tau: &self.tau,
             mode: self.mode,
             limits,
+        }
+    }
+
+    /// The task under avoidance (paper Sect. V): the end effector's repulsive
+    /// velocity adds to its task velocity (eq. 19); every other control point
+    /// shapes the joint velocity bounds (eq. 20); SNS solves the task within
+    /// them and the joint-limit bounds. Moves `q_ref`, writes `qd_ref`.
+    fn avoid_step(
+        &mut self,
+        x_d: &Vector3<f64>,
+        xd_d: &Vector3<f64>,
+        dt: f64,
+        perception: Option<PerceptionView<'_>>,
+        speed_scale: f64,
+    ) {
+        let ee = self.clik.frame();
+        let ok = phri_model::forward_kinematics(&self.model, &mut self.data, &self.q_ref).is_ok()
+            && phri_model::point_jacobian(
+                &self.model,
+                &self.data,
+                ee,
+                &Vector3::zeros(),
+                &mut self.jac_ee,
+            )
+            .is_ok();
+        if !ok || self.avoidance.begin(&self.q_ref).is_err() {
+            self.qd_ref.fill(0.0);
+            return;
+        }
+        let x = phri_model::frame_placement(&self.model, &self.data, ee).p;
+        // position feedback capped below the repulsion's V_max
+        let mut fb = (x_d - x) * self.cfg.clik_gain;
+        let cap = self.cfg.feedback_max_speed;
+        if fb.norm() > cap {
+            fb *= cap / fb.norm();
+        }
+        let xdot_task = xd_d + fb;
+        let mut v_ee = Vector3::zeros();
+        let alpha = if self.cfg.repulsion_filter_s > 0.0 {
+            1.0 - (-dt / self.cfg.repulsion_filter_s).exp()
+        } else {
+            1.0
+        };
+        if let Some(v) = perception {
+            for (k, &(frame, xyz)) in self.points.iter().enumerate() {
+                let Some(p) = v.points.get(k) else { break };
+                let target = if p.active == 0 {
+                    Vector3::zeros()
+                } else {
+                    Vector3::from(p.v_call)
+                };
+                let Some(f) = self.v_call_filtered.get_mut(k) else {
+                    break;
+                };
+                *f += (target - *f) * alpha;
+                let v_call = *f;
+                if v_call.norm() < 1e-6 {
+                    continue;
+                }
+                if k == 0 {
+                    v_ee = v_call;
+                } else if phri_model::point_jacobian(
+                    &self.model,
+                    &self.data,
+                    frame,
+                    &xyz,
+                    &mut self.jac_point,
+                )
+                .is_ok()
+                {
+                    let _ = self.avoidance.add_point(&self.jac_point, v_call);
+                }
+            }
+        }
+        // slew-limited towards the SNS solution (which stays within the bounds
+        // it was computed for; the limit only delays reaching it)
+        let dv = self.cfg.reference_accel_limit * dt;
+        match self
+            .avoidance
+            .solve(&self.jac_ee, &xdot_task, &v_ee, speed_scale)
+        {
+            Ok(out) => {
+                self.task_scale = out.scale;
+                for (r, &target) in self.qd_ref.iter_mut().zip(out.qd) {
+                    *r += (target - *r).clamp(-dv, dv);
+                }
+            }
+            Err(_) => {
+                self.task_scale = 0.0;
+                for r in self.qd_ref.iter_mut() {
+                    *r -= r.clamp(-dv, dv);
+                }
+            }
+        }
+        for (q, v) in self.q_ref.iter_mut().zip(&self.qd_ref) {
+            *q += v * dt;
         }
     }
 

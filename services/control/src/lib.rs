@@ -14,10 +14,12 @@
 //!   holds where the arm is and the task approaches its path smoothly.
 //! - Torque, velocity and position limits are enforced at the last step.
 
+pub mod avoidance;
 pub mod config;
 pub mod controller;
 pub mod limits;
+pub mod sns;
 pub mod task;
 
 pub use config::{ControlConfig, Reaction};
-pub use controller::{ControlInput, ControlOutput, Controller, ResidualView};
+pub use controller::{ControlInput, ControlOutput, Controller, PerceptionView, ResidualView};

@@ -123,6 +123,7 @@ impl Cell {
             state_stamp_ns: self.t_ns,
             q: &self.q,
             residual: Some(residual),
+            perception: None,
         });
         let jump = out
             .tau
@@ -304,12 +305,14 @@ fn malformed_state_never_panics() {
         state_stamp_ns: 1,
         q: &[f64::NAN; 7],
         residual: None,
+        perception: None,
     });
     assert!(out.tau.iter().all(|t| t.is_finite()));
     let out = c.step(&ControlInput {
         state_stamp_ns: 2,
         q: &[0.0; 3],
         residual: None,
+        perception: None,
     });
     assert_eq!(out.tau.len(), 7);
     let bad = ControlConfig {

@@ -236,6 +236,10 @@ fn body() -> Result<(), String> {
             consecutive_missed = consecutive_missed.saturating_add(1);
             if loop_established {
                 stats.missed_deadlines += 1;
+                if stats.missed_deadlines <= 20 || stats.missed_deadlines.is_power_of_two() {
+                    let since_pub = now_ns().saturating_sub(state_pub_ns);
+                    eprintln!("phri-sim: missed deadline {} at cycle {} (state published {} µs ago, this cycle woke {} µs late)", stats.missed_deadlines, stats.cycles, since_pub / 1000, woke.saturating_sub(tick) / 1000);
+                }
             }
         }
         let brake = consecutive_missed > MAX_MISSED;

@@ -215,6 +215,10 @@ fn body() -> Result<(), String> {
     let truth_sub = subscriber::<Truth>(&node, SIM_TRUTH, DRAIN).map_err(s)?;
     let residual_sub = subscriber::<Residual>(&node, DYNAMICS_RESIDUAL, DRAIN).map_err(s)?;
     let status_sub = subscriber::<ControlStatus>(&node, CONTROL_STATUS, DRAIN).map_err(s)?;
+    let frames_sub = frame_subscriber(&node, CAMERA_DEPTH).map_err(s)?;
+    let filtered_sub = frame_subscriber(&node, PERCEPTION_DEPTH).map_err(s)?;
+    let repulsion_sub =
+        subscriber::<RepulsionResult>(&node, PERCEPTION_REPULSION, DRAIN).map_err(s)?;
 
     // evaluation needs the detector's thresholds and the names of links and parts
     let model = phri_model_names(&urdf);
@@ -354,6 +358,27 @@ fn body() -> Result<(), String> {
         {
             eval.on_status(&m, &reaction_name);
             heard.push(CONTROL_STATUS);
+        }
+        while let Some(f) = frames_sub
+            .receive()
+            .map_err(|e| ipc_err(CAMERA_DEPTH, e).to_string())?
+        {
+            eval.on_frame(f.user_header());
+            heard.push(CAMERA_DEPTH);
+        }
+        while filtered_sub
+            .receive()
+            .map_err(|e| ipc_err(PERCEPTION_DEPTH, e).to_string())?
+            .is_some()
+        {
+            heard.push(PERCEPTION_DEPTH);
+        }
+        while let Some(m) = repulsion_sub
+            .receive()
+            .map_err(|e| ipc_err(PERCEPTION_REPULSION, e).to_string())?
+        {
+            eval.on_repulsion(&m);
+            heard.push(PERCEPTION_REPULSION);
         }
         for sv in list.iter_mut() {
             if sv
@@ -508,8 +533,9 @@ fn body() -> Result<(), String> {
     }
     let report = eval.report(end, &scenario.name, services_report);
 
-    // ordered shutdown: reverse start order, SIGTERM then SIGKILL after the grace period
-    for sv in list.iter_mut().rev() {
+    // ordered shutdown in start order: the robot first (it brakes the arm as it
+    // exits), then what depends on it; SIGTERM, then SIGKILL after the grace period
+    for sv in list.iter_mut() {
         if let Some(mut child) = sv.child.take() {
             signal(&child, libc::SIGTERM);
             let deadline = now_ns() + sup.shutdown_grace_ms * 1_000_000;
@@ -528,7 +554,16 @@ fn body() -> Result<(), String> {
         }
     }
     let _ = node.try_cleanup_dead_nodes();
-    drop((health_pub, stats_sub, truth_sub, residual_sub, status_sub));
+    drop((
+        health_pub,
+        stats_sub,
+        truth_sub,
+        residual_sub,
+        status_sub,
+        frames_sub,
+        filtered_sub,
+        repulsion_sub,
+    ));
     drop(node);
     match phri_ipc::remove_leftovers(&prefix) {
         Ok(0) => {}

@@ -4,7 +4,8 @@
 use std::collections::BTreeMap;
 
 use phri_ipc::{
-    control_mode, residual_flags, ControlStatus, Residual, RobotStats, Truth, LATENCY_BINS,
+    control_mode, residual_flags, ControlStatus, FrameHeader, RepulsionResult, Residual,
+    RobotStats, Truth, LATENCY_BINS,
 };
 use serde::Serialize;
 
@@ -81,6 +82,17 @@ pub struct TaskReport {
     pub waypoints_reached: u64,
 }
 
+/// `perception` in the report.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PerceptionReport {
+    /// camera frames seen
+    pub frames: u64,
+    /// frames that never got a result from every repulsion worker
+    pub dropped_frames: u64,
+    /// capture → the last worker's result [ms]
+    pub frame_to_repulsion_ms: Percentiles,
+}
+
 /// `--report` JSON.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
@@ -98,6 +110,8 @@ pub struct Report {
     pub min_distance_m: Option<f64>,
     /// controller (re)starts after the first, and how the arm moved right after
     pub resyncs: Vec<Resync>,
+    /// null when the cell ran without perception
+    pub perception: Option<PerceptionReport>,
 }
 
 /// What the evaluator needs to know about the detector.
@@ -148,6 +162,13 @@ pub struct Evaluator {
     last_mode: u32,
     resyncs: Vec<(Resync, Vec<f64>)>,
     seen_status: bool,
+    /// camera frames: (seq, capture wall time) of the recent ones, and the count
+    frames_seen: u64,
+    last_frame_seq: Option<u64>,
+    /// per frame in flight: (frame seq, capture wall ns, workers answered bitmask, workers, last publish ns)
+    in_flight: Vec<(u64, u64, u32, u32, u64)>,
+    complete_frames: u64,
+    frame_latency_ms: Vec<f64>,
 }
 
 /// Episodes end after this long without the contact [s].
@@ -180,6 +201,11 @@ impl Evaluator {
             last_mode: u32::MAX,
             resyncs: Vec::new(),
             seen_status: false,
+            frames_seen: 0,
+            last_frame_seq: None,
+            in_flight: Vec::new(),
+            complete_frames: 0,
+            frame_latency_ms: Vec::new(),
         }
     }
 
@@ -352,7 +378,13 @@ impl Evaluator {
                     t_s: t,
                     kind: "protective_stop".into(),
                     service: "control".into(),
-                    detail: "residual stale or invalid".into(),
+                    detail: "a safety input (residual or perception) is stale".into(),
+                }),
+                control_mode::SLOW => self.events.push(Event {
+                    t_s: t,
+                    kind: "slow".into(),
+                    service: "control".into(),
+                    detail: "perception stale, nothing near: slowed down".into(),
                 }),
                 control_mode::TASK
                     if self.last_mode == control_mode::SYNC || self.last_mode == u32::MAX =>
@@ -410,6 +442,78 @@ impl Evaluator {
             *l = h as u64;
         }
         self.latency_max_ns = self.latency_max_ns.max(m.latency_max_ns);
+    }
+
+    /// A camera frame was published.
+    pub fn on_frame(&mut self, h: &FrameHeader) {
+        if self.last_frame_seq != Some(h.seq) {
+            self.frames_seen += 1;
+            self.last_frame_seq = Some(h.seq);
+        }
+    }
+
+    /// A repulsion worker answered a frame.
+    pub fn on_repulsion(&mut self, m: &RepulsionResult) {
+        let bit = 1u32 << m.worker.min(31);
+        let all = if m.workers >= 32 {
+            u32::MAX
+        } else {
+            (1u32 << m.workers) - 1
+        };
+        let idx = match self.in_flight.iter().position(|f| f.0 == m.frame_seq) {
+            Some(i) => i,
+            None => {
+                // frames older than a second that never completed are dropped
+                self.in_flight
+                    .retain(|f| m.published_ns.saturating_sub(f.4) < 1_000_000_000);
+                self.in_flight.push((
+                    m.frame_seq,
+                    m.frame_capture_wall_ns,
+                    0,
+                    m.workers,
+                    m.published_ns,
+                ));
+                self.in_flight.len() - 1
+            }
+        };
+        let f = &mut self.in_flight[idx];
+        f.2 |= bit;
+        f.4 = f.4.max(m.published_ns);
+        if f.2 & all == all {
+            self.complete_frames += 1;
+            self.frame_latency_ms
+                .push(f.4.saturating_sub(f.1) as f64 * 1e-6);
+            self.in_flight.swap_remove(idx);
+        }
+    }
+
+    fn perception(&self) -> Option<PerceptionReport> {
+        if self.frames_seen == 0 && self.complete_frames == 0 {
+            return None;
+        }
+        let mut v = self.frame_latency_ms.clone();
+        v.sort_by(f64::total_cmp);
+        let at = |p: f64| {
+            if v.is_empty() {
+                0.0
+            } else {
+                v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+            }
+        };
+        // the frame in flight at the end is not dropped
+        let dropped = self
+            .frames_seen
+            .saturating_sub(self.complete_frames)
+            .saturating_sub(2);
+        Some(PerceptionReport {
+            frames: self.frames_seen,
+            dropped_frames: dropped,
+            frame_to_repulsion_ms: Percentiles {
+                p50: at(0.5),
+                p99: at(0.99),
+                max: v.last().copied().unwrap_or(0.0),
+            },
+        })
     }
 
     fn percentile(hist: &[u64], p: f64) -> f64 {
@@ -515,6 +619,7 @@ impl Evaluator {
             },
             min_distance_m: self.min_distance.is_finite().then_some(self.min_distance),
             resyncs: self.resyncs.iter().map(|(r, _)| r.clone()).collect(),
+            perception: self.perception(),
         }
     }
 }

@@ -1,0 +1,377 @@
+//! Depth-space distances and repulsive vectors (paper Sect. V, eqs. 15-18;
+//! Flacco et al. ICRA 2012; REFERENCE §3).
+//!
+//! For a point of interest `P` on the robot (base frame → camera frame
+//! `(x_P, y_P, d_p)`, pixel `(p_x, p_y)`), the surveillance region is the cube of
+//! side `2ρ` around `P`. Its image is largest at its near face, so only the
+//! pixel window of half-size `ρ f_x/(d_p − ρ)` × `ρ f_y/(d_p − ρ)` around
+//! `(p_x, p_y)` is visited (clamped to the image; the whole image if `d_p ≤ ρ`).
+//! For every valid pixel `O = (o_x, o_y, d_o)` of the window:
+//!
+//! - `d_o > d_p + ρ`: out of range, skipped;
+//! - `d_o < d_p`: occlusion — the space behind `O` is unknown and may be
+//!   occupied, the worst case lies at `P`'s own depth: `d_o := d_p`;
+//! - distance vector in Cartesian camera coordinates (as coded by the
+//!   implementations of the follow-up journal paper):
+//!   `D = ((o_x − c_x) d_o/f_x − (p_x − c_x) d_p/f_x,
+//!   (o_y − c_y) d_o/f_y − (p_y − c_y) d_p/f_y, d_o − d_p)`, pointing from `P` to `O`;
+//! - `‖D‖ > ρ`: outside the region, skipped.
+//!
+//! Every remaining pixel contributes `V_C = v(‖D‖) (−D/‖D‖)` (pointing away from
+//! the obstacle) with the magnitude (16) `v = V_max / (1 + exp((‖D‖ (2/ρ) − 1) α))`;
+//! the repulsion (17)-(18) has the direction of their sum and the magnitude of
+//! the nearest one, `v(‖D_min‖)`.
+//!
+//! Points of interest on a link's axis carry the link radius `r`: they are
+//! treated as spheres. Distances are measured from the sphere's surface,
+//! `max(‖D‖ − r, 0)`, and the region grows with it (`ρ + r` in place of `ρ`
+//! above), so that `ρ` is always the clearance at which repulsion starts. With
+//! `r = 0` this is exactly the paper's rule.
+
+use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::camera::{CameraPose, Intrinsics};
+use crate::error::{check_frame, DepthError};
+
+/// Parameters of the repulsive profile (16) (REFERENCE §3: α = 6, ρ = 0.4 m,
+/// V_max = 0.21 m/s, labelled as the paper's values by a third party).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RepulsionParams {
+    /// half side of the surveillance cube and distance where repulsion fades \[m\]
+    pub rho: f64,
+    /// largest repulsive speed, reached at zero distance \[m/s\]
+    pub v_max: f64,
+    /// shape factor of the sigmoid \[-\]
+    pub alpha: f64,
+}
+
+impl Default for RepulsionParams {
+    fn default() -> Self {
+        Self {
+            rho: 0.4,
+            v_max: 0.21,
+            alpha: 6.0,
+        }
+    }
+}
+
+impl RepulsionParams {
+    /// Eq. (16): `v(d) = V_max / (1 + exp((d (2/ρ) − 1) α))` \[m/s\] for a
+    /// distance `d` \[m\]: `V_max/(1 + e^−α)` at 0, `V_max/2` at `ρ/2`,
+    /// `V_max/(1 + e^α)` at `ρ`.
+    #[inline]
+    pub fn magnitude(&self, distance: f64) -> f64 {
+        self.v_max / (1.0 + ((distance * (2.0 / self.rho) - 1.0) * self.alpha).exp())
+    }
+
+    /// Checks `ρ > 0`, `V_max ≥ 0`, `α > 0`, all finite.
+    pub fn validate(&self) -> Result<(), DepthError> {
+        let ok = self.rho.is_finite()
+            && self.rho > 0.0
+            && self.v_max.is_finite()
+            && self.v_max >= 0.0
+            && self.alpha.is_finite()
+            && self.alpha > 0.0;
+        if ok {
+            Ok(())
+        } else {
+            Err(DepthError::Parameter {
+                what: "repulsion parameters",
+                reason: format!("{self:?}: need rho > 0, v_max >= 0, alpha > 0, all finite"),
+            })
+        }
+    }
+}
+
+/// A point of interest on the robot: a sphere around a point of a link's axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointOfInterest {
+    /// centre, base frame \[m\]
+    pub position: Point3<f64>,
+    /// link radius around it \[m\], subtracted from every distance
+    pub radius: f64,
+}
+
+impl PointOfInterest {
+    /// A point of interest at `position` (base frame \[m\]) with `radius` \[m\].
+    pub fn new(position: Point3<f64>, radius: f64) -> Self {
+        Self { position, radius }
+    }
+}
+
+/// Result of the depth-space computation for one point of interest.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Repulsion {
+    /// repulsive vector `V_Call(P)` of eq. (17), base frame \[m/s\]; zero when no
+    /// obstacle pixel lies in the region (or the contributions cancel exactly)
+    pub v_call: Vector3<f64>,
+    /// `max(‖D_min‖ − radius, 0)` \[m\]: clearance between the point's sphere and
+    /// the nearest obstacle point; `INFINITY` when the region holds none
+    pub min_distance: f64,
+    /// `‖D_min‖` \[m\], from the point itself; `INFINITY` when the region holds none
+    pub center_distance: f64,
+    /// the obstacle point `O_min` of eq. (18) in the base frame \[m\], at the depth
+    /// used for the distance (`d_p` when it was occluded)
+    pub obstacle_point: Option<Point3<f64>>,
+    /// number of pixels in the surveillance region (the `O ∈ S` of eq. 17)
+    pub pixels_considered: usize,
+}
+
+impl Repulsion {
+    /// No obstacle in the region.
+    pub const NONE: Repulsion = Repulsion {
+        v_call: Vector3::new(0.0, 0.0, 0.0),
+        min_distance: f64::INFINITY,
+        center_distance: f64::INFINITY,
+        obstacle_point: None,
+        pixels_considered: 0,
+    };
+}
+
+impl Default for Repulsion {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+/// Inclusive pixel window: columns `u0..=u1`, rows `v0..=v1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelWindow {
+    pub u0: usize,
+    pub u1: usize,
+    pub v0: usize,
+    pub v1: usize,
+}
+
+impl PixelWindow {
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        (self.u1 + 1 - self.u0) * (self.v1 + 1 - self.v0)
+    }
+
+    /// Always `false`: a window holds at least one pixel.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+}
+
+/// Depth-space distance and repulsion for one camera: intrinsics, pose, the
+/// repulsive profile and per-column/per-row back-projection factors.
+#[derive(Debug, Clone)]
+pub struct DepthSpaceDistance {
+    intrinsics: Intrinsics,
+    pose: CameraPose,
+    params: RepulsionParams,
+    depth_scale_m: f64,
+    /// `(u − c_x)/f_x` per column
+    xn: Vec<f64>,
+    /// `(v − c_y)/f_y` per row
+    yn: Vec<f64>,
+}
+
+impl DepthSpaceDistance {
+    /// For frames of `intrinsics` at `pose` whose values are in units of
+    /// `depth_scale_m` metres (0.001 for millimetres).
+    pub fn new(
+        intrinsics: Intrinsics,
+        pose: CameraPose,
+        params: RepulsionParams,
+        depth_scale_m: f64,
+    ) -> Result<Self, DepthError> {
+        intrinsics.validate()?;
+        params.validate()?;
+        if !(depth_scale_m.is_finite() && depth_scale_m > 0.0) {
+            return Err(DepthError::Parameter {
+                what: "depth scale",
+                reason: format!("{depth_scale_m} m per unit must be positive and finite"),
+            });
+        }
+        Ok(Self {
+            intrinsics,
+            pose,
+            params,
+            depth_scale_m,
+            xn: intrinsics.column_factors(),
+            yn: intrinsics.row_factors(),
+        })
+    }
+
+    /// Repulsion parameters.
+    pub fn params(&self) -> &RepulsionParams {
+        &self.params
+    }
+
+    /// Moves the camera.
+    pub fn set_pose(&mut self, pose: CameraPose) {
+        self.pose = pose;
+    }
+
+    /// The pixel window of the surveillance region of `point`, or `None` if it
+    /// lies outside the image.
+    pub fn window(&self, point: &PointOfInterest) -> Option<PixelWindow> {
+        let p = self.pose.to_camera(&point.position);
+        self.window_camera(&p, self.params.rho + point.radius)
+    }
+
+    fn window_camera(&self, p: &Point3<f64>, reach: f64) -> Option<PixelWindow> {
+        let k = &self.intrinsics;
+        let (w, h) = (k.width as usize - 1, k.height as usize - 1);
+        if p.z <= reach {
+            return Some(PixelWindow {
+                u0: 0,
+                u1: w,
+                v0: 0,
+                v1: h,
+            });
+        }
+        let px = k.fx * p.x / p.z + k.cx;
+        let py = k.fy * p.y / p.z + k.cy;
+        let hx = reach * k.fx / (p.z - reach);
+        let hy = reach * k.fy / (p.z - reach);
+        let (wf, hf) = (w as f64, h as f64);
+        let (lo_u, hi_u) = ((px - hx).ceil(), (px + hx).floor());
+        let (lo_v, hi_v) = ((py - hy).ceil(), (py + hy).floor());
+        // NaN fails every comparison and gives None
+        if !(hi_u >= 0.0 && lo_u <= wf && hi_v >= 0.0 && lo_v <= hf && lo_u <= hi_u && lo_v <= hi_v)
+        {
+            return None;
+        }
+        Some(PixelWindow {
+            u0: lo_u.max(0.0) as usize,
+            u1: hi_u.min(wf) as usize,
+            v0: lo_v.max(0.0) as usize,
+            v1: hi_v.min(hf) as usize,
+        })
+    }
+
+    /// Eqs. (15)-(18) for one point of interest on a frame (`width × height`,
+    /// row-major, units of the depth scale, 0 = no reading) from which the
+    /// robot's own pixels have been removed. Allocates nothing.
+    pub fn repulsion(
+        &self,
+        frame: &[u16],
+        point: &PointOfInterest,
+    ) -> Result<Repulsion, DepthError> {
+        check_frame(
+            "distance frame",
+            self.intrinsics.width,
+            self.intrinsics.height,
+            frame.len(),
+        )?;
+        self.repulsion_unchecked(frame, point, 0)
+    }
+
+    /// [`DepthSpaceDistance::repulsion`] for every point, into `out` (same length).
+    pub fn repulsions(
+        &self,
+        frame: &[u16],
+        points: &[PointOfInterest],
+        out: &mut [Repulsion],
+    ) -> Result<(), DepthError> {
+        check_frame(
+            "distance frame",
+            self.intrinsics.width,
+            self.intrinsics.height,
+            frame.len(),
+        )?;
+        if out.len() != points.len() {
+            return Err(DepthError::Count {
+                what: "repulsion output",
+                expected: points.len(),
+                got: out.len(),
+            });
+        }
+        for (index, (p, o)) in points.iter().zip(out.iter_mut()).enumerate() {
+            *o = self.repulsion_unchecked(frame, p, index)?;
+        }
+        Ok(())
+    }
+
+    fn repulsion_unchecked(
+        &self,
+        frame: &[u16],
+        point: &PointOfInterest,
+        index: usize,
+    ) -> Result<Repulsion, DepthError> {
+        let finite = point.position.iter().all(|c| c.is_finite());
+        if !finite || !point.radius.is_finite() || point.radius < 0.0 {
+            return Err(DepthError::PointOfInterest { index });
+        }
+        let prm = self.params;
+        let radius = point.radius;
+        let reach = prm.rho + radius;
+        let reach2 = reach * reach;
+        let p = self.pose.to_camera(&point.position);
+        let Some(win) = self.window_camera(&p, reach) else {
+            return Ok(Repulsion::NONE);
+        };
+        let d_p = p.z;
+        let d_far = d_p + reach;
+        let scale = self.depth_scale_m;
+        let w = self.intrinsics.width as usize;
+
+        let mut sum = Vector3::<f64>::zeros();
+        let mut count = 0usize;
+        let mut best2 = f64::INFINITY;
+        let mut best = (0usize, 0usize, 0.0f64);
+        let xn = &self.xn[win.u0..=win.u1];
+        for v in win.v0..=win.v1 {
+            let y = self.yn[v];
+            let row = &frame[v * w + win.u0..=v * w + win.u1];
+            for (du, (&raw, &x)) in row.iter().zip(xn).enumerate() {
+                if raw == 0 {
+                    continue;
+                }
+                let mut d_o = f64::from(raw) * scale;
+                if d_o > d_far {
+                    continue;
+                }
+                if d_o < d_p {
+                    d_o = d_p; // occlusion: worst case at P's depth
+                }
+                let dx = x * d_o - p.x;
+                let dy = y * d_o - p.y;
+                let dz = d_o - d_p;
+                let n2 = dx * dx + dy * dy + dz * dz;
+                if n2 > reach2 {
+                    continue;
+                }
+                count += 1;
+                if n2 < best2 {
+                    best2 = n2;
+                    best = (win.u0 + du, v, d_o);
+                }
+                if n2 > 0.0 {
+                    let n = n2.sqrt();
+                    let s = (n - radius).max(0.0);
+                    let k = prm.magnitude(s) / n;
+                    sum.x -= k * dx;
+                    sum.y -= k * dy;
+                    sum.z -= k * dz;
+                }
+            }
+        }
+        if count == 0 {
+            return Ok(Repulsion::NONE);
+        }
+        let center_distance = best2.sqrt();
+        let min_distance = (center_distance - radius).max(0.0);
+        let sum_norm = sum.norm();
+        let v_cam = if sum_norm > 0.0 {
+            sum * (prm.magnitude(min_distance) / sum_norm)
+        } else {
+            Vector3::zeros()
+        };
+        let (bu, bv, bd) = best;
+        let o_cam = Point3::new(self.xn[bu] * bd, self.yn[bv] * bd, bd);
+        Ok(Repulsion {
+            v_call: self.pose.vector_to_base(&v_cam),
+            min_distance,
+            center_distance,
+            obstacle_point: Some(self.pose.to_base(&o_cam)),
+            pixels_considered: count,
+        })
+    }
+}

@@ -1,0 +1,441 @@
+//! Z-buffer depth renderer of capsules, axis-aligned boxes and a floor plane,
+//! with a Kinect v1-like sensor model (range limits, axial noise, millimetre
+//! quantization, dropped pixels at depth discontinuities).
+//!
+//! Every pixel is an exact ray cast through the pixel centre: capsules are
+//! intersected analytically, and only over the pixels of their projected
+//! bounding rectangle. The output is a `width × height` row-major image of
+//! `u16` depths in millimetres, 0 = no reading (the Kinect driver convention).
+
+use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::camera::{CameraPose, Intrinsics};
+use crate::error::{check_frame, DepthError};
+use crate::noise::{sigma_z, NormalSource};
+use crate::shapes::{camera_box_bounds, Aabb, Capsule, PixelRect, RayCapsule};
+
+/// Surfaces nearer than this \[m\] block the view but give no reading.
+pub(crate) const NEAR_M: f64 = 1e-3;
+
+/// Label of a pixel that sees no surface (see [`Renderer::render_labeled`]).
+pub const LABEL_NONE: u16 = 0;
+
+/// Sensor model of the renderer.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RenderOptions {
+    /// add Gaussian axial noise `σ_z(z) = 0.0012 + 0.0019 (z − 0.4)²` m
+    pub noise: bool,
+    /// seed of the noise and drop-out sequence (deterministic per seed)
+    pub seed: u64,
+    /// nearest valid depth \[m\]; nearer surfaces read 0
+    pub min_range_m: f64,
+    /// farthest valid depth \[m\]; farther surfaces read 0
+    pub max_range_m: f64,
+    /// constant part of the depth jump \[m\] that marks a discontinuity
+    pub edge_jump_m: f64,
+    /// noise-proportional part of the jump, in multiples of `σ_z(z)`
+    pub edge_jump_sigmas: f64,
+    /// probability in \[0, 1\] that a pixel at a discontinuity reads 0 (edge shadow)
+    pub edge_dropout: f64,
+}
+
+impl Default for RenderOptions {
+    /// Kinect v1: noise on, range 0.5-4.5 m, edges over 0.05 m + 3σ dropped
+    /// with probability 0.5, seed 0.
+    fn default() -> Self {
+        Self {
+            noise: true,
+            seed: 0,
+            min_range_m: 0.5,
+            max_range_m: 4.5,
+            edge_jump_m: 0.05,
+            edge_jump_sigmas: 3.0,
+            edge_dropout: 0.5,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Noise-free, no edge drop-out: depths are the exact ray intersections,
+    /// rounded to the millimetre (range limits still apply).
+    pub fn ideal() -> Self {
+        Self {
+            noise: false,
+            edge_dropout: 0.0,
+            ..Self::default()
+        }
+    }
+
+    /// Checks ranges and probabilities.
+    pub fn validate(&self) -> Result<(), DepthError> {
+        let bad = |reason: String| {
+            Err(DepthError::Parameter {
+                what: "render options",
+                reason,
+            })
+        };
+        if !(self.min_range_m.is_finite()
+            && self.max_range_m.is_finite()
+            && self.min_range_m > 0.0
+            && self.min_range_m < self.max_range_m
+            && self.max_range_m <= 65.535)
+        {
+            return bad(format!(
+                "range [{}, {}] m must satisfy 0 < min < max <= 65.535",
+                self.min_range_m, self.max_range_m
+            ));
+        }
+        if !(self.edge_jump_m.is_finite()
+            && self.edge_jump_m >= 0.0
+            && self.edge_jump_sigmas.is_finite()
+            && self.edge_jump_sigmas >= 0.0)
+        {
+            return bad(format!(
+                "edge jump {} m + {} σ must be finite and >= 0",
+                self.edge_jump_m, self.edge_jump_sigmas
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.edge_dropout) {
+            return bad(format!(
+                "edge drop-out probability {} must lie in [0, 1]",
+                self.edge_dropout
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A z-buffer depth renderer with preallocated buffers for one camera.
+#[derive(Debug, Clone)]
+pub struct Renderer {
+    intrinsics: Intrinsics,
+    pose: CameraPose,
+    options: RenderOptions,
+    /// `(u − c_x)/f_x` per column
+    xn: Vec<f64>,
+    /// `(v − c_y)/f_y` per row
+    yn: Vec<f64>,
+    /// exact depth per pixel \[m\], `INFINITY` = no surface
+    zbuf: Vec<f64>,
+    labels: Vec<u16>,
+    normals: NormalSource,
+}
+
+impl Renderer {
+    /// A renderer for `intrinsics` at `pose`; allocates every buffer once.
+    pub fn new(
+        intrinsics: Intrinsics,
+        pose: CameraPose,
+        options: RenderOptions,
+    ) -> Result<Self, DepthError> {
+        intrinsics.validate()?;
+        options.validate()?;
+        let n = intrinsics.pixel_count();
+        Ok(Self {
+            intrinsics,
+            pose,
+            options,
+            xn: intrinsics.column_factors(),
+            yn: intrinsics.row_factors(),
+            zbuf: vec![f64::INFINITY; n],
+            labels: vec![LABEL_NONE; n],
+            normals: NormalSource::new(options.seed),
+        })
+    }
+
+    /// Camera intrinsics.
+    pub fn intrinsics(&self) -> &Intrinsics {
+        &self.intrinsics
+    }
+
+    /// Camera pose.
+    pub fn pose(&self) -> &CameraPose {
+        &self.pose
+    }
+
+    /// Moves the camera.
+    pub fn set_pose(&mut self, pose: CameraPose) {
+        self.pose = pose;
+    }
+
+    /// Sensor model.
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    /// Restarts the noise and drop-out sequence from `seed`.
+    pub fn reseed(&mut self, seed: u64) {
+        self.options.seed = seed;
+        self.normals.reseed(seed);
+    }
+
+    /// Exact (noise-free, unquantized, no range limit) depth \[m\] of every
+    /// pixel of the last render, row-major; `f64::INFINITY` where no surface is seen.
+    pub fn exact_depth(&self) -> &[f64] {
+        &self.zbuf
+    }
+
+    /// Renders `capsules` and `boxes` (base frame) and, if given, the floor plane
+    /// `z = floor_z` \[m\] into `out` (`width × height` row-major, millimetres,
+    /// 0 = no reading). Allocates nothing.
+    ///
+    /// Errors if `out` has the wrong size or a primitive is not finite (or has a
+    /// negative radius, or `min > max`).
+    pub fn render(
+        &mut self,
+        capsules: &[Capsule],
+        boxes: &[Aabb],
+        floor_z: Option<f64>,
+        out: &mut [u16],
+    ) -> Result<(), DepthError> {
+        check_frame(
+            "depth output",
+            self.intrinsics.width,
+            self.intrinsics.height,
+            out.len(),
+        )?;
+        self.rasterize(capsules, boxes, floor_z)?;
+        self.sense(out);
+        Ok(())
+    }
+
+    /// [`Renderer::render`], also writing which primitive each pixel sees into
+    /// `labels`: [`LABEL_NONE`] (0) for nothing, `1 + i` for `capsules[i]`,
+    /// `1 + capsules.len() + j` for `boxes[j]`, `1 + capsules.len() + boxes.len()`
+    /// for the floor. Labels describe the geometry: a pixel whose reading was
+    /// dropped (range, edge shadow) keeps the label of the surface it sees.
+    pub fn render_labeled(
+        &mut self,
+        capsules: &[Capsule],
+        boxes: &[Aabb],
+        floor_z: Option<f64>,
+        out: &mut [u16],
+        labels: &mut [u16],
+    ) -> Result<(), DepthError> {
+        let (w, h) = (self.intrinsics.width, self.intrinsics.height);
+        check_frame("depth output", w, h, out.len())?;
+        check_frame("label output", w, h, labels.len())?;
+        if capsules.len() + boxes.len() + 1 > usize::from(u16::MAX) {
+            return Err(DepthError::Parameter {
+                what: "render_labeled",
+                reason: format!(
+                    "{} primitives do not fit 16-bit labels",
+                    capsules.len() + boxes.len() + 1
+                ),
+            });
+        }
+        self.rasterize(capsules, boxes, floor_z)?;
+        self.sense(out);
+        labels.copy_from_slice(&self.labels);
+        Ok(())
+    }
+
+    /// Fills the exact z-buffer and the labels.
+    fn rasterize(
+        &mut self,
+        capsules: &[Capsule],
+        boxes: &[Aabb],
+        floor_z: Option<f64>,
+    ) -> Result<(), DepthError> {
+        for (index, c) in capsules.iter().enumerate() {
+            if !c.is_valid() {
+                return Err(DepthError::Primitive {
+                    what: "capsule",
+                    index,
+                    reason: "endpoints and radius must be finite, radius >= 0",
+                });
+            }
+        }
+        for (index, b) in boxes.iter().enumerate() {
+            if !b.is_valid() {
+                return Err(DepthError::Primitive {
+                    what: "box",
+                    index,
+                    reason: "corners must be finite with min <= max",
+                });
+            }
+        }
+        if let Some(fz) = floor_z {
+            if !fz.is_finite() {
+                return Err(DepthError::Parameter {
+                    what: "floor",
+                    reason: format!("height {fz} m is not finite"),
+                });
+            }
+        }
+        self.zbuf.fill(f64::INFINITY);
+        self.labels.fill(LABEL_NONE);
+        let mut label = 1u16;
+        for c in capsules {
+            self.rasterize_capsule(c, label);
+            label = label.wrapping_add(1);
+        }
+        for b in boxes {
+            self.rasterize_box(b, label);
+            label = label.wrapping_add(1);
+        }
+        if let Some(fz) = floor_z {
+            self.rasterize_floor(fz, label);
+        }
+        Ok(())
+    }
+
+    fn rasterize_capsule(&mut self, capsule: &Capsule, label: u16) {
+        let rc = RayCapsule::new(capsule, &self.pose, 0.0);
+        let (z_min, _) = rc.depth_range();
+        let Some(rect) = rc.pixel_rect(&self.intrinsics, NEAR_M) else {
+            return;
+        };
+        let w = self.intrinsics.width as usize;
+        for v in rect.v0..=rect.v1 {
+            let y = self.yn[v];
+            let row = v * w;
+            for u in rect.u0..=rect.u1 {
+                let i = row + u;
+                let current = self.zbuf[i];
+                if current <= z_min {
+                    continue; // something nearer than the whole capsule
+                }
+                let x = self.xn[u];
+                let Some(t) = rc.entry(x, y) else {
+                    continue;
+                };
+                let t = if t > NEAR_M {
+                    t
+                } else {
+                    // the capsule reaches behind the near plane: blocks the view
+                    match rc.interval(x, y) {
+                        Some((_, t_out)) if t_out > NEAR_M => NEAR_M,
+                        _ => continue,
+                    }
+                };
+                if t < current {
+                    self.zbuf[i] = t;
+                    self.labels[i] = label;
+                }
+            }
+        }
+    }
+
+    fn rasterize_box(&mut self, aabb: &Aabb, label: u16) {
+        let corners = aabb.corners().map(|c| self.pose.to_camera(&c).coords);
+        let lo = corners
+            .iter()
+            .fold(Vector3::repeat(f64::INFINITY), |m, c| m.inf(c));
+        let hi = corners
+            .iter()
+            .fold(Vector3::repeat(f64::NEG_INFINITY), |m, c| m.sup(c));
+        let rect = if lo.z >= NEAR_M {
+            // all corners in front: the image of the box is the hull of theirs
+            let mut b = [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            for c in &corners {
+                let pu = self.intrinsics.fx * c.x / c.z + self.intrinsics.cx;
+                let pv = self.intrinsics.fy * c.y / c.z + self.intrinsics.cy;
+                b = [b[0].min(pu), b[1].max(pu), b[2].min(pv), b[3].max(pv)];
+            }
+            PixelRect::from_bounds(&self.intrinsics, b[0], b[1], b[2], b[3])
+        } else {
+            camera_box_bounds(&self.intrinsics, &lo, &hi, NEAR_M)
+                .and_then(|b| PixelRect::from_bounds(&self.intrinsics, b[0], b[1], b[2], b[3]))
+        };
+        let Some(rect) = rect else {
+            return;
+        };
+        let origin: Point3<f64> = self.pose.position();
+        let r = self.pose.rotation();
+        let (c0, c1, c2) = (
+            r.matrix().column(0).into_owned(),
+            r.matrix().column(1).into_owned(),
+            r.matrix().column(2).into_owned(),
+        );
+        let w = self.intrinsics.width as usize;
+        for v in rect.v0..=rect.v1 {
+            let y = self.yn[v];
+            let row_dir = c1 * y + c2;
+            for u in rect.u0..=rect.u1 {
+                let i = v * w + u;
+                let dir = c0 * self.xn[u] + row_dir;
+                let Some((t_in, t_out)) = aabb.ray_interval(&origin, &dir) else {
+                    continue;
+                };
+                let t = if t_in > NEAR_M {
+                    t_in
+                } else if t_out > NEAR_M {
+                    NEAR_M
+                } else {
+                    continue;
+                };
+                if t < self.zbuf[i] {
+                    self.zbuf[i] = t;
+                    self.labels[i] = label;
+                }
+            }
+        }
+    }
+
+    fn rasterize_floor(&mut self, floor_z: f64, label: u16) {
+        let origin = self.pose.position();
+        let m = *self.pose.rotation().matrix();
+        // base-frame z component of the ray t (x, y, 1) is t (m20 x + m21 y + m22)
+        let height = floor_z - origin.z;
+        let w = self.intrinsics.width as usize;
+        for (v, &y) in self.yn.iter().enumerate() {
+            let row_dz = m[(2, 1)] * y + m[(2, 2)];
+            let zrow = &mut self.zbuf[v * w..(v + 1) * w];
+            let lrow = &mut self.labels[v * w..(v + 1) * w];
+            for ((z, l), &x) in zrow.iter_mut().zip(lrow.iter_mut()).zip(&self.xn) {
+                let dz = m[(2, 0)] * x + row_dz;
+                let t = height / dz;
+                // t is ±inf or NaN for rays parallel to the floor: rejected here
+                if t > NEAR_M && t < *z {
+                    *z = t;
+                    *l = label;
+                }
+            }
+        }
+    }
+
+    /// Turns the exact z-buffer into sensor readings.
+    fn sense(&mut self, out: &mut [u16]) {
+        let o = self.options;
+        let w = self.intrinsics.width as usize;
+        let h = self.intrinsics.height as usize;
+        let zbuf = &self.zbuf;
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                let z = zbuf[i];
+                if !(z >= o.min_range_m && z <= o.max_range_m) {
+                    out[i] = 0;
+                    continue;
+                }
+                let sigma = sigma_z(z);
+                if o.edge_dropout > 0.0 {
+                    let jump = o.edge_jump_m + o.edge_jump_sigmas * sigma;
+                    let differs = |j: usize| (zbuf[j] - z).abs() > jump;
+                    let edge = (u > 0 && differs(i - 1))
+                        || (u + 1 < w && differs(i + 1))
+                        || (v > 0 && differs(i - w))
+                        || (v + 1 < h && differs(i + w));
+                    if edge && self.normals.bernoulli(o.edge_dropout) {
+                        out[i] = 0;
+                        continue;
+                    }
+                }
+                let measured = if o.noise {
+                    z + sigma * self.normals.normal()
+                } else {
+                    z
+                };
+                out[i] = (measured * 1000.0).round().clamp(1.0, 65535.0) as u16;
+            }
+        }
+    }
+}
