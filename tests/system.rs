@@ -326,7 +326,8 @@ fn coexistence_avoids_the_person_without_deadline_misses() {
     let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
     assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
     assert_eq!(r["false_detections"], 0);
-    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 3);
+    // the person blocks the path from t = 8 s: the task moved before, and waits, not collides
+    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 1);
 }
 
 #[test]

@@ -83,7 +83,7 @@ fn body() -> Result<(), String> {
                         valid.iter().max().copied().unwrap_or(0),
                     );
                     let line = format!(
-                        "frame {} {}x{} valid {} ({:.1} %) depth {}..{} mm removed {} age {:.1} ms",
+                        "frame {} {}x{} valid {} ({:.1} %) depth {}..{} mm removed {} capture→published {:.2} ms age {:.1} ms",
                         h.seq,
                         h.width,
                         h.height,
@@ -92,6 +92,7 @@ fn body() -> Result<(), String> {
                         mn,
                         mx,
                         h.removed_pixels,
+                        h.published_ns.saturating_sub(h.capture_wall_ns) as f64 * 1e-6,
                         now_ns().saturating_sub(h.capture_wall_ns) as f64 * 1e-6
                     );
                     if !emit(line) {
