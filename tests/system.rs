@@ -374,3 +374,65 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     );
     assert_eq!(r["false_detections"], 0);
 }
+
+fn alive(pid: i32) -> bool {
+    // SAFETY: probing a pid with signal 0.
+    let exists = unsafe { libc::kill(pid, 0) } == 0;
+    exists
+        && std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "))
+}
+
+#[test]
+fn a_supervisor_that_dies_leaves_the_cell_running_and_a_new_one_takes_it_over() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut cell = Cell::start("takeover", "free-motion", None, &[]);
+    wait(3.0);
+    let pids: Vec<(&str, i32)> = ["sim", "dynamics", "control"]
+        .iter()
+        .map(|s| (*s, cell.pid_of(s)))
+        .collect();
+    // the supervisor dies without a word
+    // SAFETY: signal to our own child.
+    unsafe { libc::kill(cell.child.id() as i32, libc::SIGKILL) };
+    cell.child.wait().unwrap();
+    wait(1.0);
+    for (s, pid) in &pids {
+        assert!(alive(*pid), "{s} died with the supervisor");
+    }
+    // a new supervisor for the same cell adopts the services
+    let report = cell.run_dir.join("report2.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"))
+        .current_dir(repo())
+        .arg("--config")
+        .arg(repo().join("deploy/phri.toml"))
+        .arg("--scenario")
+        .arg("free-motion")
+        .arg("--prefix")
+        .arg(&cell.prefix)
+        .arg("--run-dir")
+        .arg(&cell.run_dir)
+        .arg("--duration")
+        .arg("4")
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    for (s, pid) in &pids {
+        assert!(
+            err.contains(&format!("adopted {s} (pid {pid})")),
+            "{s} not adopted: {err}"
+        );
+        assert!(!alive(*pid), "{s} still running after the shutdown");
+    }
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert!(!events(&r, "takeover", "supervisor").is_empty());
+    for s in ["sim", "dynamics", "control"] {
+        assert_eq!(r["services"][s]["restarts"], 0, "{s}");
+        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
+    }
+    assert!(r["torque_loop"]["cycles"].as_u64().unwrap() > 3000);
+    assert_eq!(r["false_detections"], 0);
+    assert_nothing_left(&cell.prefix);
+}

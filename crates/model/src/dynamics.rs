@@ -73,8 +73,7 @@ pub fn coriolis_times_qd<'a>(
     fk_pass(model, data, q);
     inertia_pass(model, data);
     let n = model.nv();
-    // q̈ = 0 without allocating: feed q̇ as q̈ after zeroing its effect is not possible,
-    // so run the passes inline with a zero acceleration term
+    // the RNEA passes with q̈ = 0 and no gravity, inline (no zero vector to allocate)
     for (i, j) in model.joints.iter().enumerate() {
         let (vp, ap) = match j.parent {
             Some(p) => (data.v[p], data.a[p]),

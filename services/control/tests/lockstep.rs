@@ -206,34 +206,6 @@ fn perception_scenarios_are_real_tests_without_avoidance() {
     }
 }
 
-#[test]
-#[ignore]
-fn print_link_envelope() {
-    let mut c = Lockstep::new("free-motion", &[]);
-    let mut lo = vec![[9.0f64; 3]; 8];
-    let mut hi = vec![[-9.0f64; 3]; 8];
-    for k in 0..12_000 {
-        c.tick();
-        if k > 4000 {
-            for cap in c.sim.robot_capsule_poses() {
-                for p in [cap.a, cap.b] {
-                    for d in 0..3 {
-                        lo[cap.collision][d] = lo[cap.collision][d].min(p[d]);
-                        hi[cap.collision][d] = hi[cap.collision][d].max(p[d]);
-                    }
-                }
-            }
-        }
-    }
-    for i in 0..8 {
-        eprintln!(
-            "capsule {i}: lo {:?} hi {:?}",
-            lo[i].map(|x| (x * 100.0).round() / 100.0),
-            hi[i].map(|x| (x * 100.0).round() / 100.0)
-        );
-    }
-}
-
 /// A lock-step cell with avoidance but an empty scene: perception always
 /// fresh, nothing near. The task must track as well as without avoidance.
 #[test]

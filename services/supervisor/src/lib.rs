@@ -2,6 +2,7 @@
 //! run and how to restart them ([`spec`], [`restart`]), and the run report
 //! built from what flowed on the channels ([`report`]). `main.rs` does the I/O.
 
+pub mod process;
 pub mod report;
 pub mod restart;
 pub mod spec;

@@ -11,6 +11,9 @@ use std::time::Duration;
 use phri_ipc::*;
 use phri_runtime::config::{apply_set, merge};
 use phri_runtime::{now_ns, sleep_until_ns, Args, Shutdown};
+use phri_supervisor::process::{
+    process_matches, Proc, ServiceState, SupervisorState, STATE_VERSION,
+};
 use phri_supervisor::report::{DetectorInfo, Evaluator, ServiceReport};
 use phri_supervisor::restart::RestartPolicy;
 use phri_supervisor::spec::{services, ServiceSpec, SupervisorConfig};
@@ -24,7 +27,7 @@ fn main() -> ExitCode {
 struct Supervised {
     name: String,
     spec: ServiceSpec,
-    child: Option<Child>,
+    child: Option<Proc>,
     policy: RestartPolicy,
     restart_at: Option<u64>,
     last_heartbeat_ns: u64,
@@ -88,28 +91,36 @@ fn load_scenario(arg: Option<&str>, deploy_dir: &Path) -> Result<ScenarioInfo, S
     })
 }
 
-fn status_text(st: std::process::ExitStatus) -> String {
-    use std::os::unix::process::ExitStatusExt;
-    match (st.code(), st.signal()) {
-        (Some(c), _) => format!("exited with status {c}"),
-        (_, Some(s)) => format!("killed by signal {s}"),
-        _ => "ended".into(),
-    }
-}
-
-fn signal(child: &Child, sig: i32) {
-    // SAFETY: plain kill(2) on our own child's pid.
-    unsafe { libc::kill(child.id() as i32, sig) };
-}
-
+/// `state.json` (pids, for people and scripts) and `supervisor.state` (bincode,
+/// for a supervisor that takes over), each replaced atomically.
 fn write_state(run_dir: &Path, prefix: &str, list: &[Supervised]) {
-    let services: serde_json::Map<String, serde_json::Value> = list.iter().map(|s| (s.name.clone(), serde_json::json!({"pid": s.child.as_ref().map(|c| c.id()), "restarts": s.policy.restarts}))).collect();
+    let services: serde_json::Map<String, serde_json::Value> = list.iter().map(|s| (s.name.clone(), serde_json::json!({"pid": s.child.as_ref().map(|c| c.pid()), "restarts": s.policy.restarts}))).collect();
     let v = serde_json::json!({"supervisor_pid": std::process::id(), "prefix": prefix, "services": services});
-    let tmp = run_dir.join("state.json.tmp");
-    if std::fs::write(&tmp, v.to_string()).is_ok() {
-        let _ = std::fs::rename(&tmp, run_dir.join("state.json"));
+    let state = SupervisorState {
+        version: STATE_VERSION,
+        supervisor_pid: std::process::id(),
+        prefix: prefix.to_string(),
+        services: list
+            .iter()
+            .map(|s| ServiceState {
+                name: s.name.clone(),
+                pid: s.child.as_ref().map_or(0, |c| c.pid()),
+                restarts: s.policy.restarts,
+            })
+            .collect(),
+    };
+    for (name, bytes) in [
+        ("state.json", v.to_string().into_bytes()),
+        (STATE_FILE, state.encode()),
+    ] {
+        let tmp = run_dir.join(format!("{name}.tmp"));
+        if std::fs::write(&tmp, bytes).is_ok() {
+            let _ = std::fs::rename(&tmp, run_dir.join(name));
+        }
     }
 }
+
+const STATE_FILE: &str = "supervisor.state";
 
 fn body() -> Result<(), String> {
     let args = Args::parse(
@@ -297,13 +308,54 @@ fn body() -> Result<(), String> {
             .map_err(|e| format!("[services.{name}]: cannot start {}: {e}", spec.binary))
     };
 
+    // a supervisor of this run that died leaves its state: take its services over
+    let previous = std::fs::read(run_dir.join(STATE_FILE))
+        .ok()
+        .and_then(|b| SupervisorState::decode(&b))
+        .filter(|p| p.prefix == prefix);
+    if let Some(p) = &previous {
+        if p.supervisor_pid != std::process::id()
+            && process_matches(p.supervisor_pid, &["phri-supervisor", prefix.as_str()])
+        {
+            return Err(format!(
+                "a supervisor (pid {}) already runs the cell of prefix {prefix}",
+                p.supervisor_pid
+            ));
+        }
+    }
     let mut list: Vec<Supervised> = Vec::new();
     for (name, spec) in specs {
-        let child = spawn(&name, &spec)?;
+        let adopt = previous
+            .as_ref()
+            .and_then(|p| p.services.iter().find(|s| s.name == name))
+            .filter(|s| {
+                process_matches(
+                    s.pid,
+                    &[&format!("--prefix {prefix}"), &format!("--name {name}")],
+                )
+            });
         let now = now_ns();
         let mut policy = RestartPolicy::default();
         policy.started(now);
-        eprintln!("phri-supervisor: started {name} (pid {})", child.id());
+        let child = match adopt {
+            Some(prev) => {
+                policy.restarts = prev.restarts;
+                eprintln!(
+                    "phri-supervisor: adopted {name} (pid {}) from the previous supervisor",
+                    prev.pid
+                );
+                Proc::Adopted {
+                    pid: prev.pid,
+                    prefix: format!("--prefix {prefix}"),
+                }
+            }
+            None => {
+                let child = spawn(&name, &spec)?;
+                eprintln!("phri-supervisor: started {name} (pid {})", child.id());
+                Proc::Child(child)
+            }
+        };
+        let adopted = matches!(child, Proc::Adopted { .. });
         list.push(Supervised {
             name,
             spec: spec.clone(),
@@ -313,9 +365,20 @@ fn body() -> Result<(), String> {
             last_heartbeat_ns: now,
             started_ns: now,
         });
-        if spec.start_delay_ms > 0 {
+        if spec.start_delay_ms > 0 && !adopted {
             std::thread::sleep(Duration::from_millis(spec.start_delay_ms));
         }
+    }
+    if list
+        .iter()
+        .any(|s| matches!(s.child, Some(Proc::Adopted { .. })))
+    {
+        eval.event(
+            now_ns(),
+            "takeover",
+            "supervisor",
+            "adopted the services of a supervisor that died",
+        );
     }
     write_state(&run_dir, &prefix, &list);
 
@@ -394,8 +457,7 @@ fn body() -> Result<(), String> {
         let mut changed = false;
         for sv in list.iter_mut() {
             if let Some(child) = sv.child.as_mut() {
-                if let Ok(Some(st)) = child.try_wait() {
-                    let detail = status_text(st);
+                if let Some(detail) = child.try_exited() {
                     sv.child = None;
                     changed = true;
                     let _ = node.try_cleanup_dead_nodes();
@@ -446,7 +508,7 @@ fn body() -> Result<(), String> {
                         now.saturating_sub(sv.last_heartbeat_ns) / 1_000_000
                     );
                     eval.event(now, "frozen", &sv.name, "no heartbeat");
-                    signal(child, libc::SIGKILL);
+                    child.signal(libc::SIGKILL);
                     sv.last_heartbeat_ns = now;
                 }
             }
@@ -467,7 +529,7 @@ fn body() -> Result<(), String> {
                             &sv.name,
                             format!("restart {}", sv.policy.restarts),
                         );
-                        sv.child = Some(child);
+                        sv.child = Some(Proc::Child(child));
                         sv.policy.started(now);
                         sv.started_ns = now;
                         sv.last_heartbeat_ns = now;
@@ -497,7 +559,7 @@ fn body() -> Result<(), String> {
                 h.name = [0; 32];
                 let b = sv.name.as_bytes();
                 h.name[..b.len().min(31)].copy_from_slice(&b[..b.len().min(31)]);
-                h.pid = sv.child.as_ref().map_or(0, |c| c.id() as i32);
+                h.pid = sv.child.as_ref().map_or(0, |c| c.pid() as i32);
                 h.alive = sv.child.is_some() as u32;
                 h.restarts = sv.policy.restarts;
                 h.started_ns = sv.started_ns;
@@ -537,17 +599,22 @@ fn body() -> Result<(), String> {
     // exits), then what depends on it; SIGTERM, then SIGKILL after the grace period
     for sv in list.iter_mut() {
         if let Some(mut child) = sv.child.take() {
-            signal(&child, libc::SIGTERM);
+            child.signal(libc::SIGTERM);
             let deadline = now_ns() + sup.shutdown_grace_ms * 1_000_000;
-            loop {
-                if let Ok(Some(_)) = child.try_wait() {
+            let mut killed = false;
+            while child.try_exited().is_none() {
+                if now_ns() > deadline + 2_000_000_000 {
+                    eprintln!(
+                        "phri-supervisor: {} (pid {}) does not end even after SIGKILL",
+                        sv.name,
+                        child.pid()
+                    );
                     break;
                 }
-                if now_ns() > deadline {
+                if now_ns() > deadline && !killed {
                     eprintln!("phri-supervisor: {} ignored SIGTERM, killing it", sv.name);
-                    let _ = child.kill();
-                    let _ = child.wait();
-                    break;
+                    child.signal(libc::SIGKILL);
+                    killed = true;
                 }
                 std::thread::sleep(Duration::from_millis(5));
             }
@@ -571,6 +638,7 @@ fn body() -> Result<(), String> {
         Err(alive) => eprintln!("phri-supervisor: {alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
     }
     let _ = std::fs::remove_file(run_dir.join("state.json"));
+    let _ = std::fs::remove_file(run_dir.join(STATE_FILE));
     if let Some(path) = args.get("--report") {
         let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         std::fs::write(path, json + "\n").map_err(|e| format!("--report {path}: {e}"))?;

@@ -1,0 +1,203 @@
+//! The perception steps in one process: camera → ingestion → repulsion worker,
+//! checked against geometry (and so the binaries of this package are built by
+//! `cargo test --workspace` for the system tests).
+
+use nalgebra::Vector3;
+use phri_depth::RenderOptions;
+use phri_ipc::{FrameHeader, WorldState, Zeroed};
+use phri_model::{Data, Model};
+use phri_perception::camera::CameraSim;
+use phri_perception::ingest::{FrameError, Ingest, StateHistory};
+use phri_perception::repulsion::Worker;
+use phri_perception::{CameraConfig, RepulsionConfig};
+
+const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
+
+fn model() -> Model {
+    Model::from_urdf_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../deploy/robots/kuka_lwr4.urdf"
+    ))
+    .unwrap()
+}
+
+fn ee(model: &Model) -> Vector3<f64> {
+    let mut d = Data::new(model);
+    phri_model::forward_kinematics(model, &mut d, &Q0).unwrap();
+    phri_model::frame_placement(model, &d, model.frame_id("lwr_flange").unwrap()).p
+}
+
+/// The arm at Q0 and a ball of radius 0.08 m at `centre`.
+fn world(centre: Vector3<f64>) -> WorldState {
+    let mut w = WorldState::zeroed();
+    w.seq = 1;
+    w.stamp_ns = 1_000_000_000;
+    w.dof = 7;
+    w.q[..7].copy_from_slice(&Q0);
+    w.n_human = 1;
+    w.human[0].a = [centre.x, centre.y, centre.z];
+    w.human[0].b = [centre.x, centre.y, centre.z];
+    w.human[0].radius = 0.08;
+    w
+}
+
+fn pipeline(centre: Vector3<f64>) -> (phri_ipc::PointRepulsion, u32) {
+    let model = model();
+    let cfg = CameraConfig {
+        render: RenderOptions::ideal(),
+        ..CameraConfig::default()
+    };
+    let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
+    let mut frame = vec![0u16; camera.pixels()];
+    let mut header = FrameHeader::zeroed();
+    let w = world(centre);
+    camera.step(&w, &mut frame, &mut header).unwrap();
+    header.capture_ns = w.stamp_ns;
+    let mut history = StateHistory::new(7, 10);
+    history.push(w.stamp_ns, &Q0);
+    let mut ingest = Ingest::new(model.clone(), Default::default(), 20.0, 200.0);
+    let mut filtered = vec![0u16; frame.len()];
+    let out = ingest
+        .step(
+            &mut header,
+            &frame,
+            &history,
+            w.stamp_ns + 5_000_000,
+            &mut filtered,
+        )
+        .unwrap();
+    let mut worker = Worker::new(model, &RepulsionConfig::default(), 0).unwrap();
+    let results = worker.step(&header, &filtered).unwrap();
+    let ee_result = results.iter().find(|r| r.point == 0).copied().unwrap();
+    (ee_result, out.removed)
+}
+
+#[test]
+fn a_ball_near_the_end_effector_is_seen_at_its_distance_and_repels_it() {
+    let model = model();
+    let p = ee(&model);
+    // beside the end effector, across the camera's line of sight (same depth: nothing occluded)
+    let camera = phri_depth::CameraPose::paper_default().position().coords;
+    let across = (p - camera).cross(&Vector3::z()).normalize();
+    let centre = p + across * 0.25;
+    let (r, removed) = pipeline(centre);
+    assert!(
+        removed > 1000,
+        "the robot's own pixels were not removed ({removed})"
+    );
+    // surface-to-surface: centre distance − ball radius − control point radius (0.05)
+    let truth = (centre - p).norm() - 0.08 - 0.05;
+    assert_eq!(r.active, 1);
+    assert!(
+        (r.min_distance - truth).abs() < 0.03,
+        "depth-space {} vs geometric {truth}",
+        r.min_distance
+    );
+    let away = (p - centre).normalize();
+    let v = Vector3::from(r.v_call);
+    assert!(
+        v.norm() > 0.0 && v.normalize().dot(&away) > 0.5,
+        "repulsion {v:?} does not point away from the ball"
+    );
+}
+
+#[test]
+fn an_obstacle_in_front_of_the_point_is_never_farther_than_it_is() {
+    // the occlusion rule: what hides the space behind it may be as near as the point's own depth
+    let model = model();
+    let p = ee(&model);
+    let camera = phri_depth::CameraPose::paper_default().position().coords;
+    let centre = p + (camera - p).normalize() * 0.3;
+    let (r, _) = pipeline(centre);
+    let truth = (centre - p).norm() - 0.08 - 0.05;
+    assert_eq!(r.active, 1);
+    assert!(
+        r.min_distance <= truth + 0.01,
+        "depth-space {} must not exceed the geometric {truth}",
+        r.min_distance
+    );
+}
+
+#[test]
+fn nothing_near_means_no_repulsion_and_robot_pixels_are_not_obstacles() {
+    let model = model();
+    let far = ee(&model) + Vector3::new(0.0, 1.5, 0.0);
+    let (r, _) = pipeline(far);
+    // only the filtered robot and the far ball: nothing within ρ except the table top far below
+    assert!(Vector3::from(r.v_call).norm() < 0.02, "{:?}", r);
+}
+
+#[test]
+fn malformed_frames_are_refused() {
+    let model = model();
+    let mut ingest = Ingest::new(model, Default::default(), 20.0, 200.0);
+    let mut history = StateHistory::new(7, 10);
+    history.push(1_000_000_000, &Q0);
+    let mut h = FrameHeader::zeroed();
+    phri_perception::camera::fill_camera_header(
+        &mut h,
+        1,
+        &Default::default(),
+        &phri_depth::CameraPose::paper_default(),
+    );
+    h.capture_ns = 1_000_000_000;
+    let mut out = vec![0u16; 640 * 480];
+    let frame = vec![1000u16; 640 * 480];
+    assert!(matches!(
+        ingest.step(
+            &mut h.clone(),
+            &frame[..100],
+            &history,
+            1_000_000_000,
+            &mut out
+        ),
+        Err(FrameError::Size { .. })
+    ));
+    let mut future = h;
+    future.capture_ns = 2_000_000_000;
+    assert!(matches!(
+        ingest.step(&mut future, &frame, &history, 1_000_000_000, &mut out),
+        Err(FrameError::Future { .. })
+    ));
+    let mut old = h;
+    old.capture_ns = 500_000_000;
+    assert!(matches!(
+        ingest.step(&mut old, &frame, &history, 1_000_000_000, &mut out),
+        Err(FrameError::Stale { .. })
+    ));
+    assert!(matches!(
+        ingest.step(
+            &mut h.clone(),
+            &vec![0u16; 640 * 480],
+            &history,
+            1_000_000_000,
+            &mut out
+        ),
+        Err(FrameError::Empty { .. })
+    ));
+    let mut bad = h;
+    bad.fx = f64::NAN;
+    assert!(matches!(
+        ingest.step(&mut bad, &frame, &history, 1_000_000_000, &mut out),
+        Err(FrameError::Camera(..))
+    ));
+    let mut scale = h;
+    scale.depth_scale = 0.0002;
+    assert!(matches!(
+        ingest.step(&mut scale, &frame, &history, 1_000_000_000, &mut out),
+        Err(FrameError::Scale { .. })
+    ));
+    let empty = StateHistory::new(7, 10);
+    assert!(matches!(
+        ingest.step(&mut h.clone(), &frame, &empty, 1_000_000_000, &mut out),
+        Err(FrameError::NoJointState { .. })
+    ));
+    // a good frame passes, then the same sequence again is refused
+    assert!(ingest
+        .step(&mut h.clone(), &frame, &history, 1_000_000_000, &mut out)
+        .is_ok());
+    assert!(matches!(
+        ingest.step(&mut h.clone(), &frame, &history, 1_000_000_000, &mut out),
+        Err(FrameError::Sequence { .. })
+    ));
+}
