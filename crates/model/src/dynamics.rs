@@ -31,7 +31,7 @@ pub fn rnea<'a>(
     check_len("qdd", model.nv(), qdd.len())?;
     fk_pass(model, data, q);
     inertia_pass(model, data);
-    rnea_pass(model, data, qd, qdd, base_acceleration(model));
+    rnea_pass(model, data, qd, Some(qdd), base_acceleration(model));
     let n = model.nv();
     for i in 0..n {
         data.tau[i] = data.s[i].dot(&data.f[i]);
@@ -39,8 +39,10 @@ pub fn rnea<'a>(
     Ok(&data.tau)
 }
 
-/// RNEA passes after FK and inertias; leaves subtree forces in `data.f`.
-fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64], a0: Motion) {
+/// RNEA passes after FK and inertias (`qdd = None`: q̈ = 0, nothing allocated;
+/// `a0`: the base's acceleration, `(0, −g)` for gravity); leaves subtree
+/// forces in `data.f`, so that `τ_i = S_iᵀ f_i`.
+fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: Option<&[f64]>, a0: Motion) {
     for (i, j) in model.joints.iter().enumerate() {
         let (vp, ap) = match j.parent {
             Some(p) => (data.v[p], data.a[p]),
@@ -48,7 +50,7 @@ fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64], a0: Motion
         };
         let s = data.s[i];
         let v = vp + s.scale(qd[i]);
-        let a = ap + s.scale(qdd[i]) + v.cross_motion(&s.scale(qd[i]));
+        let a = ap + s.scale(qdd.map_or(0.0, |x| x[i])) + v.cross_motion(&s.scale(qd[i]));
         let inertia = &data.inertia[i];
         data.v[i] = v;
         data.a[i] = a;
@@ -72,26 +74,9 @@ pub fn coriolis_times_qd<'a>(
     check_q_qd(model, q, qd)?;
     fk_pass(model, data, q);
     inertia_pass(model, data);
-    let n = model.nv();
-    // the RNEA passes with q̈ = 0 and no gravity, inline (no zero vector to allocate)
-    for (i, j) in model.joints.iter().enumerate() {
-        let (vp, ap) = match j.parent {
-            Some(p) => (data.v[p], data.a[p]),
-            None => (Motion::ZERO, Motion::ZERO),
-        };
-        let s = data.s[i];
-        let v = vp + s.scale(qd[i]);
-        let a = ap + v.cross_motion(&s.scale(qd[i]));
-        let inertia = &data.inertia[i];
-        data.v[i] = v;
-        data.a[i] = a;
-        data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
-    }
-    for i in (0..n).rev() {
-        if let Some(p) = model.joints[i].parent {
-            let fi = data.f[i];
-            data.f[p] += fi;
-        }
+    // q̈ = 0 and no gravity
+    rnea_pass(model, data, qd, None, Motion::ZERO);
+    for i in 0..model.nv() {
         data.c_qd[i] = data.s[i].dot(&data.f[i]);
     }
     Ok(&data.c_qd)
@@ -318,24 +303,8 @@ pub fn forward_dynamics<'a>(
     inertia_pass(model, data);
     crba_pass(model, data);
     // bias = RNEA(q, q̇, 0) with gravity
-    for (i, j) in model.joints.iter().enumerate() {
-        let (vp, ap) = match j.parent {
-            Some(p) => (data.v[p], data.a[p]),
-            None => (Motion::ZERO, base_acceleration(model)),
-        };
-        let s = data.s[i];
-        let v = vp + s.scale(qd[i]);
-        let a = ap + v.cross_motion(&s.scale(qd[i]));
-        let inertia = &data.inertia[i];
-        data.v[i] = v;
-        data.a[i] = a;
-        data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
-    }
-    for i in (0..n).rev() {
-        if let Some(p) = model.joints[i].parent {
-            let fi = data.f[i];
-            data.f[p] += fi;
-        }
+    rnea_pass(model, data, qd, None, base_acceleration(model));
+    for i in 0..n {
         data.qdd[i] = tau[i] - data.s[i].dot(&data.f[i]);
     }
     cholesky_solve_in_place(data)?;
