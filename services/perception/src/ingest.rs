@@ -8,6 +8,9 @@ use phri_model::{Data, Model};
 use crate::camera::header_camera;
 use crate::robot::robot_capsules;
 
+/// A frame sequence at or below this after a higher one means the camera restarted.
+const RESTARTED_SEQ: u64 = 2;
+
 /// Why a frame was refused.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum FrameError {
@@ -156,8 +159,10 @@ impl Ingest {
                 limit_ms: self.max_age_ns as f64 * 1e-6,
             });
         }
+        // a repeated or older frame is refused; a sequence that starts over is a
+        // camera that restarted: its frames are accepted
         if let Some(last) = self.last_seq {
-            if seq <= last && last - seq < 1_000_000 {
+            if seq <= last && seq > RESTARTED_SEQ {
                 return Err(FrameError::Sequence { seq, last });
             }
         }

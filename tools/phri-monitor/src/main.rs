@@ -1,115 +1,493 @@
-//! `phri-monitor echo CHANNEL --prefix P [--count N]`: attaches read-only (a
-//! subscriber, never a publisher) to a live channel and prints its samples
-//! (frames summarised, not dumped).
+//! `phri-monitor`: attaches read-only to the live channels of a running cell
+//! (subscribers only, never a publisher, never creating a channel; normal
+//! scheduling, sleeping between polls).
+//!
+//! - `echo CHANNEL --prefix P [--count N] [--every N] [--json]`: print samples (frames summarised)
+//! - `list --prefix P [--seconds S] [--json]`: live nodes, every channel's ports, rate, drops
+//! - `hz CHANNEL --prefix P [--seconds S] [--once] [--json]`: rate, jitter, age, bandwidth, drops
+//! - `top --prefix P [--seconds S] [--json]`: dashboard refreshing 4×/s
 
+mod json;
+mod probe;
+
+use std::collections::VecDeque;
 use std::process::ExitCode;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
+use iceoryx2::node::NodeView;
+use iceoryx2::prelude::*;
 use phri_ipc::*;
-use phri_runtime::{now_ns, Args, Shutdown};
+use phri_runtime::{Args, Shutdown};
+use serde_json::{json, Value};
 
-const USAGE: &str = "usage: phri-monitor echo CHANNEL --prefix PREFIX [--count N] [--every N]";
+use probe::{last, Probe};
+
+const USAGE: &str = "usage: phri-monitor echo CHANNEL | hz CHANNEL | list | top  --prefix PREFIX [--seconds S] [--json] [--once] [--count N] [--every N]";
+
+/// Pause between polls: the monitor never competes with the torque loop.
+const POLL: Duration = Duration::from_millis(2);
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-monitor", body)
 }
 
+struct NodeInfo {
+    name: String,
+    pid: i32,
+    state: &'static str,
+}
+
+/// The cell's nodes under `prefix` (this process's own nodes left out).
+fn cell_nodes(prefix: &str) -> Result<Vec<NodeInfo>, String> {
+    let mut config = Config::default();
+    config.global.prefix = FileName::new(prefix.as_bytes())
+        .map_err(|e| format!("invalid prefix '{prefix}': {e:?}"))?;
+    let me = std::process::id() as i32;
+    let mut out = Vec::new();
+    Node::<ipc::Service>::list(&config, |state| {
+        let (view, st) = match &state {
+            NodeState::Alive(v) => (Some(v.details().clone()), "alive"),
+            NodeState::Dead(v) => (Some(v.details().clone()), "dead"),
+            NodeState::Inaccessible(_) => (None, "inaccessible"),
+            NodeState::Undefined(_) => (None, "undefined"),
+        };
+        let (name, pid) = match view.flatten() {
+            Some(d) => (d.name().to_string(), d.process_id().value()),
+            None => (String::new(), -1),
+        };
+        if pid != me {
+            out.push(NodeInfo {
+                name,
+                pid,
+                state: st,
+            });
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| format!("cannot list the nodes under prefix '{prefix}': {e:?}"))?;
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(out)
+}
+
+/// Parsed common options.
+struct Opts {
+    prefix: String,
+    json: bool,
+    seconds: Option<f64>,
+    once: bool,
+    count: u64,
+    every: u64,
+}
+
+fn parse(argv: impl Iterator<Item = String>) -> Result<Opts, String> {
+    let args = Args::parse(
+        argv,
+        &["--prefix", "--count", "--every", "--seconds"],
+        &["--json", "--once"],
+    )
+    .map_err(|e| format!("{e}; {USAGE}"))?;
+    let prefix = args
+        .get("--prefix")
+        .ok_or("--prefix is required (the cell's iceoryx2 prefix, see deploy/up --prefix)")?
+        .to_string();
+    let seconds = args.parse_value::<f64>("--seconds")?;
+    if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
+        return Err("--seconds must be positive".into());
+    }
+    Ok(Opts {
+        prefix,
+        json: args.has("--json"),
+        seconds,
+        once: args.has("--once"),
+        count: args.parse_value::<u64>("--count")?.unwrap_or(u64::MAX),
+        every: args.parse_value::<u64>("--every")?.unwrap_or(1).max(1),
+    })
+}
+
+/// Fail unless some live node runs under the prefix; return the nodes.
+fn require_cell(prefix: &str) -> Result<Vec<NodeInfo>, String> {
+    let nodes = cell_nodes(prefix)?;
+    if !nodes.iter().any(|n| n.state == "alive") {
+        return Err(format!(
+            "no cell running under prefix '{prefix}' (no live iceoryx2 node; start one with deploy/up --prefix {prefix})"
+        ));
+    }
+    Ok(nodes)
+}
+
+fn monitor_node(prefix: &str) -> Result<Node<ipc::Service>, String> {
+    node(&format!("monitor{}", std::process::id()), prefix).map_err(|e| e.to_string())
+}
+
 fn body() -> Result<(), String> {
     let mut argv = std::env::args().skip(1);
     let cmd = argv.next().ok_or(USAGE)?;
-    if cmd != "echo" {
-        return Err(format!("unknown command '{cmd}'\n{USAGE}"));
-    }
-    let channel = argv.next().ok_or(USAGE)?;
-    let args = Args::parse(argv, &["--prefix", "--count", "--every"], &[])?;
-    let prefix = args
-        .get("--prefix")
-        .ok_or("--prefix is required (the cell's iceoryx2 prefix, see deploy/up --prefix)")?;
-    let count = args.parse_value::<u64>("--count")?.unwrap_or(u64::MAX);
-    let every = args.parse_value::<u64>("--every")?.unwrap_or(1).max(1);
+    let channel = match cmd.as_str() {
+        "echo" | "hz" => {
+            let c = argv.next().ok_or(USAGE)?;
+            if !ALL.contains(&c.as_str()) {
+                return Err(probe::unknown_channel(&c));
+            }
+            Some(c)
+        }
+        "list" | "top" => None,
+        other => return Err(format!("unknown command '{other}'; {USAGE}")),
+    };
+    let opts = parse(argv)?;
+    let nodes = require_cell(&opts.prefix)?;
     let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
-    let node =
-        node(&format!("monitor{}", std::process::id()), prefix).map_err(|e| e.to_string())?;
-    let mut printed = 0u64;
-    let mut seen = 0u64;
-    let mut emit = |line: String| -> bool {
+    let node = monitor_node(&opts.prefix)?;
+    match cmd.as_str() {
+        "echo" => echo(&node, &channel.unwrap(), &opts, &shutdown),
+        "hz" => hz(&node, &channel.unwrap(), &opts, &shutdown),
+        "list" => list(&node, nodes, &opts, &shutdown),
+        _ => top(&node, &opts, &shutdown),
+    }
+}
+
+fn echo(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Result<(), String> {
+    let mut p = probe::open(node, channel)?;
+    if !p.present() {
+        return Err(format!(
+            "channel '{channel}' does not exist under prefix '{}' (no service publishes it)",
+            o.prefix
+        ));
+    }
+    let (mut seen, mut printed) = (0u64, 0u64);
+    let json = o.json;
+    let mut emit = |v: Value| -> bool {
         seen += 1;
-        if seen % every == 0 {
-            println!("{line}");
+        if seen % o.every == 0 {
+            if json {
+                println!("{v}");
+            } else {
+                println!("{}", text_line(&v));
+            }
             printed += 1;
         }
-        printed < count
+        printed < o.count
     };
-    macro_rules! echo {
-        ($t:ty) => {{
-            let sub = subscriber::<$t>(&node, &channel, DRAIN).map_err(|e| e.to_string())?;
-            'outer: while !shutdown.requested() {
-                std::thread::sleep(Duration::from_millis(5));
-                while let Some(m) = sub
-                    .receive()
-                    .map_err(|e| ipc_err(&channel, e).to_string())?
-                {
-                    if !emit(format!("{:?}", *m)) {
-                        break 'outer;
-                    }
-                }
-            }
-        }};
-    }
-    match channel.as_str() {
-        ROBOT_STATE => echo!(JointState),
-        ROBOT_COMMAND => echo!(TorqueCommand),
-        ROBOT_STATS => echo!(RobotStats),
-        SIM_TRUTH => echo!(Truth),
-        DYNAMICS_RESIDUAL => echo!(Residual),
-        CONTROL_STATUS => echo!(ControlStatus),
-        SUPERVISOR_HEALTH => echo!(Health),
-        SIM_WORLD => echo!(WorldState),
-        PERCEPTION_REPULSION => echo!(RepulsionResult),
-        CAMERA_DEPTH | PERCEPTION_DEPTH => {
-            let sub = frame_subscriber(&node, &channel).map_err(|e| e.to_string())?;
-            while !shutdown.requested() {
-                std::thread::sleep(Duration::from_millis(5));
-                let mut stop = false;
-                while let Some(f) = sub
-                    .receive()
-                    .map_err(|e| ipc_err(&channel, e).to_string())?
-                {
-                    let h = f.user_header();
-                    let d = f.payload();
-                    let valid: Vec<u16> = d.iter().copied().filter(|&x| x > 0).collect();
-                    let (mn, mx) = (
-                        valid.iter().min().copied().unwrap_or(0),
-                        valid.iter().max().copied().unwrap_or(0),
-                    );
-                    let line = format!(
-                        "frame {} {}x{} valid {} ({:.1} %) depth {}..{} mm removed {} capture→published {:.2} ms age {:.1} ms",
-                        h.seq,
-                        h.width,
-                        h.height,
-                        valid.len(),
-                        100.0 * valid.len() as f64 / d.len().max(1) as f64,
-                        mn,
-                        mx,
-                        h.removed_pixels,
-                        h.published_ns.saturating_sub(h.capture_wall_ns) as f64 * 1e-6,
-                        now_ns().saturating_sub(h.capture_wall_ns) as f64 * 1e-6
-                    );
-                    if !emit(line) {
-                        stop = true;
-                        break;
-                    }
-                }
-                if stop {
-                    break;
-                }
-            }
+    let deadline = o
+        .seconds
+        .map(|s| Instant::now() + Duration::from_secs_f64(s));
+    while !sd.requested() && deadline.is_none_or(|d| Instant::now() < d) {
+        std::thread::sleep(POLL);
+        if !p.poll(Some(&mut emit))? {
+            break;
         }
-        other => {
-            return Err(format!(
-                "unknown channel '{other}'; channels: {}",
-                ALL.join(", ")
-            ))
+    }
+    Ok(())
+}
+
+/// One compact human-readable line from a JSON value: `key=value` pairs.
+fn text_line(v: &Value) -> String {
+    match v {
+        Value::Object(m) => m
+            .iter()
+            .map(|(k, v)| format!("{k}={}", v))
+            .collect::<Vec<_>>()
+            .join(" "),
+        other => other.to_string(),
+    }
+}
+
+fn channel_json(p: &dyn Probe) -> Value {
+    let (pubs, subs) = p.counts();
+    let mut v = p.stats().summary();
+    let m = v.as_object_mut().unwrap();
+    m.insert("present".into(), json!(p.present()));
+    m.insert("publishers".into(), json!(pubs));
+    m.insert("subscribers".into(), json!(subs));
+    v
+}
+
+fn open_all(node: &Node<ipc::Service>) -> Result<Vec<Box<dyn Probe>>, String> {
+    ALL.iter().map(|c| probe::open(node, c)).collect()
+}
+
+fn poll_all(probes: &mut [Box<dyn Probe>]) -> Result<(), String> {
+    for p in probes.iter_mut() {
+        p.poll(None)?;
+    }
+    Ok(())
+}
+
+fn f(v: &Value, key: &str, digits: usize) -> String {
+    match v.get(key).and_then(|x| x.as_f64()) {
+        Some(x) => format!("{x:.digits$}"),
+        None => "-".into(),
+    }
+}
+
+fn human_bytes(v: &Value) -> String {
+    let b = v
+        .get("bandwidth_bps")
+        .and_then(|x| x.as_f64())
+        .unwrap_or(0.0);
+    if b >= 1e6 {
+        format!("{:.1} MB/s", b / 1e6)
+    } else if b >= 1e3 {
+        format!("{:.1} kB/s", b / 1e3)
+    } else {
+        format!("{b:.0} B/s")
+    }
+}
+
+fn list(
+    node: &Node<ipc::Service>,
+    nodes: Vec<NodeInfo>,
+    o: &Opts,
+    sd: &Shutdown,
+) -> Result<(), String> {
+    let mut probes = open_all(node)?;
+    let t0 = Instant::now();
+    let span = Duration::from_secs_f64(o.seconds.unwrap_or(1.0));
+    while t0.elapsed() < span && !sd.requested() {
+        std::thread::sleep(POLL);
+        poll_all(&mut probes)?;
+    }
+    if o.json {
+        let channels: serde_json::Map<String, Value> = probes
+            .iter()
+            .map(|p| (p.name().to_string(), channel_json(p.as_ref())))
+            .collect();
+        let nodes: Vec<Value> = nodes
+            .iter()
+            .map(|n| json!({"name": n.name, "pid": n.pid, "state": n.state}))
+            .collect();
+        println!(
+            "{}",
+            json!({"prefix": o.prefix, "nodes": nodes, "channels": channels})
+        );
+    } else {
+        println!("nodes under prefix '{}':", o.prefix);
+        for n in &nodes {
+            println!("  {:<24} pid {:<8} {}", n.name, n.pid, n.state);
+        }
+        println!(
+            "channels (over {:.1} s):\n  {:<22} {:>4} {:>4} {:>10} {:>8} {:>6}",
+            span.as_secs_f64(),
+            "name",
+            "pub",
+            "sub",
+            "rate Hz",
+            "samples",
+            "drops"
+        );
+        for p in &probes {
+            let v = channel_json(p.as_ref());
+            if !p.present() {
+                println!("  {:<22} (absent)", p.name());
+                continue;
+            }
+            println!(
+                "  {:<22} {:>4} {:>4} {:>10} {:>8} {:>6}",
+                p.name(),
+                v["publishers"].to_string(),
+                v["subscribers"].to_string(),
+                f(&v, "rate_hz", 1),
+                v["samples"].to_string(),
+                v["drops"].to_string()
+            );
+        }
+    }
+    Ok(())
+}
+
+fn hz(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Result<(), String> {
+    let mut p = probe::open(node, channel)?;
+    if !p.present() {
+        return Err(format!(
+            "channel '{channel}' does not exist under prefix '{}' (no service publishes it)",
+            o.prefix
+        ));
+    }
+    let span = Duration::from_secs_f64(o.seconds.unwrap_or(1.0));
+    while !sd.requested() {
+        let t0 = Instant::now();
+        while t0.elapsed() < span && !sd.requested() {
+            std::thread::sleep(POLL);
+            p.poll(None)?;
+        }
+        let mut v = channel_json(p.as_ref());
+        v.as_object_mut()
+            .unwrap()
+            .insert("channel".into(), json!(channel));
+        if o.json {
+            println!("{v}");
+        } else {
+            println!(
+                "{channel}: {} Hz  interval mean {} ms max {} ms  age {} ms  {}  drops {}  ({} samples, pub {} sub {})",
+                f(&v, "rate_hz", 1),
+                f(&v, "mean_interval_ms", 3),
+                f(&v, "max_interval_ms", 3),
+                f(&v, "age_ms", 2),
+                human_bytes(&v),
+                v["drops"].to_string(),
+                v["samples"].to_string(),
+                v["publishers"].to_string(),
+                v["subscribers"].to_string()
+            );
+        }
+        if o.once {
+            break;
+        }
+        p.stats_mut().reset();
+    }
+    Ok(())
+}
+
+const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+const SPARK_LEN: usize = 60;
+
+fn sparkline(values: &VecDeque<f64>) -> String {
+    let finite = values.iter().copied().filter(|x| x.is_finite());
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+        (l.min(x), h.max(x))
+    });
+    values
+        .iter()
+        .map(|&x| {
+            if !x.is_finite() {
+                ' '
+            } else if hi - lo < 1e-12 {
+                BARS[0]
+            } else {
+                BARS[(((x - lo) / (hi - lo)) * 7.0).round().clamp(0.0, 7.0) as usize]
+            }
+        })
+        .collect()
+}
+
+fn push(h: &mut VecDeque<f64>, x: f64) {
+    if h.len() == SPARK_LEN {
+        h.pop_front();
+    }
+    h.push_back(x);
+}
+
+fn top(node: &Node<ipc::Service>, o: &Opts, sd: &Shutdown) -> Result<(), String> {
+    let mut probes = open_all(node)?;
+    let idx = |name: &str| ALL.iter().position(|c| *c == name).unwrap();
+    let (i_status, i_res, i_health) = (
+        idx(CONTROL_STATUS),
+        idx(DYNAMICS_RESIDUAL),
+        idx(SUPERVISOR_HEALTH),
+    );
+    let (mut dist_h, mut norm_h) = (VecDeque::new(), VecDeque::new());
+    let refresh = Duration::from_millis(250);
+    let window_ns = 1_000_000_000;
+    let t_start = Instant::now();
+    let end = o.seconds.map(Duration::from_secs_f64);
+    while !sd.requested() && end.is_none_or(|e| t_start.elapsed() < e) {
+        let t0 = Instant::now();
+        while t0.elapsed() < refresh && !sd.requested() {
+            std::thread::sleep(POLL);
+            poll_all(&mut probes)?;
+        }
+        for p in probes.iter_mut() {
+            p.stats_mut().trim(window_ns);
+        }
+        let status: Option<ControlStatus> = last(probes[i_status].as_ref());
+        let residual: Option<Residual> = last(probes[i_res].as_ref());
+        let health: Option<Health> = last(probes[i_health].as_ref());
+        if let Some(s) = &status {
+            push(&mut dist_h, s.min_distance);
+        }
+        if let Some(r) = &residual {
+            push(&mut norm_h, r.norm);
+        }
+        let services: Vec<Value> = health
+            .map(|h| {
+                h.services[..(h.count as usize).min(MAX_SERVICES)]
+                    .iter()
+                    .map(|s| {
+                        json!({"name": s.name_str(), "pid": s.pid, "alive": s.alive != 0,
+                               "restarts": s.restarts})
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let mode = status.map(|s| control_mode::name(s.mode));
+        let min_d = status.map(|s| s.min_distance).filter(|x| x.is_finite());
+        let norm = residual.map(|r| r.norm).filter(|x| x.is_finite());
+        if o.json {
+            let channels: serde_json::Map<String, Value> = probes
+                .iter()
+                .map(|p| (p.name().to_string(), channel_json(p.as_ref())))
+                .collect();
+            println!(
+                "{}",
+                json!({"prefix": o.prefix, "t_s": t_start.elapsed().as_secs_f64(),
+                       "mode": mode, "min_distance": min_d, "residual_norm": norm,
+                       "services": services, "channels": channels})
+            );
+        } else {
+            let mut s = String::from("\x1b[2J\x1b[H");
+            s += &format!(
+                "phri-monitor top  prefix '{}'  t {:.1} s  (Ctrl-C quits)\n\n",
+                o.prefix,
+                t_start.elapsed().as_secs_f64()
+            );
+            s += &format!(
+                "mode {}   min distance {}   residual norm {}\n",
+                mode.unwrap_or("-"),
+                min_d.map_or("-".into(), |d| format!("{d:.3} m")),
+                norm.map_or("-".into(), |n| format!("{n:.2} Nm"))
+            );
+            s += &format!("  distance {}\n", sparkline(&dist_h));
+            s += &format!("  residual {}\n\n", sparkline(&norm_h));
+            s += &format!(
+                "{:<22} {:>4} {:>4} {:>9} {:>9} {:>9} {:>9} {:>11} {:>6}\n",
+                "channel",
+                "pub",
+                "sub",
+                "rate Hz",
+                "mean ms",
+                "max ms",
+                "age ms",
+                "bandwidth",
+                "drops"
+            );
+            for p in &probes {
+                if !p.present() {
+                    s += &format!("{:<22} (absent)\n", p.name());
+                    continue;
+                }
+                let v = channel_json(p.as_ref());
+                s += &format!(
+                    "{:<22} {:>4} {:>4} {:>9} {:>9} {:>9} {:>9} {:>11} {:>6}\n",
+                    p.name(),
+                    v["publishers"].to_string(),
+                    v["subscribers"].to_string(),
+                    f(&v, "rate_hz", 1),
+                    f(&v, "mean_interval_ms", 3),
+                    f(&v, "max_interval_ms", 3),
+                    f(&v, "age_ms", 2),
+                    human_bytes(&v),
+                    v["total_drops"].to_string()
+                );
+            }
+            s += &format!(
+                "\n{:<16} {:>8} {:>6} {:>9}\n",
+                "service", "pid", "alive", "restarts"
+            );
+            for sv in &services {
+                s += &format!(
+                    "{:<16} {:>8} {:>6} {:>9}\n",
+                    sv["name"].as_str().unwrap_or("?"),
+                    sv["pid"].to_string(),
+                    if sv["alive"] == json!(true) {
+                        "yes"
+                    } else {
+                        "NO"
+                    },
+                    sv["restarts"].to_string()
+                );
+            }
+            print!("{s}");
+            use std::io::Write;
+            let _ = std::io::stdout().flush();
         }
     }
     Ok(())

@@ -1,0 +1,541 @@
+//! `phri-fault`: inject process faults into the services of a running cell.
+//!
+//! The services' pids come from `<run-dir>/state.json`, written by
+//! `phri-supervisor`; it is re-read before every injection, since a restarted
+//! service has a new pid. A pid is signalled only while its parent is the
+//! supervisor named in that file (no stray signal to a recycled pid).
+//!
+//! Exit status: 0 done, 1 usage error, 2 the cell cannot be acted on
+//! (state.json missing or garbage, service unknown, down or dead).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
+  SERVICE  a service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
+  ACTION   kill            SIGKILL
+           term            SIGTERM
+           freeze SECONDS  SIGSTOP, SIGCONT after SECONDS
+           slow PERCENT --for SECONDS
+                           SIGSTOP/SIGCONT in 10 ms slices: the process runs PERCENT % of the time
+  --times N         injections (default 1; 0 = until --until, state.json disappears or Ctrl-C)
+  --every SECONDS   wait this long before each injection
+  --random MIN,MAX  wait a uniformly random time in [MIN, MAX] s before each injection
+                    (without --every/--random: the first injection is immediate, the next 1 s apart)
+  --seed S          seed of the random choices (default: from the clock)
+  --until SECONDS   inject nothing later than this many seconds after the start
+  --json            one JSON object per injection instead of a text line
+exit status: 0 done, 1 usage, 2 state.json missing/garbage, service unknown/down, pid dead";
+
+static STOP: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_signal(_: libc::c_int) {
+    STOP.store(true, Ordering::SeqCst);
+}
+
+#[derive(Clone, Debug)]
+enum Action {
+    Kill,
+    Term,
+    Freeze(f64),
+    Slow { percent: f64, for_s: f64 },
+}
+
+impl Action {
+    fn name(&self) -> &'static str {
+        match self {
+            Action::Kill => "kill",
+            Action::Term => "term",
+            Action::Freeze(_) => "freeze",
+            Action::Slow { .. } => "slow",
+        }
+    }
+    fn detail(&self) -> String {
+        match self {
+            Action::Kill => "SIGKILL".into(),
+            Action::Term => "SIGTERM".into(),
+            Action::Freeze(s) => format!("SIGSTOP for {s} s"),
+            Action::Slow { percent, for_s } => format!("{percent} % CPU for {for_s} s"),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Target {
+    One(String),
+    Random(Option<Vec<String>>),
+}
+
+#[derive(Debug)]
+struct Opts {
+    run_dir: PathBuf,
+    target: Target,
+    action: Action,
+    times: u64,
+    every: Option<f64>,
+    random: Option<(f64, f64)>,
+    seed: u64,
+    until: Option<f64>,
+    json: bool,
+}
+
+/// Error of the cell (exit 2) or of the command line (exit 1).
+enum Fail {
+    Usage(String),
+    Cell(String),
+}
+
+fn parse_f64(flag: &str, v: &str) -> Result<f64, Fail> {
+    match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(Fail::Usage(format!(
+            "{flag}: not a non-negative number: {v:?}"
+        ))),
+    }
+}
+
+fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
+    let mut run_dir = None;
+    let mut pos: Vec<String> = Vec::new();
+    let mut times = 1u64;
+    let mut every = None;
+    let mut random = None;
+    let mut seed = None;
+    let mut until = None;
+    let mut for_s = None;
+    let mut json = false;
+    let mut it = args.into_iter();
+    while let Some(a) = it.next() {
+        let mut val = |flag: &str| {
+            it.next()
+                .ok_or_else(|| Fail::Usage(format!("{flag} needs a value")))
+        };
+        match a.as_str() {
+            "--help" | "-h" => return Err(Fail::Usage(String::new())),
+            "--run-dir" => run_dir = Some(PathBuf::from(val("--run-dir")?)),
+            "--times" => {
+                let v = val("--times")?;
+                times = v
+                    .parse()
+                    .map_err(|_| Fail::Usage(format!("--times: not a count: {v:?}")))?;
+            }
+            "--every" => every = Some(parse_f64("--every", &val("--every")?)?),
+            "--random" => {
+                let v = val("--random")?;
+                let (a, b) = v
+                    .split_once(',')
+                    .ok_or_else(|| Fail::Usage(format!("--random: expected MIN,MAX, got {v:?}")))?;
+                let (a, b) = (parse_f64("--random", a)?, parse_f64("--random", b)?);
+                if b < a {
+                    return Err(Fail::Usage(format!("--random: MIN > MAX in {v:?}")));
+                }
+                random = Some((a, b));
+            }
+            "--seed" => {
+                let v = val("--seed")?;
+                seed = Some(
+                    v.parse()
+                        .map_err(|_| Fail::Usage(format!("--seed: not an integer: {v:?}")))?,
+                );
+            }
+            "--until" => until = Some(parse_f64("--until", &val("--until")?)?),
+            "--for" => for_s = Some(parse_f64("--for", &val("--for")?)?),
+            "--json" => json = true,
+            s if s.starts_with("--") => return Err(Fail::Usage(format!("unknown option {s}"))),
+            _ => pos.push(a),
+        }
+    }
+    let run_dir = run_dir.ok_or_else(|| Fail::Usage("--run-dir is required".into()))?;
+    let mut pos = pos.into_iter();
+    let service = pos
+        .next()
+        .ok_or_else(|| Fail::Usage("SERVICE is missing".into()))?;
+    let target = if service == "random" {
+        Target::Random(None)
+    } else if let Some(set) = service.strip_prefix("random:") {
+        let set: Vec<String> = set
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(String::from)
+            .collect();
+        if set.is_empty() {
+            return Err(Fail::Usage("random: needs at least one service".into()));
+        }
+        Target::Random(Some(set))
+    } else {
+        Target::One(service)
+    };
+    let action = match pos.next().as_deref() {
+        Some("kill") => Action::Kill,
+        Some("term") => Action::Term,
+        Some("freeze") => {
+            let v = pos
+                .next()
+                .ok_or_else(|| Fail::Usage("freeze needs SECONDS".into()))?;
+            Action::Freeze(parse_f64("freeze", &v)?)
+        }
+        Some("slow") => {
+            let v = pos
+                .next()
+                .ok_or_else(|| Fail::Usage("slow needs PERCENT".into()))?;
+            let percent = parse_f64("slow", &v)?;
+            if percent > 100.0 {
+                return Err(Fail::Usage(format!("slow: PERCENT above 100: {v}")));
+            }
+            let for_s = for_s.ok_or_else(|| Fail::Usage("slow needs --for SECONDS".into()))?;
+            Action::Slow { percent, for_s }
+        }
+        Some(a) => return Err(Fail::Usage(format!("unknown ACTION {a:?}"))),
+        None => return Err(Fail::Usage("ACTION is missing".into())),
+    };
+    if let Some(extra) = pos.next() {
+        return Err(Fail::Usage(format!("unexpected argument {extra:?}")));
+    }
+    if every.is_some() && random.is_some() {
+        return Err(Fail::Usage(
+            "--every and --random exclude each other".into(),
+        ));
+    }
+    if times == 0 && until.is_none() && every.is_none() && random.is_none() {
+        return Err(Fail::Usage("--times 0 needs --every or --random".into()));
+    }
+    let seed = seed.unwrap_or_else(|| {
+        let t = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        t.as_nanos() as u64 ^ (std::process::id() as u64) << 32
+    });
+    Ok(Opts {
+        run_dir,
+        target,
+        action,
+        times,
+        every,
+        random,
+        seed,
+        until,
+        json,
+    })
+}
+
+/// SplitMix64: small, seedable, no dependency.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+struct State {
+    supervisor_pid: Option<i32>,
+    services: BTreeMap<String, Option<i32>>,
+}
+
+fn read_state(run_dir: &Path) -> Result<State, Fail> {
+    let path = run_dir.join("state.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        Fail::Cell(format!(
+            "{}: {e} (is the cell running with this --run-dir?)",
+            path.display()
+        ))
+    })?;
+    let v: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Fail::Cell(format!("{}: not JSON: {e}", path.display())))?;
+    let services = v
+        .get("services")
+        .and_then(|s| s.as_object())
+        .ok_or_else(|| Fail::Cell(format!("{}: no \"services\" object", path.display())))?;
+    let services = services
+        .iter()
+        .map(|(k, s)| {
+            let pid = s
+                .get("pid")
+                .and_then(|p| p.as_i64())
+                .filter(|&p| p > 0 && p <= i32::MAX as i64)
+                .map(|p| p as i32);
+            (k.clone(), pid)
+        })
+        .collect();
+    let supervisor_pid = v
+        .get("supervisor_pid")
+        .and_then(|p| p.as_i64())
+        .filter(|&p| p > 0 && p <= i32::MAX as i64)
+        .map(|p| p as i32);
+    Ok(State {
+        supervisor_pid,
+        services,
+    })
+}
+
+/// The parent pid of `pid` from /proc, if readable.
+fn parent_of(pid: i32) -> Option<i32> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // comm may hold spaces and parentheses: the fields follow the last ')'
+    let rest = &stat[stat.rfind(')')? + 1..];
+    rest.split_whitespace().nth(1)?.parse().ok()
+}
+
+fn alive(pid: i32) -> bool {
+    // SAFETY: signal 0 only checks existence and permission.
+    unsafe { libc::kill(pid, 0) == 0 }
+}
+
+fn send(pid: i32, sig: libc::c_int) -> Result<(), String> {
+    // SAFETY: kill(2) on a pid checked to be a child of the supervisor.
+    if unsafe { libc::kill(pid, sig) } == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error().to_string())
+    }
+}
+
+/// Pick the service and its pid, from a fresh read of state.json.
+fn choose(opts: &Opts, rng: &mut Rng) -> Result<(String, i32), Fail> {
+    let st = read_state(&opts.run_dir)?;
+    let (name, pid) = match &opts.target {
+        Target::One(name) => {
+            let pid = st
+                .services
+                .get(name)
+                .ok_or_else(|| {
+                    Fail::Cell(format!(
+                        "service {name:?} is not in state.json (services: {})",
+                        st.services.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ))
+                })?
+                .ok_or_else(|| {
+                    Fail::Cell(format!(
+                        "service {name} is down (no pid in state.json: restarting?)"
+                    ))
+                })?;
+            (name.clone(), pid)
+        }
+        Target::Random(set) => {
+            if let Some(set) = set {
+                if let Some(bad) = set.iter().find(|n| !st.services.contains_key(*n)) {
+                    return Err(Fail::Cell(format!(
+                        "service {bad:?} is not in state.json (services: {})",
+                        st.services.keys().cloned().collect::<Vec<_>>().join(", ")
+                    )));
+                }
+            }
+            let up: Vec<(String, i32)> = st
+                .services
+                .iter()
+                .filter(|(n, _)| set.as_ref().is_none_or(|s| s.contains(n)))
+                .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
+                .filter(|(_, p)| alive(*p))
+                .collect();
+            if up.is_empty() {
+                return Err(Fail::Cell("no candidate service is up".into()));
+            }
+            up[rng.below(up.len())].clone()
+        }
+    };
+    if !alive(pid) {
+        return Err(Fail::Cell(format!("{name}: pid {pid} is not alive")));
+    }
+    if let (Some(sup), Some(parent)) = (st.supervisor_pid, parent_of(pid)) {
+        if parent != sup {
+            return Err(Fail::Cell(format!("{name}: pid {pid} is not a child of the supervisor {sup} (parent {parent}): stale state.json?")));
+        }
+    }
+    Ok((name, pid))
+}
+
+/// Sleep, waking early on Ctrl-C/SIGTERM. Returns false when interrupted.
+fn sleep_s(s: f64) -> bool {
+    let end = Instant::now() + Duration::from_secs_f64(s.max(0.0));
+    loop {
+        if STOP.load(Ordering::SeqCst) {
+            return false;
+        }
+        let now = Instant::now();
+        if now >= end {
+            return true;
+        }
+        std::thread::sleep((end - now).min(Duration::from_millis(10)));
+    }
+}
+
+fn mono_s() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: valid pointer to a timespec.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+fn unix_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+/// When an injection started: since the tool's start, Unix time, CLOCK_MONOTONIC (the supervisor's clock).
+struct Stamp(f64, f64, f64);
+
+fn print_injection(opts: &Opts, at: &Stamp, n: u64, service: &str, pid: i32, outcome: &str) {
+    let Stamp(t, unix, mono) = *at;
+    if opts.json {
+        let v = serde_json::json!({
+            "n": n, "t_s": t, "unix_s": unix, "mono_s": mono,
+            "service": service, "pid": pid, "action": opts.action.name(),
+            "detail": opts.action.detail(), "outcome": outcome,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "phri-fault: {t:8.3} s  #{n}  {service} (pid {pid})  {}  {}  {outcome}",
+            opts.action.name(),
+            opts.action.detail()
+        );
+    }
+}
+
+/// Apply the action. SIGSTOPped processes are always continued on the way out.
+fn apply(action: &Action, pid: i32) -> Result<String, String> {
+    match *action {
+        Action::Kill => send(pid, libc::SIGKILL).map(|_| "sent".into()),
+        Action::Term => send(pid, libc::SIGTERM).map(|_| "sent".into()),
+        Action::Freeze(s) => {
+            send(pid, libc::SIGSTOP)?;
+            let full = sleep_s(s);
+            let cont = send(pid, libc::SIGCONT);
+            match (full, cont) {
+                (true, Ok(())) => Ok("continued".into()),
+                (false, Ok(())) => Ok("interrupted, continued".into()),
+                (_, Err(e)) => Ok(format!("gone before SIGCONT ({e})")),
+            }
+        }
+        Action::Slow { percent, for_s } => {
+            let slices = (for_s * 100.0).round() as u64;
+            let mut acc = 0.0;
+            let mut stopped = false;
+            let start = Instant::now();
+            let mut outcome = "done, continued".to_string();
+            for i in 0..slices {
+                acc += percent;
+                let run = if acc >= 100.0 {
+                    acc -= 100.0;
+                    true
+                } else {
+                    false
+                };
+                if run == stopped {
+                    let sig = if run { libc::SIGCONT } else { libc::SIGSTOP };
+                    if let Err(e) = send(pid, sig) {
+                        outcome =
+                            format!("gone after {:.2} s ({e})", start.elapsed().as_secs_f64());
+                        return Ok(outcome);
+                    }
+                    stopped = !run;
+                }
+                // absolute slice ends: no drift over a long --for
+                let end = start + Duration::from_millis(10 * (i + 1));
+                let now = Instant::now();
+                if end > now && !sleep_s((end - now).as_secs_f64()) {
+                    outcome = "interrupted, continued".into();
+                    break;
+                }
+            }
+            let _ = send(pid, libc::SIGCONT);
+            Ok(outcome)
+        }
+    }
+}
+
+fn run(opts: &Opts) -> Result<(), Fail> {
+    let mut rng = Rng(opts.seed);
+    let t0 = Instant::now();
+    let mut n = 0u64;
+    loop {
+        if opts.times != 0 && n >= opts.times {
+            return Ok(());
+        }
+        let wait = if let Some(e) = opts.every {
+            e
+        } else if let Some((a, b)) = opts.random {
+            a + (b - a) * rng.unit()
+        } else if n == 0 {
+            0.0
+        } else {
+            1.0
+        };
+        if let Some(u) = opts.until {
+            if t0.elapsed().as_secs_f64() + wait > u {
+                // the next injection would fall after --until: sleep out the window and stop
+                let _ = sleep_s(u - t0.elapsed().as_secs_f64());
+                return Ok(());
+            }
+        }
+        if !sleep_s(wait) {
+            return Ok(());
+        }
+        if opts.times == 0 && !opts.run_dir.join("state.json").exists() {
+            // unbounded mode ends with the run: the supervisor removes state.json
+            eprintln!(
+                "phri-fault: {} gone: the run ended",
+                opts.run_dir.join("state.json").display()
+            );
+            return Ok(());
+        }
+        let (service, pid) = choose(opts, &mut rng)?;
+        n += 1;
+        let at = Stamp(t0.elapsed().as_secs_f64(), unix_s(), mono_s());
+        let outcome = apply(&opts.action, pid)
+            .map_err(|e| Fail::Cell(format!("{service}: pid {pid}: {e}")))?;
+        print_injection(opts, &at, n, &service, pid, &outcome);
+    }
+}
+
+fn main() -> ExitCode {
+    let opts = match parse_args(std::env::args().skip(1).collect()) {
+        Ok(o) => o,
+        Err(Fail::Usage(m)) => {
+            if m.is_empty() {
+                println!("{USAGE}");
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("phri-fault: {m}\n{USAGE}");
+            return ExitCode::from(1);
+        }
+        Err(Fail::Cell(m)) => {
+            eprintln!("phri-fault: {m}");
+            return ExitCode::from(2);
+        }
+    };
+    // SAFETY: the handler only stores to an atomic.
+    unsafe {
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
+    }
+    match run(&opts) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Fail::Usage(m)) => {
+            eprintln!("phri-fault: {m}");
+            ExitCode::from(1)
+        }
+        Err(Fail::Cell(m)) => {
+            eprintln!("phri-fault: {m}");
+            ExitCode::from(2)
+        }
+    }
+}
