@@ -488,6 +488,9 @@ impl Controller {
                     self.start_task(q);
                 }
             }
+            // not a guard: while stopped with a stale input this arm must still match,
+            // or the stop would fall through to `recover`
+            #[allow(clippy::collapsible_match)]
             _ if !fresh || p_stop => {
                 if self.mode != mode::PROTECTIVE_STOP {
                     self.protective_stops += 1;

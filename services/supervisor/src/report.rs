@@ -676,7 +676,7 @@ mod tests {
         // contact from 100 to 200 ms; τ_ext reaches 2θ = 10 at 110 ms; flag at 115 ms
         for t in 100..200 {
             e.on_truth(&truth(t, 50.0, (t - 100) as f64));
-            e.on_residual(&residual(t, t >= 115 && t < 150));
+            e.on_residual(&residual(t, (115..150).contains(&t)));
         }
         for t in 200..1000 {
             e.on_truth(&truth(t, 0.0, 0.0));

@@ -20,15 +20,10 @@ const PONG: &str = "bench/transport/pong";
 
 type Err = String;
 
-fn services(
-    node: &Node<ipc::Service>,
-) -> Result<
-    (
-        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, [u8], ()>,
-        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, u64, ()>,
-    ),
-    Err,
-> {
+type Factory<T> =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>;
+
+fn services(node: &Node<ipc::Service>) -> Result<(Factory<[u8]>, Factory<u64>), Err> {
     let ping = node
         .service_builder(&PING.try_into().map_err(|e| ipc_err(PING, e).to_string())?)
         .publish_subscribe::<[u8]>()

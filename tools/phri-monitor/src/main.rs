@@ -323,10 +323,10 @@ fn hz(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Resu
                 f(&v, "max_interval_ms", 3),
                 f(&v, "age_ms", 2),
                 human_bytes(&v),
-                v["drops"].to_string(),
-                v["samples"].to_string(),
-                v["publishers"].to_string(),
-                v["subscribers"].to_string()
+                v["drops"],
+                v["samples"],
+                v["publishers"],
+                v["subscribers"]
             );
         }
         if o.once {

@@ -110,7 +110,7 @@ impl Stats {
             "rate_hz": (n as f64 / span_s * 100.0).round() / 100.0,
             "samples": n,
             "drops": drops,
-            "mean_interval_ms": if k > 0 { json!(ms(sum / k)) } else { Value::Null },
+            "mean_interval_ms": sum.checked_div(k).map_or(Value::Null, |m| json!(ms(m))),
             "max_interval_ms": if k > 0 { json!(ms(max)) } else { Value::Null },
             "age_ms": self.newest_pub_ns.map(|p| ms(now.saturating_sub(p))),
             "bandwidth_bps": (bytes as f64 / span_s).round(),

@@ -17,7 +17,9 @@ fn main() -> ExitCode {
 fn body() -> Result<(), String> {
     let ctx = ServiceContext::from_args("camera", &[])?;
     let cfg: CameraConfig = ctx.section("camera")?;
-    if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) || !(cfg.latency_ms >= 0.0) {
+    let rate_ok = cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0;
+    let latency_ok = cfg.latency_ms >= 0.0;
+    if !rate_ok || !latency_ok {
         return Err(format!(
             "{}: [camera] rate_hz must be in (0, 1000], latency_ms ≥ 0",
             ctx.config_path.display()

@@ -18,6 +18,7 @@ fn main() -> ExitCode {
     phri_runtime::service::run("phri-perception", body)
 }
 
+#[allow(clippy::large_enum_variant)] // one value per process, never moved in a loop
 enum Source {
     Camera {
         frames: FrameSub,

@@ -1,0 +1,170 @@
+//! `phri-plot --file FILE.mcap --out DIR`: figures of a recording as PNG
+//! (no text: axes, grid and tick marks only).
+//!
+//! - `ee_trajectory.png`: end-effector x-y path (`control/status` `ee`), blue
+//! - `residual.png`: ‖r‖ over time (`dynamics/residual` `norm`), blue; the
+//!   collision norm threshold from the recording's metadata (dashed red) when
+//!   present; an orange vertical line where `flags & COLLISION` rises
+//! - `min_distance.png`: `control/status` `min_distance` over time (non-finite skipped)
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use phri_ipc::{residual_flags, CONTROL_STATUS, DYNAMICS_RESIDUAL};
+use phri_record::plot::*;
+use phri_record::{read_file, METADATA_NAME};
+use phri_runtime::Args;
+use serde_json::Value;
+
+const USAGE: &str = "usage: phri-plot --file FILE.mcap --out DIR";
+const W: usize = 900;
+const H: usize = 600;
+
+fn main() -> ExitCode {
+    phri_runtime::service::run("phri-plot", body)
+}
+
+fn num(v: &Value, k: &str) -> f64 {
+    v.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN)
+}
+
+fn body() -> Result<(), String> {
+    let args = Args::parse(std::env::args().skip(1), &["--file", "--out"], &[])
+        .map_err(|e| format!("{e}; {USAGE}"))?;
+    let file = args
+        .get("--file")
+        .ok_or_else(|| format!("--file is required; {USAGE}"))?;
+    let out = PathBuf::from(
+        args.get("--out")
+            .ok_or_else(|| format!("--out is required; {USAGE}"))?,
+    );
+    let buf = read_file(file)?;
+
+    // the collision threshold from the recording's metadata
+    let mut threshold: Option<f64> = None;
+    if let Some(summary) = mcap::Summary::read(&buf).map_err(|e| format!("{file}: {e}"))? {
+        for idx in &summary.metadata_indexes {
+            if idx.name == METADATA_NAME {
+                let m = mcap::read::metadata(&buf, idx).map_err(|e| format!("{file}: {e}"))?;
+                threshold = m
+                    .metadata
+                    .get("collision_norm_threshold")
+                    .and_then(|s| s.parse().ok());
+            }
+        }
+    }
+
+    let (mut ee, mut dist, mut norm) = (Vec::new(), Vec::new(), Vec::new());
+    let mut rises = Vec::new();
+    let mut prev_collision = false;
+    let mut t0: Option<u64> = None;
+    let t_start = Instant::now();
+    let mut next_report = t_start + Duration::from_secs(1);
+    let mut n = 0u64;
+    let stream = mcap::MessageStream::new(&buf).map_err(|e| format!("{file}: {e}"))?;
+    for m in stream {
+        let m = m.map_err(|e| format!("{file}: {e}"))?;
+        n += 1;
+        if Instant::now() >= next_report {
+            next_report += Duration::from_secs(1);
+            eprintln!("phri-plot: {n} messages read");
+        }
+        let topic = m.channel.topic.as_str();
+        if topic != CONTROL_STATUS && topic != DYNAMICS_RESIDUAL {
+            continue;
+        }
+        let v: Value = serde_json::from_slice(&m.data)
+            .map_err(|e| format!("{file}: {topic} message {}: {e}", m.sequence))?;
+        let t0 = *t0.get_or_insert(m.log_time);
+        let t = (m.log_time as f64 - t0 as f64) * 1e-9;
+        if topic == CONTROL_STATUS {
+            if let Some(p) = v.get("ee").and_then(Value::as_array) {
+                let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
+                ee.push((c(0), c(1)));
+            }
+            let d = num(&v, "min_distance");
+            if d.is_finite() {
+                dist.push((t, d));
+            }
+        } else {
+            norm.push((t, num(&v, "norm")));
+            let flags = v.get("flags").and_then(Value::as_u64).unwrap_or(0) as u32;
+            let c = flags & residual_flags::COLLISION != 0;
+            if c && !prev_collision {
+                rises.push(t);
+            }
+            prev_collision = c;
+        }
+    }
+    if ee.is_empty() && norm.is_empty() {
+        return Err(format!(
+            "{file}: no {CONTROL_STATUS} or {DYNAMICS_RESIDUAL} messages"
+        ));
+    }
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create '{}': {e}", out.display()))?;
+
+    // (a) end-effector path, equal scale on both axes
+    let mut c = Canvas::new(W, H);
+    if let (Some(xr), Some(yr)) = (range(ee.iter().map(|p| p.0)), range(ee.iter().map(|p| p.1))) {
+        let probe = Axes::new(&c, xr, yr);
+        let (pw, ph) = (
+            (probe.right - probe.left) as f64,
+            (probe.bottom - probe.top) as f64,
+        );
+        let scale = ((xr.1 - xr.0) / pw).max((yr.1 - yr.0) / ph);
+        let (cx, cy) = ((xr.0 + xr.1) / 2.0, (yr.0 + yr.1) / 2.0);
+        let a = Axes::new(
+            &c,
+            (cx - scale * pw / 2.0, cx + scale * pw / 2.0),
+            (cy - scale * ph / 2.0, cy + scale * ph / 2.0),
+        );
+        a.draw(&mut c);
+        a.polyline(&mut c, &ee, BLUE);
+    }
+    save(&c, &out, "ee_trajectory.png")?;
+
+    // (b) residual norm over time
+    let mut c = Canvas::new(W, H);
+    if let (Some(xr), Some(yr)) = (
+        range(norm.iter().map(|p| p.0)),
+        range(norm.iter().map(|p| p.1).chain(threshold).chain([0.0])),
+    ) {
+        let a = Axes::new(&c, xr, yr);
+        a.draw(&mut c);
+        for &t in &rises {
+            a.vline(&mut c, t, ORANGE);
+        }
+        if let Some(th) = threshold {
+            a.hline(&mut c, th, RED);
+        }
+        a.polyline(&mut c, &norm, BLUE);
+    }
+    save(&c, &out, "residual.png")?;
+
+    // (c) minimum distance over time
+    let mut c = Canvas::new(W, H);
+    if let (Some(xr), Some(yr)) = (
+        range(dist.iter().map(|p| p.0)),
+        range(dist.iter().map(|p| p.1).chain([0.0])),
+    ) {
+        let a = Axes::new(&c, xr, yr);
+        a.draw(&mut c);
+        a.polyline(&mut c, &dist, BLUE);
+    }
+    save(&c, &out, "min_distance.png")?;
+    eprintln!(
+        "phri-plot: {n} messages; {} ee points, {} residuals ({} collision onsets, threshold {}), {} distances -> {}",
+        ee.len(),
+        norm.len(),
+        rises.len(),
+        threshold.map_or("none".into(), |t| format!("{t} Nm")),
+        dist.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn save(c: &Canvas, dir: &std::path::Path, name: &str) -> Result<(), String> {
+    c.save_png(&dir.join(name))
+}

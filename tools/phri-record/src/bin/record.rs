@@ -1,0 +1,381 @@
+//! `phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--config phri.toml] [--threshold NM]`
+//!
+//! Attaches read-only to every channel of `phri_ipc::ALL` of a running cell
+//! (subscribers only, never creating a channel, normal scheduling, 5 ms between
+//! polls) and writes an MCAP file: one channel per phri channel (topic = its
+//! name), `json` messages with a `jsonschema` schema, log time = the message's
+//! publish/stamp time [ns, CLOCK_MONOTONIC] (else the receive time). Depth frames:
+//! every N-th received frame, header fields plus the image downsampled 4× per axis.
+//! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
+use phri_ipc::*;
+use phri_record::json::{log_ns, Msg};
+use phri_record::{ENCODING, FRAME_DOWNSAMPLE, METADATA_NAME};
+use phri_runtime::{now_ns, Args, Shutdown};
+use serde_json::{json, Value};
+
+const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--config phri.toml] [--threshold NM]";
+const POLL: Duration = Duration::from_millis(5);
+
+fn main() -> ExitCode {
+    phri_runtime::service::run("phri-record", body)
+}
+
+type Out<'a> = dyn FnMut(u64, u32, Value) + 'a;
+
+/// One channel being recorded.
+trait Rec {
+    fn name(&self) -> &str;
+    /// open the channel if it was absent; true when subscribed
+    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String>;
+    /// drain the queue: `out(log_ns, seq, json)` per recorded message
+    fn poll(&mut self, out: &mut Out) -> Result<(), String>;
+}
+
+fn err(name: &str, e: impl std::fmt::Debug) -> String {
+    ipc_err(name, e).to_string()
+}
+
+struct MsgRec<T: Msg> {
+    name: &'static str,
+    sub: Option<Sub<T>>,
+}
+
+impl<T: Msg> Rec for MsgRec<T> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String> {
+        if self.sub.is_some() {
+            return Ok(true);
+        }
+        let name = self.name;
+        let q = qos(name);
+        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
+        let factory = match node
+            .service_builder(&service_name)
+            .publish_subscribe::<T>()
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
+            .subscriber_max_buffer_size(q.subscriber_max_buffer)
+            .history_size(q.history)
+            .enable_safe_overflow(true)
+            .open()
+        {
+            Ok(f) => f,
+            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(false),
+            Err(e) => return Err(err(name, e)),
+        };
+        let sub = factory
+            .subscriber_builder()
+            .buffer_size(DRAIN.clamp(1, q.subscriber_max_buffer))
+            .create()
+            .map_err(|e| err(name, e))?;
+        self.sub = Some(sub);
+        Ok(true)
+    }
+    fn poll(&mut self, out: &mut Out) -> Result<(), String> {
+        let Some(sub) = &self.sub else {
+            return Ok(());
+        };
+        while let Some(s) = sub.receive().map_err(|e| err(self.name, e))? {
+            let m = *s;
+            drop(s);
+            let v = m.to_json();
+            out(log_ns(&m, &v, now_ns()), m.seq() as u32, v);
+        }
+        Ok(())
+    }
+}
+
+struct FrameRec {
+    name: &'static str,
+    sub: Option<FrameSub>,
+    every: u64,
+    received: u64,
+}
+
+/// Header fields plus the depth image downsampled by `FRAME_DOWNSAMPLE` per
+/// axis (the top-left pixel of each block).
+fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
+    let (w, ht) = (h.width as usize, h.height as usize);
+    let k = FRAME_DOWNSAMPLE;
+    let (dw, dh) = (w / k, ht / k);
+    let mut data = Vec::with_capacity(dw * dh);
+    if d.len() >= w * ht {
+        for y in 0..dh {
+            for x in 0..dw {
+                data.push(d[y * k * w + x * k]);
+            }
+        }
+    }
+    let n = (h.dof as usize).min(MAX_DOF);
+    json!({
+        "seq": h.seq, "capture_ns": h.capture_ns, "capture_wall_ns": h.capture_wall_ns,
+        "published_ns": h.published_ns, "width": h.width, "height": h.height,
+        "fx": h.fx, "fy": h.fy, "cx": h.cx, "cy": h.cy, "depth_scale": h.depth_scale,
+        "pose_r": h.pose_r, "pose_t": h.pose_t, "q": &h.q[..n], "q_stamp_ns": h.q_stamp_ns,
+        "dof": h.dof, "removed_pixels": h.removed_pixels, "valid_pixels": h.valid_pixels,
+        "downsample": k, "data_width": dw, "data_height": dh, "data": data,
+    })
+}
+
+impl Rec for FrameRec {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String> {
+        if self.sub.is_some() {
+            return Ok(true);
+        }
+        let name = self.name;
+        let q = qos(name);
+        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
+        let factory = match node
+            .service_builder(&service_name)
+            .publish_subscribe::<[u16]>()
+            .user_header::<FrameHeader>()
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
+            .subscriber_max_buffer_size(q.subscriber_max_buffer)
+            .history_size(q.history)
+            .enable_safe_overflow(true)
+            .open()
+        {
+            Ok(f) => f,
+            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(false),
+            Err(e) => return Err(err(name, e)),
+        };
+        let sub = factory
+            .subscriber_builder()
+            .buffer_size(q.subscriber_max_buffer.max(1))
+            .create()
+            .map_err(|e| err(name, e))?;
+        self.sub = Some(sub);
+        Ok(true)
+    }
+    fn poll(&mut self, out: &mut Out) -> Result<(), String> {
+        let Some(sub) = &self.sub else {
+            return Ok(());
+        };
+        while let Some(f) = sub.receive().map_err(|e| err(self.name, e))? {
+            self.received += 1;
+            if !(self.received - 1).is_multiple_of(self.every) {
+                continue;
+            }
+            let h = *f.user_header();
+            let v = frame_json(&h, f.payload());
+            drop(f);
+            let t = if h.published_ns > 0 {
+                h.published_ns
+            } else {
+                now_ns()
+            };
+            out(t, h.seq as u32, v);
+        }
+        Ok(())
+    }
+}
+
+fn rec_for(name: &'static str, every: u64) -> Box<dyn Rec> {
+    fn m<T: Msg>(name: &'static str) -> Box<dyn Rec> {
+        Box::new(MsgRec::<T> { name, sub: None })
+    }
+    match name {
+        ROBOT_STATE => m::<JointState>(name),
+        ROBOT_COMMAND => m::<TorqueCommand>(name),
+        ROBOT_STATS => m::<RobotStats>(name),
+        SIM_TRUTH => m::<Truth>(name),
+        DYNAMICS_RESIDUAL => m::<Residual>(name),
+        CONTROL_STATUS => m::<ControlStatus>(name),
+        SUPERVISOR_HEALTH => m::<Health>(name),
+        SIM_WORLD => m::<WorldState>(name),
+        PERCEPTION_REPULSION => m::<RepulsionResult>(name),
+        _ => Box::new(FrameRec {
+            name,
+            sub: None,
+            every,
+            received: 0,
+        }),
+    }
+}
+
+/// `dynamics.collision_norm_threshold` of a configuration file.
+fn threshold_from_config(path: &str) -> Result<Option<f64>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read '{path}': {e}"))?;
+    let t: toml::Table = text
+        .parse()
+        .map_err(|e| format!("cannot parse '{path}': {e}"))?;
+    Ok(t.get("dynamics")
+        .and_then(|d| d.get("collision_norm_threshold"))
+        .and_then(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64))))
+}
+
+fn mcap_err(e: mcap::McapError) -> String {
+    format!("mcap: {e}")
+}
+
+fn body() -> Result<(), String> {
+    let args = Args::parse(
+        std::env::args().skip(1),
+        &[
+            "--prefix",
+            "--out",
+            "--seconds",
+            "--frame-every",
+            "--config",
+            "--threshold",
+        ],
+        &[],
+    )
+    .map_err(|e| format!("{e}; {USAGE}"))?;
+    let prefix = args
+        .get("--prefix")
+        .ok_or_else(|| format!("--prefix is required; {USAGE}"))?
+        .to_string();
+    let out_path = args
+        .get("--out")
+        .ok_or_else(|| format!("--out is required; {USAGE}"))?
+        .to_string();
+    let seconds = args.parse_value::<f64>("--seconds")?;
+    if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
+        return Err("--seconds must be positive".into());
+    }
+    let every = args.parse_value::<u64>("--frame-every")?.unwrap_or(10);
+    if every == 0 {
+        return Err("--frame-every must be at least 1".into());
+    }
+    let mut threshold = match args.get("--config") {
+        Some(p) => threshold_from_config(p)?,
+        None => None,
+    };
+    if let Some(t) = args.parse_value::<f64>("--threshold")? {
+        threshold = Some(t);
+    }
+    if phri_ipc::live_nodes(&prefix) == 0 {
+        return Err(format!(
+            "no cell running under prefix '{prefix}' (no live iceoryx2 node)"
+        ));
+    }
+    let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
+    let node =
+        node(&format!("record{}", std::process::id()), &prefix).map_err(|e| e.to_string())?;
+
+    let file = File::create(&out_path).map_err(|e| format!("cannot create '{out_path}': {e}"))?;
+    let mut w = mcap::WriteOptions::new()
+        .compression(None)
+        .profile(phri_record::PROFILE)
+        .library(concat!("phri-record ", env!("CARGO_PKG_VERSION")))
+        .create(BufWriter::new(file))
+        .map_err(mcap_err)?;
+
+    let mut recs: Vec<Box<dyn Rec>> = ALL.iter().map(|c| rec_for(c, every)).collect();
+    let mut ids = Vec::with_capacity(recs.len());
+    for r in &recs {
+        let schema = w
+            .add_schema(r.name(), "jsonschema", br#"{"type":"object"}"#)
+            .map_err(mcap_err)?;
+        let id = w
+            .add_channel(schema, r.name(), ENCODING, &BTreeMap::new())
+            .map_err(mcap_err)?;
+        ids.push(id);
+    }
+    let mut meta = BTreeMap::new();
+    meta.insert("prefix".to_string(), prefix.clone());
+    meta.insert(
+        "clock".into(),
+        "log_time: publish/stamp time [ns, CLOCK_MONOTONIC], else receive time".into(),
+    );
+    meta.insert(
+        "depth_frames".into(),
+        format!(
+            "camera/depth, perception/depth: every {every}-th received frame, header fields plus the depth image downsampled {FRAME_DOWNSAMPLE}x per axis (top-left pixel of each block; 640x480 -> 160x120) in 'data' (u16 millimetres, row-major, 0 = no reading)"
+        ),
+    );
+    meta.insert("frame_every".into(), every.to_string());
+    meta.insert("frame_downsample".into(), FRAME_DOWNSAMPLE.to_string());
+    meta.insert("start_ns".into(), now_ns().to_string());
+    if let Some(t) = threshold {
+        meta.insert("collision_norm_threshold".into(), t.to_string());
+    }
+    w.write_metadata(&mcap::records::Metadata {
+        name: METADATA_NAME.into(),
+        metadata: meta,
+    })
+    .map_err(mcap_err)?;
+
+    let t0 = Instant::now();
+    let end = seconds.map(Duration::from_secs_f64);
+    let mut counts = vec![0u64; recs.len()];
+    let mut next_attach = Instant::now();
+    let mut next_report = t0 + Duration::from_secs(1);
+    let mut write_err: Option<String> = None;
+    while !shutdown.requested() && end.is_none_or(|e| t0.elapsed() < e) {
+        if Instant::now() >= next_attach {
+            for r in recs.iter_mut() {
+                r.attach(&node)?;
+            }
+            next_attach = Instant::now() + Duration::from_secs(1);
+        }
+        for (i, r) in recs.iter_mut().enumerate() {
+            let id = ids[i];
+            let count = &mut counts[i];
+            let w = &mut w;
+            let we = &mut write_err;
+            r.poll(&mut |t, seq, v| {
+                let data = serde_json::to_vec(&v).expect("JSON values serialize");
+                let hdr = mcap::records::MessageHeader {
+                    channel_id: id,
+                    sequence: seq,
+                    log_time: t,
+                    publish_time: t,
+                };
+                match w.write_to_known_channel(&hdr, &data) {
+                    Ok(()) => *count += 1,
+                    Err(e) if we.is_none() => *we = Some(mcap_err(e)),
+                    Err(_) => {}
+                }
+            })?;
+        }
+        if let Some(e) = write_err.take() {
+            return Err(e);
+        }
+        if Instant::now() >= next_report {
+            next_report += Duration::from_secs(1);
+            eprintln!(
+                "phri-record: {:.0} s  {}",
+                t0.elapsed().as_secs_f64(),
+                progress(&recs, &counts)
+            );
+        }
+        std::thread::sleep(POLL);
+    }
+    let summary = w.finish().map_err(mcap_err)?;
+    drop(w);
+    let total: u64 = counts.iter().sum();
+    let size = std::fs::metadata(&out_path).map(|m| m.len()).unwrap_or(0);
+    eprintln!(
+        "phri-record: wrote {out_path}: {total} messages in {:.1} s, {:.1} MB, {} chunks; {}",
+        t0.elapsed().as_secs_f64(),
+        size as f64 / 1e6,
+        summary.chunk_indexes.len(),
+        progress(&recs, &counts)
+    );
+    Ok(())
+}
+
+fn progress(recs: &[Box<dyn Rec>], counts: &[u64]) -> String {
+    recs.iter()
+        .zip(counts)
+        .map(|(r, c)| format!("{}={c}", r.name()))
+        .collect::<Vec<_>>()
+        .join(" ")
+}

@@ -1,0 +1,241 @@
+//! A minimal line plotter: an RGB buffer, Bresenham lines, axes with tick
+//! marks (no text), PNG output with the `png` crate.
+
+pub type Rgb = [u8; 3];
+pub const WHITE: Rgb = [255, 255, 255];
+pub const BLACK: Rgb = [0, 0, 0];
+pub const GREY: Rgb = [200, 200, 200];
+pub const BLUE: Rgb = [31, 119, 180];
+pub const RED: Rgb = [214, 39, 40];
+pub const ORANGE: Rgb = [255, 127, 14];
+
+/// An RGB image.
+pub struct Canvas {
+    pub w: usize,
+    pub h: usize,
+    pub px: Vec<u8>,
+}
+
+impl Canvas {
+    pub fn new(w: usize, h: usize) -> Canvas {
+        Canvas {
+            w,
+            h,
+            px: vec![255; w * h * 3],
+        }
+    }
+
+    pub fn set(&mut self, x: i64, y: i64, c: Rgb) {
+        if x >= 0 && y >= 0 && (x as usize) < self.w && (y as usize) < self.h {
+            let i = (y as usize * self.w + x as usize) * 3;
+            self.px[i..i + 3].copy_from_slice(&c);
+        }
+    }
+
+    pub fn get(&self, x: usize, y: usize) -> Rgb {
+        let i = (y * self.w + x) * 3;
+        [self.px[i], self.px[i + 1], self.px[i + 2]]
+    }
+
+    /// Bresenham line from (x0, y0) to (x1, y1), pixel coordinates.
+    pub fn line(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: Rgb) {
+        let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
+        let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
+        let (mut x, mut y, mut e) = (x0, y0, dx + dy);
+        loop {
+            self.set(x, y, c);
+            if x == x1 && y == y1 {
+                break;
+            }
+            let e2 = 2 * e;
+            if e2 >= dy {
+                e += dy;
+                x += sx;
+            }
+            if e2 <= dx {
+                e += dx;
+                y += sy;
+            }
+        }
+    }
+
+    /// Write as an 8-bit RGB PNG.
+    pub fn save_png(&self, path: &std::path::Path) -> Result<(), String> {
+        let f = std::fs::File::create(path)
+            .map_err(|e| format!("cannot create '{}': {e}", path.display()))?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(f), self.w as u32, self.h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut wr = enc
+            .write_header()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        wr.write_image_data(&self.px)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        wr.finish().map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+/// A plot area mapping data coordinates into a canvas with margins.
+pub struct Axes {
+    pub x0: f64,
+    pub x1: f64,
+    pub y0: f64,
+    pub y1: f64,
+    /// pixel box: left, top, right, bottom
+    pub left: i64,
+    pub top: i64,
+    pub right: i64,
+    pub bottom: i64,
+}
+
+/// "Nice" tick step for a span (1, 2 or 5 × 10^k, about 5–10 ticks).
+pub fn tick_step(span: f64) -> f64 {
+    if !(span > 0.0 && span.is_finite()) {
+        return 1.0;
+    }
+    let raw = span / 8.0;
+    let p = 10f64.powf(raw.log10().floor());
+    let m = raw / p;
+    p * if m < 1.5 {
+        1.0
+    } else if m < 3.5 {
+        2.0
+    } else if m < 7.5 {
+        5.0
+    } else {
+        10.0
+    }
+}
+
+/// Data range with a 5 % pad (a unit range around a constant).
+pub fn range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+    if !lo.is_finite() {
+        return None;
+    }
+    if hi - lo < 1e-12 {
+        return Some((lo - 0.5, hi + 0.5));
+    }
+    let pad = (hi - lo) * 0.05;
+    Some((lo - pad, hi + pad))
+}
+
+impl Axes {
+    pub fn new(c: &Canvas, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> Axes {
+        Axes {
+            x0,
+            x1,
+            y0,
+            y1,
+            left: 60,
+            top: 30,
+            right: c.w as i64 - 30,
+            bottom: c.h as i64 - 50,
+        }
+    }
+
+    pub fn px(&self, x: f64) -> i64 {
+        let f = (x - self.x0) / (self.x1 - self.x0);
+        self.left + (f * (self.right - self.left) as f64).round() as i64
+    }
+
+    pub fn py(&self, y: f64) -> i64 {
+        let f = (y - self.y0) / (self.y1 - self.y0);
+        self.bottom - (f * (self.bottom - self.top) as f64).round() as i64
+    }
+
+    /// Frame, grid lines and tick marks at "nice" steps.
+    pub fn draw(&self, c: &mut Canvas) {
+        let sx = tick_step(self.x1 - self.x0);
+        let mut x = (self.x0 / sx).ceil() * sx;
+        while x <= self.x1 {
+            let p = self.px(x);
+            for y in (self.top..self.bottom).step_by(4) {
+                c.set(p, y, GREY);
+            }
+            c.line(p, self.bottom, p, self.bottom + 6, BLACK);
+            x += sx;
+        }
+        let sy = tick_step(self.y1 - self.y0);
+        let mut y = (self.y0 / sy).ceil() * sy;
+        while y <= self.y1 {
+            let p = self.py(y);
+            for x in (self.left..self.right).step_by(4) {
+                c.set(x, p, GREY);
+            }
+            c.line(self.left - 6, p, self.left, p, BLACK);
+            y += sy;
+        }
+        c.line(self.left, self.top, self.right, self.top, BLACK);
+        c.line(self.left, self.bottom, self.right, self.bottom, BLACK);
+        c.line(self.left, self.top, self.left, self.bottom, BLACK);
+        c.line(self.right, self.top, self.right, self.bottom, BLACK);
+    }
+
+    /// Polyline through the points; a non-finite point breaks the line.
+    pub fn polyline(&self, c: &mut Canvas, pts: &[(f64, f64)], col: Rgb) {
+        let mut prev: Option<(i64, i64)> = None;
+        for &(x, y) in pts {
+            if !(x.is_finite() && y.is_finite()) {
+                prev = None;
+                continue;
+            }
+            let p = (self.px(x), self.py(y));
+            match prev {
+                Some(q) if q != p => c.line(q.0, q.1, p.0, p.1, col),
+                None => c.set(p.0, p.1, col),
+                _ => {}
+            }
+            prev = Some(p);
+        }
+    }
+
+    /// Dashed horizontal line at `y`.
+    pub fn hline(&self, c: &mut Canvas, y: f64, col: Rgb) {
+        let p = self.py(y);
+        let mut x = self.left;
+        while x < self.right {
+            c.line(x, p, (x + 6).min(self.right), p, col);
+            x += 12;
+        }
+    }
+
+    /// Vertical line at `x`.
+    pub fn vline(&self, c: &mut Canvas, x: f64, col: Rgb) {
+        let p = self.px(x);
+        c.line(p, self.top, p, self.bottom, col);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_hits_both_ends_and_diagonal() {
+        let mut c = Canvas::new(10, 10);
+        c.line(1, 1, 8, 8, BLACK);
+        for i in 1..=8 {
+            assert_eq!(c.get(i, i), BLACK);
+        }
+        assert_eq!(c.get(0, 0), WHITE);
+        c.line(9, 0, 0, 3, RED);
+        assert_eq!(c.get(9, 0), RED);
+        assert_eq!(c.get(0, 3), RED);
+    }
+
+    #[test]
+    fn axes_map_corners() {
+        let c = Canvas::new(200, 100);
+        let a = Axes::new(&c, (0.0, 1.0), (-1.0, 1.0));
+        assert_eq!(a.px(0.0), a.left);
+        assert_eq!(a.px(1.0), a.right);
+        assert_eq!(a.py(-1.0), a.bottom);
+        assert_eq!(a.py(1.0), a.top);
+        assert_eq!(tick_step(10.0), 1.0);
+    }
+}

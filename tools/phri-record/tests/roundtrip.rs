@@ -1,0 +1,219 @@
+//! Record a real cell for 3 s, read the MCAP back with the `mcap` crate, plot it.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Stops the supervisor (SIGINT: ordered shutdown) if the test fails early.
+struct Cell(Option<Child>);
+
+impl Drop for Cell {
+    fn drop(&mut self) {
+        if let Some(c) = &mut self.0 {
+            if matches!(c.try_wait(), Ok(None)) {
+                let _ = Command::new("kill")
+                    .arg("-INT")
+                    .arg(c.id().to_string())
+                    .status();
+                let _ = c.wait();
+            }
+        }
+    }
+}
+
+fn dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn record_read_back_and_plot() {
+    let sup = dir().join("../../target/release/phri-supervisor");
+    if !sup.exists() {
+        eprintln!(
+            "SKIPPED: {} missing (cargo build --release -p phri-supervisor and the services first)",
+            sup.display()
+        );
+        return;
+    }
+    let pid = std::process::id();
+    let prefix = format!("rec{pid}_");
+    let tmp = std::env::temp_dir().join(format!("phri-record-test-{pid}"));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    let run_dir = tmp.join("run");
+    std::fs::create_dir_all(&run_dir).unwrap();
+    let mut cell = Cell(Some(
+        Command::new(&sup)
+            .current_dir(dir())
+            .args([
+                "--config",
+                "../../deploy/phri.toml",
+                "--scenario",
+                "coexistence",
+            ])
+            .args(["--duration", "8", "--prefix", &prefix, "--run-dir"])
+            .arg(&run_dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start the supervisor"),
+    ));
+    std::thread::sleep(Duration::from_secs(3));
+
+    // record
+    let file = tmp.join("cell.mcap");
+    let t = Instant::now();
+    let st = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+        .args([
+            "--prefix",
+            &prefix,
+            "--seconds",
+            "3",
+            "--config",
+            "../../deploy/phri.toml",
+        ])
+        .arg("--out")
+        .arg(&file)
+        .current_dir(dir())
+        .status()
+        .unwrap();
+    assert!(st.success(), "phri-record failed: {st}");
+    let took = t.elapsed().as_secs_f64();
+    assert!(took < 6.0, "recording 3 s took {took:.1} s");
+
+    // read back
+    let buf = std::fs::read(&file).unwrap();
+    let summary = mcap::Summary::read(&buf)
+        .expect("summary readable")
+        .expect("the file has a summary section");
+    assert!(!summary.chunk_indexes.is_empty(), "no chunk indexes");
+    let stats = summary.stats.as_ref().expect("statistics record");
+    let topics: Vec<&str> = summary
+        .channels
+        .values()
+        .map(|c| c.topic.as_str())
+        .collect();
+    for c in phri_ipc::ALL {
+        assert!(topics.contains(c), "no MCAP channel for {c}");
+    }
+    assert!(
+        summary
+            .metadata_indexes
+            .iter()
+            .any(|m| m.name == "phri-record"),
+        "no phri-record metadata"
+    );
+    let mut counts: BTreeMap<String, u64> = BTreeMap::new();
+    let mut frames_ok = 0;
+    let mut last_state_t = 0u64;
+    for m in mcap::MessageStream::new(&buf).expect("message stream") {
+        let m = m.expect("message");
+        assert_eq!(m.channel.message_encoding, "json");
+        let schema = m.channel.schema.as_ref().expect("schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        let v: serde_json::Value = serde_json::from_slice(&m.data).expect("JSON message");
+        assert!(v.is_object());
+        let topic = m.channel.topic.clone();
+        if phri_record::is_frame_channel(&topic) && topic == phri_ipc::CAMERA_DEPTH {
+            let data = v["data"].as_array().expect("frame data");
+            assert_eq!(data.len(), 160 * 120, "downsampled frame size");
+            assert!(
+                data.iter().any(|x| x.as_u64().unwrap() > 0),
+                "empty depth frame"
+            );
+            frames_ok += 1;
+        }
+        if topic == phri_ipc::ROBOT_STATE {
+            assert_eq!(m.log_time, v["published_ns"].as_u64().unwrap());
+            assert!(m.log_time >= last_state_t, "robot/state log times go back");
+            last_state_t = m.log_time;
+        }
+        *counts.entry(topic).or_default() += 1;
+    }
+    eprintln!(
+        "recorded {:.1} MB, {} messages: {counts:?}",
+        buf.len() as f64 / 1e6,
+        stats.message_count
+    );
+    assert_eq!(stats.message_count, counts.values().sum::<u64>());
+    for c in phri_ipc::ALL {
+        let n = counts.get(*c).copied().unwrap_or(0);
+        assert!(n > 0, "no messages on {c}");
+    }
+    let state = counts["robot/state"];
+    assert!(
+        (2700..=3300).contains(&state),
+        "robot/state: {state} messages in 3 s"
+    );
+    for c in [
+        "sim/truth",
+        "dynamics/residual",
+        "control/status",
+        "robot/command",
+    ] {
+        let n = counts[c];
+        assert!((2500..=3300).contains(&n), "{c}: {n} messages in 3 s");
+    }
+    assert!(
+        frames_ok >= 5,
+        "camera/depth: {frames_ok} downsampled frames"
+    );
+    assert!(counts["perception/depth"] >= 5);
+    assert!(counts["robot/stats"] >= 20 && counts["supervisor/health"] >= 20);
+
+    // plot
+    let out = tmp.join("plots");
+    let st = Command::new(env!("CARGO_BIN_EXE_phri-plot"))
+        .arg("--file")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(st.success(), "phri-plot failed: {st}");
+    for name in ["ee_trajectory.png", "residual.png", "min_distance.png"] {
+        check_png(&out.join(name));
+    }
+
+    // a bad file: one-line error, exit 2
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-plot"))
+        .args(["--file", "/nonexistent.mcap", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).lines().count(), 1);
+
+    // the cell finishes its run on its own, successfully
+    let mut child = cell.0.take().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() > deadline {
+            cell.0 = Some(child);
+            panic!("supervisor did not exit");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert!(status.success(), "supervisor: {status}");
+    let _ = std::fs::remove_dir_all(&tmp);
+}
+
+fn check_png(path: &Path) {
+    let f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let dec = png::Decoder::new(std::io::BufReader::new(f));
+    let mut r = dec.read_info().expect("PNG header");
+    let mut img = vec![0; r.output_buffer_size().expect("buffer size")];
+    let info = r.next_frame(&mut img).expect("PNG data");
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let px = &img[..info.buffer_size()];
+    let bg = [px[0], px[1], px[2]];
+    let other = px.chunks(3).filter(|p| *p != bg).count();
+    // the curve itself, not just the frame: blue pixels
+    let blue = px.chunks(3).filter(|p| p[2] > 150 && p[0] < 100).count();
+    assert!(other > 1000, "{}: almost blank", path.display());
+    assert!(blue > 50, "{}: no curve", path.display());
+}
