@@ -436,3 +436,27 @@ fn a_supervisor_that_dies_leaves_the_cell_running_and_a_new_one_takes_it_over() 
     assert_eq!(r["false_detections"], 0);
     assert_nothing_left(&cell.prefix);
 }
+
+#[test]
+fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("frozen", "free-motion", Some(10.0), &[]);
+    wait(4.0);
+    // SIGSTOP: the process does not exit, it only stops answering
+    let pid = cell.kill("dynamics", libc::SIGSTOP);
+    let r = cell.finish();
+    let frozen = events(&r, "frozen", "dynamics");
+    assert!(!frozen.is_empty(), "not detected: {}", r["events"]);
+    assert_eq!(r["services"]["dynamics"]["restarts"], 1);
+    assert_eq!(r["services"]["dynamics"]["alive_at_end"], true);
+    assert!(!alive(pid), "the frozen process was left behind");
+    // meanwhile the controller held a protective stop (stale residual) and resumed
+    let t_frozen = frozen[0]["t_s"].as_f64().unwrap();
+    assert!(events(&r, "protective_stop", "control")
+        .iter()
+        .any(|e| e["t_s"].as_f64().unwrap() <= t_frozen + 0.1));
+    assert!(events(&r, "resume", "control")
+        .iter()
+        .any(|e| e["t_s"].as_f64().unwrap() > t_frozen));
+    assert_eq!(r["false_detections"], 0);
+}
