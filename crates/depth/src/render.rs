@@ -7,7 +7,7 @@
 //! bounding rectangle. The output is a `width × height` row-major image of
 //! `u16` depths in millimetres, 0 = no reading (the Kinect driver convention).
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::{CameraPose, Intrinsics};
@@ -17,6 +17,26 @@ use crate::shapes::{camera_box_bounds, Aabb, Capsule, PixelRect, RayCapsule};
 
 /// Surfaces nearer than this \[m\] block the view but give no reading.
 pub(crate) const NEAR_M: f64 = 1e-3;
+
+/// Plain minimum (one instruction): `b` if either is NaN.
+#[inline(always)]
+fn min(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Plain maximum (one instruction): `b` if either is NaN.
+#[inline(always)]
+fn max(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
 
 /// Label of a pixel that sees no surface (see [`Renderer::render_labeled`]).
 pub const LABEL_NONE: u16 = 0;
@@ -265,8 +285,9 @@ impl Renderer {
                 });
             }
         }
-        self.zbuf.fill(f64::INFINITY);
-        self.labels.fill(LABEL_NONE);
+        // the floor (or nothing) first: it initialises the z-buffer
+        let floor_label = u16::try_from(1 + capsules.len() + boxes.len()).unwrap_or(u16::MAX);
+        self.clear_with_floor(floor_z, floor_label);
         let mut label = 1u16;
         for c in capsules {
             self.rasterize_capsule(c, label);
@@ -275,9 +296,6 @@ impl Renderer {
         for b in boxes {
             self.rasterize_box(b, label);
             label = label.wrapping_add(1);
-        }
-        if let Some(fz) = floor_z {
-            self.rasterize_floor(fz, label);
         }
         Ok(())
     }
@@ -348,7 +366,9 @@ impl Renderer {
         let Some(rect) = rect else {
             return;
         };
-        let origin: Point3<f64> = self.pose.position();
+        let origin = self.pose.position();
+        let lo_rel = aabb.min - origin;
+        let hi_rel = aabb.max - origin;
         let r = self.pose.rotation();
         let (c0, c1, c2) = (
             r.matrix().column(0).into_owned(),
@@ -361,10 +381,18 @@ impl Renderer {
             let row_dir = c1 * y + c2;
             for u in rect.u0..=rect.u1 {
                 let i = v * w + u;
+                // branch-free slab test; a zero direction component gives
+                // infinite slab parameters (NaN for a ray exactly in a face
+                // plane: `min`/`max` then keep the infinite one, a grazing miss)
                 let dir = c0 * self.xn[u] + row_dir;
-                let Some((t_in, t_out)) = aabb.ray_interval(&origin, &dir) else {
+                let inv = Vector3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
+                let t1 = lo_rel.component_mul(&inv);
+                let t2 = hi_rel.component_mul(&inv);
+                let t_in = max(max(min(t1.x, t2.x), min(t1.y, t2.y)), min(t1.z, t2.z));
+                let t_out = min(min(max(t1.x, t2.x), max(t1.y, t2.y)), max(t1.z, t2.z));
+                if !(t_in <= t_out) {
                     continue;
-                };
+                }
                 let t = if t_in > NEAR_M {
                     t_in
                 } else if t_out > NEAR_M {
@@ -380,7 +408,14 @@ impl Renderer {
         }
     }
 
-    fn rasterize_floor(&mut self, floor_z: f64, label: u16) {
+    /// Initialises the z-buffer with the floor plane `z = floor_z` (base
+    /// frame) or, without a floor, with "no surface".
+    fn clear_with_floor(&mut self, floor_z: Option<f64>, label: u16) {
+        let Some(floor_z) = floor_z else {
+            self.zbuf.fill(f64::INFINITY);
+            self.labels.fill(LABEL_NONE);
+            return;
+        };
         let origin = self.pose.position();
         let m = *self.pose.rotation().matrix();
         // base-frame z component of the ray t (x, y, 1) is t (m20 x + m21 y + m22)
@@ -391,13 +426,11 @@ impl Renderer {
             let zrow = &mut self.zbuf[v * w..(v + 1) * w];
             let lrow = &mut self.labels[v * w..(v + 1) * w];
             for ((z, l), &x) in zrow.iter_mut().zip(lrow.iter_mut()).zip(&self.xn) {
-                let dz = m[(2, 0)] * x + row_dz;
-                let t = height / dz;
+                let t = height / (m[(2, 0)] * x + row_dz);
                 // t is ±inf or NaN for rays parallel to the floor: rejected here
-                if t > NEAR_M && t < *z {
-                    *z = t;
-                    *l = label;
-                }
+                let hit = t > NEAR_M && t.is_finite();
+                *z = if hit { t } else { f64::INFINITY };
+                *l = if hit { label } else { LABEL_NONE };
             }
         }
     }
@@ -409,23 +442,38 @@ impl Renderer {
         let h = self.intrinsics.height as usize;
         let zbuf = &self.zbuf;
         for v in 0..h {
+            let row = &zbuf[v * w..(v + 1) * w];
+            // a missing neighbour row is replaced by the row itself: no jump
+            let up = if v > 0 {
+                &zbuf[(v - 1) * w..v * w]
+            } else {
+                row
+            };
+            let down = if v + 1 < h {
+                &zbuf[(v + 1) * w..(v + 2) * w]
+            } else {
+                row
+            };
+            let out_row = &mut out[v * w..(v + 1) * w];
             for u in 0..w {
-                let i = v * w + u;
-                let z = zbuf[i];
+                let z = row[u];
                 if !(z >= o.min_range_m && z <= o.max_range_m) {
-                    out[i] = 0;
+                    out_row[u] = 0;
                     continue;
                 }
                 let sigma = sigma_z(z);
                 if o.edge_dropout > 0.0 {
                     let jump = o.edge_jump_m + o.edge_jump_sigmas * sigma;
-                    let differs = |j: usize| (zbuf[j] - z).abs() > jump;
-                    let edge = (u > 0 && differs(i - 1))
-                        || (u + 1 < w && differs(i + 1))
-                        || (v > 0 && differs(i - w))
-                        || (v + 1 < h && differs(i + w));
-                    if edge && self.normals.bernoulli(o.edge_dropout) {
-                        out[i] = 0;
+                    let left = row[u.saturating_sub(1)];
+                    let right = row[(u + 1).min(w - 1)];
+                    // a neighbour without surface (infinite) is a discontinuity
+                    let largest = (left - z)
+                        .abs()
+                        .max((right - z).abs())
+                        .max((up[u] - z).abs())
+                        .max((down[u] - z).abs());
+                    if largest > jump && self.normals.bernoulli(o.edge_dropout) {
+                        out_row[u] = 0;
                         continue;
                     }
                 }
@@ -434,7 +482,8 @@ impl Renderer {
                 } else {
                     z
                 };
-                out[i] = (measured * 1000.0).round().clamp(1.0, 65535.0) as u16;
+                // round half up (positive values: truncation after + 0.5)
+                out_row[u] = (measured * 1000.0 + 0.5).clamp(1.0, 65535.0) as u16;
             }
         }
     }

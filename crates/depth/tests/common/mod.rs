@@ -74,8 +74,8 @@ pub fn lwr_points_of_interest(q: &[f64; 7]) -> Vec<(Point3<f64>, f64)> {
 }
 
 /// A standing human, 1.75 m, feet at `(x, y)` on the floor z = 0, facing
-/// `heading` \[rad\] (direction of the chest normal), right forearm raised
-/// towards the front; 17 capsules.
+/// `heading` \[rad\] (direction of the chest normal), right forearm reaching
+/// forwards and down; 17 capsules.
 pub fn human_capsules(x: f64, y: f64, heading: f64) -> Vec<Capsule> {
     let f = Vector3::new(heading.cos(), heading.sin(), 0.0); // forward
     let l = Vector3::new(-heading.sin(), heading.cos(), 0.0); // left
@@ -91,8 +91,8 @@ pub fn human_capsules(x: f64, y: f64, heading: f64) -> Vec<Capsule> {
         Capsule::new(at(0.05, 0.24, 1.10), at(0.10, 0.24, 0.86), 0.045), // left forearm
         Capsule::new(at(0.10, 0.24, 0.86), at(0.12, 0.24, 0.76), 0.045), // left hand
         Capsule::new(at(0.0, -0.21, 1.38), at(0.08, -0.24, 1.12), 0.055), // right upper arm
-        Capsule::new(at(0.08, -0.24, 1.12), at(0.34, -0.22, 0.95), 0.045), // right forearm
-        Capsule::new(at(0.34, -0.22, 0.95), at(0.44, -0.21, 0.90), 0.045), // right hand
+        Capsule::new(at(0.08, -0.24, 1.12), at(0.32, -0.20, 0.80), 0.045), // right forearm
+        Capsule::new(at(0.32, -0.20, 0.80), at(0.40, -0.19, 0.72), 0.045), // right hand
         Capsule::new(at(0.0, 0.1, 0.85), at(0.0, 0.1, 0.47), 0.08), // left thigh
         Capsule::new(at(0.0, 0.1, 0.47), at(0.0, 0.1, 0.08), 0.06), // left shin
         Capsule::new(at(0.0, -0.1, 0.85), at(0.0, -0.1, 0.47), 0.08), // right thigh
@@ -102,9 +102,9 @@ pub fn human_capsules(x: f64, y: f64, heading: f64) -> Vec<Capsule> {
     ]
 }
 
-/// A low table (top at 0.4 m) to the robot's right, base frame.
+/// A low table (top at 0.4 m) to the robot's left, base frame.
 pub fn table() -> Aabb {
-    Aabb::new(Point3::new(0.35, -0.9, 0.0), Point3::new(0.95, -0.35, 0.4))
+    Aabb::new(Point3::new(-0.3, 0.4, 0.0), Point3::new(0.3, 0.9, 0.4))
 }
 
 /// The whole scene: robot capsules first, then the human's.
@@ -120,7 +120,7 @@ pub struct Scene {
 /// effector (hand about 0.3 m from it), a table, the floor.
 pub fn scene() -> Scene {
     let robot = lwr_capsules(&Q_REACH);
-    let human = human_capsules(1.21, -0.23, std::f64::consts::PI - 0.3);
+    let human = human_capsules(0.9, -0.35, 2.0);
     let mut all = robot.clone();
     all.extend_from_slice(&human);
     Scene {
@@ -132,20 +132,48 @@ pub fn scene() -> Scene {
     }
 }
 
-/// Depth \[m\] at which the camera-frame ray `t (x, y, 1)` (base frame origin
-/// `o`, direction `dir`) first reaches the capsule, by sphere tracing on the
-/// analytic distance: an independent check of the renderer's closed form.
-pub fn sphere_trace(o: &Point3<f64>, dir: &Vector3<f64>, c: &Capsule, t_max: f64) -> Option<f64> {
+/// First ray parameter at which the line `o + t dir` reaches the capsule, by
+/// sphere tracing on the analytic distance (an independent check of the
+/// renderer's closed form), and the closest approach seen on the way \[m\].
+pub fn sphere_trace(
+    o: &Point3<f64>,
+    dir: &Vector3<f64>,
+    c: &Capsule,
+    t_max: f64,
+) -> (Option<f64>, f64) {
     let mut t = 0.0;
-    for _ in 0..10_000 {
+    let mut closest = f64::INFINITY;
+    for _ in 0..100_000 {
         let d = c.distance_to_point(&(o + dir * t));
-        if d < 1e-10 {
-            return Some(t);
+        closest = closest.min(d);
+        if d < 1e-11 {
+            return (Some(t), closest);
         }
         t += d / dir.norm();
         if t > t_max {
-            return None;
+            break;
         }
     }
-    None
+    (None, closest)
+}
+
+/// A camera at 1 m height looking along base +x (image right = base −y).
+pub fn front_camera() -> phri_depth::CameraPose {
+    phri_depth::CameraPose::look_at(
+        &Point3::new(0.0, 0.0, 1.0),
+        &Point3::new(1.0, 0.0, 1.0),
+        &Vector3::z(),
+    )
+    .expect("valid pose")
+}
+
+/// Base-frame direction of the ray through pixel `(u, v)`, scaled so that the
+/// ray parameter is the depth.
+pub fn pixel_ray(
+    k: &phri_depth::Intrinsics,
+    pose: &phri_depth::CameraPose,
+    u: usize,
+    v: usize,
+) -> Vector3<f64> {
+    pose.vector_to_base(&k.ray(u as f64, v as f64))
 }
