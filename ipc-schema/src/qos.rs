@@ -4,6 +4,7 @@
 use std::fmt::Debug;
 
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
 
 use crate::names::*;
@@ -96,22 +97,87 @@ pub fn node(name: &str, prefix: &str) -> Result<Node<ipc::Service>, IpcError> {
         .map_err(|e| ipc_err("<node>", e))
 }
 
-/// Open (or create) the publish-subscribe service `name` with its QoS.
-pub fn open_pubsub<T: Debug + ZeroCopySend>(
-    node: &Node<ipc::Service>,
+/// A publish-subscribe builder with the channel's QoS applied: the one place
+/// every process (service or tool) configures a channel.
+fn with_qos<P: Debug + IceoryxSend + ?Sized, H: Debug + ZeroCopySend>(
+    b: PubSubBuilder<P, H>,
     name: &str,
-) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcError> {
+) -> PubSubBuilder<P, H> {
     let q = qos(name);
-    let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
-    node.service_builder(&service_name)
-        .publish_subscribe::<T>()
-        .max_publishers(q.max_publishers)
+    b.max_publishers(q.max_publishers)
         .max_subscribers(q.max_subscribers)
         .subscriber_max_buffer_size(q.subscriber_max_buffer)
         .history_size(q.history)
         .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| ipc_err(name, e))
+}
+
+type PubSubBuilder<P, H> =
+    iceoryx2::service::builder::publish_subscribe::Builder<P, H, ipc::Service>;
+
+/// Message channel port factory.
+pub type MsgFactory<T> = publish_subscribe::PortFactory<ipc::Service, T, ()>;
+/// Frame channel port factory: `[u16]` depths with a [`crate::FrameHeader`].
+pub type FrameFactory = publish_subscribe::PortFactory<ipc::Service, [u16], crate::FrameHeader>;
+
+fn service_name(name: &str) -> Result<ServiceName, IpcError> {
+    name.try_into().map_err(|e| ipc_err(name, e))
+}
+
+/// Open (or create) the publish-subscribe service `name` with its QoS.
+pub fn open_pubsub<T: Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<MsgFactory<T>, IpcError> {
+    with_qos(
+        node.service_builder(&service_name(name)?)
+            .publish_subscribe::<T>(),
+        name,
+    )
+    .open_or_create()
+    .map_err(|e| ipc_err(name, e))
+}
+
+/// Open `name` only if it exists, for tools that watch a cell and must never
+/// create a channel: `Ok(None)` when it does not exist (yet).
+pub fn open_existing_pubsub<T: Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<Option<MsgFactory<T>>, IpcError> {
+    match with_qos(
+        node.service_builder(&service_name(name)?)
+            .publish_subscribe::<T>(),
+        name,
+    )
+    .open()
+    {
+        Ok(f) => Ok(Some(f)),
+        Err(PublishSubscribeOpenError::DoesNotExist) => Ok(None),
+        Err(e) => Err(ipc_err(name, e)),
+    }
+}
+
+/// [`open_existing_pubsub`] for the frame channels.
+pub fn open_existing_frames(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<Option<FrameFactory>, IpcError> {
+    match with_qos(
+        node.service_builder(&service_name(name)?)
+            .publish_subscribe::<[u16]>()
+            .user_header::<crate::FrameHeader>(),
+        name,
+    )
+    .open()
+    {
+        Ok(f) => Ok(Some(f)),
+        Err(PublishSubscribeOpenError::DoesNotExist) => Ok(None),
+        Err(e) => Err(ipc_err(name, e)),
+    }
+}
+
+/// The deepest queue a reader that drains `name` may have ([`DRAIN`], capped by the channel's QoS).
+pub fn drain_buffer(name: &str) -> usize {
+    DRAIN.clamp(1, qos(name).subscriber_max_buffer)
 }
 
 /// Open (or create) the event service `name` (wakes readers of the channel of the same name).
@@ -143,6 +209,7 @@ pub fn subscriber<T: Debug + ZeroCopySend>(
     buffer: usize,
 ) -> Result<Sub<T>, IpcError> {
     let buffer = buffer.clamp(1, qos(name).subscriber_max_buffer);
+
     open_pubsub::<T>(node, name)?
         .subscriber_builder()
         .buffer_size(buffer)
@@ -211,22 +278,15 @@ pub type FramePub = iceoryx2::port::publisher::Publisher<ipc::Service, [u16], cr
 /// Frame subscriber port type.
 pub type FrameSub = iceoryx2::port::subscriber::Subscriber<ipc::Service, [u16], crate::FrameHeader>;
 
-fn open_frames(
-    node: &Node<ipc::Service>,
-    name: &str,
-) -> Result<publish_subscribe::PortFactory<ipc::Service, [u16], crate::FrameHeader>, IpcError> {
-    let q = qos(name);
-    let service_name: ServiceName = name.try_into().map_err(|e| ipc_err(name, e))?;
-    node.service_builder(&service_name)
-        .publish_subscribe::<[u16]>()
-        .user_header::<crate::FrameHeader>()
-        .max_publishers(q.max_publishers)
-        .max_subscribers(q.max_subscribers)
-        .subscriber_max_buffer_size(q.subscriber_max_buffer)
-        .history_size(q.history)
-        .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| ipc_err(name, e))
+fn open_frames(node: &Node<ipc::Service>, name: &str) -> Result<FrameFactory, IpcError> {
+    with_qos(
+        node.service_builder(&service_name(name)?)
+            .publish_subscribe::<[u16]>()
+            .user_header::<crate::FrameHeader>(),
+        name,
+    )
+    .open_or_create()
+    .map_err(|e| ipc_err(name, e))
 }
 
 /// Publish frames of up to `max_pixels` on `name`.

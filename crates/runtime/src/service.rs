@@ -70,6 +70,21 @@ impl ServiceContext {
         Ok(resolve(&self.config_path, urdf))
     }
 
+    /// The robot model of `[robot] urdf`, refused when it has more joints than
+    /// the messages carry (`max_dof`), with an error naming the file.
+    pub fn robot_model(&self, max_dof: usize) -> Result<phri_model::Model, String> {
+        let urdf = self.robot_urdf()?;
+        let model = phri_model::Model::from_urdf_file(&urdf).map_err(|e| e.to_string())?;
+        if model.nv() > max_dof {
+            return Err(format!(
+                "{}: {} joints, messages carry at most {max_dof}",
+                urdf.display(),
+                model.nv()
+            ));
+        }
+        Ok(model)
+    }
+
     /// Switch to SCHED_FIFO if configured and permitted; say what happened on stderr.
     pub fn go_realtime(&self) {
         if self.rt_priority > 0 {

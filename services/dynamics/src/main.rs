@@ -14,15 +14,8 @@ fn main() -> ExitCode {
 fn body() -> Result<(), String> {
     let ctx = ServiceContext::from_args("dynamics", &[])?;
     let cfg: ResidualConfig = ctx.section("dynamics")?;
-    let urdf = ctx.robot_urdf()?;
-    let model = phri_model::Model::from_urdf_file(&urdf).map_err(|e| e.to_string())?;
+    let model = ctx.robot_model(MAX_DOF)?;
     let n = model.nv();
-    if n > MAX_DOF {
-        return Err(format!(
-            "{}: {n} joints, messages carry at most {MAX_DOF}",
-            urdf.display()
-        ));
-    }
     let mut observer = ResidualObserver::new(model, &cfg).map_err(|e| e.to_string())?;
 
     let s = |x: IpcError| x.to_string();

@@ -31,15 +31,8 @@ fn main() -> ExitCode {
 fn body() -> Result<(), String> {
     let ctx = ServiceContext::from_args("sim", &[])?;
     let cfg: SimConfig = ctx.section("sim")?;
-    let urdf = ctx.robot_urdf()?;
-    let model = phri_model::Model::from_urdf_file(&urdf).map_err(|e| e.to_string())?;
+    let model = ctx.robot_model(MAX_DOF)?;
     let n = model.nv();
-    if n > MAX_DOF {
-        return Err(format!(
-            "{}: {n} joints, messages carry at most {MAX_DOF}",
-            urdf.display()
-        ));
-    }
     let scenario_file = ctx
         .config
         .get("scenario")

@@ -5,7 +5,6 @@ use std::any::Any;
 use std::collections::{HashMap, VecDeque};
 
 use iceoryx2::prelude::*;
-use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use iceoryx2::service::port_factory::PortFactory as _;
 use phri_ipc::*;
@@ -149,27 +148,12 @@ pub struct MsgProbe<T: Msg> {
 
 impl<T: Msg> MsgProbe<T> {
     pub fn open(node: &Node<ipc::Service>, name: &str) -> Result<MsgProbe<T>, String> {
-        let q = qos(name);
-        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
         // open only: a monitor never creates a channel
-        let factory = match node
-            .service_builder(&service_name)
-            .publish_subscribe::<T>()
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer)
-            .history_size(q.history)
-            .enable_safe_overflow(true)
-            .open()
-        {
-            Ok(f) => Some(f),
-            Err(PublishSubscribeOpenError::DoesNotExist) => None,
-            Err(e) => return Err(err(name, e)),
-        };
+        let factory = open_existing_pubsub::<T>(node, name).map_err(|e| e.to_string())?;
         let sub = match &factory {
             Some(f) => Some(
                 f.subscriber_builder()
-                    .buffer_size(DRAIN.clamp(1, q.subscriber_max_buffer))
+                    .buffer_size(drain_buffer(name))
                     .create()
                     .map_err(|e| err(name, e))?,
             ),
@@ -255,27 +239,11 @@ pub struct FrameProbe {
 
 impl FrameProbe {
     pub fn open(node: &Node<ipc::Service>, name: &str) -> Result<FrameProbe, String> {
-        let q = qos(name);
-        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
-        let factory = match node
-            .service_builder(&service_name)
-            .publish_subscribe::<[u16]>()
-            .user_header::<FrameHeader>()
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer)
-            .history_size(q.history)
-            .enable_safe_overflow(true)
-            .open()
-        {
-            Ok(f) => Some(f),
-            Err(PublishSubscribeOpenError::DoesNotExist) => None,
-            Err(e) => return Err(err(name, e)),
-        };
+        let factory = open_existing_frames(node, name).map_err(|e| e.to_string())?;
         let sub = match &factory {
             Some(f) => Some(
                 f.subscriber_builder()
-                    .buffer_size(q.subscriber_max_buffer.max(1))
+                    .buffer_size(drain_buffer(name))
                     .create()
                     .map_err(|e| err(name, e))?,
             ),

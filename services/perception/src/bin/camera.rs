@@ -25,7 +25,7 @@ fn body() -> Result<(), String> {
             ctx.config_path.display()
         ));
     }
-    let model = phri_model::Model::from_urdf_file(ctx.robot_urdf()?).map_err(|e| e.to_string())?;
+    let model = ctx.robot_model(MAX_DOF)?;
     let mut camera = CameraSim::new(model, &cfg)?;
     let pixels = camera.pixels();
     let s = |x: IpcError| x.to_string();

@@ -37,11 +37,8 @@ fn body() -> Result<(), String> {
     let ctx = ServiceContext::from_args("perception", &[])?;
     let cfg: IngestConfig = ctx.section("perception")?;
     let camera_cfg: CameraConfig = ctx.section("camera")?;
-    let model = phri_model::Model::from_urdf_file(ctx.robot_urdf()?).map_err(|e| e.to_string())?;
+    let model = ctx.robot_model(MAX_DOF)?;
     let n = model.nv();
-    if n > MAX_DOF {
-        return Err(format!("{n} joints, messages carry at most {MAX_DOF}"));
-    }
     let mut ingest = Ingest::new(
         model,
         cfg.self_filter,

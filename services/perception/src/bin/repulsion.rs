@@ -22,7 +22,7 @@ fn body() -> Result<(), String> {
         .parse_value("--worker")?
         .ok_or("--worker is required")?;
     let cfg: RepulsionConfig = ctx.section("repulsion")?;
-    let model = phri_model::Model::from_urdf_file(ctx.robot_urdf()?).map_err(|e| e.to_string())?;
+    let model = ctx.robot_model(MAX_DOF)?;
     let mut w = Worker::new(model, &cfg, worker)?;
     let s = |x: IpcError| x.to_string();
     let node = node(&ctx.name, &ctx.prefix).map_err(s)?;

@@ -15,7 +15,6 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
-use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use phri_ipc::*;
 use phri_record::json::{log_ns, Msg};
 use phri_record::{ENCODING, FRAME_DOWNSAMPLE, METADATA_NAME};
@@ -58,25 +57,14 @@ impl<T: Msg> Rec for MsgRec<T> {
             return Ok(true);
         }
         let name = self.name;
-        let q = qos(name);
-        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
-        let factory = match node
-            .service_builder(&service_name)
-            .publish_subscribe::<T>()
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer)
-            .history_size(q.history)
-            .enable_safe_overflow(true)
-            .open()
-        {
-            Ok(f) => f,
-            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(false),
-            Err(e) => return Err(err(name, e)),
+        // open only: a recorder never creates a channel
+        let Some(factory) = open_existing_pubsub::<T>(node, name).map_err(|e| e.to_string())?
+        else {
+            return Ok(false);
         };
         let sub = factory
             .subscriber_builder()
-            .buffer_size(DRAIN.clamp(1, q.subscriber_max_buffer))
+            .buffer_size(drain_buffer(name))
             .create()
             .map_err(|e| err(name, e))?;
         self.sub = Some(sub);
@@ -137,26 +125,12 @@ impl Rec for FrameRec {
             return Ok(true);
         }
         let name = self.name;
-        let q = qos(name);
-        let service_name: ServiceName = name.try_into().map_err(|e| err(name, e))?;
-        let factory = match node
-            .service_builder(&service_name)
-            .publish_subscribe::<[u16]>()
-            .user_header::<FrameHeader>()
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer)
-            .history_size(q.history)
-            .enable_safe_overflow(true)
-            .open()
-        {
-            Ok(f) => f,
-            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(false),
-            Err(e) => return Err(err(name, e)),
+        let Some(factory) = open_existing_frames(node, name).map_err(|e| e.to_string())? else {
+            return Ok(false);
         };
         let sub = factory
             .subscriber_builder()
-            .buffer_size(q.subscriber_max_buffer.max(1))
+            .buffer_size(drain_buffer(name))
             .create()
             .map_err(|e| err(name, e))?;
         self.sub = Some(sub);
