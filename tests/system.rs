@@ -375,6 +375,65 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     assert_eq!(r["false_detections"], 0);
 }
 
+/// `phri-fault camera corrupt|delay`: bad and late frames are refused by
+/// ingestion (which must survive them), the controller stops while the person
+/// is near and it is blind, then resumes; the torque loop never notices.
+#[test]
+fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("dfault", "coexistence", Some(22.0), &[]);
+    let fault = |args: &[&str]| {
+        let out = Command::new(bin("phri-fault"))
+            .arg("--run-dir")
+            .arg(&cell.run_dir)
+            .arg("camera")
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "phri-fault {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    // the person's hand is in the end effector's path from t = 11 s
+    wait(12.5);
+    fault(&["corrupt", "size", "--frames", "30"]);
+    wait(3.0);
+    fault(&["corrupt", "stale", "--frames", "30"]);
+    wait(3.0);
+    // late beyond the controller's 100 ms, yet frequent enough not to look frozen
+    fault(&["delay", "150", "--for", "1.5"]);
+    let r = cell.finish();
+    // ingestion refused the frames and lived on
+    for s in ["camera", "perception", "repulsion0"] {
+        assert_eq!(r["services"][s]["restarts"], 0, "{s}: {}", r["events"]);
+    }
+    let stops: Vec<f64> = events(&r, "protective_stop", "control")
+        .iter()
+        .map(|e| e["t_s"].as_f64().unwrap())
+        .collect();
+    let resumes = events(&r, "resume", "control").len();
+    assert!(
+        stops.len() >= 3,
+        "a stop per fault expected: {}",
+        r["events"]
+    );
+    assert!(resumes >= 3, "a resume per fault expected: {}", r["events"]);
+    assert!(events(&r, "brake", "sim").is_empty());
+    assert_eq!(
+        r["torque_loop"]["missed_deadlines"], 0,
+        "{}",
+        r["torque_loop"]
+    );
+    assert!(
+        r["contacts"].as_array().unwrap().is_empty(),
+        "{}",
+        r["contacts"]
+    );
+    assert_eq!(r["false_detections"], 0);
+}
+
 fn alive(pid: i32) -> bool {
     // SAFETY: probing a pid with signal 0.
     let exists = unsafe { libc::kill(pid, 0) } == 0;

@@ -410,3 +410,58 @@ pub struct RepulsionResult {
 impl Zeroed for WorldState {}
 impl Zeroed for FrameHeader {}
 impl Zeroed for RepulsionResult {}
+
+/// Kinds of [`DepthFault`]: what the simulated camera does to its next frames.
+pub mod depth_fault {
+    /// flying pixels: 2 % of the pixels get random depths (0.5-4 m)
+    pub const NOISE: u32 = 1;
+    /// every pixel 0 (no return): a blind frame
+    pub const ZEROS: u32 = 2;
+    /// the header's image size disagrees with the payload
+    pub const SIZE: u32 = 3;
+    /// capture time one second in the past
+    pub const STALE: u32 = 4;
+    /// publish every frame `delay_ms` late for `duration_s`
+    pub const DELAY: u32 = 5;
+
+    /// Every kind with its name, for command lines and JSON.
+    pub const ALL: [(u32, &str); 5] = [
+        (NOISE, "noise"),
+        (ZEROS, "zeros"),
+        (SIZE, "size"),
+        (STALE, "stale"),
+        (DELAY, "delay"),
+    ];
+
+    pub fn name(kind: u32) -> &'static str {
+        ALL.iter()
+            .find(|(k, _)| *k == kind)
+            .map_or("unknown", |(_, n)| n)
+    }
+
+    pub fn from_name(name: &str) -> Option<u32> {
+        ALL.iter().find(|(_, n)| *n == name).map(|(k, _)| *k)
+    }
+}
+
+/// A fault for the simulated camera to inject into its depth frames
+/// (`phri-fault camera corrupt|delay`), for testing what perception faults
+/// cost. A real camera driver ignores this channel.
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[repr(C)]
+#[type_name("phri::DepthFault")]
+pub struct DepthFault {
+    pub seq: u64,
+    /// when it was sent [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// one of [`depth_fault`]
+    pub kind: u32,
+    /// corruptions: how many consecutive frames
+    pub frames: u32,
+    /// [`depth_fault::DELAY`]: extra capture → publish delay [ms]
+    pub delay_ms: f64,
+    /// [`depth_fault::DELAY`]: how long \[s\]
+    pub duration_s: f64,
+}
+
+impl Zeroed for DepthFault {}

@@ -29,6 +29,7 @@ pub const ALL: &[&str] = &[
     CAMERA_DEPTH,
     PERCEPTION_DEPTH,
     PERCEPTION_REPULSION,
+    FAULT_DEPTH,
 ];
 
 /// [`crate::WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
@@ -39,3 +40,5 @@ pub const CAMERA_DEPTH: &str = "camera/depth";
 pub const PERCEPTION_DEPTH: &str = "perception/depth";
 /// [`crate::RepulsionResult`] from every repulsion worker (one publisher each).
 pub const PERCEPTION_REPULSION: &str = "perception/repulsion";
+/// [`crate::DepthFault`] from `phri-fault` to the simulated camera: frames to corrupt or delay (testing only).
+pub const FAULT_DEPTH: &str = "fault/depth";

@@ -52,6 +52,13 @@ pub fn qos(name: &str) -> Qos {
             subscriber_max_buffer: 32,
             history: 0,
         },
+        // fault injection: one injector at a time; a restarted camera must not
+        // replay an old fault, so no history
+        FAULT_DEPTH => Qos {
+            subscriber_max_buffer: 8,
+            history: 0,
+            ..one_publisher
+        },
         _ => one_publisher,
     }
 }

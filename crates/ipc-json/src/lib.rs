@@ -250,3 +250,18 @@ pub fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
         "capture_to_published_ms": h.published_ns.saturating_sub(h.capture_wall_ns) as f64 * 1e-6,
     })
 }
+
+impl Msg for DepthFault {
+    fn seq(&self) -> u64 {
+        self.seq
+    }
+    fn published_ns(&self) -> Option<u64> {
+        Some(self.stamp_ns)
+    }
+    fn to_json(&self) -> Value {
+        json!({
+            "seq": self.seq, "stamp_ns": self.stamp_ns, "kind": depth_fault::name(self.kind),
+            "frames": self.frames, "delay_ms": num(self.delay_ms), "duration_s": num(self.duration_s),
+        })
+    }
+}

@@ -133,6 +133,8 @@ pub struct Controller {
     qd_ref: Vec<f64>,
     qd_ref_prev: Vec<f64>,
     q_hold: Vec<f64>,
+    /// end-effector position held in `recover` \[m\], base frame
+    x_hold: Vector3<f64>,
     reaction_t0: f64,
     quiet_since: Option<f64>,
     history: History,
@@ -241,6 +243,7 @@ impl Controller {
             qd_ref: vec![0.0; n],
             qd_ref_prev: vec![0.0; n],
             q_hold: vec![0.0; n],
+            x_hold: Vector3::zeros(),
             reaction_t0: 0.0,
             quiet_since: None,
             history: History::new(n, history_len),
@@ -366,6 +369,7 @@ impl Controller {
 
     fn enter_recover(&mut self, q: &[f64]) {
         self.hold_here(q);
+        self.x_hold = self.clik.position(&self.model, &mut self.data, q);
         self.quiet_since = None;
         self.mode = mode::RECOVER;
     }
@@ -591,16 +595,16 @@ impl Controller {
                 }
                 self.limits.clamp_position(&mut self.q_ref);
                 self.history.push(self.s, &self.q_ref);
-                for i in 0..n {
-                    let qdd_ref = if dt > 0.0 {
-                        (self.qd_ref[i] - self.qd_ref_prev[i]) / dt
-                    } else {
-                        0.0
-                    };
-                    self.accel[i] =
-                        qdd_ref + kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
-                }
-                self.qd_ref_prev.copy_from_slice(&self.qd_ref);
+                self.track_reference(q, qd, dt);
+            }
+            // waiting to resume with someone in view: hold the end effector where it
+            // stopped, but keep evading (eq. 19/20) instead of standing in their way;
+            // with nothing near the repulsion is zero and this is a plain hold
+            mode::RECOVER if p_fresh && input.perception.is_some() => {
+                let x_hold = self.x_hold;
+                self.avoid_step(&x_hold, &Vector3::zeros(), dt, perception, 1.0);
+                self.limits.clamp_position(&mut self.q_ref);
+                self.track_reference(q, qd, dt);
             }
             mode::REACTION => match (self.cfg.reaction, &input.residual) {
                 (Reaction::Reflex, Some(r)) => {
@@ -773,6 +777,21 @@ impl Controller {
         for (q, v) in self.q_ref.iter_mut().zip(&self.qd_ref) {
             *q += v * dt;
         }
+    }
+
+    /// Computed-torque acceleration tracking `q_ref`, `qd_ref` (feed-forward
+    /// from the reference's change over `dt`).
+    fn track_reference(&mut self, q: &[f64], qd: &[f64], dt: f64) {
+        let (kp, kd) = (self.cfg.kp, self.cfg.kd);
+        for i in 0..self.n {
+            let qdd_ref = if dt > 0.0 {
+                (self.qd_ref[i] - self.qd_ref_prev[i]) / dt
+            } else {
+                0.0
+            };
+            self.accel[i] = qdd_ref + kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
+        }
+        self.qd_ref_prev.copy_from_slice(&self.qd_ref);
     }
 
     fn hold_accel(&mut self, q: &[f64], qd: &[f64]) {

@@ -128,6 +128,8 @@ pub struct Keyframe {
 pub struct HumanScript {
     floor_z: f64,
     keyframes: Vec<Keyframe>,
+    /// the script starts over every `repeat_s` \[s\] (`None`: plays once)
+    repeat_s: Option<f64>,
 }
 
 /// Why a [`HumanScript`] was refused. `index` is the keyframe's position.
@@ -141,6 +143,8 @@ pub enum ScriptError {
     NotFinite { index: usize, field: &'static str },
     #[error("keyframe[{index}].t: {t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)")]
     Unsorted { index: usize, t: f64, previous: f64 },
+    #[error("repeat_s: {repeat_s} s must be finite and at least the last keyframe's time {last} s (and > 0)")]
+    Repeat { repeat_s: f64, last: f64 },
 }
 
 impl HumanScript {
@@ -190,7 +194,28 @@ impl HumanScript {
                 }
             }
         }
-        Ok(HumanScript { floor_z, keyframes })
+        Ok(HumanScript {
+            floor_z,
+            keyframes,
+            repeat_s: None,
+        })
+    }
+
+    /// Play the script over and over, starting again every `repeat_s` \[s\]
+    /// (at least the last keyframe's time, so the keyframes never overlap;
+    /// the first keyframe should match the last for a continuous loop).
+    pub fn repeating(mut self, repeat_s: f64) -> Result<HumanScript, ScriptError> {
+        let last = self.end_time();
+        if !(repeat_s.is_finite() && repeat_s > 0.0 && repeat_s >= last) {
+            return Err(ScriptError::Repeat { repeat_s, last });
+        }
+        self.repeat_s = Some(repeat_s);
+        Ok(self)
+    }
+
+    /// The loop period \[s\], if the script repeats.
+    pub fn repeat_s(&self) -> Option<f64> {
+        self.repeat_s
     }
 
     /// Height of the soles \[m\], robot base frame.
@@ -356,6 +381,10 @@ impl Human {
     /// [`BodyPart::ALL`] order). Allocates nothing.
     pub fn pose_at(&mut self, t: f64) -> &[HumanCapsule] {
         use body::*;
+        let t = match self.script.repeat_s {
+            Some(period) if t > 0.0 => t.rem_euclid(period),
+            _ => t,
+        };
         let (base, right, left) = self.interpolate(t);
         let fl = Frame::new(base, self.script.floor_z);
         let mut set = |part: BodyPart, a: Vector3<f64>, b: Vector3<f64>, radius: f64| {

@@ -18,6 +18,7 @@ pub mod error;
 pub mod human;
 pub mod scenario;
 pub mod sim;
+pub mod world;
 
 pub use config::{PerJoint, SimConfig};
 pub use contact::{

@@ -88,6 +88,7 @@ fn body() -> Result<(), String> {
     let mut tau_cmd = vec![0.0; n];
     let mut command_seq = 0u64;
     let mut consecutive_missed = MAX_MISSED + 1; // braked until a controller answers
+    let mut misses = MissLog::default();
     let mut braking = true;
     let mut loop_established = false;
 
@@ -144,20 +145,7 @@ fn body() -> Result<(), String> {
         }
         publish(&truth_pub, SIM_TRUTH, truth).map_err(|x| x.to_string())?;
         // the world the simulated camera renders
-        world.seq = seq;
-        world.stamp_ns = stamp_ns;
-        world.q[..n].copy_from_slice(&t.q);
-        let humans = sim.human_capsules();
-        world.n_human = humans.len().min(MAX_HUMAN_CAPSULES) as u32;
-        for (dst, h) in world.human.iter_mut().zip(humans) {
-            dst.a = [h.a.x, h.a.y, h.a.z];
-            dst.b = [h.b.x, h.b.y, h.b.z];
-            dst.radius = h.radius;
-            dst.part = BodyPart::ALL
-                .iter()
-                .position(|p| *p == h.part)
-                .map_or(-1, |i| i as i32);
-        }
+        phri_sim::world::fill_world(sim, seq, stamp_ns, world);
         publish(&world_pub, SIM_WORLD, world).map_err(|x| x.to_string())?;
         Ok(published)
     };
@@ -225,14 +213,18 @@ fn body() -> Result<(), String> {
         if fresh {
             consecutive_missed = 0;
             loop_established = true;
+            misses.end();
         } else {
             consecutive_missed = consecutive_missed.saturating_add(1);
             if loop_established {
                 stats.missed_deadlines += 1;
-                if stats.missed_deadlines <= 20 || stats.missed_deadlines.is_power_of_two() {
-                    let since_pub = now_ns().saturating_sub(state_pub_ns);
-                    eprintln!("phri-sim: missed deadline {} at cycle {} (state published {} µs ago, this cycle woke {} µs late)", stats.missed_deadlines, stats.cycles, since_pub / 1000, woke.saturating_sub(tick) / 1000);
-                }
+                let since_pub = now_ns().saturating_sub(state_pub_ns);
+                misses.miss(
+                    stats.missed_deadlines,
+                    stats.cycles,
+                    since_pub / 1000,
+                    woke.saturating_sub(tick) / 1000,
+                );
             }
         }
         let brake = consecutive_missed > MAX_MISSED;
@@ -277,4 +269,41 @@ fn body() -> Result<(), String> {
     ctx.shutdown.request();
     let _ = listener_thread.join();
     Ok(())
+}
+
+/// Missed deadlines logged as runs: one line per run of consecutive misses,
+/// when it ends (`missed deadlines A-B at cycles C-D`), so that every miss is
+/// placed in time; after 2000 lines only runs of 2^k-th misses are logged.
+#[derive(Default)]
+struct MissLog {
+    /// (first miss number, its cycle, µs since the state was published, µs woke late)
+    first: Option<(u64, u64, u64, u64)>,
+    last: (u64, u64),
+    lines: u64,
+}
+
+impl MissLog {
+    fn miss(&mut self, n: u64, cycle: u64, since_pub_us: u64, late_us: u64) {
+        if self.first.is_none() {
+            self.first = Some((n, cycle, since_pub_us, late_us));
+        }
+        self.last = (n, cycle);
+    }
+
+    fn end(&mut self) {
+        let Some((n0, c0, since, late)) = self.first.take() else {
+            return;
+        };
+        let (n1, c1) = self.last;
+        self.lines += 1;
+        if self.lines <= 2000 || n1.is_power_of_two() {
+            eprintln!("phri-sim: missed deadlines {n0}-{n1} at cycles {c0}-{c1} (first: state published {since} µs before, cycle woke {late} µs late)");
+        }
+    }
+}
+
+impl Drop for MissLog {
+    fn drop(&mut self) {
+        self.end();
+    }
 }

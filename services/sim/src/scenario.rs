@@ -9,6 +9,7 @@
 //! [human]                            # optional: no table, no human
 //! floor_z = -0.8                     # soles' height in the robot base frame [m], default -0.8
 //! collaborative_parts = ["hand_right"]   # contacts with these parts are intended, default none
+//! repeat_s = 30.0                    # optional: the script starts over every 30 s, default: plays once
 //!
 //! [[human.keyframe]]                 # at least one; strictly increasing t
 //! t = 0.0                            # [s]
@@ -89,6 +90,7 @@ struct RawHuman {
     collaborative_parts: Vec<String>,
     #[serde(default)]
     keyframe: Vec<RawKeyframe>,
+    repeat_s: Option<f64>,
 }
 
 fn default_duration_s() -> f64 {
@@ -187,7 +189,14 @@ impl Scenario {
                     ScriptError::Unsorted { index, t, previous } => {
                         invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))
                     }
+                    ScriptError::Repeat { .. } => invalid("human.repeat_s".into(), e.to_string()),
                 })?;
+                let script = match h.repeat_s {
+                    None => script,
+                    Some(r) => script
+                        .repeating(r)
+                        .map_err(|e| invalid("human.repeat_s".into(), e.to_string()))?,
+                };
                 (Some(script), parts)
             }
         };

@@ -196,6 +196,8 @@ pub struct Simulator {
     collaborative: [bool; BodyPart::ALL.len()],
     robot: Vec<RobotCapsule>,
     rng: SmallRng,
+    /// added to the simulation time to get the human script's time [s]
+    human_time_offset: f64,
     // state
     t: f64,
     q: Vec<f64>,
@@ -306,6 +308,7 @@ impl Simulator {
             robot,
             rng,
             t: 0.0,
+            human_time_offset: 0.0,
             qd: vec![0.0; n],
             tau_cmd: vec![0.0; n],
             noise: vec![0.0; n],
@@ -574,7 +577,7 @@ impl Simulator {
         let Some(human) = self.human.as_mut() else {
             return;
         };
-        let capsules: &[HumanCapsule] = human.pose_at(self.t);
+        let capsules: &[HumanCapsule] = human.pose_at(self.t + self.human_time_offset);
         let n_robot = self.robot.len();
         let last = self.n - 1;
         let last_origin = self.data.body[last].p;
@@ -691,6 +694,20 @@ impl Simulator {
     /// Simulation time \[s\].
     pub fn time_s(&self) -> f64 {
         self.t
+    }
+
+    /// Run the human script `offset_s` \[s\] ahead of the simulation clock
+    /// (negative: behind). A restarted simulator uses it to continue the
+    /// scenario where the cell is, rather than replaying the person from the
+    /// start; lock-step sweeps use it to meet the person at another phase of
+    /// the robot's cycle. Non-finite values count as 0.
+    pub fn set_human_time_offset(&mut self, offset_s: f64) {
+        self.human_time_offset = if offset_s.is_finite() { offset_s } else { 0.0 };
+    }
+
+    /// Time of the human script \[s\]: simulation time plus the offset.
+    pub fn human_time_s(&self) -> f64 {
+        self.t + self.human_time_offset
     }
 
     pub fn model(&self) -> &Model {

@@ -485,10 +485,13 @@ fn body() -> Result<(), String> {
         let silent: Vec<(String, bool)> = list
             .iter()
             .map(|sv| {
+                let limit = sv
+                    .spec
+                    .heartbeat_timeout_ms
+                    .map_or(timeout_ns, |ms| ms * 1_000_000);
                 (
                     sv.name.clone(),
-                    sv.spec.heartbeat.is_some()
-                        && now.saturating_sub(sv.last_heartbeat_ns) > timeout_ns,
+                    sv.spec.heartbeat.is_some() && now.saturating_sub(sv.last_heartbeat_ns) > limit,
                 )
             })
             .collect();
@@ -498,6 +501,10 @@ fn body() -> Result<(), String> {
                 .depends_on
                 .iter()
                 .all(|d| silent.iter().any(|(n, s)| n == d && !*s));
+            if !deps_ok {
+                // its silence is explained by theirs: judge it afresh once they are back
+                sv.last_heartbeat_ns = now;
+            }
             let grace = now.saturating_sub(sv.started_ns) > 4 * timeout_ns.max(500_000_000);
             if let (Some(child), true) = (sv.child.as_ref(), deps_ok && grace) {
                 if silent.iter().any(|(n, s)| *n == sv.name && *s) {

@@ -63,6 +63,10 @@ pub struct ServiceSpec {
     /// runs means it is frozen (it is then killed and restarted)
     #[serde(default)]
     pub heartbeat: Option<String>,
+    /// silence on `heartbeat` longer than this is frozen [ms] (default: the
+    /// supervisor's `heartbeat_timeout_ms`)
+    #[serde(default)]
+    pub heartbeat_timeout_ms: Option<u64>,
     /// services whose silence explains this one's (it is not judged while they are silent)
     #[serde(default)]
     pub depends_on: Vec<String>,

@@ -14,6 +14,9 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use iceoryx2::prelude::*;
+use phri_ipc::{depth_fault, DepthFault, Zeroed, FAULT_DEPTH};
+
 const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
   SERVICE  a service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
   ACTION   kill            SIGKILL
@@ -21,6 +24,12 @@ const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] 
            freeze SECONDS  SIGSTOP, SIGCONT after SECONDS
            slow PERCENT --for SECONDS
                            SIGSTOP/SIGCONT in 10 ms slices: the process runs PERCENT % of the time
+           corrupt KIND [--frames N]
+                           (SERVICE camera, the simulated one) corrupt the next N frames (default 30):
+                           noise (2 % flying pixels), zeros (blind frame), size (header
+                           disagrees with the payload), stale (capture time 1 s back)
+           delay MS --for SECONDS
+                           (SERVICE camera) publish every frame MS late for SECONDS
   --times N         injections (default 1; 0 = until --until, state.json disappears or Ctrl-C)
   --every SECONDS   wait this long before each injection
   --random MIN,MAX  wait a uniformly random time in [MIN, MAX] s before each injection
@@ -41,7 +50,17 @@ enum Action {
     Kill,
     Term,
     Freeze(f64),
-    Slow { percent: f64, for_s: f64 },
+    Slow {
+        percent: f64,
+        for_s: f64,
+    },
+    /// a fault message to the simulated camera on `fault/depth`
+    Depth {
+        kind: u32,
+        frames: u32,
+        delay_ms: f64,
+        for_s: f64,
+    },
 }
 
 impl Action {
@@ -51,6 +70,8 @@ impl Action {
             Action::Term => "term",
             Action::Freeze(_) => "freeze",
             Action::Slow { .. } => "slow",
+            Action::Depth { kind, .. } if *kind == depth_fault::DELAY => "delay",
+            Action::Depth { .. } => "corrupt",
         }
     }
     fn detail(&self) -> String {
@@ -59,6 +80,15 @@ impl Action {
             Action::Term => "SIGTERM".into(),
             Action::Freeze(s) => format!("SIGSTOP for {s} s"),
             Action::Slow { percent, for_s } => format!("{percent} % CPU for {for_s} s"),
+            Action::Depth {
+                kind,
+                delay_ms,
+                for_s,
+                ..
+            } if *kind == depth_fault::DELAY => format!("frames {delay_ms} ms late for {for_s} s"),
+            Action::Depth { kind, frames, .. } => {
+                format!("{} on {frames} frames", depth_fault::name(*kind))
+            }
         }
     }
 }
@@ -106,6 +136,7 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
     let mut seed = None;
     let mut until = None;
     let mut for_s = None;
+    let mut frames = None;
     let mut json = false;
     let mut it = args.into_iter();
     while let Some(a) = it.next() {
@@ -143,6 +174,12 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             }
             "--until" => until = Some(parse_f64("--until", &val("--until")?)?),
             "--for" => for_s = Some(parse_f64("--for", &val("--for")?)?),
+            "--frames" => {
+                let v = val("--frames")?;
+                frames = Some(v.parse::<u32>().ok().filter(|&n| n > 0).ok_or_else(|| {
+                    Fail::Usage(format!("--frames: not a positive count: {v:?}"))
+                })?);
+            }
             "--json" => json = true,
             s if s.starts_with("--") => return Err(Fail::Usage(format!("unknown option {s}"))),
             _ => pos.push(a),
@@ -189,11 +226,49 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             let for_s = for_s.ok_or_else(|| Fail::Usage("slow needs --for SECONDS".into()))?;
             Action::Slow { percent, for_s }
         }
+        Some("corrupt") => {
+            let v = pos.next().ok_or_else(|| {
+                Fail::Usage("corrupt needs KIND (noise, zeros, size, stale)".into())
+            })?;
+            let kind = depth_fault::from_name(&v)
+                .filter(|k| *k != depth_fault::DELAY)
+                .ok_or_else(|| {
+                    Fail::Usage(format!(
+                        "corrupt: unknown KIND {v:?} (noise, zeros, size, stale)"
+                    ))
+                })?;
+            Action::Depth {
+                kind,
+                frames: frames.unwrap_or(30),
+                delay_ms: 0.0,
+                for_s: 0.0,
+            }
+        }
+        Some("delay") => {
+            let v = pos
+                .next()
+                .ok_or_else(|| Fail::Usage("delay needs MS".into()))?;
+            let delay_ms = parse_f64("delay", &v)?;
+            let for_s = for_s.ok_or_else(|| Fail::Usage("delay needs --for SECONDS".into()))?;
+            Action::Depth {
+                kind: depth_fault::DELAY,
+                frames: 0,
+                delay_ms,
+                for_s,
+            }
+        }
         Some(a) => return Err(Fail::Usage(format!("unknown ACTION {a:?}"))),
         None => return Err(Fail::Usage("ACTION is missing".into())),
     };
     if let Some(extra) = pos.next() {
         return Err(Fail::Usage(format!("unexpected argument {extra:?}")));
+    }
+    if matches!(action, Action::Depth { .. })
+        && !matches!(&target, Target::One(name) if name == "camera")
+    {
+        return Err(Fail::Usage(
+            "corrupt and delay act on the simulated camera: SERVICE must be camera".into(),
+        ));
     }
     if every.is_some() && random.is_some() {
         return Err(Fail::Usage(
@@ -242,6 +317,7 @@ impl Rng {
 
 struct State {
     supervisor_pid: Option<i32>,
+    prefix: Option<String>,
     services: BTreeMap<String, Option<i32>>,
 }
 
@@ -275,8 +351,10 @@ fn read_state(run_dir: &Path) -> Result<State, Fail> {
         .and_then(|p| p.as_i64())
         .filter(|&p| p > 0 && p <= i32::MAX as i64)
         .map(|p| p as i32);
+    let prefix = v.get("prefix").and_then(|p| p.as_str()).map(String::from);
     Ok(State {
         supervisor_pid,
+        prefix,
         services,
     })
 }
@@ -425,6 +503,7 @@ fn apply(action: &Action, pid: i32) -> Result<String, String> {
                 (_, Err(e)) => Ok(format!("gone before SIGCONT ({e})")),
             }
         }
+        Action::Depth { .. } => Err("internal: depth faults are sent on fault/depth".into()),
         Action::Slow { percent, for_s } => {
             let slices = (for_s * 100.0).round() as u64;
             let mut acc = 0.0;
@@ -462,8 +541,79 @@ fn apply(action: &Action, pid: i32) -> Result<String, String> {
     }
 }
 
+/// The publisher of depth faults, opened on first use with the cell's prefix.
+struct FaultPort {
+    _node: Node<ipc::Service>,
+    publisher: phri_ipc::Pub<DepthFault>,
+    seq: u64,
+}
+
+impl FaultPort {
+    fn open(run_dir: &Path) -> Result<FaultPort, Fail> {
+        let st = read_state(run_dir)?;
+        let prefix = st.prefix.ok_or_else(|| {
+            Fail::Cell(format!(
+                "{}: no \"prefix\" (the cell's iceoryx2 prefix)",
+                run_dir.join("state.json").display()
+            ))
+        })?;
+        let node = phri_ipc::node(&format!("phri-fault-{}", std::process::id()), &prefix)
+            .map_err(|e| Fail::Cell(e.to_string()))?;
+        let publisher = phri_ipc::publisher::<DepthFault>(&node, FAULT_DEPTH).map_err(|e| {
+            Fail::Cell(format!(
+                "{e} (another phri-fault injecting into this cell?)"
+            ))
+        })?;
+        Ok(FaultPort {
+            _node: node,
+            publisher,
+            seq: 0,
+        })
+    }
+
+    fn send(&mut self, action: &Action) -> Result<String, String> {
+        let Action::Depth {
+            kind,
+            frames,
+            delay_ms,
+            for_s,
+        } = *action
+        else {
+            return Err("internal: not a depth fault".into());
+        };
+        self.seq += 1;
+        let mut f = DepthFault::zeroed();
+        f.seq = self.seq;
+        f.stamp_ns = (mono_s() * 1e9) as u64;
+        f.kind = kind;
+        f.frames = frames;
+        f.delay_ms = delay_ms;
+        f.duration_s = for_s;
+        use iceoryx2::port::update_connections::UpdateConnections;
+        let _ = self.publisher.update_connections();
+        let sample = self
+            .publisher
+            .loan_uninit()
+            .map_err(|e| phri_ipc::ipc_err(FAULT_DEPTH, e).to_string())?;
+        let receivers = sample
+            .write_payload(f)
+            .send()
+            .map_err(|e| phri_ipc::ipc_err(FAULT_DEPTH, e).to_string())?;
+        if receivers == 0 {
+            return Err(format!(
+                "{FAULT_DEPTH}: no camera listens (is the cell's camera the simulated one?)"
+            ));
+        }
+        // samples live in the publisher's memory: stay until the camera (which
+        // polls once per frame) has surely taken it
+        sleep_s(0.3);
+        Ok("sent".into())
+    }
+}
+
 fn run(opts: &Opts) -> Result<(), Fail> {
     let mut rng = Rng(opts.seed);
+    let mut port: Option<FaultPort> = None;
     let t0 = Instant::now();
     let mut n = 0u64;
     loop {
@@ -500,8 +650,18 @@ fn run(opts: &Opts) -> Result<(), Fail> {
         let (service, pid) = choose(opts, &mut rng)?;
         n += 1;
         let at = Stamp(t0.elapsed().as_secs_f64(), unix_s(), mono_s());
-        let outcome = apply(&opts.action, pid)
-            .map_err(|e| Fail::Cell(format!("{service}: pid {pid}: {e}")))?;
+        let outcome = if let Action::Depth { .. } = opts.action {
+            if port.is_none() {
+                port = Some(FaultPort::open(&opts.run_dir)?);
+            }
+            let p = port
+                .as_mut()
+                .ok_or_else(|| Fail::Cell("no fault port".into()))?;
+            p.send(&opts.action)
+        } else {
+            apply(&opts.action, pid)
+        }
+        .map_err(|e| Fail::Cell(format!("{service}: pid {pid}: {e}")))?;
         print_injection(opts, &at, n, &service, pid, &outcome);
     }
 }

@@ -324,6 +324,7 @@ pub fn open(node: &Node<ipc::Service>, channel: &str) -> Result<Box<dyn Probe>, 
         SUPERVISOR_HEALTH => Box::new(MsgProbe::<Health>::open(node, channel)?),
         SIM_WORLD => Box::new(MsgProbe::<WorldState>::open(node, channel)?),
         PERCEPTION_REPULSION => Box::new(MsgProbe::<RepulsionResult>::open(node, channel)?),
+        FAULT_DEPTH => Box::new(MsgProbe::<DepthFault>::open(node, channel)?),
         CAMERA_DEPTH | PERCEPTION_DEPTH => Box::new(FrameProbe::open(node, channel)?),
         other => return Err(unknown_channel(other)),
     })

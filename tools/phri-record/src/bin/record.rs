@@ -173,6 +173,7 @@ fn rec_for(name: &'static str, every: u64) -> Box<dyn Rec> {
         SUPERVISOR_HEALTH => m::<Health>(name),
         SIM_WORLD => m::<WorldState>(name),
         PERCEPTION_REPULSION => m::<RepulsionResult>(name),
+        FAULT_DEPTH => m::<DepthFault>(name),
         _ => Box::new(FrameRec {
             name,
             sub: None,
