@@ -573,5 +573,35 @@ mod tests {
             HumanScript::new(f64::INFINITY, vec![k(0.0)]),
             Err(ScriptError::FloorZ(_))
         ));
+        let two = || HumanScript::new(-0.8, vec![k(0.0), k(10.0)]).unwrap();
+        for bad in [5.0, 0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(
+                matches!(two().repeating(bad), Err(ScriptError::Repeat { .. })),
+                "repeat_s {bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_repeating_script_starts_over_every_period() {
+        let k = |t: f64, x: f64| Keyframe {
+            t,
+            base: [x, 0.0, 0.0],
+            right_hand: None,
+            left_hand: None,
+        };
+        let script = HumanScript::new(-0.8, vec![k(0.0, 1.0), k(4.0, 2.0)])
+            .unwrap()
+            .repeating(10.0)
+            .unwrap();
+        assert_eq!(script.repeat_s(), Some(10.0));
+        let mut h = Human::new(script);
+        let at = |h: &mut Human, t: f64| h.pose_at(t).to_vec();
+        for t in [1.0, 3.0, 6.0] {
+            assert_eq!(at(&mut h, t), at(&mut h, t + 10.0), "t = {t}");
+            assert_eq!(at(&mut h, t), at(&mut h, t + 30.0), "t = {t}");
+        }
+        // within one period it plays like the script
+        assert_ne!(at(&mut h, 1.0), at(&mut h, 3.0));
     }
 }
