@@ -189,7 +189,7 @@ pub fn load(
     sets: &[&str],
 ) -> Result<(toml::Table, Scenario, Model), CellError> {
     let scen = Scenario::from_file(scenario).map_err(|e| CellError::Config(e.to_string()))?;
-    let table = phri_runtime::config::load_config(config, &[scen.config.clone()], sets)
+    let table = phri_runtime::config::load_config(config, std::slice::from_ref(&scen.config), sets)
         .map_err(|e| CellError::Config(e.to_string()))?;
     let urdf = table
         .get("robot")

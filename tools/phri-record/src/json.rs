@@ -190,6 +190,69 @@ impl FromJson for Truth {
     }
 }
 
+impl FromJson for WorldState {
+    fn from_json(v: &Value) -> Result<Self, String> {
+        let mut m = WorldState::zeroed();
+        m.seq = u64_of(v, "seq")?;
+        m.stamp_ns = u64_of(v, "stamp_ns")?;
+        m.dof = u32_of(v, "dof")?;
+        arr_of(v, "q", &mut m.q, f64::NAN)?;
+        let human = field(v, "human")?
+            .as_array()
+            .ok_or("field 'human' is not an array")?;
+        if human.len() > MAX_HUMAN_CAPSULES {
+            return Err(format!(
+                "field 'human': {} capsules, at most {MAX_HUMAN_CAPSULES}",
+                human.len()
+            ));
+        }
+        m.n_human = human.len() as u32;
+        for (dst, h) in m.human.iter_mut().zip(human) {
+            arr_of(h, "a", &mut dst.a, f64::NAN)?;
+            arr_of(h, "b", &mut dst.b, f64::NAN)?;
+            dst.radius = f64_of(h, "radius", f64::NAN)?;
+            dst.part = i32_of(h, "part")?;
+        }
+        Ok(m)
+    }
+}
+
+impl FromJson for RepulsionResult {
+    fn from_json(v: &Value) -> Result<Self, String> {
+        let mut m = RepulsionResult::zeroed();
+        m.seq = u64_of(v, "seq")?;
+        m.frame_seq = u64_of(v, "frame_seq")?;
+        m.capture_ns = u64_of(v, "capture_ns")?;
+        m.published_ns = u64_of(v, "published_ns")?;
+        m.frame_capture_wall_ns = u64_of(v, "frame_capture_wall_ns")?;
+        m.worker = u32_of(v, "worker")?;
+        m.workers = u32_of(v, "workers")?;
+        m.compute_ns = u64_of(v, "compute_ns")?;
+        let points = field(v, "points")?
+            .as_array()
+            .ok_or("field 'points' is not an array")?;
+        if points.len() > MAX_POINTS_PER_WORKER {
+            return Err(format!(
+                "field 'points': {} points, at most {MAX_POINTS_PER_WORKER}",
+                points.len()
+            ));
+        }
+        m.n_points = points.len() as u32;
+        for (dst, p) in m.points.iter_mut().zip(points) {
+            dst.point = u32_of(p, "point")?;
+            dst.active = field(p, "active")?
+                .as_bool()
+                .ok_or("field 'active' is not a boolean")? as u32;
+            arr_of(p, "v_call", &mut dst.v_call, f64::NAN)?;
+            // non-finite on recording: nothing seen
+            dst.min_distance = f64_of(p, "min_distance", f64::INFINITY)?;
+            arr_of(p, "obstacle", &mut dst.obstacle, f64::NAN)?;
+            arr_of(p, "position", &mut dst.position, f64::NAN)?;
+        }
+        Ok(m)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -179,6 +179,19 @@ fn record_read_back_and_plot() {
     for name in ["ee_trajectory.png", "residual.png", "min_distance.png"] {
         check_png(&out.join(name));
     }
+    // with a second recording's path underneath (here the same file)
+    let out2 = tmp.join("plots2");
+    let st = Command::new(env!("CARGO_BIN_EXE_phri-plot"))
+        .arg("--file")
+        .arg(&file)
+        .arg("--without")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out2)
+        .status()
+        .unwrap();
+    assert!(st.success(), "phri-plot --without failed: {st}");
+    check_png(&out2.join("ee_trajectory.png"));
 
     // a bad file: one-line error, exit 2
     let o = Command::new(env!("CARGO_BIN_EXE_phri-plot"))
@@ -188,6 +201,38 @@ fn record_read_back_and_plot() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(String::from_utf8_lossy(&o.stderr).lines().count(), 1);
+
+    // replay into a prefix of its own: every replayable channel of the file
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-replay"))
+        .args(["--prefix", &format!("rp{pid}_"), "--speed", "4", "--file"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "phri-replay failed: {err}");
+    for c in [
+        "robot/state",
+        "sim/world",
+        "perception/repulsion",
+        "control/status",
+    ] {
+        assert!(err.contains(&format!("{c}=")), "{c} not replayed: {err}");
+    }
+    // recorded obstacles are never replayed into a commanded robot's cell
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-replay"))
+        .args([
+            "--prefix",
+            &prefix,
+            "--channels",
+            "perception/repulsion",
+            "--file",
+        ])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("robot/command"), "{err}");
 
     // the cell finishes its run on its own, successfully
     let mut child = cell.0.take().unwrap();

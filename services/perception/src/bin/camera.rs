@@ -136,7 +136,7 @@ impl FaultState {
                         self.rng ^= self.rng << 13;
                         self.rng ^= self.rng >> 7;
                         self.rng ^= self.rng << 17;
-                        if self.rng % 50 == 0 {
+                        if self.rng.is_multiple_of(50) {
                             *d = 500 + ((self.rng >> 20) % 3500) as u16;
                         }
                     }

@@ -1,7 +1,12 @@
-//! `phri-plot --file FILE.mcap --out DIR`: figures of a recording as PNG
-//! (no text: axes, grid and tick marks only).
+//! `phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]`: figures of a
+//! recording as PNG (no text: axes, grid and tick marks only).
 //!
-//! - `ee_trajectory.png`: end-effector x-y path (`control/status` `ee`), blue
+//! - `ee_trajectory.png` (like the paper's Fig. 7): end-effector x-y path
+//!   (`control/status` `ee`), blue while the person is farther than the
+//!   surveillance distance (0.4 m, `sim/truth` `min_distance`: the true
+//!   person-robot distance, for evaluation), red while nearer;
+//!   with `--without`, the path of a recording without the person (e.g.
+//!   `free-motion`) underneath in grey
 //! - `residual.png`: ‖r‖ over time (`dynamics/residual` `norm`), blue; the
 //!   collision norm threshold from the recording's metadata (dashed red) when
 //!   present; an orange vertical line where `flags & COLLISION` rises
@@ -11,13 +16,15 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use phri_ipc::{residual_flags, CONTROL_STATUS, DYNAMICS_RESIDUAL};
+use phri_ipc::{residual_flags, CONTROL_STATUS, DYNAMICS_RESIDUAL, SIM_TRUTH};
 use phri_record::plot::*;
 use phri_record::{read_file, METADATA_NAME};
 use phri_runtime::Args;
 use serde_json::Value;
 
-const USAGE: &str = "usage: phri-plot --file FILE.mcap --out DIR";
+const USAGE: &str = "usage: phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]";
+/// someone nearer than this to a control point counts as present \[m\] (ρ of eq. 16)
+const NEAR_M: f64 = 0.4;
 const W: usize = 900;
 const H: usize = 600;
 
@@ -30,8 +37,12 @@ fn num(v: &Value, k: &str) -> f64 {
 }
 
 fn body() -> Result<(), String> {
-    let args = Args::parse(std::env::args().skip(1), &["--file", "--out"], &[])
-        .map_err(|e| format!("{e}; {USAGE}"))?;
+    let args = Args::parse(
+        std::env::args().skip(1),
+        &["--file", "--out", "--without"],
+        &[],
+    )
+    .map_err(|e| format!("{e}; {USAGE}"))?;
     let file = args
         .get("--file")
         .ok_or_else(|| format!("--file is required; {USAGE}"))?;
@@ -58,6 +69,8 @@ fn body() -> Result<(), String> {
     let (mut ee, mut dist, mut norm) = (Vec::new(), Vec::new(), Vec::new());
     let mut rises = Vec::new();
     let mut prev_collision = false;
+    // true distance person ↔ arm, newest (infinite: no person)
+    let mut person_m = f64::INFINITY;
     let mut t0: Option<u64> = None;
     let t_start = Instant::now();
     let mut next_report = t_start + Duration::from_secs(1);
@@ -71,19 +84,21 @@ fn body() -> Result<(), String> {
             eprintln!("phri-plot: {n} messages read");
         }
         let topic = m.channel.topic.as_str();
-        if topic != CONTROL_STATUS && topic != DYNAMICS_RESIDUAL {
+        if topic != CONTROL_STATUS && topic != DYNAMICS_RESIDUAL && topic != SIM_TRUTH {
             continue;
         }
         let v: Value = serde_json::from_slice(&m.data)
             .map_err(|e| format!("{file}: {topic} message {}: {e}", m.sequence))?;
         let t0 = *t0.get_or_insert(m.log_time);
         let t = (m.log_time as f64 - t0 as f64) * 1e-9;
-        if topic == CONTROL_STATUS {
+        if topic == SIM_TRUTH {
+            person_m = num(&v, "min_distance");
+        } else if topic == CONTROL_STATUS {
+            let d = num(&v, "min_distance");
             if let Some(p) = v.get("ee").and_then(Value::as_array) {
                 let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
-                ee.push((c(0), c(1)));
+                ee.push((c(0), c(1), person_m < NEAR_M));
             }
-            let d = num(&v, "min_distance");
             if d.is_finite() {
                 dist.push((t, d));
             }
@@ -104,9 +119,17 @@ fn body() -> Result<(), String> {
     }
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create '{}': {e}", out.display()))?;
 
+    // the same path without the person, if given
+    let without: Vec<(f64, f64)> = match args.get("--without") {
+        Some(f) => ee_path(f)?,
+        None => Vec::new(),
+    };
+
     // (a) end-effector path, equal scale on both axes
     let mut c = Canvas::new(W, H);
-    if let (Some(xr), Some(yr)) = (range(ee.iter().map(|p| p.0)), range(ee.iter().map(|p| p.1))) {
+    let xs = || ee.iter().map(|p| p.0).chain(without.iter().map(|p| p.0));
+    let ys = || ee.iter().map(|p| p.1).chain(without.iter().map(|p| p.1));
+    if let (Some(xr), Some(yr)) = (range(xs()), range(ys())) {
         let probe = Axes::new(&c, xr, yr);
         let (pw, ph) = (
             (probe.right - probe.left) as f64,
@@ -120,7 +143,21 @@ fn body() -> Result<(), String> {
             (cy - scale * ph / 2.0, cy + scale * ph / 2.0),
         );
         a.draw(&mut c);
-        a.polyline(&mut c, &ee, BLUE);
+        a.polyline(&mut c, &without, GREY);
+        // contiguous runs of the same presence, each in its colour
+        let mut run: Vec<(f64, f64)> = Vec::new();
+        let mut near = false;
+        for &(x, y, n) in &ee {
+            if n != near && !run.is_empty() {
+                a.polyline(&mut c, &run, if near { RED } else { BLUE });
+                let last = run[run.len() - 1];
+                run.clear();
+                run.push(last);
+            }
+            near = n;
+            run.push((x, y));
+        }
+        a.polyline(&mut c, &run, if near { RED } else { BLUE });
     }
     save(&c, &out, "ee_trajectory.png")?;
 
@@ -163,6 +200,28 @@ fn body() -> Result<(), String> {
         out.display()
     );
     Ok(())
+}
+
+/// The end-effector x-y path of a recording's `control/status`.
+fn ee_path(file: &str) -> Result<Vec<(f64, f64)>, String> {
+    let buf = read_file(file)?;
+    let mut out = Vec::new();
+    for m in mcap::MessageStream::new(&buf).map_err(|e| format!("{file}: {e}"))? {
+        let m = m.map_err(|e| format!("{file}: {e}"))?;
+        if m.channel.topic != CONTROL_STATUS {
+            continue;
+        }
+        let v: Value = serde_json::from_slice(&m.data)
+            .map_err(|e| format!("{file}: {CONTROL_STATUS} message {}: {e}", m.sequence))?;
+        if let Some(p) = v.get("ee").and_then(Value::as_array) {
+            let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
+            out.push((c(0), c(1)));
+        }
+    }
+    if out.is_empty() {
+        return Err(format!("{file}: no {CONTROL_STATUS} messages"));
+    }
+    Ok(out)
 }
 
 fn save(c: &Canvas, dir: &std::path::Path, name: &str) -> Result<(), String> {

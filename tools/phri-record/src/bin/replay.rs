@@ -3,9 +3,12 @@
 //! Publishes the recorded messages of the chosen channels into the cell with
 //! prefix `P` at their recorded timing (scaled by `--speed`), rebuilding the
 //! `#[repr(C)]` messages from their JSON. Replayable: `robot/state`,
-//! `dynamics/residual`, `control/status`, `sim/truth` (the default: those of
-//! them present in the file). `robot/command` is never published, nor are
-//! depth frames (they were recorded downsampled).
+//! `dynamics/residual`, `control/status`, `sim/truth`, `sim/world`,
+//! `perception/repulsion` (the default: those of them present in the file).
+//! `robot/command` is never published, nor are depth frames (they were
+//! recorded downsampled), nor `robot/stats` and `supervisor/health` (live
+//! summaries of processes, not data). Repulsion results steer a controller's
+//! avoidance, so they are refused into a cell whose robot is commanded.
 
 use std::collections::BTreeMap;
 use std::process::ExitCode;
@@ -20,7 +23,14 @@ use serde_json::Value;
 
 const USAGE: &str = "usage: phri-replay --file FILE.mcap --prefix P [--speed X] [--channels a,b]";
 /// Channels phri-replay can rebuild.
-const REPLAYABLE: &[&str] = &[ROBOT_STATE, DYNAMICS_RESIDUAL, CONTROL_STATUS, SIM_TRUTH];
+const REPLAYABLE: &[&str] = &[
+    ROBOT_STATE,
+    DYNAMICS_RESIDUAL,
+    CONTROL_STATUS,
+    SIM_TRUTH,
+    SIM_WORLD,
+    PERCEPTION_REPULSION,
+];
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-replay", body)
@@ -70,6 +80,8 @@ fn out_for(node: &Node<ipc::Service>, name: &'static str) -> Result<Box<dyn Out>
         DYNAMICS_RESIDUAL => p::<Residual>(node, name),
         CONTROL_STATUS => p::<ControlStatus>(node, name),
         SIM_TRUTH => p::<Truth>(node, name),
+        SIM_WORLD => p::<WorldState>(node, name),
+        PERCEPTION_REPULSION => p::<RepulsionResult>(node, name),
         _ => Err(format!("cannot replay '{name}'")),
     }
 }
@@ -167,6 +179,17 @@ fn body() -> Result<(), String> {
 
     let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
     let node = node(&format!("replay{}", std::process::id()), prefix).map_err(|e| e.to_string())?;
+    if chosen.contains(&PERCEPTION_REPULSION) {
+        // recorded obstacles would steer a live controller's avoidance
+        let commanded = open_existing_pubsub::<TorqueCommand>(&node, ROBOT_COMMAND)
+            .map_err(|e| e.to_string())?
+            .is_some_and(|f| f.dynamic_config().number_of_publishers() > 0);
+        if commanded {
+            return Err(format!(
+                "refusing to replay '{PERCEPTION_REPULSION}' into prefix '{prefix}': a controller publishes '{ROBOT_COMMAND}' there and would avoid recorded obstacles (leave it out with --channels)"
+            ));
+        }
+    }
     let mut outs: BTreeMap<&'static str, Box<dyn Out>> = BTreeMap::new();
     for c in &chosen {
         outs.insert(c, out_for(&node, c)?);
