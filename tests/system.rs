@@ -436,6 +436,49 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
     assert_eq!(r["false_detections"], 0);
 }
 
+/// A restarted simulator continues the scenario's clock: the world does not
+/// rewind when the robot adapter crashes (the person is still at the robot).
+#[test]
+fn a_restarted_simulator_continues_the_scenario() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("simkill", "coexistence", Some(16.0), &[]);
+    // the person's hand is in the end effector's path from t = 11 s
+    wait(12.5);
+    cell.kill("sim", libc::SIGKILL);
+    wait(1.5);
+    let out = Command::new(bin("phri-monitor"))
+        .args([
+            "echo",
+            "sim/truth",
+            "--prefix",
+            &cell.prefix,
+            "--json",
+            "--count",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text.lines().last().unwrap_or("");
+    let v: Value = serde_json::from_str(line).unwrap_or(Value::Null);
+    let d = v["min_distance"]
+        .as_f64()
+        .or_else(|| v["msg"]["min_distance"].as_f64())
+        .unwrap_or_else(|| panic!("no min_distance in {text:?}"));
+    // at the start of the script the person stands 1.8 m to the side
+    assert!(
+        d < 0.5,
+        "after the restart the person is {d} m away: the scenario rewound"
+    );
+    let r = cell.finish();
+    assert_eq!(r["services"]["sim"]["restarts"], 1);
+    assert!(
+        r["contacts"].as_array().unwrap().is_empty(),
+        "{}",
+        r["contacts"]
+    );
+}
+
 fn alive(pid: i32) -> bool {
     // SAFETY: probing a pid with signal 0.
     let exists = unsafe { libc::kill(pid, 0) } == 0;

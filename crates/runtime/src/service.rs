@@ -24,6 +24,21 @@ pub struct ServiceContext {
     pub args: Args,
 }
 
+/// Environment variable the supervisor sets for every service: when the cell
+/// started [ns, CLOCK_MONOTONIC]. A restarted simulator continues the
+/// scenario's clock from it instead of replaying the scenario from the start.
+pub const CELL_START_ENV: &str = "PHRI_CELL_START_NS";
+
+/// The cell's start time from [`CELL_START_ENV`], if set, valid and not in the future.
+pub fn cell_start_ns() -> Option<u64> {
+    let t = std::env::var(CELL_START_ENV)
+        .ok()?
+        .trim()
+        .parse::<u64>()
+        .ok()?;
+    (t <= crate::now_ns()).then_some(t)
+}
+
 /// Flags every service accepts: `--config FILE --prefix P --rt-priority N --set k=v`.
 pub const COMMON_FLAGS: &[&str] = &["--config", "--prefix", "--rt-priority", "--set", "--name"];
 

@@ -46,6 +46,17 @@ fn body() -> Result<(), String> {
     let period_ns = (cfg.dt_s * 1e9).round() as u64;
     let mut sim =
         Simulator::from_scenario(model, cfg, &scenario, None).map_err(|e| e.to_string())?;
+    // restarted inside a running cell: the world went on without us, so the
+    // person continues where the cell's clock is (the arm starts again at rest)
+    if let Some(start) = phri_runtime::service::cell_start_ns() {
+        let behind_s = now_ns().saturating_sub(start) as f64 * 1e-9;
+        if behind_s > 1.0 {
+            eprintln!(
+                "phri-sim: the cell started {behind_s:.1} s ago: the scenario continues from there"
+            );
+        }
+        sim.set_human_time_offset(behind_s);
+    }
 
     let s = |x: IpcError| x.to_string();
     let node = node(&ctx.name, &ctx.prefix).map_err(s)?;

@@ -285,6 +285,7 @@ fn body() -> Result<(), String> {
             .arg("--rt-priority")
             .arg(spec.rt_priority.to_string())
             .args(&spec.args)
+            .env(phri_runtime::service::CELL_START_ENV, t0.to_string())
             .stdin(Stdio::null());
         // own process group: a terminal's Ctrl-C reaches the supervisor only, which stops the rest in order
         cmd.process_group(0);
