@@ -93,13 +93,14 @@ fn load_scenario(arg: Option<&str>, deploy_dir: &Path) -> Result<ScenarioInfo, S
 
 /// `state.json` (pids, for people and scripts) and `supervisor.state` (bincode,
 /// for a supervisor that takes over), each replaced atomically.
-fn write_state(run_dir: &Path, prefix: &str, list: &[Supervised]) {
+fn write_state(run_dir: &Path, prefix: &str, cell_start_ns: u64, list: &[Supervised]) {
     let services: serde_json::Map<String, serde_json::Value> = list.iter().map(|s| (s.name.clone(), serde_json::json!({"pid": s.child.as_ref().map(|c| c.pid()), "restarts": s.policy.restarts}))).collect();
     let v = serde_json::json!({"supervisor_pid": std::process::id(), "prefix": prefix, "services": services});
     let state = SupervisorState {
         version: STATE_VERSION,
         supervisor_pid: std::process::id(),
         prefix: prefix.to_string(),
+        cell_start_ns,
         services: list
             .iter()
             .map(|s| ServiceState {
@@ -273,6 +274,28 @@ fn body() -> Result<(), String> {
         .unwrap_or("reflex")
         .to_string();
 
+    // a supervisor of this run that died leaves its state: take its services over
+    let previous = std::fs::read(run_dir.join(STATE_FILE))
+        .ok()
+        .and_then(|b| SupervisorState::decode(&b))
+        .filter(|p| p.prefix == prefix);
+    if let Some(p) = &previous {
+        if p.supervisor_pid != std::process::id()
+            && process_matches(p.supervisor_pid, &["phri-supervisor", prefix.as_str()])
+        {
+            return Err(format!(
+                "a supervisor (pid {}) already runs the cell of prefix {prefix}",
+                p.supervisor_pid
+            ));
+        }
+    }
+    // the cell's clock survives a takeover
+    let cell_start_ns = previous
+        .as_ref()
+        .map(|p| p.cell_start_ns)
+        .filter(|&t| t > 0 && t <= t0)
+        .unwrap_or(t0);
+
     let spawn = |name: &str, spec: &ServiceSpec| -> Result<Child, String> {
         use std::os::unix::process::CommandExt;
         let mut cmd = Command::new(bin_dir.join(&spec.binary));
@@ -285,7 +308,10 @@ fn body() -> Result<(), String> {
             .arg("--rt-priority")
             .arg(spec.rt_priority.to_string())
             .args(&spec.args)
-            .env(phri_runtime::service::CELL_START_ENV, t0.to_string())
+            .env(
+                phri_runtime::service::CELL_START_ENV,
+                cell_start_ns.to_string(),
+            )
             .stdin(Stdio::null());
         // own process group: a terminal's Ctrl-C reaches the supervisor only, which stops the rest in order
         cmd.process_group(0);
@@ -309,21 +335,6 @@ fn body() -> Result<(), String> {
             .map_err(|e| format!("[services.{name}]: cannot start {}: {e}", spec.binary))
     };
 
-    // a supervisor of this run that died leaves its state: take its services over
-    let previous = std::fs::read(run_dir.join(STATE_FILE))
-        .ok()
-        .and_then(|b| SupervisorState::decode(&b))
-        .filter(|p| p.prefix == prefix);
-    if let Some(p) = &previous {
-        if p.supervisor_pid != std::process::id()
-            && process_matches(p.supervisor_pid, &["phri-supervisor", prefix.as_str()])
-        {
-            return Err(format!(
-                "a supervisor (pid {}) already runs the cell of prefix {prefix}",
-                p.supervisor_pid
-            ));
-        }
-    }
     let mut list: Vec<Supervised> = Vec::new();
     for (name, spec) in specs {
         let adopt = previous
@@ -381,7 +392,7 @@ fn body() -> Result<(), String> {
             "adopted the services of a supervisor that died",
         );
     }
-    write_state(&run_dir, &prefix, &list);
+    write_state(&run_dir, &prefix, cell_start_ns, &list);
 
     let end_ns = duration_s.map(|d| t0 + (d * 1e9) as u64);
     let health_period = (1e9 / sup.health_hz.max(0.1)) as u64;
@@ -556,7 +567,7 @@ fn body() -> Result<(), String> {
             }
         }
         if changed {
-            write_state(&run_dir, &prefix, &list);
+            write_state(&run_dir, &prefix, cell_start_ns, &list);
         }
         if now >= next_health {
             next_health = now + health_period;

@@ -13,6 +13,9 @@ pub struct SupervisorState {
     pub version: u32,
     pub supervisor_pid: u32,
     pub prefix: String,
+    /// when the cell started [ns, CLOCK_MONOTONIC]: a supervisor that takes
+    /// the cell over keeps it (services get it in `PHRI_CELL_START_NS`)
+    pub cell_start_ns: u64,
     pub services: Vec<ServiceState>,
 }
 
@@ -24,7 +27,7 @@ pub struct ServiceState {
     pub restarts: u32,
 }
 
-pub const STATE_VERSION: u32 = 1;
+pub const STATE_VERSION: u32 = 2;
 
 impl SupervisorState {
     pub fn encode(&self) -> Vec<u8> {
@@ -121,6 +124,7 @@ mod tests {
             version: STATE_VERSION,
             supervisor_pid: 42,
             prefix: "p_".into(),
+            cell_start_ns: 123_456_789,
             services: vec![ServiceState {
                 name: "sim".into(),
                 pid: 7,
