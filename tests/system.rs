@@ -151,6 +151,16 @@ fn events<'a>(r: &'a Value, kind: &str, service: &str) -> Vec<&'a Value> {
         .collect()
 }
 
+/// No contact at all and no false detection in the run's report.
+fn assert_untouched(r: &Value) {
+    assert!(
+        r["contacts"].as_array().unwrap().is_empty(),
+        "{}",
+        r["contacts"]
+    );
+    assert_eq!(r["false_detections"], 0, "{}", r["events"]);
+}
+
 fn wait(s: f64) {
     std::thread::sleep(Duration::from_secs_f64(s));
 }
@@ -369,12 +379,7 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     assert!(events(&r, "brake", "sim").is_empty());
     let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
     assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
-    assert!(
-        r["contacts"].as_array().unwrap().is_empty(),
-        "{}",
-        r["contacts"]
-    );
-    assert_eq!(r["false_detections"], 0);
+    assert_untouched(&r);
 }
 
 /// `phri-fault camera corrupt|delay`: bad and late frames are refused by
@@ -428,12 +433,7 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
         "{}",
         r["torque_loop"]
     );
-    assert!(
-        r["contacts"].as_array().unwrap().is_empty(),
-        "{}",
-        r["contacts"]
-    );
-    assert_eq!(r["false_detections"], 0);
+    assert_untouched(&r);
 }
 
 /// A restarted simulator continues the scenario's clock: the world does not
