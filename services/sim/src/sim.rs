@@ -705,11 +705,6 @@ impl Simulator {
         self.human_time_offset = if offset_s.is_finite() { offset_s } else { 0.0 };
     }
 
-    /// Time of the human script \[s\]: simulation time plus the offset.
-    pub fn human_time_s(&self) -> f64 {
-        self.t + self.human_time_offset
-    }
-
     pub fn model(&self) -> &Model {
         &self.model
     }
