@@ -32,6 +32,10 @@ pub const ALL: &[&str] = &[
     FAULT_DEPTH,
 ];
 
+/// Channels that carry messages only while a tool injects something (no
+/// publisher in a healthy cell): monitors and tests must not expect traffic.
+pub const ON_DEMAND: &[&str] = &[FAULT_DEPTH];
+
 /// [`crate::WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
 pub const SIM_WORLD: &str = "sim/world";
 /// Raw depth frames from the camera (`[u16]` with a [`crate::FrameHeader`]), 30 Hz.
