@@ -51,14 +51,14 @@ fn errors_are_one_line_and_exit_2() {
 #[test]
 fn list_and_hz_on_a_live_cell() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let supervisor = root.join("target/release/phri-supervisor");
-    if !supervisor.exists() {
-        eprintln!(
-            "SKIPPED: {} is not built (cargo build --release --bins)",
-            supervisor.display()
-        );
-        return;
-    }
+    // the cell's binaries sit beside this package's (same target directory)
+    let supervisor =
+        Path::new(env!("CARGO_BIN_EXE_phri-monitor")).with_file_name("phri-supervisor");
+    assert!(
+        supervisor.exists(),
+        "{} is not built: run the workspace's tests (cargo test --workspace --release) or cargo build --release --bins first",
+        supervisor.display()
+    );
     let prefix = format!("monXXX_{}_", std::process::id());
     let run_dir = PathBuf::from(format!("/tmp/phri-monitor-live-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&run_dir);

@@ -1,6 +1,7 @@
 //! Shared parts of `phri-record`, `phri-replay` and `phri-plot`: message ↔ JSON
 //! conversion, the MCAP conventions of a recording, and a tiny line plotter.
 
+pub mod foxglove;
 pub mod json;
 pub mod plot;
 

@@ -1,11 +1,13 @@
-//! `phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--config phri.toml] [--threshold NM]`
+//! `phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]`
 //!
 //! Attaches read-only to every channel of `phri_ipc::ALL` of a running cell
 //! (subscribers only, never creating a channel, normal scheduling, 5 ms between
 //! polls) and writes an MCAP file: one channel per phri channel (topic = its
 //! name), `json` messages with a `jsonschema` schema, log time = the message's
 //! publish/stamp time [ns, CLOCK_MONOTONIC] (else the receive time). Depth frames:
-//! every N-th received frame, header fields plus the image downsampled 4× per axis.
+//! every N-th received frame, header fields plus the image downsampled 4× per axis,
+//! and the same image as `foxglove.RawImage` (16UC1) on `<channel>/image` for
+//! Foxglove's Image panel. Chunks are compressed with zstd unless `--compression` says otherwise.
 //! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes.
 
 use std::collections::BTreeMap;
@@ -17,25 +19,41 @@ use std::time::{Duration, Instant};
 use iceoryx2::prelude::*;
 use phri_ipc::*;
 use phri_record::json::{log_ns, Msg};
-use phri_record::{ENCODING, FRAME_DOWNSAMPLE, METADATA_NAME};
+use phri_record::{foxglove, ENCODING, FRAME_DOWNSAMPLE, METADATA_NAME};
 use phri_runtime::{now_ns, Args, Shutdown};
 use serde_json::{json, Value};
 
-const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--config phri.toml] [--threshold NM]";
+const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
 const POLL: Duration = Duration::from_millis(5);
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-record", body)
 }
 
-type Out<'a> = dyn FnMut(u64, u32, Value) + 'a;
+/// `out(topic, log_ns, seq, json)`: `topic` indexes [`Rec::topics`].
+type Out<'a> = dyn FnMut(usize, u64, u32, Value) + 'a;
+
+/// One MCAP topic: name, schema name, JSON schema.
+struct Topic {
+    name: String,
+    schema_name: String,
+    schema: Vec<u8>,
+}
 
 /// One channel being recorded.
 trait Rec {
     fn name(&self) -> &str;
+    /// the MCAP topics this channel writes: the channel itself, plus views
+    fn topics(&self) -> Vec<Topic> {
+        vec![Topic {
+            name: self.name().to_string(),
+            schema_name: self.name().to_string(),
+            schema: br#"{"type":"object"}"#.to_vec(),
+        }]
+    }
     /// open the channel if it was absent; true when subscribed
     fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String>;
-    /// drain the queue: `out(log_ns, seq, json)` per recorded message
+    /// drain the queue: `out(topic, log_ns, seq, json)` per recorded message
     fn poll(&mut self, out: &mut Out) -> Result<(), String>;
 }
 
@@ -78,7 +96,7 @@ impl<T: Msg> Rec for MsgRec<T> {
             let m = *s;
             drop(s);
             let v = m.to_json();
-            out(log_ns(&m, &v, now_ns()), m.seq() as u32, v);
+            out(0, log_ns(&m, &v, now_ns()), m.seq() as u32, v);
         }
         Ok(())
     }
@@ -91,9 +109,9 @@ struct FrameRec {
     received: u64,
 }
 
-/// Header fields plus the depth image downsampled by `FRAME_DOWNSAMPLE` per
-/// axis (the top-left pixel of each block).
-fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
+/// The depth image downsampled by `FRAME_DOWNSAMPLE` per axis (the top-left
+/// pixel of each block): `(width, height, mm)`; empty when the payload is short.
+fn downsample(h: &FrameHeader, d: &[u16]) -> (usize, usize, Vec<u16>) {
     let (w, ht) = (h.width as usize, h.height as usize);
     let k = FRAME_DOWNSAMPLE;
     let (dw, dh) = (w / k, ht / k);
@@ -105,6 +123,12 @@ fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
             }
         }
     }
+    (dw, dh, data)
+}
+
+/// Header fields plus the downsampled depth image.
+fn frame_json(h: &FrameHeader, dw: usize, dh: usize, data: &[u16]) -> Value {
+    let k = FRAME_DOWNSAMPLE;
     let n = (h.dof as usize).min(MAX_DOF);
     json!({
         "seq": h.seq, "capture_ns": h.capture_ns, "capture_wall_ns": h.capture_wall_ns,
@@ -119,6 +143,20 @@ fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
 impl Rec for FrameRec {
     fn name(&self) -> &str {
         self.name
+    }
+    fn topics(&self) -> Vec<Topic> {
+        vec![
+            Topic {
+                name: self.name.to_string(),
+                schema_name: self.name.to_string(),
+                schema: br#"{"type":"object"}"#.to_vec(),
+            },
+            Topic {
+                name: foxglove::image_topic(self.name),
+                schema_name: foxglove::RAW_IMAGE.to_string(),
+                schema: foxglove::raw_image_schema(),
+            },
+        ]
     }
     fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String> {
         if self.sub.is_some() {
@@ -146,14 +184,23 @@ impl Rec for FrameRec {
                 continue;
             }
             let h = *f.user_header();
-            let v = frame_json(&h, f.payload());
+            let (dw, dh, data) = downsample(&h, f.payload());
             drop(f);
             let t = if h.published_ns > 0 {
                 h.published_ns
             } else {
                 now_ns()
             };
-            out(t, h.seq as u32, v);
+            if !data.is_empty() {
+                let stamp = if h.capture_ns > 0 { h.capture_ns } else { t };
+                out(
+                    1,
+                    t,
+                    h.seq as u32,
+                    foxglove::raw_image_16uc1(stamp, dw, dh, &data),
+                );
+            }
+            out(0, t, h.seq as u32, frame_json(&h, dw, dh, &data));
         }
         Ok(())
     }
@@ -208,6 +255,7 @@ fn body() -> Result<(), String> {
             "--frame-every",
             "--config",
             "--threshold",
+            "--compression",
         ],
         &[],
     )
@@ -228,6 +276,16 @@ fn body() -> Result<(), String> {
     if every == 0 {
         return Err("--frame-every must be at least 1".into());
     }
+    let compression = match args.get("--compression").unwrap_or("zstd") {
+        "zstd" => Some(mcap::Compression::Zstd),
+        "lz4" => Some(mcap::Compression::Lz4),
+        "none" => None,
+        other => {
+            return Err(format!(
+                "--compression '{other}': expected zstd, lz4 or none; {USAGE}"
+            ))
+        }
+    };
     let mut threshold = match args.get("--config") {
         Some(p) => threshold_from_config(p)?,
         None => None,
@@ -246,22 +304,27 @@ fn body() -> Result<(), String> {
 
     let file = File::create(&out_path).map_err(|e| format!("cannot create '{out_path}': {e}"))?;
     let mut w = mcap::WriteOptions::new()
-        .compression(None)
+        .compression(compression)
         .profile(phri_record::PROFILE)
         .library(concat!("phri-record ", env!("CARGO_PKG_VERSION")))
         .create(BufWriter::new(file))
         .map_err(mcap_err)?;
 
     let mut recs: Vec<Box<dyn Rec>> = ALL.iter().map(|c| rec_for(c, every)).collect();
-    let mut ids = Vec::with_capacity(recs.len());
+    // ids[rec][topic]: MCAP channel ids
+    let mut ids: Vec<Vec<u16>> = Vec::with_capacity(recs.len());
     for r in &recs {
-        let schema = w
-            .add_schema(r.name(), "jsonschema", br#"{"type":"object"}"#)
-            .map_err(mcap_err)?;
-        let id = w
-            .add_channel(schema, r.name(), ENCODING, &BTreeMap::new())
-            .map_err(mcap_err)?;
-        ids.push(id);
+        let mut rec_ids = Vec::new();
+        for t in r.topics() {
+            let schema = w
+                .add_schema(&t.schema_name, "jsonschema", &t.schema)
+                .map_err(mcap_err)?;
+            let id = w
+                .add_channel(schema, &t.name, ENCODING, &BTreeMap::new())
+                .map_err(mcap_err)?;
+            rec_ids.push(id);
+        }
+        ids.push(rec_ids);
     }
     let mut meta = BTreeMap::new();
     meta.insert("prefix".to_string(), prefix.clone());
@@ -289,7 +352,9 @@ fn body() -> Result<(), String> {
 
     let t0 = Instant::now();
     let end = seconds.map(Duration::from_secs_f64);
+    // messages per channel (its own topic) and in all (image views included)
     let mut counts = vec![0u64; recs.len()];
+    let mut total = 0u64;
     let mut next_attach = Instant::now();
     let mut next_report = t0 + Duration::from_secs(1);
     let mut write_err: Option<String> = None;
@@ -301,11 +366,15 @@ fn body() -> Result<(), String> {
             next_attach = Instant::now() + Duration::from_secs(1);
         }
         for (i, r) in recs.iter_mut().enumerate() {
-            let id = ids[i];
+            let rec_ids = &ids[i];
             let count = &mut counts[i];
+            let total = &mut total;
             let w = &mut w;
             let we = &mut write_err;
-            r.poll(&mut |t, seq, v| {
+            r.poll(&mut |topic, t, seq, v| {
+                let Some(&id) = rec_ids.get(topic) else {
+                    return;
+                };
                 let data = serde_json::to_vec(&v).expect("JSON values serialize");
                 let hdr = mcap::records::MessageHeader {
                     channel_id: id,
@@ -314,7 +383,12 @@ fn body() -> Result<(), String> {
                     publish_time: t,
                 };
                 match w.write_to_known_channel(&hdr, &data) {
-                    Ok(()) => *count += 1,
+                    Ok(()) => {
+                        *total += 1;
+                        if topic == 0 {
+                            *count += 1;
+                        }
+                    }
                     Err(e) if we.is_none() => *we = Some(mcap_err(e)),
                     Err(_) => {}
                 }
@@ -335,7 +409,6 @@ fn body() -> Result<(), String> {
     }
     let summary = w.finish().map_err(mcap_err)?;
     drop(w);
-    let total: u64 = counts.iter().sum();
     let size = std::fs::metadata(&out_path).map(|m| m.len()).unwrap_or(0);
     eprintln!(
         "phri-record: wrote {out_path}: {total} messages in {:.1} s, {:.1} MB, {} chunks; {}",
