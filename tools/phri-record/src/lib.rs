@@ -4,6 +4,7 @@
 pub mod foxglove;
 pub mod json;
 pub mod plot;
+pub mod text;
 
 /// MCAP profile written in the header (none of the well-known ones apply).
 pub const PROFILE: &str = "";

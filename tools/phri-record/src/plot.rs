@@ -1,5 +1,7 @@
 //! A minimal line plotter: an RGB buffer, Bresenham lines, axes with tick
-//! marks (no text), PNG output with the `png` crate.
+//! marks, labels and a legend ([`crate::text`]), PNG output with the `png` crate.
+
+use crate::text;
 
 pub type Rgb = [u8; 3];
 pub const WHITE: Rgb = [255, 255, 255];
@@ -131,10 +133,10 @@ impl Axes {
             x1,
             y0,
             y1,
-            left: 60,
-            top: 30,
+            left: 90,
+            top: 80,
             right: c.w as i64 - 30,
-            bottom: c.h as i64 - 50,
+            bottom: c.h as i64 - 64,
         }
     }
 
@@ -174,6 +176,62 @@ impl Axes {
         c.line(self.left, self.bottom, self.right, self.bottom, BLACK);
         c.line(self.left, self.top, self.left, self.bottom, BLACK);
         c.line(self.right, self.top, self.right, self.bottom, BLACK);
+    }
+
+    /// Tick values, the title (above the plot), the x label (below, centred)
+    /// and the y label (above the y axis), in black at text scale 2.
+    pub fn label(&self, c: &mut Canvas, title: &str, xlabel: &str, ylabel: &str) {
+        const S: i64 = 2;
+        let sx = tick_step(self.x1 - self.x0);
+        let mut x = (self.x0 / sx).ceil() * sx;
+        while x <= self.x1 {
+            let t = text::tick_label(x, sx);
+            text::draw(
+                c,
+                self.px(x) - text::width(&t, S) / 2,
+                self.bottom + 10,
+                &t,
+                BLACK,
+                S,
+            );
+            x += sx;
+        }
+        let sy = tick_step(self.y1 - self.y0);
+        let mut y = (self.y0 / sy).ceil() * sy;
+        while y <= self.y1 {
+            let t = text::tick_label(y, sy);
+            let h = text::height(S);
+            text::draw(
+                c,
+                self.left - 10 - text::width(&t, S),
+                self.py(y) - h / 2,
+                &t,
+                BLACK,
+                S,
+            );
+            y += sy;
+        }
+        let h = text::height(S);
+        let xl = (self.left + self.right - text::width(xlabel, S)) / 2;
+        text::draw(c, xl, self.bottom + 20 + h, xlabel, BLACK, S);
+        text::draw(c, self.left - 40, self.top - 12 - h, ylabel, BLACK, S);
+        text::draw(c, self.left - 40, self.top - 24 - 2 * h, title, BLACK, S);
+    }
+
+    /// A legend in the top right corner above the plot: a short line in each
+    /// colour, then its label.
+    pub fn legend(&self, c: &mut Canvas, items: &[(Rgb, &str)]) {
+        const S: i64 = 2;
+        let h = text::height(S);
+        let mut y = 8;
+        for (col, label) in items {
+            let x = self.right - text::width(label, S);
+            for dy in -1..=1 {
+                c.line(x - 30, y + h / 2 + dy, x - 8, y + h / 2 + dy, *col);
+            }
+            text::draw(c, x, y, label, BLACK, S);
+            y += h + 5;
+        }
     }
 
     /// Polyline through the points; a non-finite point breaks the line.

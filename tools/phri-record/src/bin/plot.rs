@@ -1,5 +1,6 @@
 //! `phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]`: figures of a
-//! recording as PNG (no text: axes, grid and tick marks only).
+//! recording as PNG, each with a title, axis labels in SI units, tick values
+//! and a legend.
 //!
 //! - `ee_trajectory.png` (like the paper's Fig. 7): end-effector x-y path
 //!   (`control/status` `ee`), blue while the person is farther than the
@@ -143,6 +144,15 @@ fn body() -> Result<(), String> {
             (cy - scale * ph / 2.0, cy + scale * ph / 2.0),
         );
         a.draw(&mut c);
+        a.label(&mut c, "end-effector path", "x [m]", "y [m]");
+        let mut legend = vec![
+            (BLUE, "person farther than 0.4 m"),
+            (RED, "person within 0.4 m"),
+        ];
+        if !without.is_empty() {
+            legend.push((GREY, "without the person"));
+        }
+        a.legend(&mut c, &legend);
         a.polyline(&mut c, &without, GREY);
         // contiguous runs of the same presence, each in its colour
         let mut run: Vec<(f64, f64)> = Vec::new();
@@ -169,6 +179,15 @@ fn body() -> Result<(), String> {
     ) {
         let a = Axes::new(&c, xr, yr);
         a.draw(&mut c);
+        a.label(&mut c, "momentum residual", "t [s]", "|r| [Nm]");
+        let mut legend = vec![(BLUE, "|r|")];
+        if threshold.is_some() {
+            legend.push((RED, "threshold"));
+        }
+        if !rises.is_empty() {
+            legend.push((ORANGE, "collision detected"));
+        }
+        a.legend(&mut c, &legend);
         for &t in &rises {
             a.vline(&mut c, t, ORANGE);
         }
@@ -187,6 +206,12 @@ fn body() -> Result<(), String> {
     ) {
         let a = Axes::new(&c, xr, yr);
         a.draw(&mut c);
+        a.label(
+            &mut c,
+            "minimum distance, depth space",
+            "t [s]",
+            "distance [m]",
+        );
         a.polyline(&mut c, &dist, BLUE);
     }
     save(&c, &out, "min_distance.png")?;
