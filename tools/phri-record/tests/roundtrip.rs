@@ -51,7 +51,7 @@ fn record_read_back_and_plot() {
                 "--scenario",
                 "coexistence",
             ])
-            .args(["--duration", "8", "--prefix", &prefix, "--run-dir"])
+            .args(["--duration", "12", "--prefix", &prefix, "--run-dir"])
             .arg(&run_dir)
             .stdout(Stdio::null())
             .stderr(Stdio::inherit())
@@ -87,6 +87,11 @@ fn record_read_back_and_plot() {
         .expect("summary readable")
         .expect("the file has a summary section");
     assert!(!summary.chunk_indexes.is_empty(), "no chunk indexes");
+    // zstd chunks by default
+    assert!(summary
+        .chunk_indexes
+        .iter()
+        .all(|c| c.compression == "zstd"));
     let stats = summary.stats.as_ref().expect("statistics record");
     let topics: Vec<&str> = summary
         .channels
@@ -270,6 +275,44 @@ fn record_read_back_and_plot() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("robot/command"), "{err}");
+
+    // lz4 chunks on request, read back; an unknown compression is refused
+    let lz4 = tmp.join("lz4.mcap");
+    let st = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+        .args([
+            "--prefix",
+            &prefix,
+            "--seconds",
+            "1",
+            "--compression",
+            "lz4",
+        ])
+        .arg("--out")
+        .arg(&lz4)
+        .status()
+        .unwrap();
+    assert!(st.success(), "phri-record --compression lz4 failed: {st}");
+    let buf = std::fs::read(&lz4).unwrap();
+    let summary = mcap::Summary::read(&buf).unwrap().expect("summary");
+    assert!(summary.chunk_indexes.iter().all(|c| c.compression == "lz4"));
+    let n = mcap::MessageStream::new(&buf)
+        .unwrap()
+        .map(|m| m.expect("lz4 message"))
+        .filter(|m| m.channel.topic == phri_ipc::ROBOT_STATE)
+        .count();
+    assert!(
+        (800..=1200).contains(&n),
+        "robot/state: {n} messages in 1 s"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+        .args(["--prefix", &prefix, "--compression", "gzip", "--out"])
+        .arg(tmp.join("never.mcap"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("--compression 'gzip'"), "{err}");
 
     // the cell finishes its run on its own, successfully
     let mut child = cell.0.take().unwrap();

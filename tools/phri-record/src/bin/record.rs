@@ -40,16 +40,23 @@ struct Topic {
     schema: Vec<u8>,
 }
 
+impl Topic {
+    /// a phri channel as it is: topic and schema named after the channel
+    fn channel(name: &str) -> Topic {
+        Topic {
+            name: name.to_string(),
+            schema_name: name.to_string(),
+            schema: br#"{"type":"object"}"#.to_vec(),
+        }
+    }
+}
+
 /// One channel being recorded.
 trait Rec {
     fn name(&self) -> &str;
     /// the MCAP topics this channel writes: the channel itself, plus views
     fn topics(&self) -> Vec<Topic> {
-        vec![Topic {
-            name: self.name().to_string(),
-            schema_name: self.name().to_string(),
-            schema: br#"{"type":"object"}"#.to_vec(),
-        }]
+        vec![Topic::channel(self.name())]
     }
     /// open the channel if it was absent; true when subscribed
     fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String>;
@@ -146,11 +153,7 @@ impl Rec for FrameRec {
     }
     fn topics(&self) -> Vec<Topic> {
         vec![
-            Topic {
-                name: self.name.to_string(),
-                schema_name: self.name.to_string(),
-                schema: br#"{"type":"object"}"#.to_vec(),
-            },
+            Topic::channel(self.name),
             Topic {
                 name: foxglove::image_topic(self.name),
                 schema_name: foxglove::RAW_IMAGE.to_string(),
