@@ -477,6 +477,13 @@ fn a_restarted_simulator_continues_the_scenario() {
         "{}",
         r["contacts"]
     );
+    // and the arm stood where it was (saved every 20 ms; the scenario's
+    // initial configuration is far from where the arm is at 12.5 s)
+    let restarts = r["sim_restarts"].as_array().expect("sim_restarts");
+    assert_eq!(restarts.len(), 1, "{restarts:?}");
+    let jump = restarts[0]["arm_jump_rad"].as_f64().unwrap();
+    eprintln!("the restarted simulator's arm moved {jump:.4} rad");
+    assert!(jump < 0.03, "the arm jumped {jump} rad at the restart");
 }
 
 fn alive(pid: i32) -> bool {

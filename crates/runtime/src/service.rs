@@ -29,6 +29,18 @@ pub struct ServiceContext {
 /// scenario's clock from it instead of replaying the scenario from the start.
 pub const CELL_START_ENV: &str = "PHRI_CELL_START_NS";
 
+/// Environment variable the supervisor sets for every service: the run
+/// directory (state files, report). A restarted simulator finds the arm's
+/// last state there.
+pub const RUN_DIR_ENV: &str = "PHRI_RUN_DIR";
+
+/// The run directory from [`RUN_DIR_ENV`], if set and not empty.
+pub fn run_dir() -> Option<PathBuf> {
+    std::env::var_os(RUN_DIR_ENV)
+        .filter(|s| !s.is_empty())
+        .map(PathBuf::from)
+}
+
 /// The cell's start time from [`CELL_START_ENV`], if set, valid and not in the future.
 pub fn cell_start_ns() -> Option<u64> {
     let t = std::env::var(CELL_START_ENV)

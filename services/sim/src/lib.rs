@@ -18,6 +18,7 @@ pub mod error;
 pub mod human;
 pub mod scenario;
 pub mod sim;
+pub mod snapshot;
 pub mod world;
 
 pub use config::{PerJoint, SimConfig};

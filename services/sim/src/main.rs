@@ -14,6 +14,7 @@ use std::time::Duration;
 
 use phri_ipc::*;
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
+use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{BodyPart, Scenario, SimConfig, Simulator};
 
 /// Consecutive missing commands the robot tolerates before braking (as Franka's FCI).
@@ -23,6 +24,8 @@ const STATS_EVERY: u64 = 100;
 /// When this process itself woke late (the simulated world paused with it),
 /// the controller gets this much more to answer before the cycle counts as missed [ns].
 const LATE_CYCLE_GRACE_NS: u64 = 500_000;
+/// how often the arm's positions are saved for a restarted simulator
+const SNAPSHOT_PERIOD: Duration = Duration::from_millis(20);
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-sim", body)
@@ -47,7 +50,9 @@ fn body() -> Result<(), String> {
     let mut sim =
         Simulator::from_scenario(model, cfg, &scenario, None).map_err(|e| e.to_string())?;
     // restarted inside a running cell: the world went on without us, so the
-    // person continues where the cell's clock is (the arm starts again at rest)
+    // person continues where the cell's clock is, and the arm stands, at rest,
+    // where it was when this process's predecessor last saved it
+    let snapshot_path = phri_runtime::service::run_dir().map(|d| d.join(snapshot::FILE_NAME));
     if let Some(start) = phri_runtime::service::cell_start_ns() {
         let behind_s = now_ns().saturating_sub(start) as f64 * 1e-9;
         if behind_s > 1.0 {
@@ -56,6 +61,23 @@ fn body() -> Result<(), String> {
             );
         }
         sim.set_human_time_offset(behind_s);
+        if let Some(path) = &snapshot_path {
+            match snapshot::load_fresh(path, n, start, now_ns()) {
+                Ok(Some(s)) => match sim.reset_state(&s.q) {
+                    Ok(()) => eprintln!(
+                        "phri-sim: the arm continues from its state of {:.0} ms ago ({})",
+                        now_ns().saturating_sub(s.stamp_ns) as f64 * 1e-6,
+                        path.display()
+                    ),
+                    Err(e) => eprintln!(
+                        "phri-sim: {}: {e}; the arm starts at its initial position",
+                        path.display()
+                    ),
+                },
+                Ok(None) => {}
+                Err(e) => eprintln!("phri-sim: {e}; the arm starts at its initial position"),
+            }
+        }
     }
 
     let s = |x: IpcError| x.to_string();
@@ -67,6 +89,27 @@ fn body() -> Result<(), String> {
     let stats_pub = publisher::<RobotStats>(&node, ROBOT_STATS).map_err(s)?;
     let world_pub = publisher::<WorldState>(&node, SIM_WORLD).map_err(s)?;
     let commands = subscriber::<TorqueCommand>(&node, ROBOT_COMMAND, LATEST).map_err(s)?;
+    // the arm's positions for a successor, saved by a thread at normal
+    // priority (started before this one turns real-time)
+    let shared_arm = Arc::new(SharedArm::new(n));
+    let saver_thread = snapshot_path.map(|path| {
+        let arm = Arc::clone(&shared_arm);
+        let shutdown = ctx.shutdown.clone();
+        std::thread::spawn(move || {
+            let mut reported = false;
+            while !shutdown.requested() {
+                std::thread::sleep(SNAPSHOT_PERIOD);
+                if let Some(s) = arm.load() {
+                    if let Err(e) = snapshot::save(&path, &s) {
+                        if !reported {
+                            eprintln!("phri-sim: cannot save the arm's state: {e}");
+                            reported = true;
+                        }
+                    }
+                }
+            }
+        })
+    });
     ctx.go_realtime();
 
     // a second thread wakes on command events and notes when they arrive, so
@@ -135,6 +178,7 @@ fn body() -> Result<(), String> {
         publish(&state_pub, ROBOT_STATE, state).map_err(|x| x.to_string())?;
         let _ = state_event.notify();
         let t = sim.truth();
+        shared_arm.store(&t.q, published);
         truth.seq = seq;
         truth.stamp_ns = state.stamp_ns;
         truth.state_seq = seq;
@@ -279,6 +323,9 @@ fn body() -> Result<(), String> {
     let _ = publish(&stats_pub, ROBOT_STATS, &stats);
     ctx.shutdown.request();
     let _ = listener_thread.join();
+    if let Some(t) = saver_thread {
+        let _ = t.join();
+    }
     Ok(())
 }
 

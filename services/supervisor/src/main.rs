@@ -312,6 +312,7 @@ fn body() -> Result<(), String> {
                 phri_runtime::service::CELL_START_ENV,
                 cell_start_ns.to_string(),
             )
+            .env(phri_runtime::service::RUN_DIR_ENV, &run_dir)
             .stdin(Stdio::null());
         // own process group: a terminal's Ctrl-C reaches the supervisor only, which stops the rest in order
         cmd.process_group(0);

@@ -77,6 +77,15 @@ pub struct Resync {
     pub max_joint_travel_rad: f64,
 }
 
+/// Where the arm stood when a restarted simulator published its first state.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimRestart {
+    /// first state of the new simulator [s]
+    pub t_s: f64,
+    /// largest change of a true joint position against the predecessor's last state [rad]
+    pub arm_jump_rad: f64,
+}
+
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TaskReport {
     pub waypoints_reached: u64,
@@ -110,6 +119,8 @@ pub struct Report {
     pub min_distance_m: Option<f64>,
     /// controller (re)starts after the first, and how the arm moved right after
     pub resyncs: Vec<Resync>,
+    /// simulator (re)starts after the first, and how far the arm jumped
+    pub sim_restarts: Vec<SimRestart>,
     /// null when the cell ran without perception
     pub perception: Option<PerceptionReport>,
 }
@@ -162,6 +173,10 @@ pub struct Evaluator {
     last_mode: u32,
     resyncs: Vec<(Resync, Vec<f64>)>,
     seen_status: bool,
+    /// the newest truth: sequence number and true joint positions
+    truth_seq: u64,
+    truth_q: Vec<f64>,
+    sim_restarts: Vec<SimRestart>,
     /// camera frames: (seq, capture wall time) of the recent ones, and the count
     frames_seen: u64,
     last_frame_seq: Option<u64>,
@@ -201,6 +216,9 @@ impl Evaluator {
             last_mode: u32::MAX,
             resyncs: Vec::new(),
             seen_status: false,
+            truth_seq: 0,
+            truth_q: Vec::new(),
+            sim_restarts: Vec::new(),
             frames_seen: 0,
             last_frame_seq: None,
             in_flight: Vec::new(),
@@ -229,6 +247,20 @@ impl Evaluator {
             self.min_distance = self.min_distance.min(m.min_distance);
         }
         let n = (m.dof as usize).min(m.tau_ext.len());
+        if m.seq < self.truth_seq && self.truth_q.len() == n {
+            // a new simulator: how far from its predecessor's last state?
+            let jump = m.q[..n]
+                .iter()
+                .zip(&self.truth_q)
+                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            self.sim_restarts.push(SimRestart {
+                t_s: t,
+                arm_jump_rad: jump,
+            });
+        }
+        self.truth_seq = m.seq;
+        self.truth_q.clear();
+        self.truth_q.extend_from_slice(&m.q[..n]);
         let twice = (0..n).any(|i| {
             self.det
                 .collision_threshold
@@ -619,6 +651,7 @@ impl Evaluator {
             },
             min_distance_m: self.min_distance.is_finite().then_some(self.min_distance),
             resyncs: self.resyncs.iter().map(|(r, _)| r.clone()).collect(),
+            sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
         }
     }
