@@ -147,9 +147,10 @@ pub fn load_fresh(
         path: path.to_path_buf(),
         reason,
     };
+    // a malformed length cannot make it allocate more than 4 KiB
+    let config = bincode::config::standard().with_limit::<4096>();
     let (s, used): (ArmSnapshot, usize) =
-        bincode::serde::decode_from_slice(&bytes, bincode::config::standard())
-            .map_err(|e| decode(e.to_string()))?;
+        bincode::serde::decode_from_slice(&bytes, config).map_err(|e| decode(e.to_string()))?;
     if used != bytes.len() || s.version != VERSION {
         return Err(decode(format!(
             "version {} with {} trailing bytes",
@@ -222,7 +223,9 @@ mod tests {
     #[test]
     fn a_malformed_file_is_an_error_naming_it() {
         let p = tmp("bad");
-        for bytes in [&b"garbage"[..], &[][..], &[1, 2][..]] {
+        // the last claims 2^56 joint positions
+        let huge = [1u8, 0, 0xfd, 0, 0, 0, 0, 0, 0, 0, 1];
+        for bytes in [&b"garbage"[..], &[][..], &[1, 2][..], &huge[..]] {
             std::fs::write(&p, bytes).unwrap();
             let e = load_fresh(&p, 7, 0, 1).unwrap_err().to_string();
             assert!(e.contains(FILE_NAME), "{e}");

@@ -34,10 +34,12 @@ impl SupervisorState {
         bincode::serde::encode_to_vec(self, bincode::config::standard()).unwrap_or_default()
     }
 
-    /// `None` for anything that is not a state file of this version.
+    /// `None` for anything that is not a state file of this version (a
+    /// malformed length cannot make it allocate more than 1 MiB).
     pub fn decode(bytes: &[u8]) -> Option<SupervisorState> {
+        let config = bincode::config::standard().with_limit::<{ 1 << 20 }>();
         let (s, _): (SupervisorState, usize) =
-            bincode::serde::decode_from_slice(bytes, bincode::config::standard()).ok()?;
+            bincode::serde::decode_from_slice(bytes, config).ok()?;
         (s.version == STATE_VERSION).then_some(s)
     }
 }
@@ -134,6 +136,9 @@ mod tests {
         assert_eq!(SupervisorState::decode(&s.encode()), Some(s));
         assert_eq!(SupervisorState::decode(b"garbage"), None);
         assert_eq!(SupervisorState::decode(&[]), None);
+        // version 2, pid 1, then a prefix that claims 2^56 bytes
+        let huge = [2u8, 1, 0xfd, 0, 0, 0, 0, 0, 0, 0, 1, b'p'];
+        assert_eq!(SupervisorState::decode(&huge), None);
     }
 
     #[test]
