@@ -1,6 +1,7 @@
 //! Shared parts of `phri-record`, `phri-replay` and `phri-plot`: message ↔ JSON
 //! conversion, the MCAP conventions of a recording, and a tiny line plotter.
 
+pub mod config;
 pub mod foxglove;
 pub mod json;
 pub mod plot;
@@ -12,7 +13,8 @@ pub const PROFILE: &str = "";
 pub const ENCODING: &str = "json";
 /// Name of the metadata record describing the recording.
 pub const METADATA_NAME: &str = "phri-record";
-/// Depth frames are downsampled by this factor per axis.
+/// Depth frames are downsampled by this factor per axis unless
+/// `[record] frame_downsample` or `--frame-downsample` says otherwise.
 pub const FRAME_DOWNSAMPLE: usize = 4;
 
 /// Channels carrying depth frames (recorded downsampled, never replayed).

@@ -276,7 +276,8 @@ fn record_read_back_and_plot() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("robot/command"), "{err}");
 
-    // lz4 chunks on request, read back; an unknown compression is refused
+    // lz4 chunks, every frame at half resolution, on request, read back; an
+    // unknown compression is refused
     let lz4 = tmp.join("lz4.mcap");
     let st = Command::new(env!("CARGO_BIN_EXE_phri-record"))
         .args([
@@ -287,6 +288,7 @@ fn record_read_back_and_plot() {
             "--compression",
             "lz4",
         ])
+        .args(["--frame-every", "1", "--frame-downsample", "2"])
         .arg("--out")
         .arg(&lz4)
         .status()
@@ -295,14 +297,28 @@ fn record_read_back_and_plot() {
     let buf = std::fs::read(&lz4).unwrap();
     let summary = mcap::Summary::read(&buf).unwrap().expect("summary");
     assert!(summary.chunk_indexes.iter().all(|c| c.compression == "lz4"));
-    let n = mcap::MessageStream::new(&buf)
-        .unwrap()
-        .map(|m| m.expect("lz4 message"))
-        .filter(|m| m.channel.topic == phri_ipc::ROBOT_STATE)
-        .count();
+    let (mut n, mut frames) = (0, 0);
+    for m in mcap::MessageStream::new(&buf).unwrap() {
+        let m = m.expect("lz4 message");
+        if m.channel.topic == phri_ipc::ROBOT_STATE {
+            n += 1;
+        } else if m.channel.topic == phri_ipc::CAMERA_DEPTH {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            assert_eq!(v["data"].as_array().map(Vec::len), Some(320 * 240));
+            assert_eq!(
+                (&v["data_width"], &v["downsample"]),
+                (&320.into(), &2.into())
+            );
+            frames += 1;
+        }
+    }
     assert!(
         (800..=1200).contains(&n),
         "robot/state: {n} messages in 1 s"
+    );
+    assert!(
+        (20..=40).contains(&frames),
+        "camera/depth: {frames} frames in 1 s"
     );
     let o = Command::new(env!("CARGO_BIN_EXE_phri-record"))
         .args(["--prefix", &prefix, "--compression", "gzip", "--out"])

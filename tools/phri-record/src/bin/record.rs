@@ -1,13 +1,14 @@
-//! `phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]`
+//! `phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--frame-downsample K] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]`
 //!
 //! Attaches read-only to every channel of `phri_ipc::ALL` of a running cell
 //! (subscribers only, never creating a channel, normal scheduling, 5 ms between
 //! polls) and writes an MCAP file: one channel per phri channel (topic = its
 //! name), `json` messages with a `jsonschema` schema, log time = the message's
 //! publish/stamp time [ns, CLOCK_MONOTONIC] (else the receive time). Depth frames:
-//! every N-th received frame, header fields plus the image downsampled 4× per axis,
+//! every N-th received frame, header fields plus the image downsampled K× per axis,
 //! and the same image as `foxglove.RawImage` (16UC1) on `<channel>/image` for
-//! Foxglove's Image panel. Chunks are compressed with zstd unless `--compression` says otherwise.
+//! Foxglove's Image panel. Chunks are compressed with zstd. N (10), K (4) and
+//! the compression come from `[record]` of `--config`; the flags override them.
 //! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes.
 
 use std::collections::BTreeMap;
@@ -18,12 +19,13 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
 use phri_ipc::*;
+use phri_record::config::{self, RecordConfig};
 use phri_record::json::{log_ns, Msg};
-use phri_record::{foxglove, ENCODING, FRAME_DOWNSAMPLE, METADATA_NAME};
+use phri_record::{foxglove, ENCODING, METADATA_NAME};
 use phri_runtime::{now_ns, Args, Shutdown};
 use serde_json::{json, Value};
 
-const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
+const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--frame-downsample K] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
 const POLL: Duration = Duration::from_millis(5);
 
 fn main() -> ExitCode {
@@ -113,14 +115,15 @@ struct FrameRec {
     name: &'static str,
     sub: Option<FrameSub>,
     every: u64,
+    /// keep one pixel in `k` per axis
+    k: usize,
     received: u64,
 }
 
-/// The depth image downsampled by `FRAME_DOWNSAMPLE` per axis (the top-left
-/// pixel of each block): `(width, height, mm)`; empty when the payload is short.
-fn downsample(h: &FrameHeader, d: &[u16]) -> (usize, usize, Vec<u16>) {
+/// The depth image downsampled by `k` per axis (the top-left pixel of each
+/// block): `(width, height, mm)`; empty when the payload is short.
+fn downsample(h: &FrameHeader, d: &[u16], k: usize) -> (usize, usize, Vec<u16>) {
     let (w, ht) = (h.width as usize, h.height as usize);
-    let k = FRAME_DOWNSAMPLE;
     let (dw, dh) = (w / k, ht / k);
     let mut data = Vec::with_capacity(dw * dh);
     if d.len() >= w * ht {
@@ -134,8 +137,7 @@ fn downsample(h: &FrameHeader, d: &[u16]) -> (usize, usize, Vec<u16>) {
 }
 
 /// Header fields plus the downsampled depth image.
-fn frame_json(h: &FrameHeader, dw: usize, dh: usize, data: &[u16]) -> Value {
-    let k = FRAME_DOWNSAMPLE;
+fn frame_json(h: &FrameHeader, k: usize, dw: usize, dh: usize, data: &[u16]) -> Value {
     let n = (h.dof as usize).min(MAX_DOF);
     json!({
         "seq": h.seq, "capture_ns": h.capture_ns, "capture_wall_ns": h.capture_wall_ns,
@@ -187,7 +189,7 @@ impl Rec for FrameRec {
                 continue;
             }
             let h = *f.user_header();
-            let (dw, dh, data) = downsample(&h, f.payload());
+            let (dw, dh, data) = downsample(&h, f.payload(), self.k);
             drop(f);
             let t = if h.published_ns > 0 {
                 h.published_ns
@@ -203,13 +205,13 @@ impl Rec for FrameRec {
                     foxglove::raw_image_16uc1(stamp, dw, dh, &data),
                 );
             }
-            out(0, t, h.seq as u32, frame_json(&h, dw, dh, &data));
+            out(0, t, h.seq as u32, frame_json(&h, self.k, dw, dh, &data));
         }
         Ok(())
     }
 }
 
-fn rec_for(name: &'static str, every: u64) -> Box<dyn Rec> {
+fn rec_for(name: &'static str, rc: &RecordConfig) -> Box<dyn Rec> {
     fn m<T: Msg>(name: &'static str) -> Box<dyn Rec> {
         Box::new(MsgRec::<T> { name, sub: None })
     }
@@ -227,21 +229,11 @@ fn rec_for(name: &'static str, every: u64) -> Box<dyn Rec> {
         _ => Box::new(FrameRec {
             name,
             sub: None,
-            every,
+            every: rc.frame_every,
+            k: rc.frame_downsample,
             received: 0,
         }),
     }
-}
-
-/// `dynamics.collision_norm_threshold` of a configuration file.
-fn threshold_from_config(path: &str) -> Result<Option<f64>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read '{path}': {e}"))?;
-    let t: toml::Table = text
-        .parse()
-        .map_err(|e| format!("cannot parse '{path}': {e}"))?;
-    Ok(t.get("dynamics")
-        .and_then(|d| d.get("collision_norm_threshold"))
-        .and_then(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64))))
 }
 
 fn mcap_err(e: mcap::McapError) -> String {
@@ -256,6 +248,7 @@ fn body() -> Result<(), String> {
             "--out",
             "--seconds",
             "--frame-every",
+            "--frame-downsample",
             "--config",
             "--threshold",
             "--compression",
@@ -275,24 +268,29 @@ fn body() -> Result<(), String> {
     if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
         return Err("--seconds must be positive".into());
     }
-    let every = args.parse_value::<u64>("--frame-every")?.unwrap_or(10);
-    if every == 0 {
-        return Err("--frame-every must be at least 1".into());
-    }
-    let compression = match args.get("--compression").unwrap_or("zstd") {
-        "zstd" => Some(mcap::Compression::Zstd),
-        "lz4" => Some(mcap::Compression::Lz4),
-        "none" => None,
-        other => {
-            return Err(format!(
-                "--compression '{other}': expected zstd, lz4 or none; {USAGE}"
-            ))
+    // [record] of --config, then the flags over it
+    let (mut rc, mut threshold) = match args.get("--config") {
+        Some(p) => {
+            let (rc, threshold) = config::from_file(p)?;
+            rc.validate().map_err(|e| format!("{p}: [record] {e}"))?;
+            (rc, threshold)
         }
+        None => (RecordConfig::default(), None),
     };
-    let mut threshold = match args.get("--config") {
-        Some(p) => threshold_from_config(p)?,
-        None => None,
-    };
+    if let Some(v) = args.parse_value::<u64>("--frame-every")? {
+        rc.frame_every = v;
+    }
+    if let Some(v) = args.parse_value::<usize>("--frame-downsample")? {
+        rc.frame_downsample = v;
+    }
+    if let Some(v) = args.get("--compression") {
+        rc.compression = v.to_string();
+    }
+    // the keys' messages name them: frame_every → --frame-every
+    rc.validate()
+        .map_err(|e| format!("--{}; {USAGE}", e.replacen('_', "-", 1)))?;
+    let compression = rc.mcap_compression()?;
+    let (every, k) = (rc.frame_every, rc.frame_downsample);
     if let Some(t) = args.parse_value::<f64>("--threshold")? {
         threshold = Some(t);
     }
@@ -313,7 +311,7 @@ fn body() -> Result<(), String> {
         .create(BufWriter::new(file))
         .map_err(mcap_err)?;
 
-    let mut recs: Vec<Box<dyn Rec>> = ALL.iter().map(|c| rec_for(c, every)).collect();
+    let mut recs: Vec<Box<dyn Rec>> = ALL.iter().map(|c| rec_for(c, &rc)).collect();
     // ids[rec][topic]: MCAP channel ids
     let mut ids: Vec<Vec<u16>> = Vec::with_capacity(recs.len());
     for r in &recs {
@@ -338,11 +336,12 @@ fn body() -> Result<(), String> {
     meta.insert(
         "depth_frames".into(),
         format!(
-            "camera/depth, perception/depth: every {every}-th received frame, header fields plus the depth image downsampled {FRAME_DOWNSAMPLE}x per axis (top-left pixel of each block; 640x480 -> 160x120) in 'data' (u16 millimetres, row-major, 0 = no reading)"
+            "camera/depth, perception/depth: every {every}-th received frame, header fields plus the depth image downsampled {k}x per axis (top-left pixel of each block; 640x480 -> {}x{}) in 'data' (u16 millimetres, row-major, 0 = no reading); the same image as foxglove.RawImage on <channel>/image", 640 / k, 480 / k
         ),
     );
     meta.insert("frame_every".into(), every.to_string());
-    meta.insert("frame_downsample".into(), FRAME_DOWNSAMPLE.to_string());
+    meta.insert("frame_downsample".into(), k.to_string());
+    meta.insert("compression".into(), rc.compression.clone());
     meta.insert("start_ns".into(), now_ns().to_string());
     if let Some(t) = threshold {
         meta.insert("collision_norm_threshold".into(), t.to_string());
