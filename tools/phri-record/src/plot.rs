@@ -109,6 +109,19 @@ pub fn tick_step(span: f64) -> f64 {
     }
 }
 
+/// The tick step of `[lo, hi]` and the tick values in it (multiples of the step).
+pub fn ticks(lo: f64, hi: f64) -> (f64, impl Iterator<Item = f64>) {
+    let step = tick_step(hi - lo);
+    let first = (lo / step).ceil();
+    let last = if hi.is_finite() {
+        (hi / step).floor()
+    } else {
+        first - 1.0
+    };
+    let count = (last - first + 1.0).clamp(0.0, 1000.0) as usize;
+    (step, (0..count).map(move |i| (first + i as f64) * step))
+}
+
 /// Data range with a 5 % pad (a unit range around a constant).
 pub fn range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
@@ -152,25 +165,19 @@ impl Axes {
 
     /// Frame, grid lines and tick marks at "nice" steps.
     pub fn draw(&self, c: &mut Canvas) {
-        let sx = tick_step(self.x1 - self.x0);
-        let mut x = (self.x0 / sx).ceil() * sx;
-        while x <= self.x1 {
+        for x in ticks(self.x0, self.x1).1 {
             let p = self.px(x);
             for y in (self.top..self.bottom).step_by(4) {
                 c.set(p, y, GREY);
             }
             c.line(p, self.bottom, p, self.bottom + 6, BLACK);
-            x += sx;
         }
-        let sy = tick_step(self.y1 - self.y0);
-        let mut y = (self.y0 / sy).ceil() * sy;
-        while y <= self.y1 {
+        for y in ticks(self.y0, self.y1).1 {
             let p = self.py(y);
             for x in (self.left..self.right).step_by(4) {
                 c.set(x, p, GREY);
             }
             c.line(self.left - 6, p, self.left, p, BLACK);
-            y += sy;
         }
         c.line(self.left, self.top, self.right, self.top, BLACK);
         c.line(self.left, self.bottom, self.right, self.bottom, BLACK);
@@ -182,9 +189,8 @@ impl Axes {
     /// and the y label (above the y axis), in black at text scale 2.
     pub fn label(&self, c: &mut Canvas, title: &str, xlabel: &str, ylabel: &str) {
         const S: i64 = 2;
-        let sx = tick_step(self.x1 - self.x0);
-        let mut x = (self.x0 / sx).ceil() * sx;
-        while x <= self.x1 {
+        let (sx, xs) = ticks(self.x0, self.x1);
+        for x in xs {
             let t = text::tick_label(x, sx);
             text::draw(
                 c,
@@ -194,11 +200,9 @@ impl Axes {
                 BLACK,
                 S,
             );
-            x += sx;
         }
-        let sy = tick_step(self.y1 - self.y0);
-        let mut y = (self.y0 / sy).ceil() * sy;
-        while y <= self.y1 {
+        let (sy, ys) = ticks(self.y0, self.y1);
+        for y in ys {
             let t = text::tick_label(y, sy);
             let h = text::height(S);
             text::draw(
@@ -209,7 +213,6 @@ impl Axes {
                 BLACK,
                 S,
             );
-            y += sy;
         }
         let h = text::height(S);
         let xl = (self.left + self.right - text::width(xlabel, S)) / 2;
@@ -295,5 +298,13 @@ mod tests {
         assert_eq!(a.py(-1.0), a.bottom);
         assert_eq!(a.py(1.0), a.top);
         assert_eq!(tick_step(10.0), 1.0);
+        let (step, t) = ticks(-0.25, 1.0);
+        assert_eq!(step, 0.2);
+        let t: Vec<f64> = t.collect();
+        assert_eq!(t.len(), 7);
+        assert!(
+            (t[0] + 0.2).abs() < 1e-12 && (t[6] - 1.0).abs() < 1e-12,
+            "{t:?}"
+        );
     }
 }
