@@ -1,17 +1,25 @@
 //! phri's shared-memory contract: one `#[repr(C)]` message type per concept,
-//! each with a stable `#[type_name]`, every service name as a constant, and
-//! every service's quality of service in one place ([`qos`]).
+//! each with a stable `#[type_name]`; every channel one typed constant that
+//! carries its name, message type, QoS and whether it wakes its readers
+//! ([`channels`]); modes and kinds as `#[repr(u32)]` enums ([`enums`]).
 //!
 //! Timestamps are `CLOCK_MONOTONIC` nanoseconds (system-wide, comparable
 //! across processes); every message carries a sequence number. Joint arrays
 //! hold `dof` valid entries in the order `phri-model` prints.
 
+pub mod channel;
+pub mod channels;
 pub mod cleanup;
+pub mod enums;
+pub mod error;
+pub mod json;
 pub mod messages;
-pub mod names;
 pub mod qos;
 
+pub use channel::*;
+pub use channels::*;
 pub use cleanup::*;
+pub use enums::*;
+pub use error::IpcError;
 pub use messages::*;
-pub use names::*;
 pub use qos::*;

@@ -1,6 +1,7 @@
 //! Message types. All are plain data: `#[repr(C)]`, no pointers, fixed size.
 
 use iceoryx2::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// Largest number of joints a message carries.
 pub const MAX_DOF: usize = 12;
@@ -10,6 +11,14 @@ pub const MAX_CONTACTS: usize = 8;
 pub const LATENCY_BINS: usize = 2000;
 /// Services tracked in [`Health`].
 pub const MAX_SERVICES: usize = 16;
+/// People in a [`Skeleton`].
+pub const MAX_PEOPLE: usize = 4;
+/// Joints of a [`TrackedPerson`] (OpenNI/NiTE's 15, [`crate::SkeletonJoint`]).
+pub const SKELETON_JOINTS: usize = 15;
+/// Estimated contact forces in a [`CollabState`].
+pub const MAX_COLLAB_FORCES: usize = 2;
+/// Bytes of the text of an [`HriRequest`] (UTF-8, zero padded).
+pub const REQUEST_TEXT: usize = 64;
 /// Human capsules in [`WorldState`].
 pub const MAX_HUMAN_CAPSULES: usize = 16;
 /// Control points one repulsion worker may own.
@@ -26,7 +35,7 @@ pub mod robot_status {
 }
 
 /// Measured joint state, published by the robot every control period.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::JointState")]
 pub struct JointState {
@@ -40,48 +49,24 @@ pub struct JointState {
     /// [`robot_status`] bits
     pub status: u32,
     /// measured joint positions [rad or m] (encoders; no velocities)
+    #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
     /// joint torque applied in the last period [Nm] (command after limits, or brake torque)
+    #[serde(with = "crate::json::finite_array")]
     pub tau: [f64; MAX_DOF],
     /// wrist force/torque [N, Nm]: force then moment, base frame, at the last link's origin
+    #[serde(with = "crate::json::finite_array")]
     pub wrench: [f64; 6],
     /// `seq` of the command applied in the last period (0: none yet)
     pub command_seq: u64,
     /// consecutive periods without a fresh command
     pub missed_commands: u32,
+    #[serde(skip)]
     pub _pad: u32,
 }
 
-/// Control modes reported in [`TorqueCommand::mode`] and [`ControlStatus::mode`].
-pub mod control_mode {
-    /// waiting for the first fresh inputs, re-syncing to the measured state
-    pub const SYNC: u32 = 0;
-    /// executing the task
-    pub const TASK: u32 = 1;
-    /// reacting to a detected collision
-    pub const REACTION: u32 = 2;
-    /// holding still because a safety input is stale
-    pub const PROTECTIVE_STOP: u32 = 3;
-    /// reaction over, waiting for the residual to settle before resuming
-    pub const RECOVER: u32 = 4;
-    /// slowed down because perception is stale
-    pub const SLOW: u32 = 5;
-
-    pub fn name(mode: u32) -> &'static str {
-        match mode {
-            SYNC => "sync",
-            TASK => "task",
-            REACTION => "reaction",
-            PROTECTIVE_STOP => "protective_stop",
-            RECOVER => "recover",
-            SLOW => "slow",
-            _ => "unknown",
-        }
-    }
-}
-
 /// Joint torque command, answering one [`JointState`].
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::TorqueCommand")]
 pub struct TorqueCommand {
@@ -92,9 +77,11 @@ pub struct TorqueCommand {
     pub state_seq: u64,
     pub state_stamp_ns: u64,
     pub dof: u32,
-    /// [`control_mode`]
+    /// [`crate::ControlMode`]
+    #[serde(with = "crate::json::control_mode")]
     pub mode: u32,
     /// motor torque [Nm], limits already enforced
+    #[serde(with = "crate::json::finite_array")]
     pub tau: [f64; MAX_DOF],
 }
 
@@ -111,7 +98,7 @@ pub mod residual_flags {
 }
 
 /// Momentum residual (paper eq. 5) for one joint state.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::Residual")]
 pub struct Residual {
@@ -126,19 +113,23 @@ pub struct Residual {
     /// last joint whose residual passed its contact threshold (−1: none): the
     /// colliding link is this joint's link or one after it (paper Sect. III)
     pub isolated_joint: i32,
+    #[serde(skip)]
     pub _pad: u32,
     /// residual r ≈ τ_ext [Nm]
+    #[serde(with = "crate::json::finite_array")]
     pub r: [f64; MAX_DOF],
     /// joint velocity estimated from positions [rad/s]
+    #[serde(with = "crate::json::finite_array")]
     pub qd: [f64; MAX_DOF],
     /// ‖r‖ [Nm]
+    #[serde(with = "crate::json::finite")]
     pub norm: f64,
     /// time spent computing [ns]
     pub compute_ns: u64,
 }
 
 /// Controller status, one per command.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::ControlStatus")]
 pub struct ControlStatus {
@@ -148,9 +139,10 @@ pub struct ControlStatus {
     pub state_seq: u64,
     /// measurement time of the state answered [ns, robot clock]
     pub state_stamp_ns: u64,
-    /// [`control_mode`]
+    /// [`crate::ControlMode`]
+    #[serde(with = "crate::json::control_mode")]
     pub mode: u32,
-    /// configured reaction strategy (index into the controller's list)
+    /// configured reaction strategy ([`crate::Reaction`])
     pub reaction: u32,
     /// task waypoints reached since start
     pub waypoints_reached: u64,
@@ -158,47 +150,62 @@ pub struct ControlStatus {
     pub protective_stops: u64,
     pub resumes: u64,
     /// age of the residual used [ns] (u64::MAX: none)
+    #[serde(with = "crate::json::opt_ns")]
     pub residual_age_ns: u64,
     /// joint reference [rad]
+    #[serde(with = "crate::json::finite_array")]
     pub q_ref: [f64; MAX_DOF],
     /// end-effector position [m], base frame
+    #[serde(with = "crate::json::finite_array")]
     pub ee: [f64; 3],
     /// time spent computing [ns]
     pub compute_ns: u64,
     /// state published → this controller woke [ns]
     pub wake_latency_ns: u64,
     /// age of the perception results used [ns] (u64::MAX: none)
+    #[serde(with = "crate::json::opt_ns")]
     pub perception_age_ns: u64,
     /// smallest obstacle distance of the control points last seen [m]
+    #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
     /// largest repulsion risk ‖V_Call‖/V_max over the control points [0, 1]
+    #[serde(with = "crate::json::finite")]
     pub risk: f64,
     /// SNS task scale [0, 1]
+    #[serde(with = "crate::json::finite")]
     pub task_scale: f64,
+    /// model evaluations that failed since the controller started (each one
+    /// made that period hold fail-safe; never silently dropped)
+    pub model_errors: u64,
 }
 
 /// One contact in [`Truth`].
-#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::ContactTruth")]
 pub struct ContactTruth {
     /// index into the robot model's collision objects
     pub robot_object: i32,
-    /// human body part index (simulator's numbering)
+    /// human body part ([`crate::BodyPart`] as i32; −1: unknown)
     pub human_part: i32,
     /// 1 when the part is designated collaborative
+    #[serde(with = "crate::json::flag")]
     pub intended: u32,
+    #[serde(skip)]
     pub _pad: u32,
     /// force on the robot [N], base frame
+    #[serde(with = "crate::json::finite_array")]
     pub force: [f64; 3],
     /// contact point [m], base frame
+    #[serde(with = "crate::json::finite_array")]
     pub point: [f64; 3],
     /// penetration [m]
+    #[serde(with = "crate::json::finite")]
     pub depth: f64,
 }
 
 /// Simulator ground truth. For evaluation only.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::Truth")]
 pub struct Truth {
@@ -209,16 +216,20 @@ pub struct Truth {
     pub n_contacts: u32,
     pub dof: u32,
     /// true external joint torque [Nm]
+    #[serde(with = "crate::json::finite_array")]
     pub tau_ext: [f64; MAX_DOF],
+    #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
+    #[serde(with = "crate::json::finite_array")]
     pub qd: [f64; MAX_DOF],
     /// human-robot surface distance [m] (negative: penetration; +inf: no human)
+    #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
     pub contacts: [ContactTruth; MAX_CONTACTS],
 }
 
 /// Robot loop statistics, cumulative since the robot process started.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::RobotStats")]
 pub struct RobotStats {
@@ -237,20 +248,24 @@ pub struct RobotStats {
     /// largest state-published → command-received latency [ns]
     pub latency_max_ns: u64,
     /// latency histogram, 1 µs bins; the last bin holds everything above
+    #[serde(with = "crate::json::latency_hist")]
     pub latency_hist: [u32; LATENCY_BINS],
 }
 
 /// One supervised service in [`Health`].
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::ServiceHealth")]
 pub struct ServiceHealth {
     /// service name, UTF-8, zero padded
+    #[serde(with = "crate::json::c_string")]
     pub name: [u8; 32],
     pub pid: i32,
     /// 1 while the process runs
+    #[serde(with = "crate::json::flag")]
     pub alive: u32,
     pub restarts: u32,
+    #[serde(skip)]
     pub _pad: u32,
     /// last start [ns]
     pub started_ns: u64,
@@ -268,13 +283,14 @@ impl ServiceHealth {
 }
 
 /// Supervisor's view of the services.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::Health")]
 pub struct Health {
     pub seq: u64,
     pub stamp_ns: u64,
     pub count: u32,
+    #[serde(skip)]
     pub _pad: u32,
     pub services: [ServiceHealth; MAX_SERVICES],
 }
@@ -297,21 +313,25 @@ impl Zeroed for RobotStats {}
 impl Zeroed for Health {}
 
 /// One capsule of the simulated world: segment `a`–`b` swept by `radius` [m], base frame.
-#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::WorldCapsule")]
 pub struct WorldCapsule {
+    #[serde(with = "crate::json::finite_array")]
     pub a: [f64; 3],
+    #[serde(with = "crate::json::finite_array")]
     pub b: [f64; 3],
+    #[serde(with = "crate::json::finite")]
     pub radius: f64,
-    /// human body part index (simulator's numbering)
+    /// human body part ([`crate::BodyPart`] as i32)
     pub part: i32,
+    #[serde(skip)]
     pub _pad: u32,
 }
 
 /// The simulated world a simulated camera sees: the arm's true joints and the
 /// human's capsules, on the robot's clock. Simulation only.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::WorldState")]
 pub struct WorldState {
@@ -321,13 +341,14 @@ pub struct WorldState {
     pub dof: u32,
     pub n_human: u32,
     /// true joint positions [rad]
+    #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
     pub human: [WorldCapsule; MAX_HUMAN_CAPSULES],
 }
 
 /// Header of a depth frame (`camera/depth`, `perception/depth`): the payload
 /// is `width × height` `u16` depths in millimetres, row-major, 0 = no reading.
-#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::FrameHeader")]
 pub struct FrameHeader {
@@ -342,17 +363,25 @@ pub struct FrameHeader {
     pub width: u32,
     pub height: u32,
     /// pinhole intrinsics [px]
+    #[serde(with = "crate::json::finite")]
     pub fx: f64,
+    #[serde(with = "crate::json::finite")]
     pub fy: f64,
+    #[serde(with = "crate::json::finite")]
     pub cx: f64,
+    #[serde(with = "crate::json::finite")]
     pub cy: f64,
     /// metres per depth unit (0.001: millimetres)
+    #[serde(with = "crate::json::finite")]
     pub depth_scale: f64,
     /// camera pose in the base frame: rotation (row-major 3×3, camera axes:
     /// x right, y down, z forward) then translation [m]
+    #[serde(with = "crate::json::finite_array")]
     pub pose_r: [f64; 9],
+    #[serde(with = "crate::json::finite_array")]
     pub pose_t: [f64; 3],
     /// joint state used to remove the robot's own pixels (perception/depth only)
+    #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
     /// stamp of that joint state [ns, robot clock] (0: none)
     pub q_stamp_ns: u64,
@@ -361,30 +390,36 @@ pub struct FrameHeader {
     pub removed_pixels: u32,
     /// valid pixels left
     pub valid_pixels: u32,
+    #[serde(skip)]
     pub _pad: u32,
 }
 
 /// Result for one control point.
-#[derive(Debug, Clone, Copy, Default, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::PointRepulsion")]
 pub struct PointRepulsion {
     /// control point index (in the configured list)
     pub point: u32,
     /// 1 when something was within the surveillance region
+    #[serde(with = "crate::json::flag")]
     pub active: u32,
     /// repulsive velocity V_Call [m/s], base frame (eqs. 16-18)
+    #[serde(with = "crate::json::finite_array")]
     pub v_call: [f64; 3],
     /// minimum distance to an obstacle pixel [m] (ρ when none)
+    #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
     /// the closest obstacle point [m], base frame
+    #[serde(with = "crate::json::finite_array")]
     pub obstacle: [f64; 3],
     /// the control point at the frame's joint state [m], base frame
+    #[serde(with = "crate::json::finite_array")]
     pub position: [f64; 3],
 }
 
 /// One repulsion worker's result for one frame (`perception/repulsion`).
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::RepulsionResult")]
 pub struct RepulsionResult {
@@ -401,6 +436,7 @@ pub struct RepulsionResult {
     /// workers in the configuration
     pub workers: u32,
     pub n_points: u32,
+    #[serde(skip)]
     pub _pad: u32,
     /// processing time [ns]
     pub compute_ns: u64,
@@ -411,57 +447,304 @@ impl Zeroed for WorldState {}
 impl Zeroed for FrameHeader {}
 impl Zeroed for RepulsionResult {}
 
-/// Kinds of [`DepthFault`]: what the simulated camera does to its next frames.
-pub mod depth_fault {
-    /// flying pixels: 2 % of the pixels get random depths (0.5-4 m)
-    pub const NOISE: u32 = 1;
-    /// every pixel 0 (no return): a blind frame
-    pub const ZEROS: u32 = 2;
-    /// the header's image size disagrees with the payload
-    pub const SIZE: u32 = 3;
-    /// capture time one second in the past
-    pub const STALE: u32 = 4;
-    /// publish every frame `delay_ms` late for `duration_s`
-    pub const DELAY: u32 = 5;
-
-    /// Every kind with its name, for command lines and JSON.
-    pub const ALL: [(u32, &str); 5] = [
-        (NOISE, "noise"),
-        (ZEROS, "zeros"),
-        (SIZE, "size"),
-        (STALE, "stale"),
-        (DELAY, "delay"),
-    ];
-
-    pub fn name(kind: u32) -> &'static str {
-        ALL.iter()
-            .find(|(k, _)| *k == kind)
-            .map_or("unknown", |(_, n)| n)
-    }
-
-    pub fn from_name(name: &str) -> Option<u32> {
-        ALL.iter().find(|(_, n)| *n == name).map(|(k, _)| *k)
-    }
-}
-
 /// A fault for the simulated camera to inject into its depth frames
 /// (`phri-fault camera corrupt|delay`), for testing what perception faults
 /// cost. A real camera driver ignores this channel.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::DepthFault")]
 pub struct DepthFault {
     pub seq: u64,
     /// when it was sent [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
-    /// one of [`depth_fault`]
+    /// [`crate::DepthFaultKind`]
+    #[serde(with = "crate::json::depth_fault_kind")]
     pub kind: u32,
     /// corruptions: how many consecutive frames
     pub frames: u32,
-    /// [`depth_fault::DELAY`]: extra capture → publish delay [ms]
+    /// [`crate::DepthFaultKind::Delay`]: extra capture → publish delay [ms]
+    #[serde(with = "crate::json::finite")]
     pub delay_ms: f64,
-    /// [`depth_fault::DELAY`]: how long \[s\]
+    /// [`crate::DepthFaultKind::Delay`]: how long \[s\]
+    #[serde(with = "crate::json::finite")]
     pub duration_s: f64,
 }
 
 impl Zeroed for DepthFault {}
+
+/// One event of a contact episode between the person and the robot, from the
+/// simulator's ground truth (`sim/contacts`): its beginning, every 100 ms
+/// while it lasts, and its end. Few and deeply queued, so that no episode is
+/// lost to a reader that was stalled (`sim/truth` at 1 kHz may overflow).
+/// For evaluation only.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::ContactEvent")]
+pub struct ContactEvent {
+    pub seq: u64,
+    /// [ns, robot clock]: the state this event was seen with
+    pub stamp_ns: u64,
+    /// when the episode began [ns, robot clock]
+    pub start_ns: u64,
+    /// the episode's number (counted from 1 by the simulator)
+    pub episode: u64,
+    /// [`crate::ContactPhase`]
+    #[serde(with = "crate::json::contact_phase")]
+    pub phase: u32,
+    /// index into the robot model's collision objects
+    pub robot_object: i32,
+    /// human body part ([`crate::BodyPart`] as i32)
+    pub human_part: i32,
+    /// 1 when the part is designated collaborative (an intended contact)
+    #[serde(with = "crate::json::flag")]
+    pub intended: u32,
+    /// force on the robot now [N], base frame (zero at the end)
+    #[serde(with = "crate::json::finite_array")]
+    pub force: [f64; 3],
+    /// largest force magnitude so far [N]
+    #[serde(with = "crate::json::finite")]
+    pub peak_force_n: f64,
+    /// contact point [m], base frame
+    #[serde(with = "crate::json::finite_array")]
+    pub point: [f64; 3],
+}
+
+impl Zeroed for ContactEvent {}
+
+/// One person as a body tracker sees them.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::TrackedPerson")]
+pub struct TrackedPerson {
+    /// the tracker's id of this person, stable while tracked
+    pub id: u32,
+    /// 1 while the person is tracked
+    #[serde(with = "crate::json::flag")]
+    pub tracked: u32,
+    /// joint positions [m], robot base frame, in [`crate::SkeletonJoint`] order
+    pub joints: [[f64; 3]; SKELETON_JOINTS],
+    /// confidence of each joint [0, 1]; 0: occluded or not found (its position is then the last guess)
+    pub confidence: [f64; SKELETON_JOINTS],
+}
+
+/// The people a body tracker sees in one depth frame (`perception/skeleton`):
+/// the same sequence number and capture times as the frame. A real tracker
+/// (OpenNI/NiTE-class) publishes the same message; the simulated camera
+/// stands in for one.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::Skeleton")]
+pub struct Skeleton {
+    /// the depth frame's number
+    pub seq: u64,
+    /// the frame's capture time [ns, robot clock]
+    pub capture_ns: u64,
+    /// the frame's capture time [ns, CLOCK_MONOTONIC]
+    pub capture_wall_ns: u64,
+    /// when this was published [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
+    pub n_people: u32,
+    #[serde(skip)]
+    pub _pad: u32,
+    pub people: [TrackedPerson; MAX_PEOPLE],
+}
+
+impl Zeroed for Skeleton {}
+
+/// A request to the robot from a person (`hri/request`; several publishers:
+/// the gesture recogniser, the voice recogniser, `phri-hri`).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::HriRequest")]
+pub struct HriRequest {
+    pub seq: u64,
+    /// when it was made [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// voice: when the utterance ended [ns, CLOCK_MONOTONIC] (0: not voice)
+    pub utterance_end_ns: u64,
+    /// [`crate::RequestSource`]
+    #[serde(with = "crate::json::request_source")]
+    pub source: u32,
+    /// [`crate::RequestKind`]
+    #[serde(with = "crate::json::request_kind")]
+    pub kind: u32,
+    /// [`crate::CollabPart`] named (`none`: none)
+    #[serde(with = "crate::json::collab_part")]
+    pub part: u32,
+    /// the tracker's id of the person asking (u32::MAX: whoever shows the part)
+    pub person: u32,
+    /// how sure the recogniser is [0, 1]
+    #[serde(with = "crate::json::finite")]
+    pub confidence: f64,
+    /// the recogniser's own score (voice: the decoder's; 0 otherwise)
+    #[serde(with = "crate::json::finite")]
+    pub score: f64,
+    /// what was recognised (voice: the words; gesture: the gesture), UTF-8, zero padded
+    #[serde(with = "crate::json::c_string")]
+    pub text: [u8; REQUEST_TEXT],
+}
+
+impl Zeroed for HriRequest {}
+
+/// The collaborative hand as depth ingestion sees it (`perception/hand`),
+/// per frame while a collaboration is on: the tracker's hand refined from
+/// the depth pixels around it; those pixels were removed from the frame the
+/// repulsion workers see.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::HandObservation")]
+pub struct HandObservation {
+    /// the depth frame's number
+    pub seq: u64,
+    /// the frame's capture time [ns, robot clock]
+    pub capture_ns: u64,
+    /// when this was published [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
+    /// the tracker's id of the person
+    pub person: u32,
+    /// [`crate::CollabPart`]
+    #[serde(with = "crate::json::collab_part")]
+    pub part: u32,
+    /// 1 when the position was refined from depth pixels (0: the tracker's alone)
+    #[serde(with = "crate::json::flag")]
+    pub refined: u32,
+    /// depth pixels removed around the hand (the mask)
+    pub masked_pixels: u32,
+    /// the hand's position [m], base frame: the centre of the depth points around the tracked hand
+    #[serde(with = "crate::json::finite_array")]
+    pub position: [f64; 3],
+    /// the tracker's hand position [m], base frame
+    #[serde(with = "crate::json::finite_array")]
+    pub tracked: [f64; 3],
+    /// the tracker's confidence of the hand [0, 1]
+    #[serde(with = "crate::json::finite")]
+    pub confidence: f64,
+}
+
+impl Zeroed for HandObservation {}
+
+/// One estimated contact force in a [`CollabState`] (paper eqs. 22-23).
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::ContactForce")]
+pub struct ContactForce {
+    /// the contact point [m], base frame
+    #[serde(with = "crate::json::finite_array")]
+    pub point: [f64; 3],
+    /// force applied by the human on the robot [N], base frame
+    #[serde(with = "crate::json::finite_array")]
+    pub force: [f64; 3],
+    /// the robot link it acts on (index of the model's frames; −1: none)
+    pub frame: i32,
+    /// 0 when the force is not observable from the residual (a contact on
+    /// links 1-2, or the stacked Jacobian lost rank): then `force` is not a guess but 0
+    #[serde(with = "crate::json::flag")]
+    pub observable: u32,
+}
+
+/// The collaboration, as the controller runs it (`collab/state`, 1 kHz).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::CollabState")]
+pub struct CollabState {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// measurement time of the state answered [ns, robot clock]
+    pub state_stamp_ns: u64,
+    /// [`crate::CollabPhase`]
+    #[serde(with = "crate::json::collab_phase")]
+    pub phase: u32,
+    /// [`crate::CollabReason`] of the last change of phase
+    #[serde(with = "crate::json::collab_reason")]
+    pub reason: u32,
+    /// the tracker's id of the collaborating person
+    pub person: u32,
+    /// [`crate::CollabPart`]: the collaborative human part
+    #[serde(with = "crate::json::collab_part")]
+    pub human_part: u32,
+    /// the collaborative robot part: the model frame that may touch (−1: none)
+    pub robot_frame: i32,
+    /// the last request answered: its source ([`crate::RequestSource`], 0: none yet),
+    /// kind, part, whether it was accepted and why ([`crate::CollabReason`])
+    pub request_source: u32,
+    pub request_kind: u32,
+    pub request_part: u32,
+    #[serde(with = "crate::json::flag")]
+    pub request_accepted: u32,
+    #[serde(with = "crate::json::collab_reason")]
+    pub request_reason: u32,
+    /// the last request answered: its sequence number (per source) and when it was made [ns, CLOCK_MONOTONIC]
+    pub request_seq: u64,
+    pub request_stamp_ns: u64,
+    /// the collaborative hand the controller uses [m], base frame
+    #[serde(with = "crate::json::finite_array")]
+    pub hand: [f64; 3],
+    /// age of that hand observation [ns] (u64::MAX: none)
+    #[serde(with = "crate::json::opt_ns")]
+    pub hand_age_ns: u64,
+    /// ‖r − Σ J_kᵀ F̂_k‖: the residual the intended contacts do not explain [Nm]
+    #[serde(with = "crate::json::finite")]
+    pub unexplained_norm: f64,
+    pub n_forces: u32,
+    #[serde(skip)]
+    pub _pad: u32,
+    pub forces: [ContactForce; MAX_COLLAB_FORCES],
+}
+
+impl Zeroed for CollabState {}
+
+/// `impl Message`: the publish time (and stream) of a message type, and the
+/// arrays cut to a count in its JSON view (`counted: [dof => q, tau; n => xs]`;
+/// the fields must exist: checked at compile time).
+macro_rules! message {
+    (
+        $t:ty, published: |$m:ident| $published:expr
+        $(, stream: |$s:ident| $stream:expr)?
+        $(, counted: [$($count:ident => $($array:ident),+);+])?
+    ) => {
+        impl crate::channel::Message for $t {
+            $(const COUNTED: &'static [crate::json::Counted] =
+                &[$((stringify!($count), &[$(stringify!($array)),+])),+];)?
+            fn seq(&self) -> u64 {
+                self.seq
+            }
+            fn published_ns(&self) -> Option<u64> {
+                let $m = self;
+                $published
+            }
+            $(fn stream(&self) -> u64 {
+                let $s = self;
+                $stream
+            })?
+        }
+        $(const _: () = {
+            // every counted name is a field: a count and arrays
+            #[allow(dead_code)]
+            fn counted_fields_exist(m: &$t) {
+                $(let _: u32 = m.$count; $(let _ = m.$array.len();)+)+
+            }
+        };)?
+    };
+}
+
+message!(JointState, published: |m| Some(m.published_ns), counted: [dof => q, tau]);
+message!(TorqueCommand, published: |m| Some(m.stamp_ns), counted: [dof => tau]);
+message!(Residual, published: |m| Some(m.stamp_ns), counted: [dof => r, qd]);
+message!(ControlStatus, published: |m| Some(m.stamp_ns));
+message!(Truth, published: |_m| None, counted: [dof => tau_ext, q, qd; n_contacts => contacts]);
+message!(RobotStats, published: |_m| None);
+message!(Health, published: |m| Some(m.stamp_ns), counted: [count => services]);
+message!(WorldState, published: |_m| None, counted: [dof => q; n_human => human]);
+message!(
+    RepulsionResult,
+    published: |m| Some(m.published_ns),
+    stream: |m| m.worker as u64,
+    counted: [n_points => points]
+);
+message!(DepthFault, published: |m| Some(m.stamp_ns));
+message!(ContactEvent, published: |_m| None);
+message!(Skeleton, published: |m| Some(m.published_ns), counted: [n_people => people]);
+message!(HriRequest, published: |m| Some(m.stamp_ns), stream: |m| m.source as u64);
+message!(HandObservation, published: |m| Some(m.published_ns));
+message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);

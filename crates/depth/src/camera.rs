@@ -25,6 +25,7 @@ pub const PAPER_CAMERA_TARGET_M: [f64; 3] = [0.3, 0.0, 0.4];
 
 /// Pinhole intrinsics of a depth camera; focal lengths and principal point in pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Intrinsics {
     /// image width \[px\] (columns)
     pub width: u32,

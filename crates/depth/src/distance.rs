@@ -47,7 +47,7 @@ use crate::shapes::camera_box_rect;
 /// Parameters of the repulsive profile (16) (REFERENCE §3: α = 6, ρ = 0.4 m,
 /// V_max = 0.21 m/s, labelled as the paper's values by a third party).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(deny_unknown_fields)]
 pub struct RepulsionParams {
     /// half side of the surveillance cube and distance where repulsion fades \[m\]
     pub rho: f64,

@@ -89,6 +89,19 @@ pub enum DepthPngError {
     BitDepth { path: PathBuf, bits: u8 },
     #[error("{path}: colour type {color}; a depth image must be single-channel grayscale")]
     Color { path: PathBuf, color: String },
+    #[error(
+        "{path}: {bytes} bytes, more than the {max} a depth image of this size may have; not read"
+    )]
+    TooLarge { path: PathBuf, bytes: u64, max: u64 },
+    #[error("{path}: a {width}x{height} image was asked for; depth images have 1 to {max} pixels")]
+    Dimensions {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        max: u64,
+    },
+    #[error("{path}: not a regular file")]
+    NotAFile { path: PathBuf },
     #[error("{path}: depth scale {scale} m per unit is not a positive finite number")]
     Scale { path: PathBuf, scale: f64 },
     #[error("{path}: {got} pixels given for a {width}x{height} image")]

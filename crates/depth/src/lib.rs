@@ -7,6 +7,7 @@
 //! - [`shapes`]: [`Capsule`] and [`Aabb`] primitives, base frame.
 //! - [`render`]: [`Renderer`], an exact ray-cast z-buffer of capsules, boxes and
 //!   a floor into `u16` millimetre frames, with Kinect-like noise and drop-outs.
+//! - [`flying`]: [`FlyingPixels`] removes isolated flying pixels (sensor noise).
 //! - [`selffilter`]: [`SelfFilter`] removes the robot's own pixels.
 //! - [`distance`]: [`DepthSpaceDistance`], distances and repulsive vectors
 //!   (eqs. 15-18) for points of interest on the robot.
@@ -20,6 +21,7 @@
 pub mod camera;
 pub mod distance;
 pub mod error;
+pub mod flying;
 pub mod noise;
 pub mod png;
 pub mod render;
@@ -29,6 +31,7 @@ pub mod shapes;
 pub use camera::{CameraPose, Intrinsics, PixelDepth};
 pub use distance::{DepthSpaceDistance, PixelWindow, PointOfInterest, Repulsion, RepulsionParams};
 pub use error::{DepthError, DepthPngError};
+pub use flying::FlyingPixels;
 pub use noise::sigma_z;
 pub use png::{decode_depth_png, encode_depth_png, read_depth_png, write_depth_png};
 pub use render::{RenderOptions, Renderer, LABEL_NONE};

@@ -43,7 +43,7 @@ pub const LABEL_NONE: u16 = 0;
 
 /// Sensor model of the renderer.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(deny_unknown_fields)]
 pub struct RenderOptions {
     /// add Gaussian axial noise `σ_z(z) = 0.0012 + 0.0019 (z − 0.4)²` m
     pub noise: bool,

@@ -23,7 +23,7 @@ use crate::shapes::{Capsule, RayCapsule};
 
 /// Parameters of the self-filter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(deny_unknown_fields)]
 pub struct SelfFilterParams {
     /// radius added to every robot capsule \[m\] (covers model error, joint-state latency)
     pub margin_m: f64,

@@ -192,3 +192,120 @@ fn io_and_buffer_errors_name_the_file() {
     assert!(matches!(err, DepthPngError::Write { .. }));
     assert!(err.to_string().contains("/nonexistent-dir/x.png"));
 }
+
+/// A file holding `head`, then grown (sparse) to `len` bytes.
+fn sized_file(name: &str, head: &[u8], len: u64) -> PathBuf {
+    let path = tmp(name);
+    std::fs::write(&path, head).unwrap();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&path)
+        .unwrap()
+        .set_len(len)
+        .unwrap();
+    path
+}
+
+#[test]
+fn a_huge_file_is_refused_without_being_read() {
+    let (w, h) = (640, 480);
+    assert_eq!(
+        phri_depth::png::max_png_bytes(w, h),
+        2 * 614_400 + (1 << 20)
+    );
+    // a valid 640×480 16-bit header in front of 128 MB: the header is right,
+    // the size is not (it spun ingestion at real-time priority)
+    let good = encode_depth_png(w, h, &pattern(w, h)).unwrap();
+    let path = sized_file("huge.png", &good[..64], 128 << 20);
+    let err = read_depth_png(&path, w, h, MILLIMETRE_SCALE_M).unwrap_err();
+    assert!(
+        matches!(err, DepthPngError::TooLarge { bytes, .. } if bytes == 128 << 20),
+        "{err}"
+    );
+    assert!(err.to_string().contains("huge.png"), "{err}");
+    // just under the bound, it is read (and refused as a PNG: the rest is zeros)
+    let max = phri_depth::png::max_png_bytes(w, h);
+    std::fs::remove_file(&path).unwrap();
+    let path = sized_file("just_under.png", &good[..64], max);
+    assert!(matches!(
+        read_depth_png(&path, w, h, MILLIMETRE_SCALE_M),
+        Err(DepthPngError::Decode { .. })
+    ));
+    std::fs::remove_file(&path).unwrap();
+}
+
+#[test]
+fn the_header_is_checked_before_the_image_data_is_read() {
+    let (w, h) = (640, 480);
+    // headers of the wrong size, bit depth or colour, in front of 2 MB of
+    // image data that would take milliseconds to inflate: refused by the header
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        (
+            encode_depth_png(320, 240, &pattern(320, 240)).unwrap(),
+            "320x240",
+        ),
+        (
+            png_bytes(
+                w,
+                h,
+                ::png::ColorType::Grayscale,
+                ::png::BitDepth::Eight,
+                &vec![3; (w * h) as usize],
+            ),
+            "8-bit",
+        ),
+        (
+            png_bytes(
+                w,
+                h,
+                ::png::ColorType::Rgb,
+                ::png::BitDepth::Sixteen,
+                &vec![3; (w * h * 6) as usize],
+            ),
+            "Rgb",
+        ),
+    ];
+    for (i, (bytes, needle)) in cases.iter().enumerate() {
+        let path = tmp(&format!("header{i}.png"));
+        std::fs::write(&path, bytes).unwrap();
+        let err = read_depth_png(&path, w, h, MILLIMETRE_SCALE_M).unwrap_err();
+        assert!(err.to_string().contains(needle), "{err}");
+        // the same verdict from the first 33 bytes alone
+        let from_header =
+            phri_depth::png::check_header(&path, &bytes[..phri_depth::png::HEADER_BYTES], w, h)
+                .unwrap_err();
+        assert_eq!(from_header.to_string(), err.to_string());
+        std::fs::remove_file(&path).unwrap();
+    }
+    let good = encode_depth_png(w, h, &pattern(w, h)).unwrap();
+    phri_depth::png::check_header(std::path::Path::new("x"), &good, w, h).unwrap();
+    // interlaced: byte 28 of the header (the CRC no longer matters: refused first)
+    let mut interlaced = good[..33].to_vec();
+    interlaced[28] = 1;
+    assert!(
+        phri_depth::png::check_header(std::path::Path::new("x"), &interlaced, w, h)
+            .unwrap_err()
+            .to_string()
+            .contains("interlaced")
+    );
+}
+
+#[test]
+fn directories_devices_and_absurd_sizes_are_refused() {
+    let dir = tmp("a-dir.png");
+    std::fs::create_dir_all(&dir).unwrap();
+    for path in [dir.as_path(), std::path::Path::new("/dev/zero")] {
+        let err = read_depth_png(path, 640, 480, MILLIMETRE_SCALE_M).unwrap_err();
+        assert!(matches!(err, DepthPngError::NotAFile { .. }), "{err}");
+        assert!(err.to_string().contains(&path.display().to_string()));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    for (w, h) in [(0, 480), (640, 0), (65_536, 65_536)] {
+        let err = read_depth_png("/dev/zero", w, h, MILLIMETRE_SCALE_M).unwrap_err();
+        assert!(matches!(err, DepthPngError::Dimensions { .. }), "{err}");
+        assert!(matches!(
+            decode_depth_png(&[0; 64], w, h, MILLIMETRE_SCALE_M),
+            Err(DepthPngError::Dimensions { .. })
+        ));
+    }
+}

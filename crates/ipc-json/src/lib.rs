@@ -1,236 +1,133 @@
-//! JSON views of the message types (they do not derive `Serialize`): fields by
-//! name, joint arrays truncated to `dof`, frames summarised. Shared by the
-//! tools that print or record channels (`phri-monitor`, `phri-record`).
+//! JSON views of the messages, for the tools that print, record and replay
+//! channels (`phri-monitor`, `phri-record`, `phri-replay`).
+//!
+//! The fields and their encoding come from the messages' serde derives (the
+//! helpers of [`phri_ipc::json`]: non-finite floats as `null`, flags as
+//! booleans, modes by name, ...). Here, the arrays each message lists in
+//! [`Message::COUNTED`] are cut to their count (`q` to `dof`, `contacts` to
+//! `n_contacts`, ...) and padded back with zeros when reading. Depth frames
+//! are summarised ([`frame_json`]).
 
-use phri_ipc::*;
-use serde_json::{json, Value};
+use phri_ipc::{FrameHeader, Message};
+use serde_json::{json, Map, Value};
 
-/// A message a tool can open, count and convert to JSON.
-pub trait Msg: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + Copy + 'static {
-    fn seq(&self) -> u64;
-    /// independent sequence streams on one channel (one per publisher)
-    fn stream(&self) -> u64 {
-        0
-    }
-    /// publish time [ns, CLOCK_MONOTONIC] when the message carries one
-    fn published_ns(&self) -> Option<u64>;
-    fn to_json(&self) -> Value;
+/// A JSON value that is not the view of a message.
+#[derive(Debug, thiserror::Error)]
+pub enum JsonError {
+    #[error("{message}: not a JSON object")]
+    NotAnObject { message: &'static str },
+    #[error("{message}: field '{field}': {detail}")]
+    Field {
+        message: &'static str,
+        field: String,
+        detail: String,
+    },
+    #[error("{message}: {source}")]
+    Decode {
+        message: &'static str,
+        #[source]
+        source: serde_json::Error,
+    },
 }
 
-fn joints(a: &[f64], dof: u32) -> Value {
-    json!(&a[..(dof as usize).min(a.len())])
+/// The message type's name (`JointState`), for errors.
+fn message_name<T>() -> &'static str {
+    let full = std::any::type_name::<T>();
+    full.rsplit("::").next().unwrap_or(full)
 }
 
-fn opt_ns(ns: u64) -> Value {
-    if ns == u64::MAX {
-        Value::Null
-    } else {
-        json!(ns)
-    }
-}
-
-fn num(x: f64) -> Value {
-    // JSON has no inf/NaN
-    if x.is_finite() {
-        json!(x)
-    } else {
-        Value::Null
-    }
-}
-
-impl Msg for JointState {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.published_ns)
-    }
-    fn to_json(&self) -> Value {
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "published_ns": self.published_ns,
-            "dof": self.dof, "status": self.status,
-            "q": joints(&self.q, self.dof), "tau": joints(&self.tau, self.dof),
-            "wrench": self.wrench, "command_seq": self.command_seq,
-            "missed_commands": self.missed_commands,
-        })
+/// Every field, arrays whole.
+fn full_view<T: Message>(m: &T) -> Map<String, Value> {
+    match serde_json::to_value(m) {
+        Ok(Value::Object(o)) => o,
+        // the derives write a struct, with infallible helpers
+        other => unreachable!("{} serialized as {other:?}", message_name::<T>()),
     }
 }
 
-impl Msg for TorqueCommand {
-    fn seq(&self) -> u64 {
-        self.seq
+/// The JSON view of a message: its fields by name, counted arrays cut to their count.
+pub fn to_json<T: Message>(m: &T) -> Value {
+    let mut v = full_view(m);
+    for (count, arrays) in T::COUNTED {
+        let n = v.get(*count).and_then(Value::as_u64).unwrap_or(0);
+        let n = usize::try_from(n).unwrap_or(usize::MAX);
+        for a in *arrays {
+            if let Some(Value::Array(xs)) = v.get_mut(*a) {
+                xs.truncate(n);
+            }
+        }
     }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.stamp_ns)
-    }
-    fn to_json(&self) -> Value {
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "state_seq": self.state_seq,
-            "state_stamp_ns": self.state_stamp_ns, "dof": self.dof,
-            "mode": control_mode::name(self.mode), "tau": joints(&self.tau, self.dof),
-        })
-    }
+    Value::Object(v)
 }
 
-impl Msg for Residual {
-    fn seq(&self) -> u64 {
-        self.seq
+/// A message back from its JSON view ([`to_json`]): counted arrays are
+/// padded with zeros, a count larger than its arrays' entries is cut to them,
+/// `null` floats become NaN (+inf for distances).
+pub fn from_json<T: Message>(v: &Value) -> Result<T, JsonError> {
+    let message = message_name::<T>();
+    let mut obj = v
+        .as_object()
+        .ok_or(JsonError::NotAnObject { message })?
+        .clone();
+    let mut zero: Option<Map<String, Value>> = None;
+    for (count, arrays) in T::COUNTED {
+        let mut given = usize::MAX;
+        for a in *arrays {
+            match obj.get_mut(*a) {
+                Some(Value::Array(xs)) => {
+                    given = given.min(xs.len());
+                    let zero = zero.get_or_insert_with(|| full_view(&T::zeroed()));
+                    if let Some(Value::Array(z)) = zero.get(*a) {
+                        if xs.len() < z.len() {
+                            xs.extend_from_slice(&z[xs.len()..]);
+                        }
+                    }
+                }
+                Some(other) => {
+                    return Err(JsonError::Field {
+                        message,
+                        field: a.to_string(),
+                        detail: format!("expected an array, got {other}"),
+                    })
+                }
+                // reported as missing by the decoder
+                None => {}
+            }
+        }
+        if let Some(c) = obj.get_mut(*count) {
+            if c.as_u64().is_some_and(|n| n > given as u64) {
+                *c = json!(given);
+            }
+        }
     }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.stamp_ns)
-    }
-    fn to_json(&self) -> Value {
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "state_seq": self.state_seq,
-            "state_stamp_ns": self.state_stamp_ns, "dof": self.dof, "flags": self.flags,
-            "isolated_joint": self.isolated_joint,
-            "r": joints(&self.r, self.dof), "qd": joints(&self.qd, self.dof),
-            "norm": num(self.norm), "compute_ns": self.compute_ns,
-        })
-    }
+    let obj = Value::Object(obj);
+    T::deserialize(&obj).map_err(|source| {
+        blame::<T>(&obj, &source.to_string()).unwrap_or(JsonError::Decode { message, source })
+    })
 }
 
-impl Msg for ControlStatus {
-    fn seq(&self) -> u64 {
-        self.seq
+/// The field whose value the decoder refused: the first one that, replaced
+/// by a zeroed message's, lets the message decode (serde's errors do not
+/// always name the field).
+fn blame<T: Message>(obj: &Value, detail: &str) -> Option<JsonError> {
+    let Value::Object(fields) = obj else {
+        return None;
+    };
+    for (k, z) in full_view(&T::zeroed()) {
+        if fields.get(&k).is_none_or(|x| *x == z) {
+            continue;
+        }
+        let mut fixed = fields.clone();
+        fixed.insert(k.clone(), z);
+        if T::deserialize(&Value::Object(fixed)).is_ok() {
+            return Some(JsonError::Field {
+                message: message_name::<T>(),
+                field: k,
+                detail: detail.to_string(),
+            });
+        }
     }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.stamp_ns)
-    }
-    fn to_json(&self) -> Value {
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "state_seq": self.state_seq,
-            "state_stamp_ns": self.state_stamp_ns, "mode": control_mode::name(self.mode),
-            "reaction": self.reaction, "waypoints_reached": self.waypoints_reached,
-            "detections": self.detections, "protective_stops": self.protective_stops,
-            "resumes": self.resumes, "residual_age_ns": opt_ns(self.residual_age_ns),
-            "q_ref": self.q_ref.iter().copied().map(num).collect::<Vec<_>>(),
-            "ee": self.ee, "compute_ns": self.compute_ns,
-            "wake_latency_ns": self.wake_latency_ns,
-            "perception_age_ns": opt_ns(self.perception_age_ns),
-            "min_distance": num(self.min_distance), "risk": num(self.risk),
-            "task_scale": num(self.task_scale),
-        })
-    }
-}
-
-impl Msg for Truth {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        None
-    }
-    fn to_json(&self) -> Value {
-        let n = (self.n_contacts as usize).min(MAX_CONTACTS);
-        let contacts: Vec<Value> = self.contacts[..n]
-            .iter()
-            .map(|c| {
-                json!({"robot_object": c.robot_object, "human_part": c.human_part,
-                       "intended": c.intended != 0, "force": c.force, "point": c.point,
-                       "depth": c.depth})
-            })
-            .collect();
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "state_seq": self.state_seq,
-            "n_contacts": self.n_contacts, "dof": self.dof,
-            "tau_ext": joints(&self.tau_ext, self.dof), "q": joints(&self.q, self.dof),
-            "qd": joints(&self.qd, self.dof), "min_distance": num(self.min_distance),
-            "contacts": contacts,
-        })
-    }
-}
-
-impl Msg for RobotStats {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        None
-    }
-    fn to_json(&self) -> Value {
-        // the histogram is summarised: its non-empty range and total
-        let first = self.latency_hist.iter().position(|&c| c > 0);
-        let last = self.latency_hist.iter().rposition(|&c| c > 0);
-        let total: u64 = self.latency_hist.iter().map(|&c| c as u64).sum();
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "cycles": self.cycles,
-            "missed_deadlines": self.missed_deadlines, "braked_cycles": self.braked_cycles,
-            "brake_events": self.brake_events, "overruns": self.overruns,
-            "latency_max_ns": self.latency_max_ns,
-            "latency_hist": {"bin_us": 1, "count": total, "first_bin": first, "last_bin": last},
-        })
-    }
-}
-
-impl Msg for Health {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.stamp_ns)
-    }
-    fn to_json(&self) -> Value {
-        let n = (self.count as usize).min(MAX_SERVICES);
-        let services: Vec<Value> = self.services[..n]
-            .iter()
-            .map(|s| {
-                json!({"name": s.name_str(), "pid": s.pid, "alive": s.alive != 0,
-                       "restarts": s.restarts, "started_ns": s.started_ns})
-            })
-            .collect();
-        json!({"seq": self.seq, "stamp_ns": self.stamp_ns, "count": self.count, "services": services})
-    }
-}
-
-impl Msg for WorldState {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        None
-    }
-    fn to_json(&self) -> Value {
-        let n = (self.n_human as usize).min(MAX_HUMAN_CAPSULES);
-        let human: Vec<Value> = self.human[..n]
-            .iter()
-            .map(|c| json!({"a": c.a, "b": c.b, "radius": c.radius, "part": c.part}))
-            .collect();
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "dof": self.dof,
-            "n_human": self.n_human, "q": joints(&self.q, self.dof), "human": human,
-        })
-    }
-}
-
-impl Msg for RepulsionResult {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn stream(&self) -> u64 {
-        self.worker as u64
-    }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.published_ns)
-    }
-    fn to_json(&self) -> Value {
-        let n = (self.n_points as usize).min(MAX_POINTS_PER_WORKER);
-        let points: Vec<Value> = self.points[..n]
-            .iter()
-            .map(|p| {
-                json!({"point": p.point, "active": p.active != 0, "v_call": p.v_call,
-                       "min_distance": num(p.min_distance), "obstacle": p.obstacle,
-                       "position": p.position})
-            })
-            .collect();
-        json!({
-            "seq": self.seq, "frame_seq": self.frame_seq, "capture_ns": self.capture_ns,
-            "published_ns": self.published_ns,
-            "frame_capture_wall_ns": self.frame_capture_wall_ns, "worker": self.worker,
-            "workers": self.workers, "n_points": self.n_points, "compute_ns": self.compute_ns,
-            "points": points,
-        })
-    }
+    None
 }
 
 /// Summary of a depth frame: seq, size, valid pixels, depth range, latency.
@@ -249,19 +146,4 @@ pub fn frame_json(h: &FrameHeader, d: &[u16]) -> Value {
         "max_depth_mm": if valid > 0 { json!(mx) } else { Value::Null },
         "capture_to_published_ms": h.published_ns.saturating_sub(h.capture_wall_ns) as f64 * 1e-6,
     })
-}
-
-impl Msg for DepthFault {
-    fn seq(&self) -> u64 {
-        self.seq
-    }
-    fn published_ns(&self) -> Option<u64> {
-        Some(self.stamp_ns)
-    }
-    fn to_json(&self) -> Value {
-        json!({
-            "seq": self.seq, "stamp_ns": self.stamp_ns, "kind": depth_fault::name(self.kind),
-            "frames": self.frames, "delay_ms": num(self.delay_ms), "duration_s": num(self.duration_s),
-        })
-    }
 }

@@ -2,6 +2,7 @@
 
 use nalgebra::{DVector, Vector3};
 
+use crate::cholesky::{cholesky_factor, cholesky_solve};
 use crate::data::Data;
 use crate::error::{check_len, ModelError};
 use crate::kinematics::{fk_pass, inertia_pass, velocity_pass};
@@ -10,7 +11,7 @@ use crate::spatial::{crf, crm, icrf, Force, Inertia, Motion};
 
 fn check_q_qd(model: &Model, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
     check_len("q", model.nv(), q.len())?;
-    check_len("qd", model.nv(), qd.len())
+    Ok(check_len("qd", model.nv(), qd.len())?)
 }
 
 /// Spatial acceleration of the base that stands in for gravity: `(0, −g)`.
@@ -313,41 +314,9 @@ pub fn forward_dynamics<'a>(
 
 /// Solve `M x = data.qdd` in place with a Cholesky factor in `data.chol`.
 fn cholesky_solve_in_place(data: &mut Data) -> Result<(), ModelError> {
-    let n = data.m.nrows();
-    let l = &mut data.chol;
-    for j in 0..n {
-        let mut d = data.m[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
-        if d <= 0.0 || !d.is_finite() {
-            return Err(ModelError::NotPositiveDefinite);
-        }
-        let d = d.sqrt();
-        l[(j, j)] = d;
-        for i in (j + 1)..n {
-            let mut s = data.m[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / d;
-        }
-    }
-    let x = &mut data.qdd;
-    for i in 0..n {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[(i, k)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = x[i];
-        for k in (i + 1)..n {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
-    }
+    data.chol.copy_from(&data.m);
+    cholesky_factor(data.chol.as_view_mut(), 0.0).map_err(|_| ModelError::NotPositiveDefinite)?;
+    cholesky_solve(data.chol.as_view(), data.qdd.as_mut_slice());
     Ok(())
 }
 

@@ -38,25 +38,45 @@ pub enum ModelError {
         lower: f64,
         upper: f64,
     },
+    #[error("joint '{joint}': {field} is {value}; it must be positive (only a continuous joint may go without <limit>, and is then unlimited)")]
+    LimitNotPositive {
+        joint: String,
+        field: &'static str,
+        value: f64,
+    },
+    #[error("two {element}s are named '{name}'")]
+    DuplicateName { element: &'static str, name: String },
+    #[error("joint '{joint}' moves no mass (no mass or inertia in the links it carries): the joint-space inertia matrix would be singular")]
+    MovesNoMass { joint: String },
+    #[error("{origin}: XML nested deeper than {max} elements")]
+    TooDeep { origin: String, max: usize },
+    #[error("{}: larger than {max} bytes; not a robot description", path.display())]
+    TooLarge { path: PathBuf, max: u64 },
     #[error("unknown link '{0}'")]
     UnknownLink(String),
-    #[error("{what}: expected length {expected}, got {got}")]
-    Dimension {
-        what: &'static str,
-        expected: usize,
-        got: usize,
-    },
+    #[error(transparent)]
+    Dimension(#[from] LengthError),
     #[error("the joint-space inertia matrix is not positive definite")]
     NotPositiveDefinite,
 }
 
-/// `Ok(())` if `got == expected`, a [`ModelError::Dimension`] naming `what` otherwise.
+/// An array of the wrong length: the one length check of phri's numerics
+/// ([`check_len`]), wrapped by every library's own error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{what}: expected length {expected}, got {got}")]
+pub struct LengthError {
+    pub what: &'static str,
+    pub expected: usize,
+    pub got: usize,
+}
+
+/// `Ok(())` if `got == expected`, a [`LengthError`] naming `what` otherwise.
 #[inline]
-pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), ModelError> {
+pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), LengthError> {
     if expected == got {
         Ok(())
     } else {
-        Err(ModelError::Dimension {
+        Err(LengthError {
             what,
             expected,
             got,

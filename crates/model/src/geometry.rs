@@ -1,6 +1,6 @@
 //! Link collision geometry as primitives, convertible to parry3d shapes.
 
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Vector3};
 use parry3d_f64::shape::SharedShape;
 
 use crate::data::Data;
@@ -58,6 +58,40 @@ impl Shape {
         }
     }
 
+    /// The capsule that stands in for this shape wherever phri needs capsules
+    /// (the simulator's contacts, the camera's robot pixels, the self-filter):
+    /// capsules and spheres exactly; a cylinder by the capsule of the same
+    /// radius and axis; a box by the capsule along its longest axis whose
+    /// radius covers its cross-section. Each contains the shape, and for a box
+    /// no capsule along that axis with a shorter segment or a smaller radius
+    /// does (the corners sit on it). Returns `(radius, half_length, R)` [m]:
+    /// the capsule's segment is `R (0, 0, ±half_length)` in the shape frame.
+    pub fn capsule(&self) -> (f64, f64, Matrix3<f64>) {
+        let id = Matrix3::identity();
+        match *self {
+            Shape::Capsule {
+                radius,
+                half_length,
+            }
+            | Shape::Cylinder {
+                radius,
+                half_length,
+            } => (radius, half_length, id),
+            Shape::Sphere { radius } => (radius, 0.0, id),
+            Shape::Box { half_extents: e } => {
+                // a permutation putting the longest axis on z
+                let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+                if e.z >= e.x && e.z >= e.y {
+                    (e.x.hypot(e.y), e.z, id)
+                } else if e.x >= e.y {
+                    (e.y.hypot(e.z), e.x, Matrix3::from_columns(&[y, z, x]))
+                } else {
+                    (e.z.hypot(e.x), e.y, Matrix3::from_columns(&[z, x, y]))
+                }
+            }
+        }
+    }
+
     /// Radius of the smallest sphere around the shape's origin that holds it [m].
     pub fn bounding_radius(&self) -> f64 {
         match *self {
@@ -99,4 +133,54 @@ pub fn parry_shapes(model: &Model, data: &Data) -> Vec<(String, SharedShape, Iso
             (c.link.clone(), s, iso)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// distance from `p` to the capsule `(r, h, R)` minus its radius
+    fn outside(p: Vector3<f64>, (r, h, rot): (f64, f64, Matrix3<f64>)) -> f64 {
+        let local = rot.transpose() * p;
+        let z = local.z.clamp(-h, h);
+        (local - Vector3::new(0.0, 0.0, z)).norm() - r
+    }
+
+    #[test]
+    fn the_capsule_of_a_shape_contains_it_and_is_tight_for_boxes() {
+        for e in [
+            Vector3::new(0.1, 0.2, 0.5),
+            Vector3::new(0.5, 0.1, 0.2),
+            Vector3::new(0.2, 0.5, 0.1),
+            Vector3::new(0.3, 0.3, 0.3),
+        ] {
+            let b = Shape::Box { half_extents: e };
+            let c = b.capsule();
+            let mut touching = 0;
+            for sx in [-1.0, 1.0] {
+                for sy in [-1.0, 1.0] {
+                    for sz in [-1.0, 1.0] {
+                        let corner = Vector3::new(sx * e.x, sy * e.y, sz * e.z);
+                        let d = outside(corner, c);
+                        assert!(d <= 1e-12, "corner {corner:?} of {e:?} outside by {d}");
+                        if d > -1e-12 {
+                            touching += 1;
+                        }
+                    }
+                }
+            }
+            assert_eq!(touching, 8, "every corner of {e:?} lies on its capsule");
+            // the axis is the box's longest
+            assert!((c.1 - e.max()).abs() < 1e-15);
+        }
+        let cyl = Shape::Cylinder {
+            radius: 0.07,
+            half_length: 0.2,
+        };
+        let c = cyl.capsule();
+        for (x, z) in [(0.07, 0.2), (0.0, -0.2), (0.07, -0.2)] {
+            assert!(outside(Vector3::new(x, 0.0, z), c) <= 1e-12);
+        }
+        assert_eq!(Shape::Sphere { radius: 0.1 }.capsule().1, 0.0);
+    }
 }

@@ -8,7 +8,17 @@
 //! Supported: kinematic trees of revolute, continuous, prismatic and fixed
 //! joints with any origins and axes. Floating, planar, spherical and mimic
 //! joints are refused with an error naming the joint.
+//!
+//! Refused as well, each naming the culprit: effort or velocity limits ≤ 0
+//! (a revolute or prismatic joint must give both; a continuous joint without
+//! `<limit>` is unlimited — urdf-rs reads it as effort = velocity = 0, so
+//! exactly that pair means "no limit" on a continuous joint), two links or
+//! two joints of one name, a joint that moves no mass or inertia (singular
+//! `M` at every configuration), XML nested deeper than [`MAX_XML_DEPTH`]
+//! (checked before parsing: the parser recurses), a file larger than
+//! [`MAX_URDF_BYTES`].
 
+pub mod cholesky;
 pub mod data;
 pub mod dynamics;
 pub mod error;
@@ -16,13 +26,16 @@ pub mod geometry;
 pub mod kinematics;
 pub mod model;
 pub mod spatial;
+mod xml_depth;
 
+pub use cholesky::{cholesky_factor, cholesky_solve, NotPositiveDefinite};
 pub use data::Data;
 pub use dynamics::{
     coriolis_matrix, coriolis_times_qd, coriolis_transpose_times_qd, crba, forward_dynamics,
     gravity, kinetic_energy, momentum, potential_energy, residual_terms, rnea,
 };
-pub use error::ModelError;
+pub use error::{check_len, LengthError, ModelError};
 pub use geometry::{parry_shapes, CollisionObject, Shape};
 pub use kinematics::{forward_kinematics, frame_placement, point_jacobian};
-pub use model::{Frame, Joint, JointKind, Model, Placement};
+pub use model::{Frame, Joint, JointKind, Model, Placement, MAX_URDF_BYTES};
+pub use xml_depth::MAX_XML_DEPTH;

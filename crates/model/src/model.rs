@@ -1,6 +1,6 @@
 //! The immutable robot model, built once from a URDF.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
@@ -8,6 +8,12 @@ use nalgebra::{Matrix3, Vector3};
 use crate::error::ModelError;
 use crate::geometry::{CollisionObject, Shape};
 use crate::spatial::rpy_to_matrix;
+use crate::xml_depth::{check_depth, MAX_XML_DEPTH};
+
+/// Largest URDF file read [bytes]: robot descriptions are kilobytes (meshes
+/// are separate files), so 16 MiB leaves ample room and bounds what a
+/// wrong path (a log, a device) costs.
+pub const MAX_URDF_BYTES: u64 = 16 << 20;
 
 /// Kind of an actuated joint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,9 +89,10 @@ pub struct Joint {
     /// position limits [rad or m]; ±∞ for continuous joints
     pub lower: f64,
     pub upper: f64,
-    /// velocity limit [rad/s or m/s]; ∞ when the URDF gives none
+    /// velocity limit [rad/s or m/s], > 0; ∞ only for a continuous joint
+    /// without `<limit>`
     pub velocity: f64,
-    /// effort limit [Nm or N]; ∞ when the URDF gives none
+    /// effort limit [Nm or N], > 0; ∞ only for a continuous joint without `<limit>`
     pub effort: f64,
     /// mass [kg], centre of mass [m] and inertia about it [kg m²] of the
     /// body (links rigidly attached by fixed joints merged), body frame
@@ -189,13 +196,61 @@ impl MassProps {
     }
 }
 
+/// Every joint must move some mass, whatever the configuration: a prismatic
+/// joint some mass in its subtree, a revolute one some mass or rotational
+/// inertia (a body keeps inertia only with mass: [`MassProps::split`]). Otherwise its column of `M` is zero at every `q` (singular `M`:
+/// forward dynamics, the residual and the controller's inverse fail).
+/// Configuration-dependent singularities (mass only on the axis) are the
+/// configuration's check (`phri-config`, at the start posture).
+fn moves_mass(joints: &[Joint]) -> Result<(), ModelError> {
+    let mut mass: Vec<f64> = joints.iter().map(|j| j.mass).collect();
+    let mut inertia: Vec<f64> = joints.iter().map(|j| j.inertia_com.trace()).collect();
+    for i in (0..joints.len()).rev() {
+        let moves = match joints[i].kind {
+            JointKind::Prismatic => mass[i] > 0.0,
+            JointKind::Revolute => mass[i] > 0.0 || inertia[i] > 0.0,
+        };
+        if !moves {
+            return Err(ModelError::MovesNoMass {
+                joint: joints[i].name.clone(),
+            });
+        }
+        if let Some(p) = joints[i].parent {
+            mass[p] += mass[i];
+            inertia[p] += inertia[i];
+        }
+    }
+    Ok(())
+}
+
 impl Model {
-    /// Build from a URDF file.
+    /// Build from a URDF file (at most [`MAX_URDF_BYTES`]: a larger one is
+    /// refused without being read whole).
     pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<Model, ModelError> {
+        use std::io::Read;
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        let io = |source| ModelError::Io {
             path: path.to_path_buf(),
             source,
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        let mut bytes = Vec::new();
+        // one byte more than allowed tells a file that is too large (even one
+        // whose size the file system does not report, such as a pipe)
+        file.take(MAX_URDF_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() as u64 > MAX_URDF_BYTES {
+            return Err(ModelError::TooLarge {
+                path: path.to_path_buf(),
+                max: MAX_URDF_BYTES,
+            });
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "not UTF-8 text",
+            ))
         })?;
         Self::from_urdf_str_named(&text, &path.display().to_string())
     }
@@ -206,6 +261,11 @@ impl Model {
     }
 
     fn from_urdf_str_named(text: &str, origin: &str) -> Result<Model, ModelError> {
+        // the parser recurses per nesting level: bound the depth before it runs
+        check_depth(text, MAX_XML_DEPTH).map_err(|_| ModelError::TooDeep {
+            origin: origin.to_string(),
+            max: MAX_XML_DEPTH,
+        })?;
         // urdf-rs sorts elements with a string pass before parsing; guard against panics deep in it
         let parsed =
             std::panic::catch_unwind(|| urdf_rs::read_from_string(text)).map_err(|_| {
@@ -223,12 +283,24 @@ impl Model {
 
     /// Build from a parsed URDF.
     pub fn from_urdf(robot: &urdf_rs::Robot) -> Result<Model, ModelError> {
-        let link_index: HashMap<&str, usize> = robot
-            .links
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (l.name.as_str(), i))
-            .collect();
+        let mut link_index: HashMap<&str, usize> = HashMap::with_capacity(robot.links.len());
+        for (i, l) in robot.links.iter().enumerate() {
+            if link_index.insert(l.name.as_str(), i).is_some() {
+                return Err(ModelError::DuplicateName {
+                    element: "link",
+                    name: l.name.clone(),
+                });
+            }
+        }
+        let mut joint_names: HashSet<&str> = HashSet::with_capacity(robot.joints.len());
+        for j in &robot.joints {
+            if !joint_names.insert(j.name.as_str()) {
+                return Err(ModelError::DuplicateName {
+                    element: "joint",
+                    name: j.name.clone(),
+                });
+            }
+        }
         // children per link in file order, parent joint per link
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
         let mut parent_joint: Vec<Option<usize>> = vec![None; robot.links.len()];
@@ -336,9 +408,23 @@ impl Model {
                             upper,
                         });
                     }
-                    let positive_or_inf = |x: f64, f: &str| -> Result<f64, ModelError> {
+                    // effort and velocity must be positive: 0 or less is a typo
+                    // that would remove the clamp. A continuous joint may have no
+                    // <limit> (urdf-rs then reads effort = velocity = 0): unlimited.
+                    let no_limit = continuous && lim.effort == 0.0 && lim.velocity == 0.0;
+                    let positive_or_inf = |x: f64, f: &'static str| -> Result<f64, ModelError> {
                         let x = finite(x, &el, f)?;
-                        Ok(if x > 0.0 { x } else { f64::INFINITY })
+                        if no_limit {
+                            Ok(f64::INFINITY)
+                        } else if x > 0.0 {
+                            Ok(x)
+                        } else {
+                            Err(ModelError::LimitNotPositive {
+                                joint: j.name.clone(),
+                                field: f,
+                                value: x,
+                            })
+                        }
                     };
                     joints.push(Joint {
                         name: j.name.clone(),
@@ -464,6 +550,7 @@ impl Model {
             j.com = c;
             j.inertia_com = i_c;
         }
+        moves_mass(&joints)?;
         let frame_index = frames
             .iter()
             .enumerate()

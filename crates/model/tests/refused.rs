@@ -107,23 +107,23 @@ fn wrong_lengths_and_unknown_links() {
     let mut d = Data::new(&model);
     assert!(matches!(
         crba(&model, &mut d, &[0.0; 6]),
-        Err(ModelError::Dimension {
+        Err(ModelError::Dimension(LengthError {
             what: "q",
             expected: 7,
             got: 6
-        })
+        }))
     ));
     assert!(matches!(
         rnea(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 8]),
-        Err(ModelError::Dimension { what: "qdd", .. })
+        Err(ModelError::Dimension(LengthError { what: "qdd", .. }))
     ));
     assert!(matches!(
         residual_terms(&model, &mut d, &[0.0; 7], &[0.0; 3]),
-        Err(ModelError::Dimension { what: "qd", .. })
+        Err(ModelError::Dimension(LengthError { what: "qd", .. }))
     ));
     assert!(matches!(
         forward_dynamics(&model, &mut d, &[0.0; 7], &[0.0; 7], &[0.0; 2]),
-        Err(ModelError::Dimension { what: "tau", .. })
+        Err(ModelError::Dimension(LengthError { what: "tau", .. }))
     ));
     assert!(
         matches!(model.frame_id("no_such_link"), Err(ModelError::UnknownLink(l)) if l == "no_such_link")
@@ -142,4 +142,153 @@ fn continuous_joints_have_no_position_limits_and_meshes_are_skipped() {
     assert_eq!(m.joints[0].lower, f64::NEG_INFINITY);
     assert_eq!(m.joints[0].velocity, f64::INFINITY);
     assert_eq!(m.skipped_meshes, vec!["base".to_string()]);
+}
+
+#[test]
+fn effort_or_velocity_limits_at_or_below_zero_are_refused_by_joint() {
+    for (field, value) in [
+        ("effort", "0"),
+        ("effort", "-5"),
+        ("velocity", "0"),
+        ("velocity", "-1"),
+    ] {
+        for kind in ["revolute", "prismatic", "continuous"] {
+            let body =
+                joint(kind, "").replace(&format!("{field}=\"1\""), &format!("{field}=\"{value}\""));
+            match robot(&body) {
+                Err(e @ ModelError::LimitNotPositive { .. }) => {
+                    let ModelError::LimitNotPositive {
+                        joint, field: f, ..
+                    } = &e
+                    else {
+                        unreachable!()
+                    };
+                    assert_eq!(joint, "j");
+                    assert!(f.contains(field), "{e}");
+                    assert!(e.to_string().contains("'j'"), "{e}");
+                }
+                other => panic!("{kind} {field}={value}: {other:?}"),
+            }
+        }
+    }
+    // effort omitted from <limit> (urdf-rs reads 0): refused as well
+    let body = joint("revolute", "").replace(" effort=\"1\"", "");
+    assert!(matches!(
+        robot(&body),
+        Err(ModelError::LimitNotPositive { field, .. }) if field.contains("effort")
+    ));
+    // a revolute joint without <limit> has neither limit: refused
+    let body = joint("revolute", "").replace(
+        "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>",
+        "",
+    );
+    assert!(matches!(
+        robot(&body),
+        Err(ModelError::LimitNotPositive { .. })
+    ));
+    // positive limits are kept as given
+    let m = robot(&joint("revolute", "")).unwrap();
+    assert_eq!((m.joints[0].effort, m.joints[0].velocity), (1.0, 1.0));
+}
+
+#[test]
+fn duplicate_joint_or_link_names_are_refused() {
+    let two_joints = format!(
+        "{}<link name=\"b\">{}</link><joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>",
+        joint("revolute", ""),
+        &LINK["<link name=\"a\">".len()..LINK.len() - "</link>".len()]
+    );
+    match robot(&two_joints) {
+        Err(e @ ModelError::DuplicateName { .. }) => {
+            assert!(e.to_string().contains("joints are named 'j'"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let two_links = format!("{LINK}{}", joint("revolute", ""));
+    match robot(&two_links) {
+        Err(e @ ModelError::DuplicateName { .. }) => {
+            assert!(e.to_string().contains("links are named 'a'"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_joint_that_moves_no_mass_is_refused_by_name() {
+    // "a" carries nothing: no inertial, no child
+    let massless = "<robot name=\"r\"><link name=\"base\"/><link name=\"a\"/><joint name=\"j\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>";
+    match Model::from_urdf_str(massless) {
+        Err(e @ ModelError::MovesNoMass { .. }) => {
+            assert!(e.to_string().contains("joint 'j'"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // a massless link is fine when the joint carries mass further out
+    let carried = format!("<robot name=\"r\"><link name=\"base\"/><link name=\"a\"/>{}<joint name=\"j\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint><joint name=\"k\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/><origin xyz=\"0.1 0 0\"/></joint></robot>", LINK.replace("name=\"a\"", "name=\"b\""));
+    assert!(
+        Model::from_urdf_str(&carried).is_ok(),
+        "{:?}",
+        Model::from_urdf_str(&carried)
+    );
+    // a link with inertia but no mass is no body (the model keeps no inertia
+    // without mass): the joint that carries only it moves nothing
+    for kind in ["prismatic", "revolute"] {
+        let inertia_only = format!(
+            "<robot name=\"r\"><link name=\"base\"/>{}{}</robot>",
+            LINK.replace("value=\"1\"", "value=\"0\""),
+            joint(kind, "")
+        );
+        assert!(
+            matches!(
+                Model::from_urdf_str(&inertia_only),
+                Err(ModelError::MovesNoMass { ref joint }) if joint == "j"
+            ),
+            "{kind}"
+        );
+    }
+}
+
+#[test]
+fn deep_nesting_and_huge_files_are_refused_before_parsing() {
+    // 100 000 levels overflowed the parser's stack (the process aborted)
+    let deep = format!(
+        "<robot name=\"r\"><link name=\"base\">{}</link></robot>",
+        "<x>".repeat(100_000)
+    );
+    match Model::from_urdf_str(&deep) {
+        Err(e @ ModelError::TooDeep { .. }) => {
+            assert!(e.to_string().contains("nested deeper than 64"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // within the bound, the parser has its say as before
+    let nested_ok = format!(
+        "<robot name=\"r\"><link name=\"base\">{}{}</link></robot>",
+        "<x>".repeat(MAX_XML_DEPTH - 2),
+        "</x>".repeat(MAX_XML_DEPTH - 2)
+    );
+    assert!(!matches!(
+        Model::from_urdf_str(&nested_ok),
+        Err(ModelError::TooDeep { .. })
+    ));
+    let dir = std::env::temp_dir().join(format!("phri-model-refused-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("deep.urdf");
+    std::fs::write(&path, &deep).unwrap();
+    match Model::from_urdf_file(&path) {
+        Err(e @ ModelError::TooDeep { .. }) => {
+            assert!(e.to_string().contains("deep.urdf"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let huge = dir.join("huge.urdf");
+    let f = std::fs::File::create(&huge).unwrap();
+    f.set_len(MAX_URDF_BYTES + 1).unwrap();
+    match Model::from_urdf_file(&huge) {
+        Err(e @ ModelError::TooLarge { .. }) => {
+            assert!(e.to_string().contains("huge.urdf"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

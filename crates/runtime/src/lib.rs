@@ -1,15 +1,15 @@
 //! What every phri process needs: a monotonic clock and absolute-deadline
-//! sleep, real-time scheduling, shutdown on signals, and configuration.
+//! sleep, real-time scheduling, shutdown on signals, and the service context
+//! (arguments, configuration through `phri-config`, the node).
 
 pub mod args;
 pub mod clock;
-pub mod config;
 pub mod rt;
+pub mod rundir;
 pub mod service;
 pub mod shutdown;
 
-pub use args::Args;
+pub use args::{Args, ArgsError};
 pub use clock::{now_ns, sleep_until_ns};
-pub use config::{load_config, section, ConfigError};
-pub use service::ServiceContext;
+pub use service::{ServiceContext, ServiceError};
 pub use shutdown::Shutdown;

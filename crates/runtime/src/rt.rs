@@ -1,5 +1,19 @@
 //! Real-time scheduling where the machine permits it.
 
+/// What could not be done to make a process real-time.
+#[derive(Debug, thiserror::Error)]
+pub enum RtError {
+    #[error("real-time priority 0: normal scheduler")]
+    NoPriority,
+    #[error("SCHED_FIFO {priority} refused: {source}")]
+    Scheduler {
+        priority: i32,
+        source: std::io::Error,
+    },
+    #[error("mlockall refused: {0}")]
+    Lock(std::io::Error),
+}
+
 /// Run the calling process under SCHED_FIFO at `priority` (1-99) and lock the
 /// memory it has mapped so far (call it after creating its ports). Not
 /// MCL_FUTURE: a real-time loop would then stall while the kernel faults in
@@ -7,9 +21,9 @@
 /// (a restarted perception worker, a monitor), milliseconds per segment.
 /// Returns a description of what could not be done (the process then runs
 /// under the normal scheduler), never fails hard.
-pub fn make_realtime(priority: i32) -> Result<(), String> {
+pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     if priority <= 0 {
-        return Err("real-time priority 0: normal scheduler".into());
+        return Err(RtError::NoPriority);
     }
     let param = libc::sched_param {
         sched_priority: priority.min(99),
@@ -17,18 +31,15 @@ pub fn make_realtime(priority: i32) -> Result<(), String> {
     // SAFETY: plain syscalls with valid arguments.
     let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
     if rc != 0 {
-        return Err(format!(
-            "SCHED_FIFO {priority} refused: {}",
-            std::io::Error::last_os_error()
-        ));
+        return Err(RtError::Scheduler {
+            priority,
+            source: std::io::Error::last_os_error(),
+        });
     }
     // SAFETY: as above.
     let rc = unsafe { libc::mlockall(libc::MCL_CURRENT) };
     if rc != 0 {
-        return Err(format!(
-            "mlockall refused: {}",
-            std::io::Error::last_os_error()
-        ));
+        return Err(RtError::Lock(std::io::Error::last_os_error()));
     }
     Ok(())
 }

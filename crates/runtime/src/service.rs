@@ -1,21 +1,35 @@
 //! What a service binary does before its loop: arguments, configuration,
 //! shutdown handlers, real-time scheduling, and one-line errors.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use serde::de::DeserializeOwned;
-use toml::Table;
+use phri_config::{Config, ConfigError, Loaded, Scenario};
+use phri_ipc::{IpcError, IpcNode};
 
-use crate::{load_config, section, Args, Shutdown};
+use crate::{Args, ArgsError, Shutdown};
+
+/// Why a service could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    #[error(transparent)]
+    Args(#[from] ArgsError),
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+    #[error("signal handlers: {0}")]
+    Signals(std::io::Error),
+    #[error("--config {0}")]
+    Untrusted(#[from] crate::rundir::TrustError),
+}
 
 /// Everything a service's `main` needs.
 pub struct ServiceContext {
     /// service name as the supervisor knows it
     pub name: String,
-    /// merged configuration (`--config` file plus `--set`s)
-    pub config: Table,
-    pub config_path: PathBuf,
+    /// the configuration (`--config` file plus `--set`s), typed and checked
+    pub loaded: Loaded,
     /// iceoryx2 prefix of this run
     pub prefix: String,
     /// SCHED_FIFO priority (0: normal scheduler)
@@ -34,6 +48,17 @@ pub const CELL_START_ENV: &str = "PHRI_CELL_START_NS";
 /// last state there.
 pub const RUN_DIR_ENV: &str = "PHRI_RUN_DIR";
 
+/// Environment variable the supervisor sets for every service it starts: the
+/// service is supervised, and stops safely (the dead-man) when no supervisor
+/// of its cell has published `supervisor/health` for `[supervisor] deadman_s`.
+pub const SUPERVISED_ENV: &str = "PHRI_SUPERVISED";
+
+/// Environment variable giving the iceoryx2 prefix when `--prefix` is absent.
+pub const PREFIX_ENV: &str = "PHRI_PREFIX";
+
+/// The prefix used when neither `--prefix` nor [`PREFIX_ENV`] gives one.
+pub const DEFAULT_PREFIX: &str = "phri_";
+
 /// The run directory from [`RUN_DIR_ENV`], if set and not empty.
 pub fn run_dir() -> Option<PathBuf> {
     std::env::var_os(RUN_DIR_ENV)
@@ -51,29 +76,36 @@ pub fn cell_start_ns() -> Option<u64> {
     (t <= crate::now_ns()).then_some(t)
 }
 
-/// Flags every service accepts: `--config FILE --prefix P --rt-priority N --set k=v`.
+/// Flags every service accepts: `--config FILE --prefix P --rt-priority N --set k=v --name N`.
 pub const COMMON_FLAGS: &[&str] = &["--config", "--prefix", "--rt-priority", "--set", "--name"];
 
+/// Switch every service accepts: build everything from the configuration,
+/// check it, and exit (0: it would run; 2 and one line: what it refuses),
+/// opening no channel. The supervisor runs it for every service before it
+/// starts any.
+pub const CHECK_FLAG: &str = "--check";
+
 impl ServiceContext {
-    /// Parse the process arguments (`extra` are service-specific valued flags).
-    pub fn from_args(default_name: &str, extra: &[&str]) -> Result<ServiceContext, String> {
+    /// Parse the process arguments (`extra` are service-specific valued flags)
+    /// and load the configuration.
+    pub fn from_args(default_name: &str, extra: &[&str]) -> Result<ServiceContext, ServiceError> {
         let valued: Vec<&str> = COMMON_FLAGS.iter().chain(extra.iter()).copied().collect();
-        let args = Args::parse(std::env::args().skip(1), &valued, &[])?;
+        let args = Args::parse(std::env::args().skip(1), &valued, &[CHECK_FLAG])?;
         let config_path = PathBuf::from(args.get("--config").unwrap_or("deploy/phri.toml"));
-        let sets = args.all("--set");
-        let config = load_config(&config_path, &[], &sets).map_err(|e| e.to_string())?;
+        // settings that another user could write are never read
+        crate::rundir::check_trusted_file(&config_path)?;
+        let loaded = Loaded::load(&config_path, None, &args.all("--set"))?;
         let prefix = args
             .get("--prefix")
             .map(str::to_string)
-            .or_else(|| std::env::var("PHRI_PREFIX").ok())
-            .unwrap_or_else(|| "phri_".to_string());
+            .or_else(|| std::env::var(PREFIX_ENV).ok())
+            .unwrap_or_else(|| DEFAULT_PREFIX.to_string());
         let rt_priority = args.parse_value::<i32>("--rt-priority")?.unwrap_or(0);
-        let shutdown = Shutdown::install().map_err(|e| format!("signal handlers: {e}"))?;
+        let shutdown = Shutdown::install().map_err(ServiceError::Signals)?;
         let name = args.get("--name").unwrap_or(default_name).to_string();
         Ok(ServiceContext {
             name,
-            config,
-            config_path,
+            loaded,
             prefix,
             rt_priority,
             shutdown,
@@ -81,35 +113,86 @@ impl ServiceContext {
         })
     }
 
-    /// Deserialize `[name]`, errors naming the section and key.
-    pub fn section<T: DeserializeOwned>(&self, name: &str) -> Result<T, String> {
-        section(&self.config, name).map_err(|e| format!("{}: {e}", self.config_path.display()))
+    /// Started with [`CHECK_FLAG`]: the service returns (exit 0) once its
+    /// steps are built from the configuration, before it opens any channel.
+    pub fn checking(&self) -> bool {
+        self.args.has(CHECK_FLAG)
     }
 
-    /// `[robot] urdf`, relative to the configuration file's directory.
-    pub fn robot_urdf(&self) -> Result<PathBuf, String> {
-        let urdf = self
-            .config
-            .get("robot")
-            .and_then(|r| r.get("urdf"))
-            .and_then(|u| u.as_str())
-            .ok_or_else(|| format!("{}: [robot] urdf is missing", self.config_path.display()))?;
-        Ok(resolve(&self.config_path, urdf))
-    }
-
-    /// The robot model of `[robot] urdf`, refused when it has more joints than
-    /// the messages carry (`max_dof`), with an error naming the file.
-    pub fn robot_model(&self, max_dof: usize) -> Result<phri_model::Model, String> {
-        let urdf = self.robot_urdf()?;
-        let model = phri_model::Model::from_urdf_file(&urdf).map_err(|e| e.to_string())?;
-        if model.nv() > max_dof {
-            return Err(format!(
-                "{}: {} joints, messages carry at most {max_dof}",
-                urdf.display(),
-                model.nv()
-            ));
+    /// Start the dead-man when supervised ([`SUPERVISED_ENV`]): a thread at
+    /// normal priority (call it before [`ServiceContext::go_realtime`]) that
+    /// requests shutdown once no supervisor of this cell has published
+    /// `supervisor/health` for `[supervisor] deadman_s` (a supervisor that
+    /// died and was not replaced). Unsupervised, it does nothing.
+    pub fn start_deadman(&self) -> Result<(), IpcError> {
+        if std::env::var_os(SUPERVISED_ENV).is_none() {
+            return Ok(());
         }
-        Ok(model)
+        let (node_name, prefix) = (format!("{}-deadman", self.name), self.prefix.clone());
+        let limit_ns = (self.config().supervisor.deadman_s * 1e9) as u64;
+        let shutdown = self.shutdown.clone();
+        let name = self.name.clone();
+        let (ready, started) = std::sync::mpsc::channel::<Result<(), IpcError>>();
+        std::thread::spawn(move || {
+            // the node and its port live on this thread (iceoryx2 ports are not Send)
+            let opened = phri_ipc::node(&node_name, &prefix).and_then(|node| {
+                let sub = phri_ipc::SUPERVISOR_HEALTH.subscriber(&node, phri_ipc::Queue::Latest)?;
+                Ok((node, sub))
+            });
+            let (_node, health) = match opened {
+                Ok(x) => {
+                    let _ = ready.send(Ok(()));
+                    x
+                }
+                Err(e) => {
+                    let _ = ready.send(Err(e));
+                    return;
+                }
+            };
+            let mut last = crate::now_ns();
+            while !shutdown.requested() {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+                let now = crate::now_ns();
+                if matches!(health.latest(), Ok(Some(_))) {
+                    last = now;
+                }
+                if now.saturating_sub(last) > limit_ns {
+                    eprintln!(
+                        "{name}: no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)",
+                        now.saturating_sub(last) as f64 * 1e-9
+                    );
+                    shutdown.request();
+                }
+            }
+        });
+        started.recv().unwrap_or(Ok(()))?;
+        Ok(())
+    }
+
+    /// The typed configuration.
+    pub fn config(&self) -> &Config {
+        &self.loaded.config
+    }
+
+    /// The scenario the cell runs.
+    pub fn scenario(&self) -> &Scenario {
+        &self.loaded.scenario
+    }
+
+    /// The robot model of `[robot] urdf`, checked against the configuration
+    /// and the messages' joint capacity.
+    pub fn robot_model(&self) -> Result<phri_model::Model, ConfigError> {
+        self.loaded.model()
+    }
+
+    /// This service's iceoryx2 node under the run's prefix.
+    pub fn node(&self) -> Result<IpcNode, IpcError> {
+        phri_ipc::node(&self.name, &self.prefix)
+    }
+
+    /// A second node (for a helper thread) named `<name>-<suffix>`.
+    pub fn node_named(&self, suffix: &str) -> Result<IpcNode, IpcError> {
+        phri_ipc::node(&format!("{}-{suffix}", self.name), &self.prefix)
     }
 
     /// Switch to SCHED_FIFO if configured and permitted; say what happened on stderr.
@@ -122,30 +205,13 @@ impl ServiceContext {
     }
 }
 
-/// `path` as given if absolute, else relative to the directory of `base_file`
-/// (and, failing that, to the current directory).
-pub fn resolve(base_file: &Path, path: &str) -> PathBuf {
-    let p = Path::new(path);
-    if p.is_absolute() {
-        return p.to_path_buf();
-    }
-    let beside = base_file
-        .parent()
-        .map(|d| d.join(p))
-        .unwrap_or_else(|| p.to_path_buf());
-    if beside.exists() {
-        beside
-    } else {
-        p.to_path_buf()
-    }
-}
-
 /// Run a service body; print its error as one line and exit non-zero.
-pub fn run(name: &str, body: impl FnOnce() -> Result<(), String>) -> ExitCode {
+pub fn run<E: std::fmt::Display>(name: &str, body: impl FnOnce() -> Result<(), E>) -> ExitCode {
     match body() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{name}: {e}");
+            let line = e.to_string().replace('\n', " ");
+            eprintln!("{name}: {line}");
             ExitCode::from(2)
         }
     }

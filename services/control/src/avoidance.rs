@@ -55,8 +55,8 @@
 //! No allocation per cycle: [`Avoidance`] holds preallocated buffers.
 
 use nalgebra::{DMatrixView, Dim, Matrix, RawStorage, Vector3};
-use phri_model::Model;
-use serde::Deserialize;
+pub use phri_config::AvoidanceParams;
+use phri_model::{check_len, Model};
 
 use crate::sns::{SnsError, SnsSolver};
 
@@ -186,34 +186,6 @@ pub fn shape_bounds_for_point<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
 #[inline]
 pub fn end_effector_velocity(xdot_task: &Vector3<f64>, v_call_ee: &Vector3<f64>) -> Vector3<f64> {
     xdot_task + v_call_ee
-}
-
-/// Settings of [`Avoidance`].
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct AvoidanceParams {
-    /// joint acceleration limit of the joint-limit bounds, all joints [rad/s²]
-    pub accel_limit: f64,
-    /// horizon `T` of the `(Q − q)/T` term of the joint-limit bounds [s]
-    pub horizon_s: f64,
-    /// `V_max` of eq. 16: the largest repulsive speed, full risk [m/s]
-    pub v_max_repulsion: f64,
-    /// damping `λ` of the pseudoinverse [m/s]
-    pub damping: f64,
-    /// keep this far inside the model's position limits [rad]
-    pub position_margin: f64,
-}
-
-impl Default for AvoidanceParams {
-    fn default() -> Self {
-        AvoidanceParams {
-            accel_limit: 10.0,
-            horizon_s: 0.05,
-            v_max_repulsion: 0.21,
-            damping: 0.02,
-            position_margin: 0.05,
-        }
-    }
 }
 
 /// A body control point for [`Avoidance::step`]: its Jacobian (at least 3
@@ -386,9 +358,9 @@ impl Avoidance {
     ) -> Result<f64, SnsError> {
         let n = self.n();
         if jacobian.nrows() < 3 {
-            return Err(SnsError::Dimension {
-                what: "control point jacobian rows (at least)",
-                expected: 3,
+            return Err(SnsError::TooFewRows {
+                what: "control point jacobian",
+                min: 3,
                 got: jacobian.nrows(),
             });
         }
@@ -418,9 +390,9 @@ impl Avoidance {
         speed_scale: f64,
     ) -> Result<AvoidanceOutput<'_>, SnsError> {
         if task_jacobian.nrows() < 3 {
-            return Err(SnsError::Dimension {
-                what: "task jacobian rows (at least)",
-                expected: 3,
+            return Err(SnsError::TooFewRows {
+                what: "task jacobian",
+                min: 3,
                 got: task_jacobian.nrows(),
             });
         }
@@ -481,18 +453,6 @@ impl Avoidance {
     }
 }
 
-fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), SnsError> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(SnsError::Dimension {
-            what,
-            expected,
-            got,
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -544,7 +504,8 @@ mod tests {
 
     #[test]
     fn effective_range_and_params() {
-        let a = Avoidance::from_limits(&[-1.0], &[1.0], &[2.0], AvoidanceParams::default());
+        let params = phri_config::Config::defaults().control.avoidance_params;
+        let a = Avoidance::from_limits(&[-1.0], &[1.0], &[2.0], params);
         assert_eq!((a.range_lo[0], a.range_hi[0]), (-0.95, 0.95));
         assert_eq!(a.n(), 1);
     }

@@ -1,114 +1,72 @@
-//! The controller's state machine and torque laws.
+//! The torque-loop controller: one short [`Controller::step`] that applies
+//! the paper's hierarchy in order — safety inputs fresh? → reaction to a
+//! detected collision (the mode transition) → the active behaviour →
+//! avoidance (eqs. 19-20, SNS) → torque law → limits.
 
 use nalgebra::Vector3;
-use phri_dynamics::VelocityEstimator;
-use phri_ipc::control_mode as mode;
-use phri_model::{Data, Model};
+use phri_config::{Config, ControlConfig, PointConfig};
+use phri_estimation::VelocityEstimator;
+use phri_ipc::{ControlMode, Reaction, MAX_DOF};
+use phri_model::{check_len, Data, Model};
 
-use crate::avoidance::Avoidance;
-use crate::config::{ControlConfig, Reaction};
+use crate::error::ControlError;
+use crate::history::PathHistory;
+use crate::inputs::{ControlInput, PerceptionView};
 use crate::limits::{LimitActivity, Limits};
-use crate::task::{Approach, Clik, ClikGains, Path};
+use crate::modes::reaction::{ReactionIo, ReactionState};
+use crate::modes::task::TaskState;
+use crate::modes::{self, protective_stop, recover, sync, Behaviour, CartesianRef, Conditions};
+use crate::reference::{JointReference, TrackingGains};
+use crate::resolve::{Faults, Resolver};
+use crate::safety::{Safety, SafetyMonitor};
+use crate::terms::DynamicsTerms;
 
-/// The newest residual, as the controller sees it.
-#[derive(Clone, Copy, Debug)]
-pub struct ResidualView<'a> {
-    /// stamp of the joint state the residual was computed from [ns]
-    pub state_stamp_ns: u64,
-    /// residual [Nm]
-    pub r: &'a [f64],
-    /// the observer is past its warm-up
-    pub valid: bool,
-    /// some joint passed its contact level
-    pub contact: bool,
-    /// some joint (or the norm) passed its collision level
-    pub collision: bool,
+/// Cut-off of the controller's velocity estimate from positions \[Hz\].
+const VELOCITY_CUTOFF_HZ: f64 = 60.0;
+
+/// A gap between two states longer than this many control periods counts as this many.
+const MAX_GAP_PERIODS: f64 = 10.0;
+
+/// What the controller takes besides `[control]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ControllerParams {
+    /// control period \[s\]: the robot's state period (`[sim] dt_s`); the
+    /// retreat's history holds one entry per period
+    pub period_s: f64,
 }
 
-/// One control period's inputs.
-#[derive(Clone, Copy, Debug)]
-pub struct ControlInput<'a> {
-    /// measurement time of `q` [ns, robot clock]
-    pub state_stamp_ns: u64,
-    /// measured joint positions [rad]
-    pub q: &'a [f64],
-    pub residual: Option<ResidualView<'a>>,
-    /// newest repulsion results; `None`: this controller runs without perception
-    pub perception: Option<PerceptionView<'a>>,
-}
-
-/// The newest perception results, as the controller sees them.
-#[derive(Clone, Copy, Debug)]
-pub struct PerceptionView<'a> {
-    /// capture time of the oldest of the workers' newest results [ns, robot
-    /// clock]; 0 while some worker has not answered yet
-    pub capture_ns: u64,
-    /// newest result per control point, indexed by point (0: the end effector)
-    pub points: &'a [phri_ipc::PointRepulsion],
+impl ControllerParams {
+    /// From the configuration: the period is `[sim] dt_s`.
+    pub fn from_config(cfg: &Config) -> ControllerParams {
+        ControllerParams {
+            period_s: cfg.sim.dt_s,
+        }
+    }
 }
 
 /// One control period's outputs (borrowed from the controller).
 #[derive(Debug)]
 pub struct ControlOutput<'a> {
-    /// joint torque [Nm], limits enforced
+    /// joint torque \[Nm\], limits enforced
     pub tau: &'a [f64],
-    /// [`phri_ipc::control_mode`]
-    pub mode: u32,
+    pub mode: ControlMode,
     pub limits: LimitActivity,
 }
 
-#[derive(Debug, thiserror::Error)]
-pub enum ControlError {
-    #[error("config [control]: {0}")]
-    Config(String),
-}
-
-/// Recent joint references with their path time, for the retreat.
-struct History {
-    n: usize,
-    cap: usize,
-    data: Vec<f64>,
-    count: usize,
-}
-
-impl History {
-    fn new(n: usize, cap: usize) -> History {
-        History {
-            n,
-            cap,
-            data: vec![0.0; cap * (n + 1)],
-            count: 0,
-        }
-    }
-
-    fn push(&mut self, s: f64, q: &[f64]) {
-        let at = (self.count % self.cap) * (self.n + 1);
-        self.data[at] = s;
-        self.data[at + 1..at + 1 + self.n].copy_from_slice(q);
-        self.count += 1;
-    }
-
-    fn available(&self) -> usize {
-        self.count.min(self.cap)
-    }
-
-    fn clear(&mut self) {
-        self.count = 0;
-    }
-
-    /// Entry `back` steps before the newest (0 = newest), interpolated; writes q, returns s.
-    fn at(&self, back: f64, q: &mut [f64]) -> f64 {
-        let max_back = (self.available().max(1) - 1) as f64;
-        let back = back.clamp(0.0, max_back);
-        let (i0, frac) = (back.floor() as usize, back.fract());
-        let i1 = (i0 + 1).min(max_back as usize);
-        let slot = |i: usize| ((self.count - 1 - i) % self.cap) * (self.n + 1);
-        let (a, b) = (slot(i0), slot(i1));
-        for k in 0..self.n {
-            q[k] = self.data[a + 1 + k] * (1.0 - frac) + self.data[b + 1 + k] * frac;
-        }
-        self.data[a] * (1.0 - frac) + self.data[b] * frac
-    }
+/// Counts since the start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ControlCounters {
+    pub waypoints_reached: u64,
+    /// collisions reacted to
+    pub detections: u64,
+    pub protective_stops: u64,
+    /// task resumptions after a reaction or a stop
+    pub resumes: u64,
+    /// model calls refused (dynamics, kinematics, Jacobians): each left its
+    /// fail-safe (the last good term, zero velocity, a zero position)
+    pub model_errors: u64,
+    /// avoidance or SNS refusals (the reference velocity then decays to zero)
+    pub avoidance_errors: u64,
 }
 
 /// The torque-loop controller. `step` is pure and allocation-free.
@@ -116,95 +74,66 @@ pub struct Controller {
     model: Model,
     data: Data,
     cfg: ControlConfig,
-    limits: Limits,
-    clik: Clik,
-    path: Path,
-    velocity: VelocityEstimator,
+    params: ControllerParams,
     n: usize,
+    limits: Limits,
+    /// velocity limits of the reference [rad/s]
     vmax_ref: Vec<f64>,
+    /// null-space posture \[rad\] (empty until the first start: the measured one)
     posture: Vec<f64>,
-    // state
-    mode: u32,
+    velocity: VelocityEstimator,
+    terms: DynamicsTerms,
+    safety: SafetyMonitor,
+    resolver: Resolver,
+    reference: JointReference,
+    history: PathHistory,
+    task: TaskState,
+    reaction: ReactionState,
+    mode: ControlMode,
     last_stamp: Option<u64>,
+    /// controller time \[s\]: the sum of the periods seen
     t: f64,
-    s: f64,
-    approach: Option<Approach>,
-    q_ref: Vec<f64>,
-    qd_ref: Vec<f64>,
-    qd_ref_prev: Vec<f64>,
-    q_hold: Vec<f64>,
-    /// end-effector position held in `recover` \[m\], base frame
-    x_hold: Vector3<f64>,
-    reaction_t0: f64,
+    /// recovering: since when the residual is quiet \[s\]
     quiet_since: Option<f64>,
-    history: History,
-    retreat_u: f64,
-    retreat_total: f64,
-    /// progress of the path's time-law ramp, 0 → 1
-    ramp_u: f64,
-    last_target: usize,
-    // outputs and counters
-    tau: Vec<f64>,
-    zeros: Vec<f64>,
-    m_diag: Vec<f64>,
-    gravity: Vec<f64>,
-    bias: Vec<f64>,
-    accel: Vec<f64>,
-    pub waypoints_reached: u64,
-    pub detections: u64,
-    pub protective_stops: u64,
-    pub resumes: u64,
+    /// end-effector position at the measured joints \[m\], base frame
     ee: Vector3<f64>,
-    residual_age_ns: u64,
-    // avoidance
-    avoidance: Avoidance,
-    /// control points: (link frame, point in it); 0 is the end effector
-    points: Vec<(usize, Vector3<f64>)>,
-    jac_ee: nalgebra::Matrix6xX<f64>,
-    jac_point: nalgebra::Matrix6xX<f64>,
-    perception_age_ns: u64,
-    last_min_distance: f64,
-    /// largest risk ‖V_Call‖/V_max over the control points in the last step
-    pub risk: f64,
-    /// task scale of the last SNS solution
-    pub task_scale: f64,
-    /// low-passed repulsive vectors per control point [m/s]
-    v_call_filtered: Vec<Vector3<f64>>,
+    accel: Vec<f64>,
+    tau: Vec<f64>,
+    counters: ControlCounters,
 }
 
 impl Controller {
-    pub fn new(model: Model, cfg: ControlConfig) -> Result<Controller, ControlError> {
+    /// A controller for `model` with the settings of `[control]` and `params`.
+    pub fn new(
+        model: Model,
+        cfg: ControlConfig,
+        params: ControllerParams,
+    ) -> Result<Controller, ControlError> {
         let n = model.nv();
-        let err = ControlError::Config;
-        if cfg.waypoints.len() < 2 {
-            return Err(err("waypoints: need at least two".into()));
+        if n > MAX_DOF {
+            return Err(ControlError::TooManyJoints {
+                joints: n,
+                max: MAX_DOF,
+            });
         }
-        if cfg.waypoints.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(err("waypoints: not finite".into()));
+        if !(params.period_s.is_finite() && params.period_s > 0.0) {
+            return Err(ControlError::Period {
+                period_s: params.period_s,
+            });
         }
-        let positive = [
-            ("segment_time_s", cfg.segment_time_s),
-            ("kp", cfg.kp),
-            ("kd", cfg.kd),
-            ("velocity_scale", cfg.velocity_scale),
-            ("approach_speed", cfg.approach_speed),
-            ("residual_max_age_ms", cfg.residual_max_age_ms),
-        ];
-        if let Some((name, _)) = positive.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
-            return Err(err(format!("{name}: must be positive")));
-        }
-        if !cfg.posture.is_empty() && cfg.posture.len() != n {
-            return Err(err(format!(
-                "posture: expected {n} values, got {}",
-                cfg.posture.len()
-            )));
+        cfg.validate()?;
+        if !cfg.posture.is_empty() {
+            check_len("posture", n, cfg.posture.len())?;
         }
         let ee_frame = if cfg.ee_link.is_empty() {
             model.frames.len() - 1
         } else {
             model
                 .frame_id(&cfg.ee_link)
-                .map_err(|_| err(format!("ee_link: unknown link '{}'", cfg.ee_link)))?
+                .map_err(|_| ControlError::UnknownLink {
+                    key: "control.ee_link".into(),
+                    link: cfg.ee_link.clone(),
+                })?
         };
         let limits = Limits::from_model(&model, cfg.position_margin);
         let vmax_ref = limits
@@ -218,160 +147,60 @@ impl Controller {
                 }
             })
             .collect();
-        let history_len = ((cfg.retreat_path_s.max(0.0) + 0.5) / 0.001).ceil() as usize + 2;
         Ok(Controller {
             data: Data::new(&model),
-            clik: Clik::new(&model, ee_frame),
-            path: Path {
-                waypoints: cfg
-                    .waypoints
-                    .iter()
-                    .map(|w| Vector3::new(w[0], w[1], w[2]))
-                    .collect(),
-                segment_time: cfg.segment_time_s,
-            },
-            velocity: VelocityEstimator::new(n, 60.0),
             n,
             vmax_ref,
-            posture: cfg.posture.clone(),
-            mode: mode::SYNC,
+            // room for the measured posture taken at the first start, without allocating then
+            posture: {
+                let mut p = Vec::with_capacity(n);
+                p.extend_from_slice(&cfg.posture);
+                p
+            },
+            velocity: VelocityEstimator::new(n, VELOCITY_CUTOFF_HZ),
+            terms: DynamicsTerms::new(n),
+            safety: SafetyMonitor::default(),
+            resolver: Resolver::new(&model, ee_frame, &cfg),
+            reference: JointReference::new(n),
+            history: PathHistory::for_span(n, cfg.retreat_path_s.max(0.0) + 0.5, params.period_s),
+            task: TaskState::new(&cfg),
+            reaction: ReactionState::new(&cfg, params.period_s),
+            mode: ControlMode::Sync,
             last_stamp: None,
             t: 0.0,
-            s: 0.0,
-            approach: None,
-            q_ref: vec![0.0; n],
-            qd_ref: vec![0.0; n],
-            qd_ref_prev: vec![0.0; n],
-            q_hold: vec![0.0; n],
-            x_hold: Vector3::zeros(),
-            reaction_t0: 0.0,
             quiet_since: None,
-            history: History::new(n, history_len),
-            retreat_u: 0.0,
-            retreat_total: 0.0,
-            ramp_u: 0.0,
-            last_target: 0,
-            tau: vec![0.0; n],
-            zeros: vec![0.0; n],
-            m_diag: vec![0.0; n],
-            gravity: vec![0.0; n],
-            bias: vec![0.0; n],
-            accel: vec![0.0; n],
-            waypoints_reached: 0,
-            detections: 0,
-            protective_stops: 0,
-            resumes: 0,
             ee: Vector3::zeros(),
-            residual_age_ns: u64::MAX,
-            avoidance: Avoidance::new(&model, cfg.avoidance_params),
-            points: Vec::new(),
-            jac_ee: phri_model::Data::jacobian_buffer(&model),
-            jac_point: phri_model::Data::jacobian_buffer(&model),
-            perception_age_ns: u64::MAX,
-            last_min_distance: 0.0,
-            risk: 0.0,
-            task_scale: 1.0,
-            v_call_filtered: Vec::new(),
+            accel: vec![0.0; n],
+            tau: vec![0.0; n],
+            counters: ControlCounters::default(),
             limits,
             model,
             cfg,
+            params,
         })
     }
 
-    pub fn model(&self) -> &Model {
-        &self.model
-    }
-
-    pub fn mode(&self) -> u32 {
-        self.mode
-    }
-
-    pub fn reaction(&self) -> Reaction {
-        self.cfg.reaction
-    }
-
-    pub fn q_ref(&self) -> &[f64] {
-        &self.q_ref
-    }
-
-    /// End-effector position at the measured joints [m], base frame.
-    pub fn ee(&self) -> Vector3<f64> {
-        self.ee
-    }
-
-    /// The control points of the repulsion workers, in their configured order
-    /// (the first is the end effector): link name and point in the link frame [m].
-    pub fn set_control_points(
-        &mut self,
-        points: &[(String, [f64; 3])],
-    ) -> Result<(), ControlError> {
-        self.points = points
-            .iter()
-            .enumerate()
-            .map(|(i, (link, xyz))| {
-                let f = self.model.frame_id(link).map_err(|_| {
-                    ControlError::Config(format!("control point {i}: unknown link '{link}'"))
-                })?;
-                Ok((f, Vector3::from(*xyz)))
-            })
-            .collect::<Result<_, _>>()?;
-        self.v_call_filtered = vec![Vector3::zeros(); points.len()];
-        Ok(())
-    }
-
-    /// Age of the perception results used in the last step [ns] (u64::MAX: none).
-    pub fn perception_age_ns(&self) -> u64 {
-        self.perception_age_ns
-    }
-
-    /// Smallest obstacle distance of the control points last seen [m].
-    pub fn last_min_distance(&self) -> f64 {
-        self.last_min_distance
-    }
-
-    /// Age of the residual used in the last step [ns] (u64::MAX: none).
-    pub fn residual_age_ns(&self) -> u64 {
-        self.residual_age_ns
-    }
-
-    fn hold_here(&mut self, q: &[f64]) {
-        self.q_hold.copy_from_slice(q);
-        self.q_ref.copy_from_slice(q);
-        self.qd_ref.fill(0.0);
-        self.qd_ref_prev.fill(0.0);
-    }
-
-    /// Re-sync to the measured state and approach the path smoothly.
-    fn start_task(&mut self, q: &[f64]) {
-        self.hold_here(q);
-        if self.posture.is_empty() {
-            self.posture.extend_from_slice(q);
+    /// The controller of a loaded configuration: `[control]`, the period of
+    /// `[sim] dt_s` and, with avoidance, the control points of `[repulsion]`.
+    pub fn from_config(model: Model, cfg: &Config) -> Result<Controller, ControlError> {
+        let mut c = Controller::new(
+            model,
+            cfg.control.clone(),
+            ControllerParams::from_config(cfg),
+        )?;
+        if cfg.control.avoidance {
+            if cfg.repulsion.workers == 0 || cfg.repulsion.points.is_empty() {
+                return Err(ControlError::NoControlPoints);
+            }
+            c.set_control_points(&cfg.repulsion.points)?;
         }
-        let from = self.clik.position(&self.model, &mut self.data, q);
-        let (to, _) = self.path.sample(self.s);
-        self.approach = Some(Approach::new(from, to, self.cfg.approach_speed));
-        self.history.clear();
-        self.ramp_u = 0.0;
-        self.last_target = self.path.target_index(self.s);
-        self.mode = mode::TASK;
+        Ok(c)
     }
 
-    fn enter_reaction(&mut self, q: &[f64]) {
-        self.detections += 1;
-        self.reaction_t0 = self.t;
-        self.quiet_since = None;
-        self.hold_here(q);
-        self.retreat_u = 0.0;
-        self.retreat_total =
-            (self.cfg.retreat_path_s / 0.001).min((self.history.available().max(1) - 1) as f64);
-        self.mode = mode::REACTION;
-    }
-
-    fn enter_recover(&mut self, q: &[f64]) {
-        self.hold_here(q);
-        self.x_hold = self.clik.position(&self.model, &mut self.data, q);
-        self.quiet_since = None;
-        self.mode = mode::RECOVER;
+    /// The control points of the repulsion workers (`[repulsion] points`), in
+    /// their configured order; the first is the end effector.
+    pub fn set_control_points(&mut self, points: &[PointConfig]) -> Result<(), ControlError> {
+        self.resolver.set_control_points(&self.model, points)
     }
 
     /// One control period.
@@ -379,303 +208,43 @@ impl Controller {
         let n = self.n;
         let q = input.q;
         if q.len() != n || q.iter().any(|x| !x.is_finite()) {
-            // never act on a malformed state: hold the last reference with gravity only
-            self.tau.copy_from_slice(&self.gravity);
-            return ControlOutput {
-                tau: &self.tau,
-                mode: self.mode,
-                limits: LimitActivity {
-                    non_finite: true,
-                    ..Default::default()
-                },
-            };
+            return self.refuse_state();
         }
-        let dt = match self.last_stamp {
-            Some(t0) if input.state_stamp_ns > t0 => {
-                ((input.state_stamp_ns - t0) as f64 * 1e-9).min(0.01)
-            }
-            _ => 0.0,
-        };
-        self.last_stamp = Some(input.state_stamp_ns);
-        self.t += dt;
-        self.velocity.update(q, dt);
-        let qd: &[f64] = self.velocity.velocity();
-        let qd: [f64; phri_ipc::MAX_DOF] = {
-            let mut a = [0.0; phri_ipc::MAX_DOF];
-            a[..n].copy_from_slice(qd);
-            a
-        };
+        let dt = self.advance_clock(input.state_stamp_ns);
+        let mut qd = [0.0; MAX_DOF];
+        qd[..n].copy_from_slice(self.velocity.update(q, dt));
         let qd = &qd[..n];
 
-        // freshness of the residual, in measurement time (deterministic)
-        let (fresh, collision, contact) = match &input.residual {
-            Some(r) if r.r.len() == n => {
-                self.residual_age_ns = input.state_stamp_ns.saturating_sub(r.state_stamp_ns);
-                let fresh =
-                    r.valid && (self.residual_age_ns as f64) <= self.cfg.residual_max_age_ms * 1e6;
-                (fresh, fresh && r.collision, fresh && r.contact)
-            }
-            _ => {
-                self.residual_age_ns = u64::MAX;
-                (false, false, false)
-            }
-        };
+        // 1. the safety inputs: a fresh residual, fresh perception?
+        let safety = self.safety.assess(input, &self.cfg, n);
+        self.measure(q, qd);
 
-        // dynamics at the measured state
-        let _ = phri_model::crba(&self.model, &mut self.data, q);
-        for i in 0..n {
-            self.m_diag[i] = self.data.m[(i, i)];
-        }
-        if let Ok(g) = phri_model::gravity(&self.model, &mut self.data, q) {
-            self.gravity.copy_from_slice(g.as_slice());
-        }
-        if let Ok(b) = phri_model::rnea(&self.model, &mut self.data, q, qd, &self.zeros) {
-            self.bias.copy_from_slice(b.as_slice());
-        }
-        self.ee = self.clik.position(&self.model, &mut self.data, q);
+        // 2. the reaction to a detected collision, and every other change of mode
+        let next = modes::next_mode(self.mode, &self.conditions(&safety));
+        self.switch_to(next, q);
 
-        // perception: fresh, stale (slow down), or stale with a person last seen near (stop)
-        let v_max_rep = self.cfg.avoidance_params.v_max_repulsion.max(1e-9);
-        let (p_fresh, p_stop) = match &input.perception {
-            None => {
-                self.perception_age_ns = u64::MAX;
-                (true, false)
-            }
-            Some(v) => {
-                self.perception_age_ns = if v.capture_ns == 0 {
-                    u64::MAX
-                } else {
-                    input.state_stamp_ns.saturating_sub(v.capture_ns)
-                };
-                let age_ms = self.perception_age_ns as f64 * 1e-6;
-                let fresh = age_ms <= self.cfg.perception_max_age_ms;
-                if fresh {
-                    self.last_min_distance = v
-                        .points
-                        .iter()
-                        .filter(|p| p.active != 0)
-                        .map(|p| p.min_distance)
-                        .fold(f64::INFINITY, f64::min);
-                }
-                // blind with a person last seen near: stop at once; blind for long: stop anyway
-                let near = self.last_min_distance < self.cfg.near_distance_m;
-                (
-                    fresh,
-                    !fresh && (near || age_ms > self.cfg.perception_stop_after_ms),
-                )
-            }
-        };
-        let perception = input.perception.filter(|_| p_fresh);
-        self.risk = perception.map_or(0.0, |v| {
-            v.points
-                .iter()
-                .map(|p| Vector3::from(p.v_call).norm() / v_max_rep)
-                .fold(0.0, f64::max)
-                .min(1.0)
-        });
-        let ee_risk = perception.and_then(|v| v.points.first()).map_or(0.0, |p| {
-            (Vector3::from(p.v_call).norm() / v_max_rep).min(1.0)
-        });
-        let speed_scale = if p_fresh {
-            1.0
-        } else {
-            self.cfg.slow_scale.clamp(0.0, 1.0)
-        };
+        // 3. the active behaviour
+        let behaviour = self.behave(q, qd, dt, &safety, input);
 
-        // transitions
-        match self.mode {
-            mode::SYNC => {
-                if self.last_stamp.is_some() && self.t == 0.0 {
-                    self.hold_here(q);
-                }
-                if fresh && p_fresh {
-                    self.start_task(q);
-                }
-            }
-            // not a guard: while stopped with a stale input this arm must still match,
-            // or the stop would fall through to `recover`
-            #[allow(clippy::collapsible_match)]
-            _ if !fresh || p_stop => {
-                if self.mode != mode::PROTECTIVE_STOP {
-                    self.protective_stops += 1;
-                    self.hold_here(q);
-                    self.mode = mode::PROTECTIVE_STOP;
-                }
-            }
-            mode::PROTECTIVE_STOP => self.enter_recover(q),
-            mode::TASK | mode::SLOW => {
-                if collision {
-                    self.enter_reaction(q);
-                } else {
-                    self.mode = if p_fresh { mode::TASK } else { mode::SLOW };
-                }
-            }
-            mode::REACTION => {
-                let min_done = self.t - self.reaction_t0 >= self.cfg.reaction_min_s;
-                let retreat_done = self.cfg.reaction != Reaction::Retreat
-                    || self.retreat_total - self.retreat_u < 0.5;
-                if min_done && retreat_done && !contact {
-                    self.enter_recover(q);
-                }
-            }
-            mode::RECOVER => {
-                if collision {
-                    self.enter_reaction(q);
-                } else if contact {
-                    self.quiet_since = None;
-                } else {
-                    let since = *self.quiet_since.get_or_insert(self.t);
-                    if self.cfg.resume && self.t - since >= self.cfg.resume_quiet_s {
-                        self.resumes += 1;
-                        self.start_task(q);
-                    }
-                }
-            }
-            _ => {}
+        // 4. avoidance (eqs. 19-20, SNS; CLIK without perception), then tracking
+        if let Behaviour::Cartesian(c) = behaviour {
+            let fresh = input.perception.filter(|_| safety.perception_fresh);
+            self.resolve(&c, dt, input.perception.is_some(), fresh);
+            self.track(q, qd, dt, &c);
         }
 
-        // torque law of the mode: τ = M a + (C q̇ + g) [− r for the reflex]
-        let (kp, kd) = (self.cfg.kp, self.cfg.kd);
-        let mut minus_r = false;
-        match self.mode {
-            mode::TASK | mode::SLOW => {
-                // time scaling: slower when perception is stale, and near obstacles in
-                // front of the end effector (risk f: ṡ scaled by 1 − f)
-                let time_scale = speed_scale * (1.0 - ee_risk);
-                let (x_d, xd_d) = match self.approach.as_mut() {
-                    Some(a) => {
-                        let out = a.step(dt * time_scale);
-                        if a.done() {
-                            self.approach = None;
-                        }
-                        out
-                    }
-                    None => {
-                        // time scaling: ṡ = smoothstep(u) ramps 0 → 1, so that a path resumed
-                        // mid-segment starts without a jump in velocity or acceleration
-                        self.ramp_u = (self.ramp_u + dt / self.cfg.path_ramp_s.max(1e-3)).min(1.0);
-                        let u = self.ramp_u;
-                        let rate = u * u * (3.0 - 2.0 * u) * time_scale;
-                        self.s += dt * rate;
-                        let (x, dx) = self.path.sample(self.s);
-                        let dx = dx * rate;
-                        // waypoint reached: the segment ended with the end effector there
-                        let target = self.path.target_index(self.s);
-                        if target != self.last_target {
-                            if (self.ee - self.path.waypoints[self.last_target]).norm()
-                                <= self.cfg.waypoint_tolerance
-                            {
-                                self.waypoints_reached += 1;
-                            }
-                            self.last_target = target;
-                        }
-                        (x, dx)
-                    }
-                };
-                if input.perception.is_some() {
-                    self.avoid_step(&x_d, &xd_d, dt, perception, speed_scale);
-                } else {
-                    let gains = ClikGains {
-                        clik: self.cfg.clik_gain,
-                        posture: self.cfg.posture_gain,
-                        damping: self.cfg.damping,
-                    };
-                    let qd_ref = self.clik.step(
-                        &self.model,
-                        &mut self.data,
-                        &mut self.q_ref,
-                        &x_d,
-                        &xd_d,
-                        dt,
-                        gains,
-                        &self.posture,
-                        &self.vmax_ref,
-                    );
-                    self.qd_ref.copy_from_slice(qd_ref);
-                }
-                self.limits.clamp_position(&mut self.q_ref);
-                self.history.push(self.s, &self.q_ref);
-                self.track_reference(q, qd, dt);
-            }
-            // waiting to resume with someone in view: hold the end effector where it
-            // stopped, but keep evading (eq. 19/20) instead of standing in their way;
-            // with nothing near the repulsion is zero and this is a plain hold
-            mode::RECOVER if p_fresh && input.perception.is_some() => {
-                let x_hold = self.x_hold;
-                self.avoid_step(&x_hold, &Vector3::zeros(), dt, perception, 1.0);
-                self.limits.clamp_position(&mut self.q_ref);
-                self.track_reference(q, qd, dt);
-            }
-            mode::REACTION => match (self.cfg.reaction, &input.residual) {
-                (Reaction::Reflex, Some(r)) => {
-                    for i in 0..n {
-                        self.accel[i] =
-                            self.cfg.reflex_gain * r.r[i] - self.cfg.reflex_damping * qd[i];
-                    }
-                    minus_r = true;
-                }
-                (Reaction::Admittance, Some(r)) => {
-                    for i in 0..n {
-                        self.qd_ref[i] = self.cfg.admittance_gain * r.r[i];
-                        self.q_ref[i] += self.qd_ref[i] * dt;
-                    }
-                    self.limits.clamp_position(&mut self.q_ref);
-                    for i in 0..n {
-                        self.accel[i] = kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
-                    }
-                }
-                (Reaction::Float, _) => {
-                    // τ = g − D q̇: no inertial term
-                    for i in 0..n {
-                        self.accel[i] = 0.0;
-                        self.bias[i] = self.gravity[i] - self.cfg.float_damping * qd[i];
-                    }
-                }
-                (Reaction::Retreat, _) => {
-                    // time law: the retreat speed ramps from 0 to 1 (path time runs backwards at
-                    // ṡ = −1) and back to 0 at the end; u counts history entries (one per period)
-                    let ramp = self.cfg.retreat_ramp_s.max(1e-3);
-                    let left_s = (self.retreat_total - self.retreat_u) * 0.001;
-                    let sigma = ((self.t - self.reaction_t0) / ramp)
-                        .min(1.0)
-                        .min(left_s / (0.5 * ramp))
-                        .max(0.05);
-                    self.retreat_u = (self.retreat_u + sigma * dt * 1000.0).min(self.retreat_total);
-                    let prev: [f64; phri_ipc::MAX_DOF] = {
-                        let mut a = [0.0; phri_ipc::MAX_DOF];
-                        a[..n].copy_from_slice(&self.q_ref);
-                        a
-                    };
-                    self.s = self.history.at(self.retreat_u, &mut self.q_ref);
-                    for i in 0..n {
-                        self.qd_ref[i] = if dt > 0.0 {
-                            (self.q_ref[i] - prev[i]) / dt
-                        } else {
-                            0.0
-                        };
-                        self.accel[i] = kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
-                    }
-                }
-                // stop, or a strategy whose residual vanished: hold where detected
-                _ => self.hold_accel(q, qd),
-            },
-            _ => self.hold_accel(q, qd),
-        }
-        for i in 0..n {
-            let mut t = self.bias[i];
-            for k in 0..n {
-                t += self.data.m[(i, k)] * self.accel[k];
-            }
-            if minus_r {
-                if let Some(r) = &input.residual {
-                    t -= r.r[i];
-                }
-            }
-            self.tau[i] = t;
-        }
-        let limits = self
-            .limits
-            .apply(q, qd, &self.m_diag, &self.gravity, &mut self.tau);
+        // 5. the torque law: τ = M a + C q̇ + g [− r for the reflex, eq. 9]
+        let minus_r = matches!(behaviour, Behaviour::Joint { minus_r: true });
+        self.torque_law(input.residual.filter(|_| minus_r).map(|r| r.r));
+
+        // 6. the limits of the model
+        let limits = self.limits.apply(
+            q,
+            qd,
+            &self.terms.m_diag,
+            &self.terms.gravity,
+            &mut self.tau,
+        );
         ControlOutput {
             tau: &self.tau,
             mode: self.mode,
@@ -683,120 +252,544 @@ impl Controller {
         }
     }
 
-    /// The task under avoidance (paper Sect. V): the end effector's repulsive
-    /// velocity adds to its task velocity (eq. 19); every other control point
-    /// shapes the joint velocity bounds (eq. 20); SNS solves the task within
-    /// them and the joint-limit bounds. Moves `q_ref`, writes `qd_ref`.
-    fn avoid_step(
-        &mut self,
-        x_d: &Vector3<f64>,
-        xd_d: &Vector3<f64>,
-        dt: f64,
-        perception: Option<PerceptionView<'_>>,
-        speed_scale: f64,
-    ) {
-        let ee = self.clik.frame();
-        let ok = phri_model::forward_kinematics(&self.model, &mut self.data, &self.q_ref).is_ok()
-            && phri_model::point_jacobian(
-                &self.model,
-                &self.data,
-                ee,
-                &Vector3::zeros(),
-                &mut self.jac_ee,
-            )
-            .is_ok();
-        if !ok || self.avoidance.begin(&self.q_ref).is_err() {
-            self.qd_ref.fill(0.0);
-            return;
+    /// A malformed state (wrong length, not finite): never act on it; hold
+    /// the last reference with gravity only.
+    fn refuse_state(&mut self) -> ControlOutput<'_> {
+        self.tau.copy_from_slice(&self.terms.gravity);
+        ControlOutput {
+            tau: &self.tau,
+            mode: self.mode,
+            limits: LimitActivity {
+                non_finite: true,
+                ..Default::default()
+            },
         }
-        let x = phri_model::frame_placement(&self.model, &self.data, ee).p;
-        // position feedback capped below the repulsion's V_max
-        let mut fb = (x_d - x) * self.cfg.clik_gain;
-        let cap = self.cfg.feedback_max_speed;
-        if fb.norm() > cap {
-            fb *= cap / fb.norm();
-        }
-        let xdot_task = xd_d + fb;
-        let mut v_ee = Vector3::zeros();
-        let alpha = if self.cfg.repulsion_filter_s > 0.0 {
-            1.0 - (-dt / self.cfg.repulsion_filter_s).exp()
-        } else {
-            1.0
+    }
+
+    /// The period since the last state \[s\] (0 for the first or a repeated
+    /// stamp, at most [`MAX_GAP_PERIODS`] periods), added to the controller's time.
+    fn advance_clock(&mut self, stamp_ns: u64) -> f64 {
+        let dt = match self.last_stamp {
+            Some(t0) if stamp_ns > t0 => {
+                ((stamp_ns - t0) as f64 * 1e-9).min(MAX_GAP_PERIODS * self.params.period_s)
+            }
+            _ => 0.0,
         };
-        if let Some(v) = perception {
-            for (k, &(frame, xyz)) in self.points.iter().enumerate() {
-                let Some(p) = v.points.get(k) else { break };
-                let target = if p.active == 0 {
-                    Vector3::zeros()
-                } else {
-                    Vector3::from(p.v_call)
-                };
-                let Some(f) = self.v_call_filtered.get_mut(k) else {
-                    break;
-                };
-                *f += (target - *f) * alpha;
-                let v_call = *f;
-                if v_call.norm() < 1e-6 {
-                    continue;
-                }
-                if k == 0 {
-                    v_ee = v_call;
-                } else if phri_model::point_jacobian(
-                    &self.model,
-                    &self.data,
-                    frame,
-                    &xyz,
-                    &mut self.jac_point,
-                )
-                .is_ok()
-                {
-                    let _ = self.avoidance.add_point(&self.jac_point, v_call);
-                }
-            }
-        }
-        // slew-limited towards the SNS solution (which stays within the bounds
-        // it was computed for; the limit only delays reaching it)
-        let dv = self.cfg.reference_accel_limit * dt;
-        match self
-            .avoidance
-            .solve(&self.jac_ee, &xdot_task, &v_ee, speed_scale)
-        {
-            Ok(out) => {
-                self.task_scale = out.scale;
-                for (r, &target) in self.qd_ref.iter_mut().zip(out.qd) {
-                    *r += (target - *r).clamp(-dv, dv);
-                }
-            }
+        self.last_stamp = Some(stamp_ns);
+        self.t += dt;
+        dt
+    }
+
+    /// The model terms and the end effector at the measured state.
+    fn measure(&mut self, q: &[f64], qd: &[f64]) {
+        self.counters.model_errors += self.terms.update(&self.model, &mut self.data, q, qd);
+        self.ee = self.ee_at(q);
+    }
+
+    /// The end effector at `q` \[m\]; the origin (counted) if the model refuses `q`.
+    fn ee_at(&mut self, q: &[f64]) -> Vector3<f64> {
+        match self.resolver.ee_position(&self.model, &mut self.data, q) {
+            Ok(x) => x,
             Err(_) => {
-                self.task_scale = 0.0;
-                for r in self.qd_ref.iter_mut() {
-                    *r -= r.clamp(-dv, dv);
-                }
+                self.counters.model_errors += 1;
+                Vector3::zeros()
             }
         }
-        for (q, v) in self.q_ref.iter_mut().zip(&self.qd_ref) {
-            *q += v * dt;
-        }
     }
 
-    /// Computed-torque acceleration tracking `q_ref`, `qd_ref` (feed-forward
-    /// from the reference's change over `dt`).
-    fn track_reference(&mut self, q: &[f64], qd: &[f64], dt: f64) {
-        let (kp, kd) = (self.cfg.kp, self.cfg.kd);
-        for i in 0..self.n {
-            let qdd_ref = if dt > 0.0 {
-                (self.qd_ref[i] - self.qd_ref_prev[i]) / dt
+    fn conditions(&mut self, s: &Safety) -> Conditions {
+        if self.mode == ControlMode::Recover {
+            if s.contact || s.collision {
+                self.quiet_since = None;
             } else {
-                0.0
-            };
-            self.accel[i] = qdd_ref + kp * (self.q_ref[i] - q[i]) + kd * (self.qd_ref[i] - qd[i]);
+                self.quiet_since.get_or_insert(self.t);
+            }
         }
-        self.qd_ref_prev.copy_from_slice(&self.qd_ref);
+        let quiet = self
+            .quiet_since
+            .is_some_and(|since| self.t - since >= self.cfg.resume_quiet_s);
+        Conditions {
+            residual_fresh: s.residual_fresh,
+            collision: s.collision,
+            contact: s.contact,
+            perception_fresh: s.perception_fresh,
+            perception_stop: s.perception_stop,
+            reaction_done: self.reaction.done(self.t),
+            may_resume: self.cfg.resume && quiet,
+        }
     }
 
-    fn hold_accel(&mut self, q: &[f64], qd: &[f64]) {
-        for i in 0..self.n {
-            self.accel[i] = self.cfg.kp * (self.q_hold[i] - q[i]) - self.cfg.kd * qd[i];
+    /// Enter `next` from the current mode (its entry actions and counts).
+    fn switch_to(&mut self, next: ControlMode, q: &[f64]) {
+        use ControlMode::*;
+        let from = self.mode;
+        match (from, next) {
+            _ if next == from => {}
+            (Task | Slow, Task | Slow) => {}
+            (_, Task | Slow) => {
+                if from == Recover {
+                    self.counters.resumes += 1;
+                }
+                self.start_task(q);
+            }
+            (_, Reaction) => {
+                self.counters.detections += 1;
+                self.quiet_since = None;
+                self.reference.hold_here(q);
+                self.reaction.enter(self.t, self.history.available());
+            }
+            (_, ProtectiveStop) => {
+                self.counters.protective_stops += 1;
+                protective_stop::enter(&mut self.reference, q);
+            }
+            (_, Recover) => {
+                let ee = self.ee_at(q);
+                recover::enter(&mut self.reference, q, ee);
+                self.quiet_since = None;
+            }
+            (_, Sync) => self.reference.hold_here(q),
+        }
+        self.mode = next;
+    }
+
+    /// Re-sync to the measured state and approach the path smoothly.
+    fn start_task(&mut self, q: &[f64]) {
+        self.reference.hold_here(q);
+        if self.posture.is_empty() {
+            self.posture.extend_from_slice(q);
+        }
+        let from = self.ee_at(q);
+        self.task.start(from);
+        self.history.clear();
+    }
+
+    /// The active mode's behaviour for this period.
+    fn behave(
+        &mut self,
+        q: &[f64],
+        qd: &[f64],
+        dt: f64,
+        s: &Safety,
+        input: &ControlInput<'_>,
+    ) -> Behaviour {
+        let gains = self.gains();
+        match self.mode {
+            ControlMode::Sync => sync::step(
+                &mut self.reference,
+                q,
+                qd,
+                self.t == 0.0,
+                gains,
+                &mut self.accel,
+            ),
+            ControlMode::ProtectiveStop => {
+                protective_stop::step(&self.reference, q, qd, gains, &mut self.accel)
+            }
+            ControlMode::Task | ControlMode::Slow => {
+                let c = self.task.step(dt, s.speed_scale, s.ee_risk, &self.ee);
+                self.counters.waypoints_reached = self.task.waypoints_reached();
+                Behaviour::Cartesian(c)
+            }
+            ControlMode::Recover => {
+                let evading = s.perception_fresh && input.perception.is_some();
+                recover::step(&self.reference, q, qd, evading, gains, &mut self.accel)
+            }
+            ControlMode::Reaction => {
+                let (b, path_time) = self.reaction.step(ReactionIo {
+                    q,
+                    qd,
+                    dt,
+                    t: self.t,
+                    residual: input.residual.map(|r| r.r).filter(|r| r.len() == q.len()),
+                    reference: &mut self.reference,
+                    limits: &self.limits,
+                    history: &self.history,
+                    terms: &mut self.terms,
+                    gains,
+                    accel: &mut self.accel,
+                });
+                if let Some(s) = path_time {
+                    self.task.set_path_time(s);
+                }
+                b
+            }
+        }
+    }
+
+    /// Resolve a Cartesian reference into the joint reference: SNS under
+    /// avoidance when the controller runs with perception (`fresh`: the
+    /// results, if fresh), CLIK otherwise.
+    fn resolve(
+        &mut self,
+        c: &CartesianRef,
+        dt: f64,
+        with_perception: bool,
+        fresh: Option<PerceptionView<'_>>,
+    ) {
+        let (model, data, rf, cfg) = (&self.model, &mut self.data, &mut self.reference, &self.cfg);
+        let faults: Faults = if with_perception {
+            self.resolver.avoid(model, data, rf, c, dt, cfg, fresh)
+        } else {
+            self.resolver
+                .clik(model, data, rf, c, dt, cfg, &self.posture, &self.vmax_ref)
+        };
+        self.counters.model_errors += faults.model;
+        self.counters.avoidance_errors += faults.avoidance;
+    }
+
+    /// Keep the resolved reference inside the position limits, record the
+    /// task's path in the history, and track it.
+    fn track(&mut self, q: &[f64], qd: &[f64], dt: f64, c: &CartesianRef) {
+        self.limits.clamp_position(&mut self.reference.q_ref);
+        if let Some(s) = c.path_time {
+            self.history.push(s, &self.reference.q_ref);
+        }
+        let gains = self.gains();
+        self.reference.track(q, qd, dt, gains, &mut self.accel);
+    }
+
+    /// `τ = M(q) a + C(q, q̇) q̇ + g(q)`, minus the residual `r` when given (eq. 9).
+    fn torque_law(&mut self, minus_r: Option<&[f64]>) {
+        let n = self.n;
+        for i in 0..n {
+            let mut t = self.terms.bias[i];
+            for k in 0..n {
+                t += self.data.m[(i, k)] * self.accel[k];
+            }
+            if let Some(r) = minus_r {
+                t -= r[i];
+            }
+            self.tau[i] = t;
+        }
+    }
+
+    fn gains(&self) -> TrackingGains {
+        TrackingGains {
+            kp: self.cfg.kp,
+            kd: self.cfg.kd,
+        }
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    pub fn params(&self) -> &ControllerParams {
+        &self.params
+    }
+
+    pub fn mode(&self) -> ControlMode {
+        self.mode
+    }
+
+    /// The configured reaction strategy.
+    pub fn reaction(&self) -> Reaction {
+        self.reaction.strategy()
+    }
+
+    /// The last torque \[Nm\] (limits enforced).
+    pub fn tau(&self) -> &[f64] {
+        &self.tau
+    }
+
+    /// Joint reference \[rad\].
+    pub fn q_ref(&self) -> &[f64] {
+        &self.reference.q_ref
+    }
+
+    /// Estimated joint velocity [rad/s] of the last step.
+    pub fn velocity(&self) -> &[f64] {
+        self.velocity.velocity()
+    }
+
+    /// End-effector position at the measured joints \[m\], base frame.
+    pub fn ee(&self) -> Vector3<f64> {
+        self.ee
+    }
+
+    pub fn counters(&self) -> &ControlCounters {
+        &self.counters
+    }
+
+    /// Model calls refused since the start (each with its fail-safe).
+    pub fn model_errors(&self) -> u64 {
+        self.counters.model_errors
+    }
+
+    /// Age of the perception results used in the last step \[ns\] (u64::MAX: none).
+    pub fn perception_age_ns(&self) -> u64 {
+        self.safety.perception_age_ns
+    }
+
+    /// Smallest obstacle distance of the control points last seen \[m\].
+    pub fn last_min_distance(&self) -> f64 {
+        self.safety.last_min_distance
+    }
+
+    /// Age of the residual used in the last step \[ns\] (u64::MAX: none).
+    pub fn residual_age_ns(&self) -> u64 {
+        self.safety.residual_age_ns
+    }
+
+    /// Largest risk ‖V_Call‖/V_max over the control points in the last step.
+    pub fn risk(&self) -> f64 {
+        self.safety.risk
+    }
+
+    /// Task scale of the last SNS solution.
+    pub fn task_scale(&self) -> f64 {
+        self.resolver.task_scale()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inputs::ResidualView;
+
+    const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
+    const MS: u64 = 1_000_000;
+
+    fn lwr4() -> Model {
+        Model::from_urdf_file(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../deploy/robots/kuka_lwr4.urdf"
+        ))
+        .unwrap()
+    }
+
+    fn controller(reaction: Reaction) -> Controller {
+        let cfg = ControlConfig {
+            reaction,
+            ..Config::defaults().control
+        };
+        Controller::new(lwr4(), cfg, ControllerParams { period_s: 0.001 }).unwrap()
+    }
+
+    /// A residual computed from the state at `stamp_ms`.
+    fn residual(stamp_ms: u64, r: &[f64], collision: bool) -> ResidualView<'_> {
+        ResidualView {
+            state_stamp_ns: stamp_ms * MS,
+            r,
+            valid: true,
+            contact: collision,
+            collision,
+        }
+    }
+
+    fn input<'a>(stamp_ms: u64, q: &'a [f64], r: Option<ResidualView<'a>>) -> ControlInput<'a> {
+        ControlInput {
+            state_stamp_ns: stamp_ms * MS,
+            q,
+            residual: r,
+            perception: None,
+        }
+    }
+
+    /// `M(q) a + C(q, q̇) q̇ + g(q)` from the model directly.
+    fn computed_torque(model: &Model, q: &[f64], qd: &[f64], a: &[f64]) -> Vec<f64> {
+        let mut data = Data::new(model);
+        phri_model::crba(model, &mut data, q).unwrap();
+        let m = data.m.clone();
+        let b = phri_model::rnea(model, &mut data, q, qd, &[0.0; 7])
+            .unwrap()
+            .clone();
+        (0..7)
+            .map(|i| b[i] + (0..7).map(|k| m[(i, k)] * a[k]).sum::<f64>())
+            .collect()
+    }
+
+    #[test]
+    fn reflex_torque_is_eq_9() {
+        let mut c = controller(Reaction::Reflex);
+        let zero = [0.0; 7];
+        let out = c.step(&input(1, &Q0, Some(residual(1, &zero, false))));
+        assert_eq!(out.mode, ControlMode::Task, "fresh inputs start the task");
+        // the arm moved a little (q̇ ≠ 0) and the residual reports a collision
+        let q: Vec<f64> = Q0
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + 1e-4 * i as f64)
+            .collect();
+        let r = [3.0, -2.0, 1.5, 2.0, -1.0, 0.5, 0.3];
+        let out = c.step(&input(2, &q, Some(residual(2, &r, true))));
+        assert_eq!(out.mode, ControlMode::Reaction);
+        assert_eq!(out.limits, LimitActivity::default());
+        let tau = out.tau.to_vec();
+        // τ = M (K_R r − D_R q̇) + C q̇ + g − r
+        let cfg = Config::defaults().control;
+        let qd = c.velocity().to_vec();
+        assert!(qd[6] > 0.01, "the estimate sees the motion: {qd:?}");
+        let a: Vec<f64> = (0..7)
+            .map(|i| cfg.reflex_gain * r[i] - cfg.reflex_damping * qd[i])
+            .collect();
+        let expected = computed_torque(c.model(), &q, &qd, &a);
+        for i in 0..7 {
+            assert!(
+                (tau[i] - (expected[i] - r[i])).abs() < 1e-9,
+                "joint {i}: {} vs {}",
+                tau[i],
+                expected[i] - r[i]
+            );
+        }
+        assert_eq!(c.counters().detections, 1);
+    }
+
+    #[test]
+    fn protective_stop_holds_where_it_stopped_and_recovers_first() {
+        let mut c = controller(Reaction::Stop);
+        let zero = [0.0; 7];
+        c.step(&input(1, &Q0, Some(residual(1, &zero, false))));
+        // the residual stops at 1 ms: from 7 ms on it is older than 5 ms
+        for k in 2..=6 {
+            let out = c.step(&input(k, &Q0, Some(residual(1, &zero, false))));
+            assert_eq!(out.mode, ControlMode::Task);
+        }
+        let model = lwr4();
+        let g = phri_model::gravity(&model, &mut Data::new(&model), &Q0)
+            .unwrap()
+            .clone();
+        let out = c.step(&input(7, &Q0, Some(residual(1, &zero, false))));
+        assert_eq!(out.mode, ControlMode::ProtectiveStop);
+        // at the hold, at rest: gravity alone
+        for i in 0..7 {
+            assert!((out.tau[i] - g[i]).abs() < 1e-9);
+        }
+        // pushed away from the hold: a = K_P (q_hold − q) − K_D q̇ pulls it back
+        let mut q = Q0;
+        q[1] += 0.001;
+        let out = c.step(&input(8, &q, Some(residual(1, &zero, false))));
+        assert_eq!(out.mode, ControlMode::ProtectiveStop);
+        assert_eq!(out.limits, LimitActivity::default());
+        let tau = out.tau.to_vec();
+        let cfg = Config::defaults().control;
+        let qd = c.velocity().to_vec();
+        let a: Vec<f64> = (0..7)
+            .map(|i| cfg.kp * (Q0[i] - q[i]) - cfg.kd * qd[i])
+            .collect();
+        let expected = computed_torque(&model, &q, &qd, &a);
+        for i in 0..7 {
+            assert!((tau[i] - expected[i]).abs() < 1e-9, "joint {i}");
+        }
+        assert!(tau[1] < g[1], "pulls joint 1 back");
+        assert_eq!(c.counters().protective_stops, 1, "one stop, counted once");
+        // fresh again: recover (holding), never straight back to the task
+        let out = c.step(&input(9, &Q0, Some(residual(9, &zero, false))));
+        assert_eq!(out.mode, ControlMode::Recover);
+    }
+
+    #[test]
+    fn sync_waits_for_a_residual_without_counting_stops() {
+        let mut c = controller(Reaction::Reflex);
+        for k in 1..=20 {
+            let out = c.step(&input(k, &Q0, None));
+            assert_eq!(out.mode, ControlMode::Sync);
+        }
+        assert_eq!(c.counters().protective_stops, 0);
+        assert_eq!(c.q_ref(), Q0, "holds where it was first measured");
+        let zero = [0.0; 7];
+        let out = c.step(&input(21, &Q0, Some(residual(21, &zero, false))));
+        assert_eq!(out.mode, ControlMode::Task);
+    }
+
+    #[test]
+    fn recovering_resumes_after_a_quiet_residual() {
+        let mut c = controller(Reaction::Stop);
+        let zero = [0.0; 7];
+        let r = [10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        c.step(&input(1, &Q0, Some(residual(1, &zero, false))));
+        assert_eq!(
+            c.step(&input(2, &Q0, Some(residual(2, &r, true)))).mode,
+            ControlMode::Reaction
+        );
+        // reaction_min_s = 0.3 s, then recover; resume_quiet_s = 1 s later the task
+        let mut modes: Vec<(ControlMode, u64)> = vec![(ControlMode::Reaction, 2)];
+        for k in 3..1400 {
+            let m = c.step(&input(k, &Q0, Some(residual(k, &zero, false)))).mode;
+            if modes.last().map(|x| x.0) != Some(m) {
+                modes.push((m, k));
+            }
+        }
+        let names: Vec<ControlMode> = modes.iter().map(|x| x.0).collect();
+        assert_eq!(
+            names,
+            [
+                ControlMode::Reaction,
+                ControlMode::Recover,
+                ControlMode::Task
+            ]
+        );
+        let (recovered, resumed) = (modes[1].1, modes[2].1);
+        assert!(
+            (301..=304).contains(&recovered),
+            "recovered at {recovered} ms"
+        );
+        assert!(
+            (1000..=1003).contains(&(resumed - recovered)),
+            "resumed at {resumed} ms"
+        );
+        assert_eq!(c.counters().resumes, 1);
+    }
+
+    fn refused(cfg: &Config) -> ControlError {
+        match Controller::from_config(lwr4(), cfg) {
+            Ok(_) => panic!("accepted"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn malformed_configurations_name_the_key() {
+        let cfg = Config::defaults();
+        let params = ControllerParams { period_s: 0.0 };
+        let Err(e) = Controller::new(lwr4(), cfg.control.clone(), params) else {
+            panic!("a zero period accepted")
+        };
+        assert!(e.to_string().starts_with("sim.dt_s"), "{e}");
+        let mut bad = cfg.clone();
+        bad.control.posture = vec![0.0; 3];
+        let e = refused(&bad);
+        assert_eq!(e.to_string(), "control.posture: expected length 7, got 3");
+        let mut bad = cfg.clone();
+        bad.control.ee_link = "lwr_hand".into();
+        let e = refused(&bad);
+        assert_eq!(
+            e.to_string(),
+            "control.ee_link: the robot has no link 'lwr_hand'"
+        );
+        let mut bad = cfg.clone();
+        bad.repulsion.points[1].link = "nope".into();
+        let e = refused(&bad);
+        assert_eq!(
+            e.to_string(),
+            "repulsion.points[1].link: the robot has no link 'nope'"
+        );
+        let mut bad = cfg.clone();
+        bad.repulsion.points.clear();
+        assert!(matches!(refused(&bad), ControlError::NoControlPoints));
+        let mut bad = cfg.clone();
+        bad.control.kp = -1.0;
+        let e = refused(&bad);
+        assert!(e.to_string().starts_with("control.kp"), "{e}");
+        // without avoidance no control points are needed
+        bad = cfg;
+        bad.control.avoidance = false;
+        bad.repulsion.points.clear();
+        assert!(Controller::from_config(lwr4(), &bad).is_ok());
+    }
+
+    #[test]
+    fn the_history_holds_the_retreat_at_any_period() {
+        let cfg = Config::defaults().control;
+        for period_s in [0.001, 0.002, 0.004] {
+            let c = Controller::new(lwr4(), cfg.clone(), ControllerParams { period_s }).unwrap();
+            // room for the retreat and half a second more, one entry per period
+            let want = ((cfg.retreat_path_s + 0.5) / period_s).ceil() as usize;
+            let mut h = c.history.clone();
+            for k in 0..2 * want {
+                h.push(k as f64, &Q0);
+            }
+            assert!(h.available() >= want && h.available() <= want + 2);
         }
     }
 }

@@ -1,25 +1,46 @@
-//! The torque loop as a pure, deterministic step: joint positions and the
-//! newest residual in, a limited joint torque and a mode out.
+//! The torque loop as a pure, deterministic step: joint positions, the
+//! newest residual and the newest repulsion results in, a limited joint
+//! torque and a mode out. [`Controller::step`] applies the paper's hierarchy
+//! in order:
 //!
-//! - Task: the end effector cycles through Cartesian waypoints on
-//!   minimum-jerk segments, resolved by closed-loop inverse kinematics with a
-//!   damped pseudoinverse; the redundancy holds a comfortable posture; a
-//!   computed-torque law tracks the joint reference with gravity compensated.
-//! - On a detected collision it switches at once to the configured reaction
-//!   (reflex torque eq. 9, admittance eq. 13, stop, float, time-scaled retreat
-//!   along the past path), then holds until the residual falls back and
-//!   resumes the task (configurable).
-//! - Without a fresh, valid residual it holds a protective stop.
-//! - After (re)start it re-syncs to the measured state: the first command
-//!   holds where the arm is and the task approaches its path smoothly.
-//! - Torque, velocity and position limits are enforced at the last step.
+//! 1. safety inputs ([`safety`]): without a fresh, valid residual the arm
+//!    holds a protective stop; blind perception slows the task, or stops it
+//!    with a person last seen near;
+//! 2. reaction to a detected collision ([`modes::next_mode`]): at once, the
+//!    configured strategy (reflex eq. 9, admittance eq. 13, stop, float,
+//!    time-scaled retreat along the past path), then recover and resume;
+//! 3. the active behaviour ([`modes`]): sync after a (re)start (no jump to an
+//!    old command), the Cartesian task (waypoints on minimum-jerk segments),
+//!    the reaction, protective stop, recover;
+//! 4. avoidance ([`resolve`], [`avoidance`], [`sns`]): the end effector's
+//!    repulsion adds to the task (eq. 19), the other control points shape the
+//!    joint velocity bounds (eq. 20), SNS solves within them; CLIK ([`clik`])
+//!    without perception;
+//! 5. the computed-torque law `τ = M a + C q̇ + g` with gravity compensated;
+//! 6. torque, velocity and position limits of the model ([`limits`]).
+//!
+//! [`inputs`] and [`outputs`] are the one conversion between the cell's
+//! messages and the step, for `main.rs` and the lock-step cell.
 
 pub mod avoidance;
-pub mod config;
+pub mod clik;
 pub mod controller;
+pub mod error;
+pub mod history;
+pub mod inputs;
 pub mod limits;
+pub mod modes;
+pub mod outputs;
+pub mod path;
+pub mod reference;
+pub mod resolve;
+pub mod safety;
 pub mod sns;
-pub mod task;
+pub mod terms;
 
-pub use config::{ControlConfig, Reaction};
-pub use controller::{ControlInput, ControlOutput, Controller, PerceptionView, ResidualView};
+pub use controller::{ControlCounters, ControlOutput, Controller, ControllerParams};
+pub use error::{ControlError, InputError};
+pub use inputs::{ControlInput, PerceptionView, RepulsionInputs, ResidualView};
+pub use outputs::{write_messages, Stamps};
+pub use phri_config::{AvoidanceParams, ControlConfig};
+pub use phri_ipc::{ControlMode, Reaction};

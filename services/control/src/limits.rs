@@ -9,7 +9,7 @@ pub struct Limits {
     pub upper: Vec<f64>,
     pub velocity: Vec<f64>,
     pub effort: Vec<f64>,
-    /// keep this far inside the position limits [rad]
+    /// keep this far inside the position limits \[rad\]
     pub margin: f64,
 }
 

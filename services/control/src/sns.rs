@@ -1,7 +1,7 @@
 //! Saturation in the Null Space (SNS): velocity-level inverse kinematics of a
 //! single task under hard joint-velocity bounds, scaling the task down when it
 //! cannot be met (Flacco, De Luca, Khatib, ICRA 2012 / T-RO 2015; the
-//! paper's ref. [23]).
+//! paper's ref. \[23\]).
 //!
 //! Given a task Jacobian `J` (m×n), a task velocity `ẋ` (m) and joint velocity
 //! bounds `q̇min ≤ q̇ ≤ q̇max`:
@@ -70,9 +70,11 @@
 //! are allowed; infinite bounds are allowed, NaN is not.
 //!
 //! No allocation after [`SnsSolver::new`]: all buffers are preallocated and
-//! the small m×m factorisations are done in place.
+//! the small m×m factorisations are done in place (phri's one Cholesky,
+//! [`phri_model::cholesky_factor`]).
 
-use nalgebra::{Dim, Matrix, RawStorage};
+use nalgebra::{DMatrixView, DMatrixViewMut, Dim, Matrix, RawStorage};
+use phri_model::{check_len, cholesky_factor, cholesky_solve, LengthError};
 
 /// Most joints a solver handles (the saturation set is a `u32` bitmask).
 pub const MAX_JOINTS: usize = 32;
@@ -90,10 +92,13 @@ const RANK_EPS: f64 = 1e-10;
 /// Why [`SnsSolver::solve`] refused a problem.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum SnsError {
-    #[error("{what}: expected length {expected}, got {got}")]
-    Dimension {
+    #[error(transparent)]
+    Dimension(#[from] LengthError),
+    /// a Jacobian with fewer rows than the task needs
+    #[error("{what}: expected at least {min} rows, got {got}")]
+    TooFewRows {
         what: &'static str,
-        expected: usize,
+        min: usize,
         got: usize,
     },
     #[error("task dimension {m} is outside 1..={m_max}")]
@@ -145,7 +150,7 @@ pub struct SnsSolver {
     qd: Vec<f64>,
     a: Vec<f64>,
     tol: Vec<f64>,
-    /// Cholesky factor of `JW (JW)ᵀ + λ² I`, m×m row-major
+    /// Cholesky factor of `JW (JW)ᵀ + λ² I`, m×m column-major (lower triangle)
     chol: Vec<f64>,
     /// scratch of the pivoted Cholesky of the rank test, m×m
     piv: Vec<f64>,
@@ -321,9 +326,9 @@ impl SnsSolver {
                 self.y1[r] = self.xd[r];
                 self.r[r] = self.xd[r] - jqn;
             }
-            chol_solve(&self.chol, m, &mut self.y1);
+            Self::chol_solve(&self.chol, m, &mut self.y1);
             self.y2[..m].copy_from_slice(&self.r[..m]);
-            chol_solve(&self.chol, m, &mut self.y2);
+            Self::chol_solve(&self.chol, m, &mut self.y2);
             for k in 0..n {
                 if free & (1 << k) != 0 {
                     let (mut ak, mut ck) = (0.0, 0.0);
@@ -456,8 +461,9 @@ impl SnsSolver {
         })
     }
 
-    /// Cholesky factor of `JW (JW)ᵀ + λ² I` into `self.chol`; false if it is
-    /// not (numerically) positive definite.
+    /// Cholesky factor of `JW (JW)ᵀ + λ² I` into `self.chol` (phri's one
+    /// Cholesky, [`phri_model::cholesky_factor`]); false if it is not
+    /// (numerically) positive definite.
     fn factor(&mut self, m: usize, free: u32, lambda2: f64) -> bool {
         gram(&self.j, self.n, m, free, &mut self.chol);
         let mut max_diag = 0.0f64;
@@ -465,10 +471,22 @@ impl SnsSolver {
             self.chol[r * m + r] += lambda2;
             max_diag = max_diag.max(self.chol[r * m + r]);
         }
-        chol_factor(&mut self.chol, m, max_diag * 1e-14)
+        // the Gram matrix is symmetric: its row-major buffer is its column-major one
+        let a = DMatrixViewMut::from_slice(&mut self.chol[..m * m], m, m);
+        cholesky_factor(a, max_diag * 1e-14).is_ok()
+    }
+
+    /// Solve `(JW (JW)ᵀ + λ² I) x = b` in place with the factor of [`SnsSolver::factor`].
+    fn chol_solve(chol: &[f64], m: usize, b: &mut [f64]) {
+        cholesky_solve(DMatrixView::from_slice(&chol[..m * m], m, m), &mut b[..m]);
     }
 
     /// `rank(JW) < m`, by a diagonally pivoted Cholesky of `JW (JW)ᵀ`.
+    ///
+    /// This is a rank test, not a solver: the pivoting orders the columns by
+    /// their remaining norm so that a (numerically) dependent row shows as a
+    /// small pivot whatever its position. The solves use the unpivoted
+    /// [`phri_model::cholesky_factor`] of the damped matrix ([`SnsSolver::factor`]).
     fn rank_deficient(&mut self, m: usize, free: u32, jscale: f64) -> bool {
         gram(&self.j, self.n, m, free, &mut self.piv);
         let tol = RANK_EPS * jscale;
@@ -509,18 +527,6 @@ impl SnsSolver {
     }
 }
 
-fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), SnsError> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(SnsError::Dimension {
-            what,
-            expected,
-            got,
-        })
-    }
-}
-
 /// `out = JW (JW)ᵀ` (m×m row-major) for the columns in `free`.
 fn gram(j: &[f64], n: usize, m: usize, free: u32, out: &mut [f64]) {
     for r in 0..m {
@@ -534,48 +540,6 @@ fn gram(j: &[f64], n: usize, m: usize, free: u32, out: &mut [f64]) {
             out[r * m + c] = s;
             out[c * m + r] = s;
         }
-    }
-}
-
-/// In-place lower Cholesky of the m×m row-major `a`; false if a pivot is not
-/// above `floor` (or not finite).
-fn chol_factor(a: &mut [f64], m: usize, floor: f64) -> bool {
-    for c in 0..m {
-        let mut d = a[c * m + c];
-        for k in 0..c {
-            d -= a[c * m + k] * a[c * m + k];
-        }
-        if d.is_nan() || d <= floor || !d.is_finite() {
-            return false;
-        }
-        let l = d.sqrt();
-        a[c * m + c] = l;
-        for r in c + 1..m {
-            let mut v = a[r * m + c];
-            for k in 0..c {
-                v -= a[r * m + k] * a[c * m + k];
-            }
-            a[r * m + c] = v / l;
-        }
-    }
-    true
-}
-
-/// Solve `L Lᵀ x = b` in place with the factor of [`chol_factor`].
-fn chol_solve(l: &[f64], m: usize, b: &mut [f64]) {
-    for r in 0..m {
-        let mut v = b[r];
-        for k in 0..r {
-            v -= l[r * m + k] * b[k];
-        }
-        b[r] = v / l[r * m + r];
-    }
-    for r in (0..m).rev() {
-        let mut v = b[r];
-        for k in r + 1..m {
-            v -= l[k * m + r] * b[k];
-        }
-        b[r] = v / l[r * m + r];
     }
 }
 

@@ -15,6 +15,17 @@ use phri_control::avoidance::{
 use phri_control::sns::{SnsError, SnsSolver};
 use phri_model::{Data, Model};
 
+/// The avoidance settings these tests were written for (V_max = 0.21 m/s).
+fn avoidance_params() -> AvoidanceParams {
+    AvoidanceParams {
+        accel_limit: 10.0,
+        horizon_s: 0.05,
+        v_max_repulsion: 0.21,
+        damping: 0.02,
+        position_margin: 0.05,
+    }
+}
+
 // ---------------------------------------------------------------------------
 // allocation counter (per thread, so parallel tests do not interfere)
 
@@ -513,7 +524,7 @@ fn avoidance_on_the_lwr_keeps_the_elbow_from_the_obstacle() {
     phri_model::point_jacobian(&model, &data, elbow, &Vector3::zeros(), &mut j_el).unwrap();
     let p_elbow = phri_model::frame_placement(&model, &data, elbow).p;
 
-    let params = AvoidanceParams::default();
+    let params = avoidance_params();
     let mut av = Avoidance::new(&model, params);
     let xdot_t = Vector3::new(0.0, 0.25, -0.25); // end-effector task velocity
     let zero = Vector3::zeros();
@@ -649,7 +660,7 @@ fn solve_and_step_do_not_allocate() {
         model.frame_id("lwr_link_4").unwrap(),
         model.frame_id("lwr_link_6").unwrap(),
     );
-    let mut av = Avoidance::new(&model, AvoidanceParams::default());
+    let mut av = Avoidance::new(&model, avoidance_params());
     let before = allocations();
     phri_model::forward_kinematics(&model, &mut data, &q).unwrap();
     phri_model::point_jacobian(&model, &data, ee, &Vector3::zeros(), &mut j_ee).unwrap();

@@ -1,13 +1,219 @@
-//! Momentum-residual collision detection (paper Sect. III, eqs. 4-8) as a pure,
-//! deterministic step: joint positions and applied torques in, residual,
-//! detection flags and the isolated link out. `main.rs` wires it to channels.
+//! The dynamics service as a pure, deterministic step over messages: a
+//! [`JointState`] in, the [`Residual`] message out (momentum residual, paper
+//! Sect. III, eqs. 4-8; detection flags; the isolated joint). The estimators
+//! themselves live in `phri-estimation`; `main.rs` only wires `robot/state`
+//! to `dynamics/residual`, and the lock-step cell calls the same step.
 
-pub mod config;
-pub mod detect;
-pub mod observer;
-pub mod velocity;
+use phri_config::ResidualConfig;
+use phri_estimation::{ResidualError, ResidualObserver};
+use phri_ipc::{residual_flags, robot_status, JointState, Residual, Zeroed};
+use phri_model::Model;
 
-pub use config::ResidualConfig;
-pub use detect::{Detection, Detector};
-pub use observer::{ResidualError, ResidualObserver};
-pub use velocity::VelocityEstimator;
+/// Why a state produced no residual.
+#[derive(Debug, thiserror::Error)]
+pub enum DynamicsError {
+    /// the robot model has more joints than a message carries
+    #[error("the model has {model} joints, the messages carry at most {max}")]
+    TooManyJoints { model: usize, max: usize },
+    /// a state whose joint count is not the model's
+    #[error("state {seq} has {got} joints, the model {model}")]
+    Dof { seq: u64, got: u32, model: usize },
+    /// the observer refused the state (non-finite values) or its configuration
+    #[error("state {seq}: {source}")]
+    State {
+        seq: u64,
+        #[source]
+        source: ResidualError,
+    },
+    #[error(transparent)]
+    Config(#[from] ResidualError),
+}
+
+/// The residual observer and the message it fills; `step` allocates nothing.
+pub struct DynamicsStep {
+    observer: ResidualObserver,
+    msg: Residual,
+    n: usize,
+}
+
+impl DynamicsStep {
+    /// An observer for `model` with `[dynamics]` settings `cfg` (validated here).
+    pub fn new(model: Model, cfg: &ResidualConfig) -> Result<DynamicsStep, DynamicsError> {
+        let n = model.nv();
+        if n > phri_ipc::MAX_DOF {
+            return Err(DynamicsError::TooManyJoints {
+                model: n,
+                max: phri_ipc::MAX_DOF,
+            });
+        }
+        let mut msg = Residual::zeroed();
+        msg.dof = n as u32;
+        msg.isolated_joint = -1;
+        Ok(DynamicsStep {
+            observer: ResidualObserver::new(model, cfg)?,
+            msg,
+            n,
+        })
+    }
+
+    /// One robot state: its positions [rad] at `stamp_ns` [ns, robot clock],
+    /// the torque applied over the period that ended there [Nm] and, when the
+    /// status says `FT_VALID`, the wrist wrench [N, Nm; base frame, at the
+    /// F/T link's origin]. Returns the residual message: `r` [Nm], the
+    /// estimated `qd` [rad/s], ‖r‖, [`residual_flags`], the isolated joint
+    /// (−1: none), the state's sequence and stamp. `seq`, `stamp_ns` and
+    /// `compute_ns` are those of the last [`DynamicsStep::seal`].
+    ///
+    /// A state of the wrong joint count or with non-finite values is refused
+    /// and leaves the message as it was.
+    pub fn step(&mut self, state: &JointState) -> Result<&Residual, DynamicsError> {
+        let n = self.n;
+        if state.dof as usize != n {
+            return Err(DynamicsError::Dof {
+                seq: state.seq,
+                got: state.dof,
+                model: n,
+            });
+        }
+        let wrench = (state.status & robot_status::FT_VALID != 0).then_some(&state.wrench);
+        let out = self
+            .observer
+            .step(
+                state.stamp_ns as f64 * 1e-9,
+                &state.q[..n],
+                &state.tau[..n],
+                wrench,
+            )
+            .map_err(|source| DynamicsError::State {
+                seq: state.seq,
+                source,
+            })?;
+        let m = &mut self.msg;
+        m.r[..n].copy_from_slice(out.r);
+        m.qd[..n].copy_from_slice(out.qd);
+        m.norm = out.norm;
+        let d = out.detection;
+        m.flags = (d.contact as u32 * residual_flags::CONTACT)
+            | (d.collision as u32 * residual_flags::COLLISION)
+            | (out.ft_used as u32 * residual_flags::FT_USED)
+            | (out.valid as u32 * residual_flags::VALID);
+        m.isolated_joint = d.isolated_joint.map_or(-1, |j| j as i32);
+        m.state_seq = state.seq;
+        m.state_stamp_ns = state.stamp_ns;
+        m.dof = n as u32;
+        Ok(&self.msg)
+    }
+
+    /// Number the residual of the last accepted state for publishing: the
+    /// next sequence number, the publish time `stamp_ns` [ns, CLOCK_MONOTONIC]
+    /// and the time its step took `compute_ns` [ns]. A reader drains every
+    /// queued state and publishes the last residual once.
+    pub fn seal(&mut self, stamp_ns: u64, compute_ns: u64) -> &Residual {
+        self.msg.seq += 1;
+        self.msg.stamp_ns = stamp_ns;
+        self.msg.compute_ns = compute_ns;
+        &self.msg
+    }
+
+    /// The message as it stands.
+    pub fn message(&self) -> &Residual {
+        &self.msg
+    }
+
+    pub fn observer(&self) -> &ResidualObserver {
+        &self.observer
+    }
+
+    /// Joints of the model.
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_config::Loaded;
+
+    const Q: [f64; 7] = [0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0];
+
+    fn state(seq: u64, tau: &[f64; 7]) -> JointState {
+        let mut s = JointState::zeroed();
+        s.seq = seq;
+        s.stamp_ns = 1_000_000_000 + seq * 1_000_000;
+        s.dof = 7;
+        s.q[..7].copy_from_slice(&Q);
+        s.tau[..7].copy_from_slice(tau);
+        s
+    }
+
+    #[test]
+    fn a_state_in_a_residual_out_flags_isolation_and_refusals() {
+        let loaded = Loaded::defaults();
+        let model = loaded.model().unwrap();
+        let mut d = phri_model::Data::new(&model);
+        let g: [f64; 7] = {
+            let g = phri_model::gravity(&model, &mut d, &Q).unwrap();
+            std::array::from_fn(|i| g[i])
+        };
+        let cfg = &loaded.config.dynamics;
+        let mut step = DynamicsStep::new(model, cfg).unwrap();
+        assert_eq!(step.dof(), 7);
+        // the arm held still by gravity compensation: valid after warm-up, quiet
+        let warm = cfg.warmup_samples as u64;
+        for seq in 1..=warm {
+            let m = step.step(&state(seq, &g)).unwrap();
+            assert_eq!(m.flags & residual_flags::VALID, 0, "valid during warm-up");
+        }
+        let m = *step.step(&state(warm + 1, &g)).unwrap();
+        assert_eq!(m.flags, residual_flags::VALID);
+        assert_eq!((m.state_seq, m.dof, m.isolated_joint), (warm + 1, 7, -1));
+        assert_eq!(m.state_stamp_ns, state(warm + 1, &g).stamp_ns);
+        assert!(m.norm < 1e-6, "‖r‖ {}", m.norm);
+        // 10 Nm pushing on joint 4 (the motors hold g − τ_ext): contact and
+        // collision (threshold 6 Nm there), isolated at joint index 3
+        let mut push = g;
+        push[3] -= 10.0;
+        let mut seq = warm + 2;
+        let mut m = m;
+        for _ in 0..200 {
+            m = *step.step(&state(seq, &push)).unwrap();
+            seq += 1;
+        }
+        assert_eq!(
+            m.flags,
+            residual_flags::VALID | residual_flags::CONTACT | residual_flags::COLLISION
+        );
+        assert_eq!(m.isolated_joint, 3);
+        assert!((m.r[3] - 10.0).abs() < 1e-3, "r {:?}", &m.r[..7]);
+        assert!((m.norm - 10.0).abs() < 1e-3);
+        // a wrist reading is used when the robot flags it (use_ft_sensor = true)
+        let mut ft = state(seq, &push);
+        ft.status = robot_status::FT_VALID;
+        assert_ne!(step.step(&ft).unwrap().flags & residual_flags::FT_USED, 0);
+        seq += 1;
+        // refusals leave the message as it was
+        let before = *step.message();
+        let mut six = state(seq, &g);
+        six.dof = 6;
+        assert!(matches!(
+            step.step(&six),
+            Err(DynamicsError::Dof {
+                got: 6,
+                model: 7,
+                ..
+            })
+        ));
+        let mut nan = state(seq, &g);
+        nan.q[2] = f64::NAN;
+        let e = step.step(&nan).unwrap_err();
+        assert!(matches!(e, DynamicsError::State { .. }), "{e}");
+        assert!(e.to_string().contains(&format!("state {seq}")), "{e}");
+        assert_eq!(step.message().state_seq, before.state_seq);
+        assert_eq!(step.message().r, before.r);
+        // sealing numbers the publications
+        assert_eq!(step.seal(7, 3).seq, 1);
+        let sealed = *step.seal(8, 4);
+        assert_eq!((sealed.seq, sealed.stamp_ns, sealed.compute_ns), (2, 8, 4));
+    }
+}

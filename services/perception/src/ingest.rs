@@ -1,18 +1,20 @@
-//! Depth ingestion: validate a frame, remove the robot's own pixels at the
-//! joint state nearest the frame's capture time.
+//! Depth ingestion: validate a frame, remove isolated flying pixels (sensor
+//! noise that would be an obstacle next to the robot) and the robot's own
+//! pixels at the joint state nearest the frame's capture time.
 
-use phri_depth::{Capsule, SelfFilter, SelfFilterParams};
-use phri_ipc::{FrameHeader, MAX_DOF};
-use phri_model::{Data, Model};
+use phri_config::{IngestConfig, Invalid};
+use phri_depth::{Capsule, DepthError, FlyingPixels, SelfFilter, SelfFilterParams};
+use phri_ipc::{FrameHeader, JointState, MAX_DOF};
+use phri_model::{Data, Model, ModelError};
 
-use crate::camera::header_camera;
+use crate::camera::{header_camera, HeaderError, DEPTH_SCALE_M};
 use crate::robot::robot_capsules;
 
 /// A frame sequence at or below this after a higher one means the camera restarted.
 const RESTARTED_SEQ: u64 = 2;
 
 /// Why a frame was refused.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Debug, thiserror::Error)]
 pub enum FrameError {
     #[error("frame {seq}: {got} pixels, the header says {width}×{height}")]
     Size {
@@ -21,8 +23,15 @@ pub enum FrameError {
         width: u32,
         height: u32,
     },
-    #[error("frame {seq}: {0}", seq = .1)]
-    Camera(String, u64),
+    /// the header's intrinsics or pose describe no camera
+    #[error("frame {seq}: {source}")]
+    Camera { seq: u64, source: HeaderError },
+    /// the self-filter refused the camera or the frame
+    #[error("frame {seq}: self-filter: {source}")]
+    Filter { seq: u64, source: DepthError },
+    /// the joint state could not be placed (kinematics)
+    #[error("frame {seq}: {source}")]
+    Model { seq: u64, source: ModelError },
     #[error("frame {seq}: depth scale {scale} m per unit (this pipeline works in millimetres)")]
     Scale { seq: u64, scale: f64 },
     #[error("frame {seq}: captured {age_ms:.0} ms ago (limit {limit_ms:.0} ms)")]
@@ -41,32 +50,55 @@ pub enum FrameError {
     NoJointState { seq: u64, limit_ms: f64 },
 }
 
-/// Recent joint states (stamp [ns], q), newest last; fixed capacity.
+/// Recent joint states (stamp [ns, robot clock], q [rad]), newest last;
+/// fixed capacity, the oldest overwritten.
 pub struct StateHistory {
     n: usize,
     stamps: Vec<u64>,
     q: Vec<f64>,
     head: usize,
     len: usize,
+    newest_ns: u64,
 }
 
 impl StateHistory {
+    /// Room for `capacity` (≥ 1) states of `n` joints.
     pub fn new(n: usize, capacity: usize) -> StateHistory {
+        let capacity = capacity.max(1);
         StateHistory {
             n,
             stamps: vec![0; capacity],
             q: vec![0.0; capacity * n],
             head: 0,
             len: 0,
+            newest_ns: 0,
         }
     }
 
+    /// Keep positions `q` (at least `n` of them) measured at `stamp_ns`.
     pub fn push(&mut self, stamp_ns: u64, q: &[f64]) {
         let cap = self.stamps.len();
         self.stamps[self.head] = stamp_ns;
         self.q[self.head * self.n..(self.head + 1) * self.n].copy_from_slice(&q[..self.n]);
         self.head = (self.head + 1) % cap;
         self.len = (self.len + 1).min(cap);
+        self.newest_ns = self.newest_ns.max(stamp_ns);
+    }
+
+    /// Keep a robot state if it has this history's joint count; `false` (and
+    /// nothing kept) otherwise.
+    pub fn push_state(&mut self, s: &JointState) -> bool {
+        if s.dof as usize != self.n || self.n > s.q.len() {
+            return false;
+        }
+        self.push(s.stamp_ns, &s.q[..self.n]);
+        true
+    }
+
+    /// The latest stamp kept [ns, robot clock] (0: none yet): ingestion's
+    /// "now" for judging a frame's age.
+    pub fn newest_ns(&self) -> u64 {
+        self.newest_ns
     }
 
     /// The state nearest `stamp_ns`: (stamp, q).
@@ -84,7 +116,9 @@ pub struct Ingest {
     model: Model,
     data: Data,
     params: SelfFilterParams,
-    filter: Option<(u64, SelfFilter)>,
+    /// the filters of the current camera geometry (its key, the self-filter,
+    /// the flying-pixel filter), rebuilt only when the camera changes
+    filter: Option<(u64, SelfFilter, FlyingPixels)>,
     robot: Vec<Capsule>,
     last_seq: Option<u64>,
     max_state_gap_ns: u64,
@@ -94,32 +128,38 @@ pub struct Ingest {
 /// What [`Ingest::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IngestOutcome {
+    /// the robot's own pixels removed
     pub removed: u32,
+    /// isolated flying pixels removed ([`FlyingPixels`])
+    pub flying: u32,
+    /// pixels with a reading left
     pub valid: u32,
 }
 
 impl Ingest {
-    pub fn new(
-        model: Model,
-        params: SelfFilterParams,
-        max_state_gap_ms: f64,
-        max_frame_age_ms: f64,
-    ) -> Ingest {
-        Ingest {
+    /// Ingestion for `model` with `[perception]` settings `cfg` (validated here).
+    pub fn new(model: Model, cfg: &IngestConfig) -> Result<Ingest, Invalid> {
+        cfg.validate()?;
+        Ok(Ingest {
             data: Data::new(&model),
-            params,
+            params: cfg.self_filter,
             filter: None,
             robot: Vec::with_capacity(32),
             last_seq: None,
-            max_state_gap_ns: (max_state_gap_ms * 1e6) as u64,
-            max_age_ns: (max_frame_age_ms * 1e6) as u64,
+            max_state_gap_ns: (cfg.max_state_gap_ms * 1e6) as u64,
+            max_age_ns: (cfg.max_frame_age_ms * 1e6) as u64,
             model,
-        }
+        })
     }
 
-    /// Validate `header`/`input`, copy into `out` without the robot's pixels,
-    /// and complete `header` (joint state used, counts). `now_ns` is on the
-    /// robot's clock, as the capture time.
+    /// Validate `header`/`input` (size, camera, millimetres, age, sequence),
+    /// copy the depths [mm] into `out` without isolated flying pixels
+    /// ([`FlyingPixels`]) and without the robot's pixels (the arm at the state
+    /// of `states` nearest the capture time), and complete `header` (joint
+    /// state used, the robot's removed pixels, valid pixels left). `now_ns` [ns, robot
+    /// clock] is when the frame is handled: the service passes the newest
+    /// state's stamp ([`StateHistory::newest_ns`]), the lock-step cell the
+    /// capture time plus the perception latency.
     pub fn step(
         &mut self,
         header: &mut FrameHeader,
@@ -138,8 +178,9 @@ impl Ingest {
                 height: header.height,
             });
         }
-        let (k, pose) = header_camera(header).map_err(|e| FrameError::Camera(e, seq))?;
-        if (header.depth_scale - 0.001).abs() > 1e-12 {
+        let (k, pose) =
+            header_camera(header).map_err(|source| FrameError::Camera { seq, source })?;
+        if (header.depth_scale - DEPTH_SCALE_M).abs() > 1e-12 {
             return Err(FrameError::Scale {
                 seq,
                 scale: header.depth_scale,
@@ -179,32 +220,39 @@ impl Ingest {
             });
         }
         let out = &mut out[..pixels];
-        out.copy_from_slice(input);
-        let valid_in = out.iter().filter(|&&d| d > 0).count();
-        if valid_in == 0 {
-            return Err(FrameError::Empty { seq });
-        }
-        // a filter per camera geometry (rebuilt only when the camera changes)
+        // filters per camera geometry (rebuilt only when the camera changes)
         let key = header.width as u64
             ^ (header.height as u64) << 16
             ^ header.fx.to_bits()
             ^ header.pose_t[0].to_bits().rotate_left(7)
             ^ header.pose_t[2].to_bits().rotate_left(13);
-        if self.filter.as_ref().is_none_or(|(k0, _)| *k0 != key) {
+        let filter_err = |source| FrameError::Filter { seq, source };
+        if self.filter.as_ref().is_none_or(|(k0, _, _)| *k0 != key) {
             self.filter = Some((
                 key,
-                SelfFilter::new(k, pose, self.params)
-                    .map_err(|e| FrameError::Camera(e.to_string(), seq))?,
+                SelfFilter::new(k, pose, self.params).map_err(filter_err)?,
+                FlyingPixels::new(&k).map_err(filter_err)?,
             ));
+        }
+        let flying = match self.filter.as_ref() {
+            Some((_, _, fp)) => fp.apply(input, out).map_err(filter_err)?,
+            None => {
+                out.copy_from_slice(input);
+                0
+            }
+        };
+        let valid_in = out.iter().filter(|&&d| d > 0).count();
+        if valid_in == 0 {
+            return Err(FrameError::Empty { seq });
         }
         let n = self.model.nv().min(MAX_DOF);
         phri_model::forward_kinematics(&self.model, &mut self.data, &q[..n])
-            .map_err(|e| FrameError::Camera(e.to_string(), seq))?;
+            .map_err(|source| FrameError::Model { seq, source })?;
         robot_capsules(&self.model, &self.data, 0.0, &mut self.robot);
         let removed = match self.filter.as_mut() {
-            Some((_, f)) => f
+            Some((_, f, _)) => f
                 .apply(&self.robot, out)
-                .map_err(|e| FrameError::Camera(e.to_string(), seq))?,
+                .map_err(|source| FrameError::Filter { seq, source })?,
             None => 0,
         };
         self.last_seq = Some(seq);
@@ -216,7 +264,41 @@ impl Ingest {
         header.valid_pixels = (valid_in - removed) as u32;
         Ok(IngestOutcome {
             removed: removed as u32,
+            flying: flying as u32,
             valid: header.valid_pixels,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    fn state(stamp_ns: u64, dof: u32, q0: f64) -> JointState {
+        let mut s = JointState::zeroed();
+        s.stamp_ns = stamp_ns;
+        s.dof = dof;
+        s.q[..dof as usize].fill(q0);
+        s
+    }
+
+    #[test]
+    fn the_history_keeps_the_robots_states_and_finds_the_nearest() {
+        let mut h = StateHistory::new(2, 3);
+        assert!(h.nearest(5).is_none());
+        assert_eq!(h.newest_ns(), 0);
+        assert!(!h.push_state(&state(10, 3, 1.0)), "another joint count");
+        assert!(h.nearest(10).is_none());
+        for (t, q) in [(10, 0.1), (20, 0.2), (30, 0.3), (40, 0.4)] {
+            assert!(h.push_state(&state(t, 2, q)));
+        }
+        assert_eq!(h.newest_ns(), 40);
+        assert_eq!(h.nearest(24), Some((20, &[0.2, 0.2][..])));
+        // capacity 3: the oldest (10) is gone
+        assert_eq!(h.nearest(0).map(|x| x.0), Some(20));
+        // an older stamp arriving late does not move "now" back
+        h.push_state(&state(35, 2, 0.35));
+        assert_eq!(h.newest_ns(), 40);
     }
 }

@@ -1,13 +1,23 @@
-//! Perception for collision avoidance (paper Sect. V) as pure steps:
-//! the simulated camera renders the world ([`camera`]), ingestion validates
-//! frames and removes the robot's own pixels ([`ingest`]), repulsion workers
-//! compute depth-space distances and repulsive vectors for their control
-//! points ([`repulsion`]). The binaries in `src/bin` wire them to channels.
+//! Perception for collision avoidance (paper Sect. V) as pure steps: the
+//! simulated camera renders and stamps the world ([`camera`]) and injects the
+//! faults it is asked for ([`fault`]); ingestion validates frames and removes
+//! the robot's own pixels ([`ingest`]), from the camera channel or a PNG
+//! directory ([`source`]); repulsion workers compute depth-space distances
+//! and repulsive vectors for their control points and fill their message
+//! ([`repulsion`]). The binaries in `src/bin` only wire them to channels;
+//! the lock-step cell calls the same steps. Configuration sections come from
+//! `phri-config` (`[camera]`, `[perception]`, `[repulsion]`).
 
 pub mod camera;
-pub mod config;
+pub mod fault;
 pub mod ingest;
 pub mod repulsion;
 pub mod robot;
+pub mod skeleton;
+pub mod source;
 
-pub use config::{CameraConfig, IngestConfig, PointConfig, RepulsionConfig};
+pub use camera::{CameraError, CameraSim, HeaderError};
+pub use fault::{FaultAccepted, FaultRefused, FaultState};
+pub use ingest::{FrameError, Ingest, IngestOutcome, StateHistory};
+pub use repulsion::{RepulsionError, Worker};
+pub use source::{PngReplay, RateLimited, SourceError, Ticks};

@@ -1,66 +1,87 @@
 //! A repulsion worker: for its control points, at the frame's joint state, the
-//! depth-space distance and repulsive vector (eqs. 15-18).
+//! depth-space distance and repulsive vector (eqs. 15-18), and the
+//! `perception/repulsion` message that carries them.
 
 use nalgebra::{Point3, Vector3};
-use phri_depth::{DepthSpaceDistance, PointOfInterest, RepulsionParams};
-use phri_ipc::{FrameHeader, PointRepulsion, MAX_POINTS_PER_WORKER};
-use phri_model::{Data, Model};
+use phri_config::{Invalid, RepulsionConfig};
+use phri_depth::{DepthError, DepthSpaceDistance, PointOfInterest, RepulsionParams};
+use phri_ipc::{FrameHeader, PointRepulsion, RepulsionResult, Zeroed, MAX_POINTS_PER_WORKER};
+use phri_model::{Data, Model, ModelError};
 
-use crate::camera::header_camera;
-use crate::config::RepulsionConfig;
+use crate::camera::{header_camera, HeaderError};
+
+/// Why a worker could not be built or could not answer a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum RepulsionError {
+    #[error(transparent)]
+    Config(#[from] Invalid),
+    #[error("repulsion.workers = {workers}: worker {worker} does not exist")]
+    NoSuchWorker { worker: u32, workers: u32 },
+    #[error("repulsion.points[{index}] ({name}): unknown link '{link}'")]
+    UnknownLink {
+        index: usize,
+        name: String,
+        link: String,
+    },
+    #[error("repulsion.params: {0}")]
+    Params(#[source] DepthError),
+    /// the frame's joint state is not one of this model
+    #[error("frame {seq}: joint state of {got} joints, the model has {model}")]
+    Dof { seq: u64, got: u32, model: usize },
+    #[error("frame {seq}: {source}")]
+    Camera { seq: u64, source: HeaderError },
+    #[error("frame {seq}: {source}")]
+    Depth { seq: u64, source: DepthError },
+    #[error("frame {seq}: {source}")]
+    Model { seq: u64, source: ModelError },
+}
 
 /// One worker's state; `step` allocates nothing after the first frame.
 pub struct Worker {
     model: Model,
     data: Data,
     params: RepulsionParams,
-    /// (point index, frame id, point in the link frame, radius)
+    /// (point index, frame id, point in the link frame [m], radius [m])
     points: Vec<(usize, usize, Vector3<f64>, f64)>,
     distance: Option<(u64, DepthSpaceDistance)>,
     out: [PointRepulsion; MAX_POINTS_PER_WORKER],
+    msg: RepulsionResult,
 }
 
 impl Worker {
-    pub fn new(model: Model, cfg: &RepulsionConfig, worker: u32) -> Result<Worker, String> {
-        if cfg.workers == 0 || worker >= cfg.workers {
-            return Err(format!(
-                "[repulsion] workers = {}: worker {worker} does not exist",
-                cfg.workers
-            ));
-        }
-        let mine = cfg.points_of(worker);
-        if mine.len() > MAX_POINTS_PER_WORKER {
-            return Err(format!(
-                "[repulsion]: worker {worker} would own {} points, at most {MAX_POINTS_PER_WORKER}",
-                mine.len()
-            ));
+    /// Worker `worker` of `[repulsion]` (validated here): the points `i` with
+    /// `i mod workers = worker`.
+    pub fn new(model: Model, cfg: &RepulsionConfig, worker: u32) -> Result<Worker, RepulsionError> {
+        cfg.validate()?;
+        if worker >= cfg.workers {
+            return Err(RepulsionError::NoSuchWorker {
+                worker,
+                workers: cfg.workers,
+            });
         }
         let mut points = Vec::new();
-        for i in mine {
+        for i in cfg.points_of(worker) {
             let p = &cfg.points[i];
-            let frame = model.frame_id(&p.link).map_err(|_| {
-                format!(
-                    "[repulsion] points[{i}] ({}): unknown link '{}'",
-                    p.name, p.link
-                )
-            })?;
-            if !(p.radius >= 0.0) || p.xyz.iter().any(|x| !x.is_finite()) {
-                return Err(format!(
-                    "[repulsion] points[{i}] ({}): position and radius must be finite, radius ≥ 0",
-                    p.name
-                ));
-            }
+            let frame = model
+                .frame_id(&p.link)
+                .map_err(|_| RepulsionError::UnknownLink {
+                    index: i,
+                    name: p.name.clone(),
+                    link: p.link.clone(),
+                })?;
             points.push((i, frame, Vector3::from(p.xyz), p.radius));
         }
-        cfg.params
-            .validate()
-            .map_err(|e| format!("[repulsion] params: {e}"))?;
+        cfg.params.validate().map_err(RepulsionError::Params)?;
+        let mut msg = RepulsionResult::zeroed();
+        msg.worker = worker;
+        msg.workers = cfg.workers;
         Ok(Worker {
             data: Data::new(&model),
             params: cfg.params,
             points,
             distance: None,
             out: [PointRepulsion::default(); MAX_POINTS_PER_WORKER],
+            msg,
             model,
         })
     }
@@ -69,33 +90,39 @@ impl Worker {
         self.points.len()
     }
 
-    /// Results for `frame` (filtered, with the joint state in its header).
+    /// Results for `frame` (filtered depths [mm], with the joint state in
+    /// its header), one per control point of this worker: the point and the
+    /// closest obstacle [m, base frame], their distance [m] and the repulsive
+    /// velocity V_Call [m/s, base frame].
     pub fn step(
         &mut self,
         header: &FrameHeader,
         frame: &[u16],
-    ) -> Result<&[PointRepulsion], String> {
+    ) -> Result<&[PointRepulsion], RepulsionError> {
         let n = self.model.nv();
-        if header.dof as usize != n {
-            return Err(format!(
-                "frame {}: joint state of {} joints, the model has {n}",
-                header.seq, header.dof
-            ));
+        let seq = header.seq;
+        if header.dof as usize != n || n > header.q.len() {
+            return Err(RepulsionError::Dof {
+                seq,
+                got: header.dof,
+                model: n,
+            });
         }
         let key = header.width as u64
             ^ header.fx.to_bits()
             ^ header.pose_t[0].to_bits().rotate_left(7)
             ^ header.pose_t[2].to_bits().rotate_left(13);
         if self.distance.as_ref().is_none_or(|(k, _)| *k != key) {
-            let (k, pose) = header_camera(header)?;
+            let (k, pose) =
+                header_camera(header).map_err(|source| RepulsionError::Camera { seq, source })?;
             self.distance = Some((
                 key,
                 DepthSpaceDistance::new(k, pose, self.params, header.depth_scale)
-                    .map_err(|e| e.to_string())?,
+                    .map_err(|source| RepulsionError::Depth { seq, source })?,
             ));
         }
         phri_model::forward_kinematics(&self.model, &mut self.data, &header.q[..n])
-            .map_err(|e| e.to_string())?;
+            .map_err(|source| RepulsionError::Model { seq, source })?;
         let Some((_, dist)) = self.distance.as_ref() else {
             return Ok(&self.out[..0]);
         };
@@ -103,7 +130,7 @@ impl Worker {
             let p = phri_model::frame_placement(&self.model, &self.data, frame_id).apply(&xyz);
             let r = dist
                 .repulsion(frame, &PointOfInterest::new(Point3::from(p), radius))
-                .map_err(|e| e.to_string())?;
+                .map_err(|source| RepulsionError::Depth { seq, source })?;
             *slot = PointRepulsion {
                 point: index as u32,
                 active: r.obstacle_point.is_some() as u32,
@@ -114,5 +141,28 @@ impl Worker {
             };
         }
         Ok(&self.out[..self.points.len()])
+    }
+
+    /// [`Worker::step`] as this worker's `perception/repulsion` message: its
+    /// results, the frame's sequence and capture times, the worker's index
+    /// and the configured worker count, and `seq` counting the results. The
+    /// caller sets `compute_ns` and `published_ns` (the service: its clock
+    /// when it publishes) before sending.
+    pub fn respond(
+        &mut self,
+        header: &FrameHeader,
+        frame: &[u16],
+    ) -> Result<&mut RepulsionResult, RepulsionError> {
+        let n = self.step(header, frame)?.len();
+        let m = &mut self.msg;
+        m.n_points = n as u32;
+        m.points[..n].copy_from_slice(&self.out[..n]);
+        m.seq += 1;
+        m.frame_seq = header.seq;
+        m.capture_ns = header.capture_ns;
+        m.frame_capture_wall_ns = header.capture_wall_ns;
+        m.compute_ns = 0;
+        m.published_ns = 0;
+        Ok(m)
     }
 }

@@ -3,22 +3,36 @@
 //! `cargo test --workspace` for the system tests).
 
 use nalgebra::Vector3;
+use phri_config::{CameraConfig, Config, IngestConfig, PointConfig, RepulsionConfig};
 use phri_depth::RenderOptions;
 use phri_ipc::{FrameHeader, WorldState, Zeroed};
 use phri_model::{Data, Model};
-use phri_perception::camera::CameraSim;
-use phri_perception::ingest::{FrameError, Ingest, StateHistory};
-use phri_perception::repulsion::Worker;
-use phri_perception::{CameraConfig, RepulsionConfig};
+use phri_perception::{CameraSim, FrameError, Ingest, StateHistory, Worker};
 
 const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
 
 fn model() -> Model {
-    Model::from_urdf_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../deploy/robots/kuka_lwr4.urdf"
-    ))
-    .unwrap()
+    phri_config::Loaded::defaults().model().unwrap()
+}
+
+/// `[perception]` as deployed.
+fn ingest_config() -> IngestConfig {
+    Config::defaults().perception
+}
+
+/// `[repulsion]` as deployed, with one control point: the flange, radius
+/// 0.05 m (what the geometry below measures against).
+fn repulsion_config() -> RepulsionConfig {
+    RepulsionConfig {
+        workers: 1,
+        points: vec![PointConfig {
+            name: "end_effector".into(),
+            link: "lwr_flange".into(),
+            xyz: [0.0; 3],
+            radius: 0.05,
+        }],
+        ..Config::defaults().repulsion
+    }
 }
 
 fn ee(model: &Model) -> Vector3<f64> {
@@ -45,17 +59,17 @@ fn pipeline(centre: Vector3<f64>) -> (phri_ipc::PointRepulsion, u32) {
     let model = model();
     let cfg = CameraConfig {
         render: RenderOptions::ideal(),
-        ..CameraConfig::default()
+        ..Config::defaults().camera
     };
     let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
     let mut frame = vec![0u16; camera.pixels()];
     let mut header = FrameHeader::zeroed();
     let w = world(centre);
-    camera.step(&w, &mut frame, &mut header).unwrap();
-    header.capture_ns = w.stamp_ns;
+    camera.step(&w, 0, &mut frame, &mut header).unwrap();
+    assert_eq!(header.capture_ns, w.stamp_ns);
     let mut history = StateHistory::new(7, 10);
     history.push(w.stamp_ns, &Q0);
-    let mut ingest = Ingest::new(model.clone(), Default::default(), 20.0, 200.0);
+    let mut ingest = Ingest::new(model.clone(), &ingest_config()).unwrap();
     let mut filtered = vec![0u16; frame.len()];
     let out = ingest
         .step(
@@ -66,9 +80,18 @@ fn pipeline(centre: Vector3<f64>) -> (phri_ipc::PointRepulsion, u32) {
             &mut filtered,
         )
         .unwrap();
-    let mut worker = Worker::new(model, &RepulsionConfig::default(), 0).unwrap();
-    let results = worker.step(&header, &filtered).unwrap();
+    let mut worker = Worker::new(model, &repulsion_config(), 0).unwrap();
+    let results = worker.step(&header, &filtered).unwrap().to_vec();
     let ee_result = results.iter().find(|r| r.point == 0).copied().unwrap();
+    // the message carries the same results, for this frame
+    let msg = *worker.respond(&header, &filtered).unwrap();
+    assert_eq!(msg.n_points as usize, results.len());
+    assert_eq!(
+        (msg.frame_seq, msg.capture_ns),
+        (header.seq, header.capture_ns)
+    );
+    assert_eq!((msg.worker, msg.workers, msg.seq), (0, 1, 1));
+    assert_eq!(msg.points[0].min_distance, ee_result.min_distance);
     (ee_result, out.removed)
 }
 
@@ -77,7 +100,7 @@ fn a_ball_near_the_end_effector_is_seen_at_its_distance_and_repels_it() {
     let model = model();
     let p = ee(&model);
     // beside the end effector, across the camera's line of sight (same depth: nothing occluded)
-    let camera = phri_depth::CameraPose::paper_default().position().coords;
+    let camera = Config::defaults().camera.pose().unwrap().position().coords;
     let across = (p - camera).cross(&Vector3::z()).normalize();
     let centre = p + across * 0.25;
     let (r, removed) = pipeline(centre);
@@ -106,7 +129,7 @@ fn an_obstacle_in_front_of_the_point_is_never_farther_than_it_is() {
     // the occlusion rule: what hides the space behind it may be as near as the point's own depth
     let model = model();
     let p = ee(&model);
-    let camera = phri_depth::CameraPose::paper_default().position().coords;
+    let camera = Config::defaults().camera.pose().unwrap().position().coords;
     let centre = p + (camera - p).normalize() * 0.3;
     let (r, _) = pipeline(centre);
     let truth = (centre - p).norm() - 0.08 - 0.05;
@@ -130,15 +153,15 @@ fn nothing_near_means_no_repulsion_and_robot_pixels_are_not_obstacles() {
 #[test]
 fn malformed_frames_are_refused() {
     let model = model();
-    let mut ingest = Ingest::new(model, Default::default(), 20.0, 200.0);
+    let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
     let mut history = StateHistory::new(7, 10);
     history.push(1_000_000_000, &Q0);
     let mut h = FrameHeader::zeroed();
     phri_perception::camera::fill_camera_header(
         &mut h,
         1,
-        &Default::default(),
-        &phri_depth::CameraPose::paper_default(),
+        &Config::defaults().camera.intrinsics,
+        &Config::defaults().camera.pose().unwrap(),
     );
     h.capture_ns = 1_000_000_000;
     let mut out = vec![0u16; 640 * 480];
@@ -179,7 +202,7 @@ fn malformed_frames_are_refused() {
     bad.fx = f64::NAN;
     assert!(matches!(
         ingest.step(&mut bad, &frame, &history, 1_000_000_000, &mut out),
-        Err(FrameError::Camera(..))
+        Err(FrameError::Camera { .. })
     ));
     let mut scale = h;
     scale.depth_scale = 0.0002;
@@ -206,4 +229,54 @@ fn malformed_frames_are_refused() {
     assert!(ingest
         .step(&mut h.clone(), &frame, &history, 1_000_000_000, &mut out)
         .is_ok());
+}
+
+#[test]
+fn injected_faults_reach_ingestion_as_the_frames_they_describe() {
+    use phri_ipc::{DepthFault, DepthFaultKind};
+    use phri_perception::FaultState;
+    let model = model();
+    let mut camera = CameraSim::new(model.clone(), &Config::defaults().camera).unwrap();
+    let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
+    let mut frame = vec![0u16; camera.pixels()];
+    let mut filtered = vec![0u16; camera.pixels()];
+    let mut history = StateHistory::new(7, 10);
+    let mut faults = FaultState::default();
+    let w = world(Vector3::new(0.5, 0.5, 0.5));
+    history.push(w.stamp_ns, &Q0);
+    let mut capture = |kind: Option<DepthFaultKind>, seq: u64| {
+        if let Some(kind) = kind {
+            let mut f = DepthFault::zeroed();
+            f.seq = seq;
+            f.kind = kind as u32;
+            f.frames = 1;
+            faults.accept(&f, 0).unwrap();
+        }
+        let mut header = FrameHeader::zeroed();
+        camera.step(&w, 0, &mut frame, &mut header).unwrap();
+        assert_eq!(faults.apply(&mut frame, &mut header, 0), 0);
+        ingest.step(
+            &mut header,
+            &frame,
+            &history,
+            w.stamp_ns + 5_000_000,
+            &mut filtered,
+        )
+    };
+    assert!(capture(None, 0).is_ok());
+    assert!(matches!(
+        capture(Some(DepthFaultKind::Zeros), 1),
+        Err(FrameError::Empty { .. })
+    ));
+    assert!(matches!(
+        capture(Some(DepthFaultKind::Size), 2),
+        Err(FrameError::Size { .. })
+    ));
+    assert!(matches!(
+        capture(Some(DepthFaultKind::Stale), 3),
+        Err(FrameError::Stale { .. })
+    ));
+    // flying pixels are plausible depths: they pass, as a real sensor's would
+    assert!(capture(Some(DepthFaultKind::Noise), 4).is_ok());
+    assert!(capture(None, 5).is_ok());
 }

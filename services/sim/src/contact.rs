@@ -10,9 +10,11 @@
 //! `n` that pushes the robot out of the human, with `k` the body part's spring
 //! constant and `d` a small damping; it acts at the point of the robot
 //! capsule's surface that is deepest in the human. The clamp keeps the
-//! contact from pulling (no adhesion while the bodies separate).
+//! contact from pulling (no adhesion while the bodies separate). The spring
+//! constant of each body region is [`stiffness_n_per_m`].
 
 use nalgebra::Vector3;
+use phri_ipc::BodyPart;
 
 /// Closest points of two segments.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,6 +164,24 @@ pub fn contact_force_magnitude(depth: f64, depth_rate: f64, k: f64, d: f64) -> f
     } else {
         (k * depth + d * depth_rate).max(0.0)
     }
+}
+
+/// Contact spring constant [N/m] of a body region, after the effective
+/// spring constants of ISO/TS 15066 Table A.2 (N/mm × 1000): hand 75,
+/// forearm 40, upper arm 30, head 150, chest 25, abdomen/pelvis 10,
+/// thigh 50, lower leg 60.
+pub fn stiffness_n_per_m(part: BodyPart) -> f64 {
+    let n_per_mm = match part {
+        BodyPart::Head => 150.0,
+        BodyPart::Torso => 25.0,
+        BodyPart::Pelvis => 10.0,
+        BodyPart::UpperArmLeft | BodyPart::UpperArmRight => 30.0,
+        BodyPart::ForearmLeft | BodyPart::ForearmRight => 40.0,
+        BodyPart::HandLeft | BodyPart::HandRight => 75.0,
+        BodyPart::ThighLeft | BodyPart::ThighRight => 50.0,
+        BodyPart::ShinLeft | BodyPart::ShinRight => 60.0,
+    };
+    n_per_mm * 1000.0
 }
 
 #[cfg(test)]

@@ -1,18 +1,31 @@
 //! Typed errors of the simulator.
 
-use phri_model::ModelError;
+use phri_config::Invalid;
+use phri_model::LengthError;
 
-/// Why a [`crate::Simulator`] could not be built or set to a state.
+/// Why a [`crate::Simulator`] could not be built or set to a state. Each
+/// variant names the key (`sim.q0`) or the argument (`q`, `qd`) at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
     #[error("the model has {n} joints; the simulator supports at most {max}")]
     TooManyJoints { n: usize, max: usize },
-    #[error("sim config: {field}: {reason}")]
-    Config { field: &'static str, reason: String },
-    #[error("sim config: {0}")]
-    Toml(String),
-    #[error("{what}: {reason}")]
-    State { what: &'static str, reason: String },
+    /// a `[sim]` key out of range or not fitting the model (`sim.dt_s`, `sim.viscous_friction`)
     #[error(transparent)]
-    Model(#[from] ModelError),
+    Config(#[from] Invalid),
+    /// an array of the wrong length (`sim.q0`, `q`, `qd`)
+    #[error(transparent)]
+    Length(#[from] LengthError),
+    #[error("{what}: joint {joint}: not a finite number")]
+    NotFinite { what: &'static str, joint: usize },
+    #[error(
+        "{what}: joint {joint} ('{name}'): {value} rad is outside the limits [{lower}, {upper}]"
+    )]
+    OutsideLimits {
+        what: &'static str,
+        joint: usize,
+        name: String,
+        value: f64,
+        lower: f64,
+        upper: f64,
+    },
 }

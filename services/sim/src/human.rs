@@ -10,93 +10,13 @@
 //! Frames: everything is in the robot base frame (x forward, z up, SI units).
 //! The human's own frame has its origin on the floor between the feet, `x`
 //! along its heading, `y` to its left and `z` up.
+//!
+//! The script itself (keyframes, checked) is [`phri_config::HumanScript`];
+//! body parts are numbered as on the wire ([`phri_ipc::BodyPart`]).
 
 use nalgebra::Vector3;
-
-/// A body region, with the contact stiffness used for it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum BodyPart {
-    Head,
-    Torso,
-    Pelvis,
-    UpperArmLeft,
-    UpperArmRight,
-    ForearmLeft,
-    ForearmRight,
-    HandLeft,
-    HandRight,
-    ThighLeft,
-    ThighRight,
-    ShinLeft,
-    ShinRight,
-}
-
-impl BodyPart {
-    /// Every part, in the order [`Human::pose_at`] returns their capsules.
-    pub const ALL: [BodyPart; 13] = [
-        BodyPart::Head,
-        BodyPart::Torso,
-        BodyPart::Pelvis,
-        BodyPart::UpperArmLeft,
-        BodyPart::UpperArmRight,
-        BodyPart::ForearmLeft,
-        BodyPart::ForearmRight,
-        BodyPart::HandLeft,
-        BodyPart::HandRight,
-        BodyPart::ThighLeft,
-        BodyPart::ThighRight,
-        BodyPart::ShinLeft,
-        BodyPart::ShinRight,
-    ];
-
-    /// snake_case name, as written in scenario files (e.g. `"forearm_right"`).
-    pub fn name(self) -> &'static str {
-        match self {
-            BodyPart::Head => "head",
-            BodyPart::Torso => "torso",
-            BodyPart::Pelvis => "pelvis",
-            BodyPart::UpperArmLeft => "upper_arm_left",
-            BodyPart::UpperArmRight => "upper_arm_right",
-            BodyPart::ForearmLeft => "forearm_left",
-            BodyPart::ForearmRight => "forearm_right",
-            BodyPart::HandLeft => "hand_left",
-            BodyPart::HandRight => "hand_right",
-            BodyPart::ThighLeft => "thigh_left",
-            BodyPart::ThighRight => "thigh_right",
-            BodyPart::ShinLeft => "shin_left",
-            BodyPart::ShinRight => "shin_right",
-        }
-    }
-
-    /// The part called `name` (see [`BodyPart::name`]).
-    pub fn from_name(name: &str) -> Option<BodyPart> {
-        BodyPart::ALL.into_iter().find(|p| p.name() == name)
-    }
-
-    /// Contact spring constant [N/m] of the body region, after the effective
-    /// spring constants of ISO/TS 15066 Table A.2 (N/mm × 1000): hand 75,
-    /// forearm 40, upper arm 30, head 150, chest 25, abdomen/pelvis 10,
-    /// thigh 50, lower leg 60.
-    pub fn stiffness_n_per_m(self) -> f64 {
-        let n_per_mm = match self {
-            BodyPart::Head => 150.0,
-            BodyPart::Torso => 25.0,
-            BodyPart::Pelvis => 10.0,
-            BodyPart::UpperArmLeft | BodyPart::UpperArmRight => 30.0,
-            BodyPart::ForearmLeft | BodyPart::ForearmRight => 40.0,
-            BodyPart::HandLeft | BodyPart::HandRight => 75.0,
-            BodyPart::ThighLeft | BodyPart::ThighRight => 50.0,
-            BodyPart::ShinLeft | BodyPart::ShinRight => 60.0,
-        };
-        n_per_mm * 1000.0
-    }
-}
-
-impl std::fmt::Display for BodyPart {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+use phri_config::{HumanScript, Keyframe};
+use phri_ipc::BodyPart;
 
 /// One body part as a capsule: the segment `a`–`b` \[m\] swept by a sphere of
 /// `radius` \[m\], robot base frame.
@@ -106,132 +26,6 @@ pub struct HumanCapsule {
     pub a: Vector3<f64>,
     pub b: Vector3<f64>,
     pub radius: f64,
-}
-
-/// The human's pose at one instant of the script.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Keyframe {
-    /// time \[s\] (scenario time, the simulator's clock)
-    pub t: f64,
-    /// `[x, y, yaw]`: floor position \[m\] and heading \[rad\] (angle of the
-    /// human's forward direction about the base z axis), robot base frame
-    pub base: [f64; 3],
-    /// right-hand target \[m\], robot base frame; `None`: the arm hangs down
-    pub right_hand: Option<[f64; 3]>,
-    /// left-hand target \[m\], robot base frame; `None`: the arm hangs down
-    pub left_hand: Option<[f64; 3]>,
-}
-
-/// A validated human script: keyframes sorted by strictly increasing time,
-/// every number finite (build it with [`HumanScript::new`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct HumanScript {
-    floor_z: f64,
-    keyframes: Vec<Keyframe>,
-    /// the script starts over every `repeat_s` \[s\] (`None`: plays once)
-    repeat_s: Option<f64>,
-}
-
-/// Why a [`HumanScript`] was refused. `index` is the keyframe's position.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ScriptError {
-    #[error("floor_z: {0} is not a finite number")]
-    FloorZ(f64),
-    #[error("keyframe: a human needs at least one keyframe")]
-    NoKeyframe,
-    #[error("keyframe[{index}].{field}: not a finite number")]
-    NotFinite { index: usize, field: &'static str },
-    #[error("keyframe[{index}].t: {t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)")]
-    Unsorted { index: usize, t: f64, previous: f64 },
-    #[error("repeat_s: {repeat_s} s must be finite and at least the last keyframe's time {last} s (and > 0)")]
-    Repeat { repeat_s: f64, last: f64 },
-}
-
-impl HumanScript {
-    /// Default floor height \[m\]: the robot stands on a 0.8 m table.
-    pub const DEFAULT_FLOOR_Z: f64 = -0.8;
-
-    /// Check and keep a script. `floor_z` \[m\] is the height of the human's
-    /// soles in the robot base frame.
-    pub fn new(floor_z: f64, keyframes: Vec<Keyframe>) -> Result<HumanScript, ScriptError> {
-        if !floor_z.is_finite() {
-            return Err(ScriptError::FloorZ(floor_z));
-        }
-        if keyframes.is_empty() {
-            return Err(ScriptError::NoKeyframe);
-        }
-        for (index, k) in keyframes.iter().enumerate() {
-            let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-            if !k.t.is_finite() {
-                return Err(ScriptError::NotFinite { index, field: "t" });
-            }
-            if !fin(&k.base) {
-                return Err(ScriptError::NotFinite {
-                    index,
-                    field: "base",
-                });
-            }
-            if k.right_hand.is_some_and(|h| !fin(&h)) {
-                return Err(ScriptError::NotFinite {
-                    index,
-                    field: "right_hand",
-                });
-            }
-            if k.left_hand.is_some_and(|h| !fin(&h)) {
-                return Err(ScriptError::NotFinite {
-                    index,
-                    field: "left_hand",
-                });
-            }
-            if index > 0 {
-                let previous = keyframes[index - 1].t;
-                if k.t <= previous {
-                    return Err(ScriptError::Unsorted {
-                        index,
-                        t: k.t,
-                        previous,
-                    });
-                }
-            }
-        }
-        Ok(HumanScript {
-            floor_z,
-            keyframes,
-            repeat_s: None,
-        })
-    }
-
-    /// Play the script over and over, starting again every `repeat_s` \[s\]
-    /// (at least the last keyframe's time, so the keyframes never overlap;
-    /// the first keyframe should match the last for a continuous loop).
-    pub fn repeating(mut self, repeat_s: f64) -> Result<HumanScript, ScriptError> {
-        let last = self.end_time();
-        if !(repeat_s.is_finite() && repeat_s > 0.0 && repeat_s >= last) {
-            return Err(ScriptError::Repeat { repeat_s, last });
-        }
-        self.repeat_s = Some(repeat_s);
-        Ok(self)
-    }
-
-    /// The loop period \[s\], if the script repeats.
-    pub fn repeat_s(&self) -> Option<f64> {
-        self.repeat_s
-    }
-
-    /// Height of the soles \[m\], robot base frame.
-    pub fn floor_z(&self) -> f64 {
-        self.floor_z
-    }
-
-    /// The keyframes, sorted by time.
-    pub fn keyframes(&self) -> &[Keyframe] {
-        &self.keyframes
-    }
-
-    /// Time of the last keyframe \[s\]: the human stands still afterwards.
-    pub fn end_time(&self) -> f64 {
-        self.keyframes.last().map_or(0.0, |k| k.t)
-    }
 }
 
 /// Body dimensions \[m\] of the standing adult (about 1.75 m tall), human frame.
@@ -381,12 +175,12 @@ impl Human {
     /// [`BodyPart::ALL`] order). Allocates nothing.
     pub fn pose_at(&mut self, t: f64) -> &[HumanCapsule] {
         use body::*;
-        let t = match self.script.repeat_s {
+        let t = match self.script.repeat_s() {
             Some(period) if t > 0.0 => t.rem_euclid(period),
             _ => t,
         };
         let (base, right, left) = self.interpolate(t);
-        let fl = Frame::new(base, self.script.floor_z);
+        let fl = Frame::new(base, self.script.floor_z());
         let mut set = |part: BodyPart, a: Vector3<f64>, b: Vector3<f64>, radius: f64| {
             // ALL lists the parts in declaration order, so the discriminant is the index
             self.capsules[part as usize] = HumanCapsule { part, a, b, radius };
@@ -460,8 +254,8 @@ impl Human {
 
     /// Interpolated `[x, y, yaw]` and hand targets at `t` (clamped to the script).
     fn interpolate(&self, t: f64) -> ([f64; 3], Option<Vector3<f64>>, Option<Vector3<f64>>) {
-        let ks = &self.script.keyframes;
-        let floor_z = self.script.floor_z;
+        let ks = self.script.keyframes();
+        let floor_z = self.script.floor_z();
         let v3 = |h: [f64; 3]| Vector3::new(h[0], h[1], h[2]);
         let first = &ks[0];
         let last = &ks[ks.len() - 1];
@@ -513,14 +307,15 @@ mod tests {
         HumanScript::new(-0.8, ks).expect("valid script")
     }
 
+    /// The capsules are indexed by the part's wire number: `ALL` must be in that order.
     #[test]
     fn names_round_trip() {
-        for (i, p) in BodyPart::ALL.into_iter().enumerate() {
-            assert_eq!(BodyPart::from_name(p.name()), Some(p));
+        for (i, p) in BodyPart::ALL.iter().copied().enumerate() {
+            assert_eq!(BodyPart::from_name(p.name()), Ok(p));
             assert_eq!(p as usize, i, "ALL is in declaration order");
         }
         assert_eq!(BodyPart::ForearmRight.name(), "forearm_right");
-        assert_eq!(BodyPart::HandRight.stiffness_n_per_m(), 75_000.0);
+        assert_eq!(crate::stiffness_n_per_m(BodyPart::HandRight), 75_000.0);
     }
 
     #[test]
@@ -547,39 +342,6 @@ mod tests {
         // head top near 1.75 m above the floor
         let head = c[BodyPart::Head as usize];
         assert!((head.b.z + head.radius - (-0.8 + 1.75)).abs() < 0.01);
-    }
-
-    #[test]
-    fn refuses_bad_scripts() {
-        let k = |t: f64| Keyframe {
-            t,
-            base: [0.0; 3],
-            right_hand: None,
-            left_hand: None,
-        };
-        assert_eq!(HumanScript::new(-0.8, vec![]), Err(ScriptError::NoKeyframe));
-        assert!(matches!(
-            HumanScript::new(-0.8, vec![k(1.0), k(0.5)]),
-            Err(ScriptError::Unsorted { index: 1, .. })
-        ));
-        assert!(matches!(
-            HumanScript::new(-0.8, vec![k(f64::NAN)]),
-            Err(ScriptError::NotFinite {
-                index: 0,
-                field: "t"
-            })
-        ));
-        assert!(matches!(
-            HumanScript::new(f64::INFINITY, vec![k(0.0)]),
-            Err(ScriptError::FloorZ(_))
-        ));
-        let two = || HumanScript::new(-0.8, vec![k(0.0), k(10.0)]).unwrap();
-        for bad in [5.0, 0.0, -1.0, f64::NAN, f64::INFINITY] {
-            assert!(
-                matches!(two().repeating(bad), Err(ScriptError::Repeat { .. })),
-                "repeat_s {bad}"
-            );
-        }
     }
 
     #[test]

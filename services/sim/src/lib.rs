@@ -7,28 +7,42 @@
 //! human made of capsules ([`human`]) walks through the cell; where it
 //! overlaps the robot's link capsules a compliant contact with the body
 //! region's ISO/TS 15066 stiffness pushes on the robot ([`contact`]).
-//! Scenarios ([`scenario`]) bundle a human script with configuration.
+//! Configuration (`[sim]`) and scenarios come from [`phri_config`].
+//!
+//! Two layers, as a real cell has them:
+//! - [`Simulator`] ([`sim`]): the arm and the person; torque and brake in,
+//!   sensor readings and ground truth out, one control period per
+//!   [`Simulator::step`];
+//! - [`RobotLink`] ([`link`]): the robot side of the 1 kHz protocol, what a
+//!   real robot adapter wraps: which command to apply, when to brake, the
+//!   loop statistics. It knows commands and time, not the simulator.
+//!
+//! [`messages`] fills the cell's messages from both. `main.rs` only wires
+//! them to channels and keeps the real-time schedule.
 //!
 //! Everything is in the robot base frame (x forward, z up) and SI units. Runs
-//! are deterministic given the seed; [`Simulator::step`] allocates nothing.
+//! are deterministic given the seed; [`Simulator::step`] and
+//! [`RobotLink::cycle`] allocate nothing.
 
-pub mod config;
 pub mod contact;
+pub mod contact_log;
 pub mod error;
 pub mod human;
-pub mod scenario;
+pub mod link;
+pub mod messages;
 pub mod sim;
 pub mod snapshot;
-pub mod world;
 
-pub use config::{PerJoint, SimConfig};
 pub use contact::{
-    capsule_distance, closest_points_segments, contact_force_magnitude, CapsuleDistance,
-    SegmentClosest,
+    capsule_distance, closest_points_segments, contact_force_magnitude, stiffness_n_per_m,
+    CapsuleDistance, SegmentClosest,
 };
+pub use contact_log::ContactLog;
 pub use error::SimError;
-pub use human::{BodyPart, Human, HumanCapsule, HumanScript, Keyframe, ScriptError};
-pub use scenario::{Scenario, ScenarioError};
+pub use human::{Human, HumanCapsule};
+pub use link::{CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake};
+pub use messages::{fill_state, fill_truth, fill_world};
 pub use sim::{
-    ContactTruth, Measurement, RobotCapsule, Simulator, Truth, MAX_CONTACTS, MAX_JOINTS,
+    ContactTruth, ExternalForce, Measurement, RobotCapsule, Simulator, Truth, MAX_CONTACTS,
+    MAX_JOINTS,
 };

@@ -4,17 +4,27 @@
 //! restarts, instead of at the scenario's initial configuration.
 //!
 //! The 1 kHz loop only stores into [`SharedArm`] (atomics: no allocation, no
-//! lock); a helper thread copies it out and writes the file.
+//! lock); a helper thread copies it out every [`SAVE_PERIOD`] and writes the
+//! file ([`save`]). A restarted simulator picks the cell up with [`resume`].
+//!
+//! The file is private to the cell's user: written owner-only and atomically
+//! ([`phri_runtime::rundir::write_private`]), read only if no one else can
+//! have written it ([`phri_runtime::rundir::read_trusted`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{fence, AtomicU64, Ordering};
+use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::SimError;
 use crate::sim::MAX_JOINTS;
+use crate::Simulator;
 
 /// File name of the snapshot inside the run directory.
 pub const FILE_NAME: &str = "sim-arm.state";
+/// How often the arm's positions are saved for a restarted simulator.
+pub const SAVE_PERIOD: Duration = Duration::from_millis(20);
 /// A snapshot older than this is not the arm's state any more \[ns\].
 pub const MAX_AGE_NS: u64 = 2_000_000_000;
 const VERSION: u32 = 1;
@@ -31,11 +41,9 @@ pub struct ArmSnapshot {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SnapshotError {
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    /// not a file this user alone could have written (or too large)
+    #[error(transparent)]
+    Untrusted(#[from] phri_runtime::rundir::TrustError),
     #[error("{path}: not an arm snapshot: {reason}")]
     Decode { path: PathBuf, reason: String },
     #[error("{path}: {found} joints, the model has {expected}")]
@@ -106,24 +114,23 @@ impl SharedArm {
     }
 }
 
-/// Write `s` to `path` atomically (a temporary file, then rename).
+/// Largest snapshot file read [bytes] (a 64-joint arm needs about 530).
+const MAX_FILE_LEN: u64 = 4096;
+
+/// Write `s` to `path` atomically and owner-only (0600).
 pub fn save(path: &Path, s: &ArmSnapshot) -> Result<(), SnapshotError> {
-    let io = |source| SnapshotError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let bytes = bincode::serde::encode_to_vec(s, bincode::config::standard()).map_err(|e| {
         SnapshotError::Decode {
             path: path.to_path_buf(),
             reason: e.to_string(),
         }
     })?;
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    phri_runtime::rundir::write_private(path, &bytes)?;
+    Ok(())
 }
 
-/// The snapshot at `path` if it exists, is for `n` joints, all finite, was
+/// The snapshot at `path` if it exists, is trusted (a regular file of this
+/// user that no one else can write, at most 4 KiB), is for `n` joints, all finite, was
 /// taken at or after `not_before_ns` (this cell's start: never a previous
 /// run's) and at most [`MAX_AGE_NS`] before `now_ns`; `Ok(None)` when absent or
 /// not of this moment.
@@ -133,15 +140,8 @@ pub fn load_fresh(
     not_before_ns: u64,
     now_ns: u64,
 ) -> Result<Option<ArmSnapshot>, SnapshotError> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(SnapshotError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
-        }
+    let Some(bytes) = phri_runtime::rundir::read_trusted(path, MAX_FILE_LEN)? else {
+        return Ok(None);
     };
     let decode = |reason: String| SnapshotError::Decode {
         path: path.to_path_buf(),
@@ -172,6 +172,88 @@ pub fn load_fresh(
         return Ok(None);
     }
     Ok(Some(s))
+}
+
+/// How a simulator restarted inside a running cell picked the cell up ([`resume`]).
+#[derive(Debug)]
+pub struct Resumed {
+    /// how long ago the cell started \[s\]: the person's script continues from there
+    pub behind_s: f64,
+    pub arm: ArmResume,
+}
+
+/// Where the arm of a restarted simulator stands.
+#[derive(Debug)]
+pub enum ArmResume {
+    /// no run directory, or no snapshot of this cell's recent past: at its initial position
+    Initial,
+    /// at rest where the snapshot at `path` put it, taken `age_ns` \[ns\] ago
+    Restored { path: PathBuf, age_ns: u64 },
+    /// the snapshot at `path` does not fit the arm (joint limits): at its initial position
+    Refused { path: PathBuf, error: SimError },
+    /// the snapshot could not be read: at its initial position
+    Unreadable(SnapshotError),
+}
+
+/// Restarted inside a running cell that started at `cell_start_ns` (it is
+/// `now_ns`): the world went on without us, so the person continues where the
+/// cell's clock is, and the arm stands, at rest, where this process's
+/// predecessor last saved it in `snapshot` (if given, fresh and fitting).
+pub fn resume(
+    sim: &mut Simulator,
+    cell_start_ns: u64,
+    now_ns: u64,
+    snapshot: Option<&Path>,
+) -> Resumed {
+    let behind_s = now_ns.saturating_sub(cell_start_ns) as f64 * 1e-9;
+    sim.set_human_time_offset(behind_s);
+    let arm = match snapshot {
+        None => ArmResume::Initial,
+        Some(path) => match load_fresh(path, sim.model().nv(), cell_start_ns, now_ns) {
+            Ok(Some(s)) => match sim.reset_state(&s.q) {
+                Ok(()) => ArmResume::Restored {
+                    path: path.to_path_buf(),
+                    age_ns: now_ns.saturating_sub(s.stamp_ns),
+                },
+                Err(error) => ArmResume::Refused {
+                    path: path.to_path_buf(),
+                    error,
+                },
+            },
+            Ok(None) => ArmResume::Initial,
+            Err(e) => ArmResume::Unreadable(e),
+        },
+    };
+    Resumed { behind_s, arm }
+}
+
+impl Resumed {
+    /// What to tell the operator, one line each (none when nothing notable happened).
+    pub fn log_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        if self.behind_s > 1.0 {
+            lines.push(format!(
+                "the cell started {:.1} s ago: the scenario continues from there",
+                self.behind_s
+            ));
+        }
+        match &self.arm {
+            ArmResume::Initial => {}
+            ArmResume::Restored { path, age_ns } => lines.push(format!(
+                "the arm continues from its state of {:.0} ms ago ({})",
+                *age_ns as f64 * 1e-6,
+                path.display()
+            )),
+            ArmResume::Refused { path, error } => lines.push(format!(
+                "{}: {error}; the arm starts at its initial position",
+                path.display()
+            )),
+            ArmResume::Unreadable(e) => {
+                lines.push(format!("{e}; the arm starts at its initial position"))
+            }
+        }
+        lines
+    }
 }
 
 #[cfg(test)]
@@ -237,6 +319,43 @@ mod tests {
         };
         save(&p, &good).unwrap();
         assert!(load_fresh(&p, 7, 0, 2).is_err());
+    }
+
+    #[test]
+    fn a_snapshot_is_written_private_and_one_others_could_write_is_refused() {
+        use std::os::unix::fs::PermissionsExt;
+        let p = tmp("trust");
+        let s = ArmSnapshot {
+            version: VERSION,
+            stamp_ns: 1,
+            q: vec![0.1; 7],
+        };
+        save(&p, &s).unwrap();
+        let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o600);
+        assert_eq!(load_fresh(&p, 7, 0, 2).unwrap(), Some(s));
+        // another user could have replaced the arm's state: not read
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o666)).unwrap();
+        let e = load_fresh(&p, 7, 0, 2).unwrap_err().to_string();
+        assert!(
+            e.contains(FILE_NAME) && e.contains("writable by other users"),
+            "{e}"
+        );
+        // a symbolic link is not followed
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o600)).unwrap();
+        let link = p.with_file_name("link.state");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&p, &link).unwrap();
+        assert!(matches!(
+            load_fresh(&link, 7, 0, 2),
+            Err(SnapshotError::Untrusted(_))
+        ));
+        // nor a file larger than any snapshot
+        std::fs::write(&p, vec![0u8; MAX_FILE_LEN as usize + 1]).unwrap();
+        assert!(matches!(
+            load_fresh(&p, 7, 0, 2),
+            Err(SnapshotError::Untrusted(_))
+        ));
     }
 
     #[test]

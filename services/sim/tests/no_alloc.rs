@@ -1,12 +1,15 @@
-//! `Simulator::step` allocates nothing: counted with a global allocator
-//! (this file holds a single test so no other thread allocates meanwhile).
+//! `Simulator::step`, `RobotLink::cycle` and the message adapters allocate
+//! nothing: counted with a global allocator (this file holds a single test so
+//! no other thread allocates meanwhile).
 
 mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use phri_sim::{Scenario, SimConfig, Simulator};
+use phri_config::{Scenario, SimConfig};
+use phri_ipc::{JointState, TorqueCommand, Truth, WorldState, Zeroed};
+use phri_sim::{fill_state, fill_truth, fill_world, CycleTiming, RobotLink, Simulator};
 
 struct Counting;
 
@@ -39,7 +42,7 @@ fn step_does_not_allocate() {
     let cfg = SimConfig {
         q0: q.clone(),
         ft_sensor: true,
-        ..SimConfig::default()
+        ..common::sim_config()
     };
     let mut sim = Simulator::from_scenario(model, cfg, &sc, Some(1)).expect("sim");
     let tau = [0.0, 20.0, 0.0, 10.0, 0.0, 1.0, 0.0];
@@ -64,7 +67,7 @@ fn step_does_not_allocate() {
     assert_eq!(allocated, 0, "step allocated {allocated} times");
 
     let mut empty =
-        Simulator::new(common::model(), SimConfig::default(), None, &[], None).expect("sim");
+        Simulator::new(common::model(), common::sim_config(), None, &[], None).expect("sim");
     let start = ALLOCATIONS.load(Ordering::Relaxed);
     let t0 = std::time::Instant::now();
     for _ in 0..10_000 {
@@ -77,4 +80,43 @@ fn step_does_not_allocate() {
         elapsed.as_secs_f64() * 1e6 / 10_000.0
     );
     assert_eq!(allocated, 0, "step allocated {allocated} times");
+
+    // the robot side of the loop: commands fresh, stale, malformed and
+    // missing (brakes on and off, runs of misses reported), the messages filled
+    let mut link = RobotLink::new(7, 1_000_000).expect("link");
+    let (mut state, mut truth, mut world) =
+        (JointState::zeroed(), Truth::zeroed(), WorldState::zeroed());
+    let mut cmd = TorqueCommand::zeroed();
+    cmd.dof = 7;
+    let mut reports = 0usize;
+    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    for seq in 1..=10_000u64 {
+        cmd.seq = seq;
+        cmd.state_seq = if seq % 7 == 0 { seq - 1 } else { seq };
+        cmd.tau[2] = if seq % 11 == 0 { f64::NAN } else { 1.0 };
+        let newest = if seq % 1000 > 970 { None } else { Some(&cmd) };
+        let timing = CycleTiming {
+            state_published_ns: seq * 1_000_000,
+            command_event_ns: seq * 1_000_000 + 300_000,
+            now_ns: seq * 1_000_000 + 1_000_000,
+            behind_schedule_ns: 0,
+        };
+        let out = link.cycle(newest, seq, &timing);
+        reports += usize::from(out.miss_run.is_some()) + usize::from(out.brake_engaged);
+        empty.step(out.torque(), out.brake);
+        fill_state(&empty, &out, seq + 1, seq, seq, &mut state);
+        fill_truth(&empty, seq + 1, seq, &mut truth);
+        fill_world(&empty, seq + 1, seq, &mut world);
+    }
+    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    println!(
+        "10 000 link cycles: {} braked, {} missed, {reports} reports",
+        link.stats().braked_cycles,
+        link.stats().missed_deadlines
+    );
+    assert!(
+        link.stats().brake_events > 0 && reports > 10,
+        "the run braked and missed"
+    );
+    assert_eq!(allocated, 0, "the link allocated {allocated} times");
 }

@@ -3,9 +3,13 @@
 
 mod common;
 
+use std::path::Path;
+
 use nalgebra::{Matrix6xX, Vector3};
+use phri_config::{HumanScript, Keyframe, Loaded, PerJoint, SimConfig, DEFAULT_DEPLOY_DIR};
+use phri_ipc::BodyPart;
 use phri_model::{gravity, rnea, Data, Model};
-use phri_sim::{BodyPart, HumanScript, Keyframe, PerJoint, SimConfig, Simulator};
+use phri_sim::{stiffness_n_per_m, Simulator};
 
 fn no_limits(mut model: Model) -> Model {
     for j in model.joints.iter_mut() {
@@ -25,7 +29,7 @@ fn sim(model: Model, cfg: SimConfig) -> Simulator {
 fn torque_free_arm_conserves_energy() {
     let model = no_limits(common::model());
     let mut data = Data::new(&model);
-    let mut s = sim(model.clone(), SimConfig::ideal());
+    let mut s = sim(model.clone(), common::ideal());
     let zero = [0.0; 7];
     let (q, qd) = s.state();
     let e0 = common::energy(&model, &mut data, q, qd);
@@ -51,7 +55,7 @@ fn torque_free_arm_conserves_energy() {
 fn gravity_compensation_holds_the_arm() {
     let model = common::model();
     let mut data = Data::new(&model);
-    let mut s = sim(model.clone(), SimConfig::ideal());
+    let mut s = sim(model.clone(), common::ideal());
     let q0 = s.state().0.to_vec();
     let mut tau = [0.0; 7];
     for _ in 0..1000 {
@@ -82,7 +86,7 @@ fn friction_dissipates_energy() {
             viscous_friction: PerJoint::All(viscous),
             coulomb_friction: PerJoint::All(coulomb),
             torque_noise_std: 0.0,
-            ..SimConfig::default()
+            ..common::sim_config()
         };
         let mut s = sim(model.clone(), cfg);
         let q0 = s.state().0.to_vec();
@@ -123,7 +127,7 @@ fn brake_stops_and_holds_the_arm() {
         model,
         SimConfig {
             seed: 3,
-            ..SimConfig::default()
+            ..common::sim_config()
         },
     );
     let q0 = s.state().0.to_vec();
@@ -155,7 +159,7 @@ fn brake_stops_and_holds_the_arm() {
 /// step of the truth.
 #[test]
 fn measured_positions_are_quantized() {
-    let cfg = SimConfig::default();
+    let cfg = common::sim_config();
     let res = cfg.encoder_resolution_rad;
     let mut s = sim(common::model(), cfg);
     let tau = [0.0, 5.0, 0.0, 2.0, 0.0, 0.5, 0.1];
@@ -178,7 +182,7 @@ fn measured_positions_are_quantized() {
 fn commands_are_clamped_and_reported() {
     let model = common::model();
     let effort: Vec<f64> = model.joints.iter().map(|j| j.effort).collect();
-    let mut s = sim(model, SimConfig::ideal());
+    let mut s = sim(model, common::ideal());
     let m = s.step(&[1000.0, -1000.0, f64::NAN, 5.0], false);
     assert_eq!(
         m.tau_applied,
@@ -192,7 +196,7 @@ fn commands_are_clamped_and_reported() {
 fn end_stops_hold_the_joint() {
     let model = common::model();
     let upper = model.joints[3].upper;
-    let mut s = sim(model, SimConfig::ideal());
+    let mut s = sim(model, common::ideal());
     let mut tau = [0.0; 7];
     tau[3] = 60.0;
     for _ in 0..1000 {
@@ -207,7 +211,7 @@ fn end_stops_hold_the_joint() {
 #[test]
 fn runs_are_deterministic() {
     let run = |seed| {
-        let mut s = Simulator::new(common::model(), SimConfig::default(), None, &[], Some(seed))
+        let mut s = Simulator::new(common::model(), common::sim_config(), None, &[], Some(seed))
             .expect("sim");
         for _ in 0..300 {
             s.step(&[0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0], false);
@@ -251,7 +255,7 @@ fn hand_pushing_the_forearm() {
         q0: q_front.clone(),
         contact_damping: 0.0,
         ft_sensor: true,
-        ..SimConfig::ideal()
+        ..common::ideal()
     };
     let mut s = Simulator::new(
         model.clone(),
@@ -284,7 +288,7 @@ fn hand_pushing_the_forearm() {
         for c in &after.contacts {
             let link = s.collision_link(c.collision).expect("link");
             seen_forearm |= link == "lwr_link_4" || link == "lwr_link_5";
-            let k = c.part.stiffness_n_per_m();
+            let k = stiffness_n_per_m(c.part);
             worst_force = worst_force.max((c.force.norm() - k * c.depth).abs() / (k * c.depth));
             assert_eq!(c.intended, c.part == BodyPart::HandRight);
             // J_c of the contact point, fixed in the link frame
@@ -370,7 +374,7 @@ fn wrist_sensor_measures_contacts_beyond_the_wrist() {
         q0: q.clone(),
         contact_damping: 0.0,
         ft_sensor: true,
-        ..SimConfig::ideal()
+        ..common::ideal()
     };
     let s = Simulator::new(model.clone(), cfg, Some(script), &[], None).expect("sim");
     let last = model.joints.len() - 1;
@@ -408,45 +412,54 @@ fn refuses_bad_configuration() {
     };
     assert!(bad(SimConfig {
         q0: vec![0.0; 6],
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("q0"));
     assert!(bad(SimConfig {
         q0: vec![0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("q0"));
     assert!(bad(SimConfig {
         dt_s: 0.0,
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("dt_s"));
     assert!(bad(SimConfig {
         substeps: 0,
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("substeps"));
     assert!(bad(SimConfig {
         viscous_friction: PerJoint::Each(vec![0.5; 3]),
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("viscous_friction"));
     assert!(bad(SimConfig {
         coulomb_friction: PerJoint::All(-1.0),
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("coulomb_friction"));
     assert!(bad(SimConfig {
         torque_noise_std: f64::NAN,
-        ..SimConfig::default()
+        ..common::sim_config()
     })
     .contains("torque_noise_std"));
-    let mut s = sim(model.clone(), SimConfig::default());
+    let mut s = sim(model.clone(), common::sim_config());
     assert!(s.reset_state(&[0.0; 3]).is_err());
     assert!(s.reset_state(&[f64::NAN; 7]).is_err());
     assert!(s.set_state(&[0.0; 7], &[0.0; 6]).is_err());
-    // TOML config: defaults, per-joint arrays, unknown fields refused
-    let cfg = SimConfig::from_toml_str("substeps = 8\nviscous_friction = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.2]\nbrake_torque_max = 30\n").expect("valid");
+    // TOML config ([sim] over the defaults): defaults, per-joint arrays, unknown fields refused
+    let sim_section = |text: &str| {
+        Loaded::load_text(
+            &format!("[sim]\n{text}"),
+            &Path::new(DEFAULT_DEPLOY_DIR).join("phri.toml"),
+            None,
+            &[],
+        )
+        .map(|l| l.config.sim)
+    };
+    let cfg = sim_section("substeps = 8\nviscous_friction = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.2]\nbrake_torque_max = 30\n").expect("valid");
     assert_eq!(cfg.substeps, 8);
     assert_eq!(
         cfg.viscous_friction,
@@ -454,9 +467,9 @@ fn refuses_bad_configuration() {
     );
     assert_eq!(cfg.brake_torque_max, PerJoint::All(30.0));
     assert_eq!(cfg.dt_s, 0.001);
-    assert!(SimConfig::from_toml_str("substep = 8\n")
+    assert!(sim_section("substep = 8\n")
         .expect_err("unknown")
         .to_string()
         .contains("substep"));
-    assert!(SimConfig::from_toml_str("coulomb_friction = \"high\"\n").is_err());
+    assert!(sim_section("coulomb_friction = \"high\"\n").is_err());
 }

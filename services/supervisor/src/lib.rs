@@ -1,8 +1,25 @@
-//! The supervisor's logic as plain data and pure functions: which services to
-//! run and how to restart them ([`spec`], [`restart`]), and the run report
-//! built from what flowed on the channels ([`report`]). `main.rs` does the I/O.
+//! The supervisor's logic as plain data and pure functions: what a run will
+//! do, checked before anything starts ([`plan`]); which services run, in
+//! which order ([`spec`]); their bookkeeping, restarts and the frozen
+//! verdict ([`roster`], [`restart`]), and who starves whom ([`cpu`]); the
+//! state files ([`state`]); the run report built from what flowed on the
+//! channels ([`report`]); how services are started and recognised
+//! ([`process`]); iceoryx2's node counter, checked and closed ([`shm`]). `main.rs` does the I/O: it
+//! spawns, signals and reaps the processes, reads the channels, publishes
+//! the health, writes the files, every 10 ms.
 
+pub mod cpu;
+pub mod error;
+pub mod plan;
 pub mod process;
 pub mod report;
 pub mod restart;
+pub mod roster;
+pub mod shm;
 pub mod spec;
+pub mod state;
+
+pub use error::SupervisorError;
+pub use plan::Plan;
+pub use roster::{Frozen, Roster, Supervised};
+pub use state::{StateJson, SupervisorState};

@@ -1,129 +1,358 @@
 //! `phri-supervisor`: starts the services of `[services]`, restarts what dies
-//! (with back-off), kills what freezes, publishes `supervisor/health`, shuts
-//! everything down in reverse order on SIGINT/SIGTERM or after `--duration`,
-//! leaves no process and no shared-memory file behind, and writes `--report`.
+//! (with back-off), kills what freezes (or what starves it), publishes
+//! `supervisor/health`, shuts everything down in order on SIGINT/SIGTERM or
+//! after `--duration`, leaves no process and no shared-memory file behind,
+//! and writes `--report`.
+//!
+//! The cell starts whole or not at all: everything is checked before the
+//! first process starts (the configuration, the run length, the binaries,
+//! every service's acceptance of the configuration (`--check`), the report
+//! file, the run directory, iceoryx2's node counter), and a start that fails
+//! stops what it started. A service that crash-loops, or a process other than
+//! the supervised controller publishing on `robot/command`, ends the run:
+//! ordered shutdown, a report with `clean: false`, a non-zero exit.
+//!
+//! The decisions are the library's ([`Plan`], [`Roster`], [`cpu`], the
+//! report's evaluator); this file starts, signals and reaps processes, reads
+//! and publishes the channels and writes the files, every 10 ms.
 
-use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{Seek, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitCode, Stdio};
-use std::time::Duration;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
 
-use phri_ipc::*;
-use phri_runtime::config::{apply_set, merge};
-use phri_runtime::{now_ns, sleep_until_ns, Args, Shutdown};
-use phri_supervisor::process::{
-    process_matches, Proc, ServiceState, SupervisorState, STATE_VERSION,
+use phri_ipc::{
+    node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
+    CAMERA_DEPTH, CONTROL_STATUS, DYNAMICS_RESIDUAL, PERCEPTION_DEPTH, PERCEPTION_REPULSION,
+    ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
-use phri_supervisor::report::{DetectorInfo, Evaluator, ServiceReport};
-use phri_supervisor::restart::RestartPolicy;
-use phri_supervisor::spec::{services, ServiceSpec, SupervisorConfig};
+use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
+use phri_runtime::{now_ns, sleep_until_ns, Args, Shutdown};
+use phri_supervisor::cpu::{self, CpuUse};
+use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
+use phri_supervisor::shm::{self, SHM_DIR};
+use phri_supervisor::state::{StateJson, STATE_FILE};
+use phri_supervisor::{Plan, Roster, SupervisorError, SupervisorState};
 
 const USAGE: &str = "usage: phri-supervisor [--config deploy/phri.toml] [--scenario NAME|FILE] [--duration SECONDS] [--report FILE] [--set section.key=value]... [--prefix P] [--run-dir DIR]";
+
+/// Period of the supervision loop [ns].
+const TICK_NS: u64 = 10_000_000;
+/// Period of the watch over who publishes on `robot/command` [ns].
+const WATCH_NS: u64 = 50_000_000;
+/// Period of the samples of the services' CPU time [ns].
+const CPU_SAMPLE_NS: u64 = 20_000_000;
+/// A supervision loop later than this was a stall of the supervisor itself [ns].
+const STALL_NS: u64 = 100_000_000;
+/// A service's `--check` must answer within this.
+const CHECK_TIMEOUT: Duration = Duration::from_secs(60);
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-supervisor", body)
 }
 
-struct Supervised {
-    name: String,
-    spec: ServiceSpec,
-    child: Option<Proc>,
-    policy: RestartPolicy,
-    restart_at: Option<u64>,
-    last_heartbeat_ns: u64,
-    started_ns: u64,
+/// The supervisor's ports on the cell's channels.
+struct Ports {
+    health: Publisher<Health>,
+    stats: Subscriber<phri_ipc::RobotStats>,
+    truth: Subscriber<phri_ipc::Truth>,
+    contacts: Subscriber<phri_ipc::ContactEvent>,
+    residual: Subscriber<phri_ipc::Residual>,
+    status: Subscriber<phri_ipc::ControlStatus>,
+    frames: FrameSubscriber,
+    filtered: FrameSubscriber,
+    repulsion: Subscriber<phri_ipc::RepulsionResult>,
 }
 
-/// A scenario file: `name`, `duration_s`, `[config]` overrides (the rest is the simulator's).
-struct ScenarioInfo {
-    name: String,
-    path: Option<PathBuf>,
-    duration_s: Option<f64>,
-    config: toml::Table,
+impl Ports {
+    fn open(node: &IpcNode) -> Result<Ports, IpcError> {
+        Ok(Ports {
+            health: SUPERVISOR_HEALTH.publisher(node)?,
+            stats: ROBOT_STATS.subscriber(node, Queue::Drain)?,
+            truth: SIM_TRUTH.subscriber(node, Queue::Drain)?,
+            contacts: SIM_CONTACTS.subscriber(node, Queue::Drain)?,
+            residual: DYNAMICS_RESIDUAL.subscriber(node, Queue::Drain)?,
+            status: CONTROL_STATUS.subscriber(node, Queue::Drain)?,
+            frames: CAMERA_DEPTH.frame_subscriber(node, Queue::Latest)?,
+            filtered: PERCEPTION_DEPTH.frame_subscriber(node, Queue::Latest)?,
+            repulsion: PERCEPTION_REPULSION.subscriber(node, Queue::Drain)?,
+        })
+    }
 }
 
-fn load_scenario(arg: Option<&str>, deploy_dir: &Path) -> Result<ScenarioInfo, String> {
-    let Some(arg) = arg else {
-        return Ok(ScenarioInfo {
-            name: "free-motion".into(),
-            path: None,
-            duration_s: None,
-            config: toml::Table::new(),
-        });
-    };
-    let candidates = [
-        PathBuf::from(arg),
-        deploy_dir.join("scenarios").join(format!("{arg}.toml")),
-    ];
-    let path = candidates.iter().find(|p| p.is_file()).ok_or_else(|| {
-        format!(
-            "--scenario: '{arg}' is neither a file nor a scenario in {}",
-            deploy_dir.join("scenarios").display()
-        )
-    })?;
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| format!("{}: {}", path.display(), e.message()))?;
-    let name = table
-        .get("name")
-        .and_then(|v| v.as_str())
-        .map(str::to_string)
-        .unwrap_or_else(|| {
-            path.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        });
-    let duration_s = table
-        .get("duration_s")
-        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)));
-    let config = match table.get("config") {
-        Some(toml::Value::Table(t)) => t.clone(),
-        Some(_) => return Err(format!("{}: [config] must be a table", path.display())),
-        None => toml::Table::new(),
-    };
-    let abs = std::fs::canonicalize(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(ScenarioInfo {
-        name,
-        path: Some(abs),
-        duration_s,
-        config,
-    })
+/// `--report FILE`, opened (created if need be) before anything starts, so
+/// that an unwritable place is refused at once. A file this run created is
+/// removed again unless the report was written into it.
+struct ReportFile {
+    path: PathBuf,
+    file: File,
+    created: bool,
+    written: bool,
 }
 
-/// `state.json` (pids, for people and scripts) and `supervisor.state` (bincode,
-/// for a supervisor that takes over), each replaced atomically.
-fn write_state(run_dir: &Path, prefix: &str, cell_start_ns: u64, list: &[Supervised]) {
-    let services: serde_json::Map<String, serde_json::Value> = list.iter().map(|s| (s.name.clone(), serde_json::json!({"pid": s.child.as_ref().map(|c| c.pid()), "restarts": s.policy.restarts}))).collect();
-    let v = serde_json::json!({"supervisor_pid": std::process::id(), "prefix": prefix, "services": services});
-    let state = SupervisorState {
-        version: STATE_VERSION,
-        supervisor_pid: std::process::id(),
-        prefix: prefix.to_string(),
-        cell_start_ns,
-        services: list
-            .iter()
-            .map(|s| ServiceState {
-                name: s.name.clone(),
-                pid: s.child.as_ref().map_or(0, |c| c.pid()),
-                restarts: s.policy.restarts,
-            })
-            .collect(),
-    };
-    for (name, bytes) in [
-        ("state.json", v.to_string().into_bytes()),
-        (STATE_FILE, state.encode()),
-    ] {
-        let tmp = run_dir.join(format!("{name}.tmp"));
-        if std::fs::write(&tmp, bytes).is_ok() {
-            let _ = std::fs::rename(&tmp, run_dir.join(name));
+impl ReportFile {
+    fn open(path: Option<&str>) -> Result<Option<ReportFile>, SupervisorError> {
+        let Some(path) = path else { return Ok(None) };
+        let report_err = |source| SupervisorError::Report {
+            path: path.into(),
+            source,
+        };
+        let created = !Path::new(path).exists();
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .map_err(report_err)?;
+        Ok(Some(ReportFile {
+            path: path.into(),
+            file,
+            created,
+            written: false,
+        }))
+    }
+
+    fn write(&mut self, json: &str) -> Result<(), SupervisorError> {
+        let report_err = |source| SupervisorError::Report {
+            path: self.path.clone(),
+            source,
+        };
+        self.file.set_len(0).map_err(report_err)?;
+        self.file.rewind().map_err(report_err)?;
+        self.file
+            .write_all(json.as_bytes())
+            .and_then(|_| self.file.write_all(b"\n"))
+            .map_err(report_err)?;
+        self.written = true;
+        Ok(())
+    }
+}
+
+impl Drop for ReportFile {
+    fn drop(&mut self) {
+        if self.created && !self.written {
+            let _ = std::fs::remove_file(&self.path);
         }
     }
 }
 
-const STATE_FILE: &str = "supervisor.state";
+/// The running cell: the roster and its processes, and where its state lies.
+struct Cell {
+    roster: Roster,
+    procs: Vec<Option<Proc>>,
+    launch: Launch,
+}
 
-fn body() -> Result<(), String> {
+impl Cell {
+    /// Start service `i`.
+    fn spawn(&self, i: usize) -> Result<std::process::Child, SupervisorError> {
+        let (name, spec) = (&self.roster.get(i).name, &self.roster.get(i).spec);
+        self.launch
+            .command(name, spec)
+            .spawn()
+            .map_err(|source| SupervisorError::Spawn {
+                service: name.clone(),
+                binary: spec.binary.clone(),
+                source,
+            })
+    }
+
+    /// `state.json` and `supervisor.state`, each replaced atomically, owner-only.
+    fn write_state(&self) {
+        let me = std::process::id();
+        let (dir, prefix) = (&self.launch.run_dir, &self.launch.prefix);
+        let written = self.roster.state_json(prefix, me).write(dir).and_then(|_| {
+            self.roster
+                .state(prefix, me, self.launch.cell_start_ns)
+                .write(dir)
+        });
+        if let Err(e) = written {
+            eprintln!("phri-supervisor: {e}");
+        }
+    }
+
+    fn remove_state(&self) {
+        let _ = std::fs::remove_file(StateJson::path(&self.launch.run_dir));
+        let _ = std::fs::remove_file(self.launch.run_dir.join(STATE_FILE));
+    }
+
+    /// The first service of the start that has ended, and how.
+    fn first_exit(&mut self) -> Option<(usize, String)> {
+        self.procs
+            .iter_mut()
+            .enumerate()
+            .find_map(|(i, p)| Some((i, p.as_mut()?.try_exited()?)))
+    }
+
+    /// Ordered shutdown in start order: the robot first (it brakes the arm as
+    /// it exits), then what depends on it; SIGTERM, then SIGKILL after the
+    /// grace period.
+    fn stop(&mut self) {
+        let grace_ns = self.roster.config().shutdown_grace_ms * 1_000_000;
+        for (i, slot) in self.procs.iter_mut().enumerate() {
+            let Some(mut child) = slot.take() else {
+                continue;
+            };
+            let name = &self.roster.get(i).name;
+            child.signal(libc::SIGTERM);
+            let deadline = now_ns() + grace_ns;
+            let mut killed = false;
+            while child.try_exited().is_none() {
+                if now_ns() > deadline + 2_000_000_000 {
+                    eprintln!(
+                        "phri-supervisor: {name} (pid {}) does not end even after SIGKILL",
+                        child.pid()
+                    );
+                    break;
+                }
+                if now_ns() > deadline && !killed {
+                    eprintln!("phri-supervisor: {name} ignored SIGTERM, killing it");
+                    child.signal(libc::SIGKILL);
+                    killed = true;
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+    }
+}
+
+/// Drop the supervisor's node and remove what the run left in shared memory.
+fn close_ipc(node: IpcNode, ports: Option<Ports>, prefix: &str) {
+    let _ = node.try_cleanup_dead_nodes();
+    drop(ports);
+    drop(node);
+    match phri_ipc::remove_leftovers(prefix) {
+        Ok(0) => {}
+        Ok(n) => eprintln!("phri-supervisor: removed {n} shared-memory files the run left"),
+        Err(alive) => eprintln!("phri-supervisor: {alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
+    }
+}
+
+/// `pid` exists and is not a zombie.
+fn alive(pid: i32) -> bool {
+    // SAFETY: signal 0 only probes the pid
+    let exists = pid > 0
+        && (unsafe { libc::kill(pid, 0) } == 0
+            || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM));
+    exists
+        && std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+            s.rsplit_once(')')
+                .is_some_and(|(_, r)| !r.starts_with(" Z"))
+        })
+}
+
+/// `pid`'s command line, shortened, for messages.
+fn cmdline_of(pid: i32) -> String {
+    let raw = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let line: String = String::from_utf8_lossy(&raw)
+        .split('\0')
+        .filter(|a| !a.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    if line.is_empty() {
+        "?".into()
+    } else if line.chars().count() > 120 {
+        format!("{}…", line.chars().take(120).collect::<String>())
+    } else {
+        line
+    }
+}
+
+/// The run directory another supervisor (`pid`) of `prefix` uses, from its
+/// command line (else the default for the prefix).
+fn run_dir_of(pid: i32, prefix: &str) -> String {
+    let raw = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let text = String::from_utf8_lossy(&raw);
+    let args: Vec<&str> = text.split('\0').collect();
+    args.windows(2)
+        .rev()
+        .find(|w| w[0] == "--run-dir")
+        .map(|w| w[1].to_string())
+        .or_else(|| Some(default_run_dir(prefix).ok()?.display().to_string()))
+        .unwrap_or_else(|| "the default".into())
+}
+
+/// Run every enabled service once with `--check` on a private copy of the
+/// merged configuration, with the flags it will be started with, all at
+/// once: each must accept it (exit 0) within [`CHECK_TIMEOUT`]. The first
+/// refusal is returned, naming the service and quoting its line.
+fn check_services(plan: &Plan, launch: &Launch) -> Result<(), SupervisorError> {
+    let tmp = launch
+        .run_dir
+        .join(format!(".config.check.{}.toml", std::process::id()));
+    write_private(&tmp, plan.merged_toml().as_bytes())?;
+    let result = (|| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let mut pending: Vec<(String, u32)> = Vec::new();
+        let kill_pending = |pending: &[(String, u32)]| {
+            for (_, pid) in pending {
+                // SAFETY: kill(2) on a check process this function started
+                unsafe { libc::kill(*pid as i32, libc::SIGKILL) };
+            }
+        };
+        for (name, spec) in &plan.services {
+            let child = match launch.check_command(name, spec, &tmp).spawn() {
+                Ok(c) => c,
+                Err(source) => {
+                    kill_pending(&pending);
+                    return Err(SupervisorError::Spawn {
+                        service: name.clone(),
+                        binary: spec.binary.clone(),
+                        source,
+                    });
+                }
+            };
+            pending.push((name.clone(), child.id()));
+            let (tx, name) = (tx.clone(), name.clone());
+            std::thread::spawn(move || {
+                let _ = tx.send((name, child.wait_with_output()));
+            });
+        }
+        drop(tx);
+        let deadline = Instant::now() + CHECK_TIMEOUT;
+        while !pending.is_empty() {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let Ok((name, out)) = rx.recv_timeout(left) else {
+                kill_pending(&pending);
+                return Err(SupervisorError::Refused {
+                    service: pending[0].0.clone(),
+                    line: format!(
+                        "its --check did not finish within {} s",
+                        CHECK_TIMEOUT.as_secs()
+                    ),
+                });
+            };
+            pending.retain(|(n, _)| *n != name);
+            let refusal = match out {
+                Ok(out) if out.status.success() => None,
+                Ok(out) => {
+                    let err = String::from_utf8_lossy(&out.stderr);
+                    Some(
+                        err.lines()
+                            .rev()
+                            .find(|l| !l.trim().is_empty())
+                            .map(str::to_string)
+                            .unwrap_or_else(|| phri_supervisor::process::status_text(out.status)),
+                    )
+                }
+                Err(e) => Some(format!("its --check could not be waited for: {e}")),
+            };
+            if let Some(line) = refusal {
+                kill_pending(&pending);
+                return Err(SupervisorError::Refused {
+                    service: name,
+                    line,
+                });
+            }
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_file(&tmp);
+    result
+}
+
+fn body() -> Result<(), SupervisorError> {
     let args = Args::parse(
         std::env::args().skip(1),
         &[
@@ -141,251 +370,171 @@ fn body() -> Result<(), String> {
         println!("{USAGE}");
         return Ok(());
     }
-    let config_path = std::fs::canonicalize(args.get("--config").unwrap_or("deploy/phri.toml"))
-        .map_err(|e| {
-            format!(
-                "{}: {e}",
-                args.get("--config").unwrap_or("deploy/phri.toml")
-            )
-        })?;
-    let deploy_dir = config_path
+    let me = std::process::id();
+    // everything is checked before anything starts: the configuration, the
+    // scenario, the robot model, the run length, the binaries
+    let plan = Plan::load(
+        Path::new(args.get("--config").unwrap_or("deploy/phri.toml")),
+        args.get("--scenario"),
+        &args.all("--set"),
+        args.parse_value::<f64>("--duration")?,
+    )?;
+    let bin_dir = std::env::current_exe()
+        .map_err(SupervisorError::CurrentExe)?
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_default();
-    let duration_arg = args.parse_value::<f64>("--duration")?;
-    if duration_arg.is_some_and(|d| !(d > 0.0)) {
-        return Err("--duration: must be positive".into());
-    }
-    let scenario = load_scenario(args.get("--scenario"), &deploy_dir)?;
-    let text = std::fs::read_to_string(&config_path)
-        .map_err(|e| format!("{}: {e}", config_path.display()))?;
-    let mut table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| format!("{}: {}", config_path.display(), e.message()))?;
-    merge(&mut table, &scenario.config);
-    for s in args.all("--set") {
-        apply_set(&mut table, s).map_err(|e| e.to_string())?;
-    }
-    // paths absolute, the scenario named, so that services read one self-contained file
-    let urdf = table
-        .get("robot")
-        .and_then(|r| r.get("urdf"))
-        .and_then(|u| u.as_str())
-        .ok_or_else(|| format!("{}: [robot] urdf is missing", config_path.display()))?;
-    let urdf = phri_runtime::service::resolve(&config_path, urdf);
-    let urdf = std::fs::canonicalize(&urdf)
-        .map_err(|e| format!("[robot] urdf {}: {e}", urdf.display()))?;
-    apply_set(&mut table, &format!("robot.urdf=\"{}\"", urdf.display()))
-        .map_err(|e| e.to_string())?;
-    if let Some(p) = &scenario.path {
-        apply_set(&mut table, &format!("scenario.file=\"{}\"", p.display()))
-            .map_err(|e| e.to_string())?;
-    }
-    apply_set(&mut table, &format!("scenario.name=\"{}\"", scenario.name))
-        .map_err(|e| e.to_string())?;
-    let sup: SupervisorConfig =
-        phri_runtime::section(&table, "supervisor").map_err(|e| e.to_string())?;
-    let specs = services(&table)?;
-    let duration_s = duration_arg.or(scenario.duration_s);
-
+    plan.check_binaries(&bin_dir)?;
     let prefix = args
         .get("--prefix")
         .map(str::to_string)
-        .unwrap_or_else(|| format!("phri{}_", std::process::id()));
-    let run_dir = PathBuf::from(
-        args.get("--run-dir")
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("/tmp/phri-run-{prefix}")),
-    );
-    std::fs::create_dir_all(&run_dir).map_err(|e| format!("{}: {e}", run_dir.display()))?;
-    let merged_path = run_dir.join("config.toml");
-    std::fs::write(
-        &merged_path,
-        toml::to_string(&table).map_err(|e| e.to_string())?,
-    )
-    .map_err(|e| format!("{}: {e}", merged_path.display()))?;
-    let bin_dir = std::env::current_exe()
-        .map_err(|e| e.to_string())?
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
-    for (name, spec) in &specs {
-        if !bin_dir.join(&spec.binary).is_file() {
-            return Err(format!(
-                "[services.{name}] binary '{}' not found in {} (build with: cargo build --release)",
-                spec.binary,
-                bin_dir.display()
-            ));
-        }
-    }
+        .unwrap_or_else(|| format!("phri{me}_"));
 
-    let shutdown = Shutdown::install().map_err(|e| format!("signal handlers: {e}"))?;
-    let s = |x: IpcError| x.to_string();
-    let node = node("supervisor", &prefix).map_err(s)?;
-    let health_pub = publisher::<Health>(&node, SUPERVISOR_HEALTH).map_err(s)?;
-    let stats_sub = subscriber::<RobotStats>(&node, ROBOT_STATS, 8).map_err(s)?;
-    let truth_sub = subscriber::<Truth>(&node, SIM_TRUTH, DRAIN).map_err(s)?;
-    let residual_sub = subscriber::<Residual>(&node, DYNAMICS_RESIDUAL, DRAIN).map_err(s)?;
-    let status_sub = subscriber::<ControlStatus>(&node, CONTROL_STATUS, DRAIN).map_err(s)?;
-    let frames_sub = frame_subscriber(&node, CAMERA_DEPTH).map_err(s)?;
-    let filtered_sub = frame_subscriber(&node, PERCEPTION_DEPTH).map_err(s)?;
-    let repulsion_sub =
-        subscriber::<RepulsionResult>(&node, PERCEPTION_REPULSION, DRAIN).map_err(s)?;
-
-    // evaluation needs the detector's thresholds and the names of links and parts
-    let model = phri_model_names(&urdf);
-    let dyn_table = table
-        .get("dynamics")
-        .and_then(|v| v.as_table())
-        .cloned()
-        .unwrap_or_default();
-    let floats = |key: &str, default: Vec<f64>| -> Vec<f64> {
-        dyn_table
-            .get(key)
-            .and_then(|v| v.as_array())
-            .map(|a| {
-                a.iter()
-                    .filter_map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
-                    .collect()
-            })
-            .unwrap_or(default)
+    // the run directory is this user's alone
+    let run_dir = match args.get("--run-dir") {
+        Some(d) => PathBuf::from(d),
+        None => default_run_dir(&prefix)?,
     };
-    let thresholds = floats(
-        "collision_threshold",
-        vec![8.0, 8.0, 6.0, 6.0, 4.0, 3.0, 2.0],
-    );
-    let gain = floats("gain", vec![100.0])
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
-    let t0 = now_ns();
-    let mut eval = Evaluator::new(
-        t0,
-        DetectorInfo {
-            collision_threshold: thresholds,
-            gain: if gain.is_finite() { gain } else { 100.0 },
-        },
-        model,
-        part_names(),
-    );
-    let reaction_name = table
-        .get("control")
-        .and_then(|c| c.get("reaction"))
-        .and_then(|r| r.as_str())
-        .unwrap_or("reflex")
-        .to_string();
-
-    // a supervisor of this run that died leaves its state: take its services over
-    let previous = std::fs::read(run_dir.join(STATE_FILE))
-        .ok()
-        .and_then(|b| SupervisorState::decode(&b))
-        .filter(|p| p.prefix == prefix);
+    let run_dir_existed = run_dir.exists();
+    create_private_dir(&run_dir)?;
+    // a cell of this prefix whose supervisor lives: refused, writing nothing
+    let previous = SupervisorState::read(&run_dir, &prefix)?;
     if let Some(p) = &previous {
-        if p.supervisor_pid != std::process::id()
-            && process_matches(p.supervisor_pid, &["phri-supervisor", prefix.as_str()])
-        {
-            return Err(format!(
-                "a supervisor (pid {}) already runs the cell of prefix {prefix}",
-                p.supervisor_pid
-            ));
+        if p.supervisor_pid != me && process_matches(p.supervisor_pid, &["phri-supervisor"]) {
+            return Err(SupervisorError::AlreadyRunning {
+                pid: p.supervisor_pid,
+                prefix,
+                run_dir: run_dir.display().to_string(),
+            });
         }
     }
-    // the cell's clock survives a takeover
-    let cell_start_ns = previous
-        .as_ref()
-        .map(|p| p.cell_start_ns)
-        .filter(|&t| t > 0 && t <= t0)
-        .unwrap_or(t0);
-
-    let spawn = |name: &str, spec: &ServiceSpec| -> Result<Child, String> {
-        use std::os::unix::process::CommandExt;
-        let mut cmd = Command::new(bin_dir.join(&spec.binary));
-        cmd.arg("--config")
-            .arg(&merged_path)
-            .arg("--prefix")
-            .arg(&prefix)
-            .arg("--name")
-            .arg(name)
-            .arg("--rt-priority")
-            .arg(spec.rt_priority.to_string())
-            .args(&spec.args)
-            .env(
-                phri_runtime::service::CELL_START_ENV,
-                cell_start_ns.to_string(),
-            )
-            .env(phri_runtime::service::RUN_DIR_ENV, &run_dir)
-            .stdin(Stdio::null());
-        // own process group: a terminal's Ctrl-C reaches the supervisor only, which stops the rest in order
-        cmd.process_group(0);
-        let online = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let cpus: Vec<usize> = spec.cpus.iter().copied().filter(|&c| c < online).collect();
-        if !cpus.is_empty() {
-            // SAFETY: between fork and exec only async-signal-safe calls: CPU_SET on a
-            // stack value and sched_setaffinity.
-            unsafe {
-                cmd.pre_exec(move || {
-                    let mut set: libc::cpu_set_t = std::mem::zeroed();
-                    for &c in &cpus {
-                        libc::CPU_SET(c, &mut set);
-                    }
-                    libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-                    Ok(())
-                });
-            }
-        }
-        cmd.spawn()
-            .map_err(|e| format!("[services.{name}]: cannot start {}: {e}", spec.binary))
+    // iceoryx2's node counter of this prefix: not another user's, not altered
+    shm::check_global_mgmt(Path::new(SHM_DIR), &prefix)?;
+    let mut report_file = ReportFile::open(args.get("--report"))?;
+    let shutdown = Shutdown::install().map_err(SupervisorError::Signals)?;
+    let mut launch = Launch {
+        bin_dir,
+        config: run_dir.join("config.toml"),
+        prefix: prefix.clone(),
+        cell_start_ns: now_ns(),
+        run_dir: run_dir.clone(),
     };
+    // every service accepts the configuration, with the flags it will get
+    check_services(&plan, &launch)?;
+    if shutdown.requested() {
+        return Err(SupervisorError::StartFailed("interrupted".into()));
+    }
 
-    let mut list: Vec<Supervised> = Vec::new();
-    for (name, spec) in specs {
+    let node = node("supervisor", &prefix)?;
+    // a supervisor of this prefix with another run directory
+    if let Some(pid) = SUPERVISOR_HEALTH
+        .publisher_pids(&node)?
+        .unwrap_or_default()
+        .into_iter()
+        .find(|&p| p as u32 != me && alive(p))
+    {
+        // the other cell's shared memory is not ours to clean up
+        drop(node);
+        if !run_dir_existed {
+            let _ = std::fs::remove_dir(&run_dir);
+        }
+        return Err(SupervisorError::AlreadyRunning {
+            pid: pid as u32,
+            run_dir: run_dir_of(pid, &prefix),
+            prefix,
+        });
+    }
+    // the node counter exists now: owner-only from here on
+    if let Err(e) = shm::restrict_global_mgmt(Path::new(SHM_DIR), &prefix) {
+        close_ipc(node, None, &prefix);
+        return Err(e.into());
+    }
+    let ports = match Ports::open(&node) {
+        Ok(p) => p,
+        Err(e) => {
+            close_ipc(node, None, &prefix);
+            return Err(e.into());
+        }
+    };
+    if let Err(e) = write_private(&launch.config, plan.merged_toml().as_bytes()) {
+        close_ipc(node, Some(ports), &prefix);
+        return Err(e.into());
+    }
+    eprintln!(
+        "phri-supervisor: cell {prefix}, run directory {}",
+        run_dir.display()
+    );
+
+    let t0 = now_ns();
+    // the cell's clock survives a takeover, and the report counts from it
+    let cell_start_ns = SupervisorState::cell_start_ns(previous.as_ref(), t0);
+    launch.cell_start_ns = cell_start_ns;
+    let mut eval = plan.evaluator(cell_start_ns);
+    let reaction = plan.reaction().name();
+    let mut cell = Cell {
+        roster: Roster::new(plan.loaded.config.supervisor.clone(), plan.services.clone()),
+        procs: Vec::with_capacity(plan.services.len()),
+        launch,
+    };
+    let mut health = Health::zeroed();
+
+    // start (or adopt) every service in order; a start that fails stops what it started
+    let mut adopted_any = false;
+    let mut start_error: Option<String> = None;
+    for i in 0..cell.roster.len() {
+        let name = cell.roster.get(i).name.clone();
         let adopt = previous
             .as_ref()
-            .and_then(|p| p.services.iter().find(|s| s.name == name))
-            .filter(|s| {
-                process_matches(
-                    s.pid,
-                    &[&format!("--prefix {prefix}"), &format!("--name {name}")],
-                )
-            });
+            .and_then(|p| p.service(&name))
+            .filter(|s| process_matches(s.pid, &cell.launch.needles(&name)));
         let now = now_ns();
-        let mut policy = RestartPolicy::default();
-        policy.started(now);
-        let child = match adopt {
+        match adopt {
             Some(prev) => {
-                policy.restarts = prev.restarts;
                 eprintln!(
                     "phri-supervisor: adopted {name} (pid {}) from the previous supervisor",
                     prev.pid
                 );
-                Proc::Adopted {
+                cell.roster.adopted(i, now, prev.pid, prev.restarts);
+                cell.procs.push(Some(Proc::Adopted {
                     pid: prev.pid,
-                    prefix: format!("--prefix {prefix}"),
+                    prefix: cell.launch.run_needle(),
+                }));
+                adopted_any = true;
+            }
+            None => match cell.spawn(i) {
+                Ok(child) => {
+                    eprintln!("phri-supervisor: started {name} (pid {})", child.id());
+                    cell.roster.started(i, now, child.id());
+                    cell.procs.push(Some(Proc::Child(child)));
                 }
+                Err(e) => {
+                    start_error = Some(e.to_string());
+                    break;
+                }
+            },
+        }
+        cell.write_state();
+        // the services' dead-man hears a supervisor from their start
+        cell.roster.fill_health(&mut health, now_ns());
+        let _ = ports.health.publish(&health);
+        let delay = cell.roster.get(i).spec.start_delay_ms;
+        if delay > 0 {
+            std::thread::sleep(Duration::from_millis(delay));
+        }
+        if !adopted_any {
+            if let Some((j, detail)) = cell.first_exit() {
+                start_error = Some(format!(
+                    "{} {detail} during start-up",
+                    cell.roster.get(j).name
+                ));
+                break;
             }
-            None => {
-                let child = spawn(&name, &spec)?;
-                eprintln!("phri-supervisor: started {name} (pid {})", child.id());
-                Proc::Child(child)
-            }
-        };
-        let adopted = matches!(child, Proc::Adopted { .. });
-        list.push(Supervised {
-            name,
-            spec: spec.clone(),
-            child: Some(child),
-            policy,
-            restart_at: None,
-            last_heartbeat_ns: now,
-            started_ns: now,
-        });
-        if spec.start_delay_ms > 0 && !adopted {
-            std::thread::sleep(Duration::from_millis(spec.start_delay_ms));
+        }
+        if shutdown.requested() {
+            break;
         }
     }
-    if list
-        .iter()
-        .any(|s| matches!(s.child, Some(Proc::Adopted { .. })))
-    {
+    if adopted_any {
         eval.event(
             now_ns(),
             "takeover",
@@ -393,294 +542,310 @@ fn body() -> Result<(), String> {
             "adopted the services of a supervisor that died",
         );
     }
-    write_state(&run_dir, &prefix, cell_start_ns, &list);
+    cell.write_state();
 
-    let end_ns = duration_s.map(|d| t0 + (d * 1e9) as u64);
+    let end_ns = plan.duration_s.map(|d| t0 + (d * 1e9) as u64);
+    let sup = cell.roster.config().clone();
     let health_period = (1e9 / sup.health_hz.max(0.1)) as u64;
-    let mut next_health = t0;
-    let mut health = Health::zeroed();
-    let mut tick = t0;
-    let timeout_ns = sup.heartbeat_timeout_ms * 1_000_000;
-    while !shutdown.requested() && end_ns.is_none_or(|e| now_ns() < e) {
-        tick += 10_000_000;
+    // start-up lasts startup_s after the last start: an exit before then fails
+    // the start (not in a takeover: the adopted services were running)
+    let mut starting_until = (!adopted_any).then(|| now_ns() + (sup.startup_s * 1e9) as u64);
+    let mut stop_reason: Option<String> = None;
+    let mut cpu_use = CpuUse::new(cell.roster.len());
+    let mut next_health = now_ns();
+    let mut next_watch = now_ns();
+    let mut next_cpu_sample = now_ns();
+    let mut tick = now_ns();
+    while start_error.is_none()
+        && stop_reason.is_none()
+        && !shutdown.requested()
+        && end_ns.is_none_or(|e| now_ns() < e)
+    {
+        tick += TICK_NS;
         sleep_until_ns(tick);
         let now = now_ns();
+        let stalled_ns = now.saturating_sub(tick);
+        if stalled_ns > TICK_NS {
+            // fell behind: no burst of ticks to catch up
+            tick = now;
+        }
+        let roster = &mut cell.roster;
         // evaluation streams, and heartbeats per channel
-        let mut heard: Vec<&str> = Vec::new();
-        while let Some(m) = stats_sub
-            .receive()
-            .map_err(|e| ipc_err(ROBOT_STATS, e).to_string())?
-        {
-            eval.on_stats(&m);
-            heard.push(ROBOT_STATS);
+        if ports.stats.drain(|m| eval.on_stats(m))? > 0 {
+            roster.heard(ROBOT_STATS.name, now);
         }
-        while let Some(m) = truth_sub
-            .receive()
-            .map_err(|e| ipc_err(SIM_TRUTH, e).to_string())?
-        {
-            eval.on_truth(&m);
-            heard.push(SIM_TRUTH);
+        ports.contacts.drain(|m| eval.on_contact_event(m))?;
+        if ports.truth.drain(|m| eval.on_truth(m))? > 0 {
+            roster.heard(SIM_TRUTH.name, now);
         }
-        while let Some(m) = residual_sub
-            .receive()
-            .map_err(|e| ipc_err(DYNAMICS_RESIDUAL, e).to_string())?
-        {
-            eval.on_residual(&m);
-            heard.push(DYNAMICS_RESIDUAL);
+        if ports.residual.drain(|m| eval.on_residual(m))? > 0 {
+            roster.heard(DYNAMICS_RESIDUAL.name, now);
         }
-        while let Some(m) = status_sub
-            .receive()
-            .map_err(|e| ipc_err(CONTROL_STATUS, e).to_string())?
-        {
-            eval.on_status(&m, &reaction_name);
-            heard.push(CONTROL_STATUS);
+        if ports.status.drain(|m| eval.on_status(m, reaction))? > 0 {
+            roster.heard(CONTROL_STATUS.name, now);
         }
-        while let Some(f) = frames_sub
-            .receive()
-            .map_err(|e| ipc_err(CAMERA_DEPTH, e).to_string())?
-        {
+        let mut frames = 0;
+        while let Some(f) = ports.frames.receive()? {
             eval.on_frame(f.user_header());
-            heard.push(CAMERA_DEPTH);
+            frames += 1;
         }
-        while filtered_sub
-            .receive()
-            .map_err(|e| ipc_err(PERCEPTION_DEPTH, e).to_string())?
-            .is_some()
-        {
-            heard.push(PERCEPTION_DEPTH);
+        if frames > 0 {
+            roster.heard(CAMERA_DEPTH.name, now);
         }
-        while let Some(m) = repulsion_sub
-            .receive()
-            .map_err(|e| ipc_err(PERCEPTION_REPULSION, e).to_string())?
-        {
-            eval.on_repulsion(&m);
-            heard.push(PERCEPTION_REPULSION);
+        let mut filtered = 0;
+        while ports.filtered.receive()?.is_some() {
+            filtered += 1;
         }
-        for sv in list.iter_mut() {
-            if sv
-                .spec
-                .heartbeat
-                .as_deref()
-                .is_some_and(|h| heard.contains(&h))
-            {
-                sv.last_heartbeat_ns = now;
+        if filtered > 0 {
+            roster.heard(PERCEPTION_DEPTH.name, now);
+        }
+        if ports.repulsion.drain(|m| eval.on_repulsion(m))? > 0 {
+            roster.heard(PERCEPTION_REPULSION.name, now);
+        }
+        if stalled_ns > STALL_NS {
+            // this process did not run (a stopped supervisor, a starved CPU):
+            // the services' silence meanwhile is not theirs to answer for
+            eprintln!(
+                "phri-supervisor: stalled for {} ms: heartbeats judged afresh",
+                stalled_ns / 1_000_000
+            );
+            roster.judge_afresh(now);
+        }
+
+        // who uses the CPUs, and who commands the robot
+        if now >= next_cpu_sample {
+            next_cpu_sample = now + CPU_SAMPLE_NS;
+            for i in 0..roster.len() {
+                cpu_use.record(i, now, roster.get(i).pid.and_then(cpu_time_ns));
             }
         }
+        if now >= next_watch {
+            next_watch = now + WATCH_NS;
+            let intruder = ROBOT_COMMAND
+                .publisher_pids(&node)?
+                .unwrap_or_default()
+                .into_iter()
+                .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
+            if let Some(pid) = intruder {
+                let who = cmdline_of(pid);
+                eprintln!(
+                    "phri-supervisor: pid {pid} ({who}) publishes on {}, and is not the controller this supervisor started: stopping the cell (the robot first: it brakes)",
+                    ROBOT_COMMAND.name
+                );
+                let reason = format!(
+                    "pid {pid} ({who}) published on {} instead of the supervised controller",
+                    ROBOT_COMMAND.name
+                );
+                eval.event(now, "intruder", "supervisor", reason.clone());
+                eval.degrade(reason.clone());
+                stop_reason = Some(reason);
+            }
+        }
+
         // reap and schedule restarts
         let mut changed = false;
-        for sv in list.iter_mut() {
-            if let Some(child) = sv.child.as_mut() {
-                if let Some(detail) = child.try_exited() {
-                    sv.child = None;
-                    changed = true;
-                    let _ = node.try_cleanup_dead_nodes();
-                    if sv.spec.restart {
-                        let at = sv.policy.exited(
-                            now,
-                            sup.restart_backoff_min_ms,
-                            sup.restart_backoff_max_ms,
-                            sup.stable_after_s,
-                        );
-                        sv.restart_at = Some(at);
-                        eprintln!(
-                            "phri-supervisor: {} {detail}; restarting in {} ms",
-                            sv.name,
-                            (at - now) / 1_000_000
-                        );
-                    } else {
-                        eprintln!("phri-supervisor: {} {detail}", sv.name);
-                    }
-                    eval.event(now, "exit", &sv.name, detail);
-                }
+        for i in 0..cell.procs.len() {
+            let Some(detail) = cell.procs[i].as_mut().and_then(Proc::try_exited) else {
+                continue;
+            };
+            cell.procs[i] = None;
+            changed = true;
+            let _ = node.try_cleanup_dead_nodes();
+            let name = cell.roster.get(i).name.clone();
+            eval.event(now, "exit", &name, detail.clone());
+            if starting_until.is_some() {
+                start_error = Some(format!("{name} {detail} during start-up"));
+                break;
+            }
+            let restart_at = cell.roster.exited(i, now);
+            cpu_use.restarted(i);
+            if let Some(n) = cell.roster.crash_looping(i, now) {
+                let reason = format!(
+                    "{name} ended {n} times within {} s (last: {detail}): the cell is not whole",
+                    sup.crash_loop_window_s
+                );
+                eprintln!("phri-supervisor: {reason}; stopping the cell");
+                eval.degrade(reason.clone());
+                stop_reason = Some(reason);
+                break;
+            }
+            match restart_at {
+                Some(at) => eprintln!(
+                    "phri-supervisor: {name} {detail}; restarting in {} ms",
+                    (at - now) / 1_000_000
+                ),
+                None => eprintln!("phri-supervisor: {name} {detail}"),
             }
         }
-        // frozen services: alive, their dependencies heard from, but silent themselves
-        let silent: Vec<(String, bool)> = list
-            .iter()
-            .map(|sv| {
-                let limit = sv
-                    .spec
-                    .heartbeat_timeout_ms
-                    .map_or(timeout_ns, |ms| ms * 1_000_000);
-                (
-                    sv.name.clone(),
-                    sv.spec.heartbeat.is_some() && now.saturating_sub(sv.last_heartbeat_ns) > limit,
-                )
-            })
-            .collect();
-        for sv in list.iter_mut() {
-            let deps_ok = sv
-                .spec
-                .depends_on
-                .iter()
-                .all(|d| silent.iter().any(|(n, s)| n == d && !*s));
-            if !deps_ok {
-                // its silence is explained by theirs: judge it afresh once they are back
-                sv.last_heartbeat_ns = now;
+        if start_error.is_some() || stop_reason.is_some() {
+            break;
+        }
+        if starting_until.is_some_and(|until| now >= until) {
+            starting_until = None;
+            if !cell.roster.whole() {
+                eprintln!(
+                    "phri-supervisor: {} s after the start, not heard yet: {}",
+                    sup.startup_s,
+                    cell.roster.unheard().join(", ")
+                );
             }
-            let grace = now.saturating_sub(sv.started_ns) > 4 * timeout_ns.max(500_000_000);
-            if let (Some(child), true) = (sv.child.as_ref(), deps_ok && grace) {
-                if silent.iter().any(|(n, s)| *n == sv.name && *s) {
+        }
+        // frozen services: alive, their dependencies heard from, but silent
+        // themselves; a service that starves them on their CPUs dies instead
+        let mut killed: Vec<usize> = Vec::new();
+        for f in cell.roster.frozen(now) {
+            // the later half of the silence: the starvation had surely begun
+            let window = (f.silent_ns / 2).clamp(cpu::WINDOW_NS / 10, cpu::WINDOW_NS);
+            let sv = cell.roster.get(f.index);
+            let heartbeat = sv.spec.heartbeat.as_deref().unwrap_or("?");
+            let victim = match cpu::culprit(&cell.roster, &cpu_use, f.index, window) {
+                Some((c, share)) => {
+                    let culprit = &cell.roster.get(c).name;
                     eprintln!(
-                        "phri-supervisor: {} silent on {} for {} ms: frozen, killing it",
+                        "phri-supervisor: {} silent on {heartbeat} for {} ms while {culprit} used {:.0} % of a CPU they share: killing {culprit} instead",
                         sv.name,
-                        sv.spec.heartbeat.as_deref().unwrap_or("?"),
-                        now.saturating_sub(sv.last_heartbeat_ns) / 1_000_000
+                        f.silent_ns / 1_000_000,
+                        share.min(1.0) * 100.0
                     );
-                    eval.event(now, "frozen", &sv.name, "no heartbeat");
-                    child.signal(libc::SIGKILL);
-                    sv.last_heartbeat_ns = now;
+                    eval.event(
+                        now,
+                        "frozen",
+                        &sv.name,
+                        format!("no heartbeat; starved by {culprit}"),
+                    );
+                    eval.event(
+                        now,
+                        "blame",
+                        culprit,
+                        format!(
+                            "used {:.0} % of a CPU while {} starved: killed",
+                            share.min(1.0) * 100.0,
+                            sv.name
+                        ),
+                    );
+                    c
+                }
+                None => match cpu::busiest(&cell.roster, &cpu_use, f.index, window) {
+                    // no CPU samples over its silence (this process was held
+                    // up too): no verdict without evidence, judged again
+                    None => {
+                        eprintln!(
+                            "phri-supervisor: {} silent on {heartbeat} for {} ms; no CPU samples over that time: judged again",
+                            sv.name,
+                            f.silent_ns / 1_000_000
+                        );
+                        continue;
+                    }
+                    Some((b, share)) => {
+                        eprintln!(
+                            "phri-supervisor: {} silent on {heartbeat} for {} ms: frozen, killing it (busiest on its CPUs: {} at {:.0} %)",
+                            sv.name,
+                            f.silent_ns / 1_000_000,
+                            cell.roster.get(b).name,
+                            share.min(1.0) * 100.0
+                        );
+                        eval.event(now, "frozen", &sv.name, "no heartbeat");
+                        f.index
+                    }
+                },
+            };
+            if !killed.contains(&victim) {
+                killed.push(victim);
+                if let Some(p) = &cell.procs[victim] {
+                    p.signal(libc::SIGKILL);
                 }
             }
         }
-        for sv in list.iter_mut() {
-            if sv.restart_at.is_some_and(|at| now >= at) {
-                sv.restart_at = None;
-                match spawn(&sv.name, &sv.spec) {
-                    Ok(child) => {
-                        eprintln!(
-                            "phri-supervisor: restarted {} (pid {})",
-                            sv.name,
-                            child.id()
+        for i in 0..cell.roster.len() {
+            if !cell.roster.restart_due(i, now) {
+                continue;
+            }
+            match cell.spawn(i) {
+                Ok(child) => {
+                    let name = &cell.roster.get(i).name;
+                    eprintln!("phri-supervisor: restarted {name} (pid {})", child.id());
+                    eval.event(
+                        now,
+                        "restart",
+                        name,
+                        format!("restart {}", cell.roster.get(i).restarts()),
+                    );
+                    cell.roster.started(i, now, child.id());
+                    cell.procs[i] = Some(Proc::Child(child));
+                    cpu_use.restarted(i);
+                    changed = true;
+                }
+                Err(e) => {
+                    eprintln!("phri-supervisor: {e}");
+                    cell.roster.restart_failed(i, now);
+                    if let Some(n) = cell.roster.crash_looping(i, now) {
+                        let reason = format!(
+                            "{} could not be started {n} times within {} s ({e})",
+                            cell.roster.get(i).name,
+                            sup.crash_loop_window_s
                         );
-                        eval.event(
-                            now,
-                            "restart",
-                            &sv.name,
-                            format!("restart {}", sv.policy.restarts),
-                        );
-                        sv.child = Some(Proc::Child(child));
-                        sv.policy.started(now);
-                        sv.started_ns = now;
-                        sv.last_heartbeat_ns = now;
-                        changed = true;
-                    }
-                    Err(e) => {
-                        eprintln!("phri-supervisor: {e}");
-                        sv.restart_at = Some(sv.policy.exited(
-                            now,
-                            sup.restart_backoff_min_ms,
-                            sup.restart_backoff_max_ms,
-                            sup.stable_after_s,
-                        ));
+                        eval.degrade(reason.clone());
+                        stop_reason = Some(reason);
                     }
                 }
             }
         }
         if changed {
-            write_state(&run_dir, &prefix, cell_start_ns, &list);
+            cell.write_state();
+            // a restart opened a node: the node counter must still be ours alone
+            if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &prefix) {
+                let reason = e.to_string();
+                eprintln!("phri-supervisor: {reason}; stopping the cell");
+                eval.degrade(reason.clone());
+                stop_reason = Some(reason);
+            }
         }
         if now >= next_health {
             next_health = now + health_period;
-            health.seq += 1;
-            health.stamp_ns = now;
-            health.count = list.len() as u32;
-            for (h, sv) in health.services.iter_mut().zip(&list) {
-                h.name = [0; 32];
-                let b = sv.name.as_bytes();
-                h.name[..b.len().min(31)].copy_from_slice(&b[..b.len().min(31)]);
-                h.pid = sv.child.as_ref().map_or(0, |c| c.pid() as i32);
-                h.alive = sv.child.is_some() as u32;
-                h.restarts = sv.policy.restarts;
-                h.started_ns = sv.started_ns;
-            }
-            let _ = publish(&health_pub, SUPERVISOR_HEALTH, &health);
+            cell.roster.fill_health(&mut health, now);
+            let _ = ports.health.publish(&health);
         }
+    }
+
+    if let Some(reason) = start_error {
+        eprintln!("phri-supervisor: {reason}: stopping everything started");
+        cell.stop();
+        close_ipc(node, Some(ports), &prefix);
+        cell.remove_state();
+        return Err(SupervisorError::StartFailed(reason));
     }
     let end = now_ns();
-    let services_report: BTreeMap<String, ServiceReport> = list
-        .iter()
-        .map(|sv| {
-            (
-                sv.name.clone(),
-                ServiceReport {
-                    restarts: sv.policy.restarts,
-                    alive_at_end: sv.child.is_some(),
-                },
-            )
-        })
-        .collect();
+    let services_report = cell.roster.reports();
     // drain what arrived in the last period before stopping anything
-    while let Ok(Some(m)) = truth_sub.receive() {
-        eval.on_truth(&m);
+    let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
+    let _ = ports.truth.drain(|m| eval.on_truth(m));
+    let _ = ports.residual.drain(|m| eval.on_residual(m));
+    let _ = ports.status.drain(|m| eval.on_status(m, reaction));
+    let _ = ports.stats.drain(|m| eval.on_stats(m));
+    cell.stop();
+    // what the services said last (the simulator's contacts as it braked)
+    let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
+    let report = eval.report(end, plan.scenario_name(), services_report);
+    close_ipc(node, Some(ports), &prefix);
+    cell.remove_state();
+    if let Some(file) = report_file.as_mut() {
+        let json = serde_json::to_string_pretty(&report).map_err(|e| SupervisorError::Report {
+            path: file.path.clone(),
+            source: std::io::Error::other(e),
+        })?;
+        file.write(&json)?;
     }
-    while let Ok(Some(m)) = residual_sub.receive() {
-        eval.on_residual(&m);
-    }
-    while let Ok(Some(m)) = status_sub.receive() {
-        eval.on_status(&m, &reaction_name);
-    }
-    while let Ok(Some(m)) = stats_sub.receive() {
-        eval.on_stats(&m);
-    }
-    let report = eval.report(end, &scenario.name, services_report);
-
-    // ordered shutdown in start order: the robot first (it brakes the arm as it
-    // exits), then what depends on it; SIGTERM, then SIGKILL after the grace period
-    for sv in list.iter_mut() {
-        if let Some(mut child) = sv.child.take() {
-            child.signal(libc::SIGTERM);
-            let deadline = now_ns() + sup.shutdown_grace_ms * 1_000_000;
-            let mut killed = false;
-            while child.try_exited().is_none() {
-                if now_ns() > deadline + 2_000_000_000 {
-                    eprintln!(
-                        "phri-supervisor: {} (pid {}) does not end even after SIGKILL",
-                        sv.name,
-                        child.pid()
-                    );
-                    break;
-                }
-                if now_ns() > deadline && !killed {
-                    eprintln!("phri-supervisor: {} ignored SIGTERM, killing it", sv.name);
-                    child.signal(libc::SIGKILL);
-                    killed = true;
-                }
-                std::thread::sleep(Duration::from_millis(5));
-            }
-        }
-    }
-    let _ = node.try_cleanup_dead_nodes();
-    drop((
-        health_pub,
-        stats_sub,
-        truth_sub,
-        residual_sub,
-        status_sub,
-        frames_sub,
-        filtered_sub,
-        repulsion_sub,
-    ));
-    drop(node);
-    match phri_ipc::remove_leftovers(&prefix) {
-        Ok(0) => {}
-        Ok(n) => eprintln!("phri-supervisor: removed {n} shared-memory files the run left"),
-        Err(alive) => eprintln!("phri-supervisor: {alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
-    }
-    let _ = std::fs::remove_file(run_dir.join("state.json"));
-    let _ = std::fs::remove_file(run_dir.join(STATE_FILE));
-    if let Some(path) = args.get("--report") {
-        let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-        std::fs::write(path, json + "\n").map_err(|e| format!("--report {path}: {e}"))?;
-    }
+    let verdict = if report.clean {
+        "clean".to_string()
+    } else {
+        format!("NOT clean: {}", report.degraded.join("; "))
+    };
     eprintln!(
-        "phri-supervisor: {} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections",
+        "phri-supervisor: {} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections; {verdict}",
         report.scenario, report.duration_s, report.torque_loop.cycles, report.torque_loop.missed_deadlines, report.torque_loop.latency_us.p99, report.contacts.len(), report.false_detections
     );
-    Ok(())
-}
-
-/// Names of the robot model's collision objects (for contact reports).
-fn phri_model_names(urdf: &Path) -> Vec<String> {
-    phri_model::Model::from_urdf_file(urdf)
-        .map(|m| m.collisions.iter().map(|c| c.link.clone()).collect())
-        .unwrap_or_default()
-}
-
-/// Human body part names in the simulator's numbering.
-fn part_names() -> Vec<String> {
-    phri_sim::human::BodyPart::ALL
-        .iter()
-        .map(|p| p.name().to_string())
-        .collect()
+    match stop_reason {
+        Some(reason) => Err(SupervisorError::Degraded(reason)),
+        None => Ok(()),
+    }
 }

@@ -3,9 +3,10 @@
 
 use std::collections::BTreeMap;
 
+use phri_config::{Invalid, ResidualConfig};
 use phri_ipc::{
-    control_mode, residual_flags, ControlStatus, FrameHeader, RepulsionResult, Residual,
-    RobotStats, Truth, LATENCY_BINS,
+    residual_flags, BodyPart, ContactEvent, ContactPhase, ControlMode, ControlStatus, FrameHeader,
+    RepulsionResult, Residual, RobotStats, Truth, LATENCY_BINS,
 };
 use serde::Serialize;
 
@@ -105,6 +106,14 @@ pub struct PerceptionReport {
 /// `--report` JSON.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// the run was clean: every service ran to the end as configured, nothing
+    /// of the evaluation was lost; otherwise `degraded` says why
+    pub clean: bool,
+    /// why the run was degraded (a service that kept crashing, a start that
+    /// failed, an intruder on `robot/command`, lost ground truth, ...)
+    pub degraded: Vec<String>,
+    /// what the evaluation lost on the way (a stalled supervisor)
+    pub evaluation: Evaluation,
     pub duration_s: f64,
     pub scenario: String,
     pub torque_loop: TorqueLoop,
@@ -125,13 +134,42 @@ pub struct Report {
     pub perception: Option<PerceptionReport>,
 }
 
+/// `evaluation` in the report: samples that never reached the evaluator.
+/// Contact episodes come from `sim/contacts` (deeply queued); a lost
+/// `sim/truth` sample (1 kHz, 256 deep) only coarsens the detection timing.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Evaluation {
+    pub truth_samples_lost: u64,
+    pub contact_events_lost: u64,
+}
+
 /// What the evaluator needs to know about the detector.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct DetectorInfo {
     /// per-joint collision thresholds [Nm]
     pub collision_threshold: Vec<f64>,
     /// observer gain [1/s] (the smallest, for the bound)
     pub gain: f64,
+}
+
+impl DetectorInfo {
+    /// The detector of `[dynamics]` for a robot of `joints` joints: its
+    /// collision thresholds, and its smallest gain K_I (the slowest joint
+    /// bounds the detection delay).
+    pub fn from_config(dynamics: &ResidualConfig, joints: usize) -> Result<DetectorInfo, Invalid> {
+        let collision_threshold = dynamics
+            .collision_threshold
+            .resolve(joints, "dynamics.collision_threshold")?;
+        let gain = dynamics
+            .gain
+            .resolve(joints, "dynamics.gain")?
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        Ok(DetectorInfo {
+            collision_threshold,
+            gain,
+        })
+    }
 }
 
 struct Episode {
@@ -159,7 +197,6 @@ pub struct Evaluator {
     t0_ns: u64,
     det: DetectorInfo,
     link_names: Vec<String>,
-    part_names: Vec<String>,
     episodes: Vec<Episode>,
     collision_edges: Vec<f64>,
     last_collision: bool,
@@ -170,7 +207,8 @@ pub struct Evaluator {
     hist_last: Vec<u64>,
     latency_max_ns: u64,
     status: Restartable<(u64, u64, u64, u64)>,
-    last_mode: u32,
+    /// the controller's last mode (`None`: no status yet from this controller)
+    last_mode: Option<u32>,
     resyncs: Vec<(Resync, Vec<f64>)>,
     seen_status: bool,
     /// the newest truth: sequence number and true joint positions
@@ -184,6 +222,19 @@ pub struct Evaluator {
     in_flight: Vec<(u64, u64, u32, u32, u64)>,
     complete_frames: u64,
     frame_latency_ms: Vec<f64>,
+    /// why the run was degraded (see [`Report::degraded`])
+    degraded: Vec<String>,
+    /// CLOCK_MONOTONIC − robot clock [ns], from the newest controller status
+    /// (which carries both): robot-clock stamps are reported on the monotonic
+    /// time base of every other event
+    robot_to_mono_ns: i64,
+    /// ground-truth samples missing from the `sim/truth` stream (a stalled reader)
+    truth_lost: u64,
+    /// contact events missing from the `sim/contacts` stream
+    events_lost: u64,
+    last_event_seq: u64,
+    /// contact episodes come from `sim/contacts` (then truth only refines them)
+    events_seen: bool,
 }
 
 /// Episodes end after this long without the contact [s].
@@ -192,17 +243,14 @@ const CONTACT_GAP_S: f64 = 0.05;
 const DETECTION_GRACE_S: f64 = 0.5;
 
 impl Evaluator {
-    pub fn new(
-        t0_ns: u64,
-        det: DetectorInfo,
-        link_names: Vec<String>,
-        part_names: Vec<String>,
-    ) -> Evaluator {
+    /// An evaluator of a run that started at `t0_ns` [ns, CLOCK_MONOTONIC]:
+    /// `link_names` are the robot model's collision objects by index
+    /// (`ContactTruth::robot_object`); body parts are named by [`BodyPart`].
+    pub fn new(t0_ns: u64, det: DetectorInfo, link_names: Vec<String>) -> Evaluator {
         Evaluator {
             t0_ns,
             det,
             link_names,
-            part_names,
             episodes: Vec::new(),
             collision_edges: Vec::new(),
             last_collision: false,
@@ -213,7 +261,7 @@ impl Evaluator {
             hist_last: vec![0; LATENCY_BINS],
             latency_max_ns: 0,
             status: Restartable::default(),
-            last_mode: u32::MAX,
+            last_mode: None,
             resyncs: Vec::new(),
             seen_status: false,
             truth_seq: 0,
@@ -224,6 +272,76 @@ impl Evaluator {
             in_flight: Vec::new(),
             complete_frames: 0,
             frame_latency_ms: Vec::new(),
+            degraded: Vec::new(),
+            robot_to_mono_ns: 0,
+            truth_lost: 0,
+            events_lost: 0,
+            last_event_seq: 0,
+            events_seen: false,
+        }
+    }
+
+    /// A robot-clock stamp [ns] on the report's time base [s since t0].
+    fn t_robot(&self, ns: u64) -> f64 {
+        self.t((ns as i64).saturating_add(self.robot_to_mono_ns).max(0) as u64)
+    }
+
+    /// The open episode of `(robot_object, part)`, or a new one starting at `t`.
+    fn episode(&mut self, robot_object: i32, part: i32, intended: bool, t: f64) -> &mut Episode {
+        let i = match self
+            .episodes
+            .iter()
+            .position(|e| !e.closed && e.robot_object == robot_object && e.part == part)
+        {
+            Some(i) => i,
+            None => {
+                self.episodes.push(Episode {
+                    robot_object,
+                    part,
+                    t_start: t,
+                    t_last: t,
+                    peak: 0.0,
+                    intended,
+                    t_twice: None,
+                    t_detect: None,
+                    closed: false,
+                });
+                self.episodes.len() - 1
+            }
+        };
+        &mut self.episodes[i]
+    }
+
+    /// A contact event from `sim/contacts`: episodes begin, grow and end here
+    /// (the truth stream refines them but may lose samples).
+    pub fn on_contact_event(&mut self, m: &ContactEvent) {
+        if m.seq <= self.last_event_seq {
+            // a new simulator numbers its events from 1 again
+            self.last_event_seq = 0;
+        }
+        self.events_lost += m.seq.saturating_sub(self.last_event_seq + 1);
+        self.last_event_seq = m.seq;
+        self.events_seen = true;
+        let (t_start, t) = (self.t_robot(m.start_ns), self.t_robot(m.stamp_ns));
+        let e = self.episode(m.robot_object, m.human_part, m.intended != 0, t_start);
+        e.t_start = e.t_start.min(t_start);
+        e.t_last = e.t_last.max(t);
+        e.peak = e.peak.max(m.peak_force_n);
+        if ContactPhase::try_from(m.phase) == Ok(ContactPhase::End) {
+            e.closed = true;
+        }
+    }
+
+    /// Ground truth lost on the way (see [`Report::evaluation`]).
+    pub fn truth_samples_lost(&self) -> u64 {
+        self.truth_lost
+    }
+
+    /// Mark the run degraded for `reason` (kept once per distinct reason).
+    pub fn degrade(&mut self, reason: impl Into<String>) {
+        let r = reason.into();
+        if !self.degraded.contains(&r) {
+            self.degraded.push(r);
         }
     }
 
@@ -242,7 +360,10 @@ impl Evaluator {
     }
 
     pub fn on_truth(&mut self, m: &Truth) {
-        let t = self.t(m.stamp_ns);
+        let t = self.t_robot(m.stamp_ns);
+        if m.seq > self.truth_seq + 1 && self.truth_seq > 0 {
+            self.truth_lost += m.seq - self.truth_seq - 1;
+        }
         if m.min_distance.is_finite() {
             self.min_distance = self.min_distance.min(m.min_distance);
         }
@@ -273,32 +394,17 @@ impl Evaluator {
             .take((m.n_contacts as usize).min(m.contacts.len()))
         {
             let f = (c.force[0].powi(2) + c.force[1].powi(2) + c.force[2].powi(2)).sqrt();
-            let open = self
-                .episodes
-                .iter_mut()
-                .find(|e| !e.closed && e.robot_object == c.robot_object && e.part == c.human_part);
-            match open {
-                Some(e) => {
-                    e.t_last = t;
-                    e.peak = e.peak.max(f);
-                    if twice && e.t_twice.is_none() {
-                        e.t_twice = Some(t);
-                    }
-                }
-                None => self.episodes.push(Episode {
-                    robot_object: c.robot_object,
-                    part: c.human_part,
-                    t_start: t,
-                    t_last: t,
-                    peak: f,
-                    intended: c.intended != 0,
-                    t_twice: twice.then_some(t),
-                    t_detect: None,
-                    closed: false,
-                }),
+            let e = self.episode(c.robot_object, c.human_part, c.intended != 0, t);
+            e.t_last = e.t_last.max(t);
+            e.peak = e.peak.max(f);
+            if twice && e.t_twice.is_none() {
+                e.t_twice = Some(t);
             }
         }
-        for e in self.episodes.iter_mut().filter(|e| !e.closed) {
+        // with contact events, episodes end with their `end` event; without
+        // them (an older simulator), after a gap in the truth
+        let events = self.events_seen;
+        for e in self.episodes.iter_mut().filter(|e| !e.closed && !events) {
             if t - e.t_last > CONTACT_GAP_S {
                 e.closed = true;
             }
@@ -323,7 +429,7 @@ impl Evaluator {
         if m.flags & residual_flags::VALID == 0 {
             return;
         }
-        let t = self.t(m.state_stamp_ns);
+        let t = self.t_robot(m.state_stamp_ns);
         let collision = m.flags & residual_flags::COLLISION != 0;
         if collision {
             for e in self.episodes.iter_mut() {
@@ -355,12 +461,12 @@ impl Evaluator {
     }
 
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
-        // the robot's clock, as truth and residual: one time base for the loop's events
-        let t = self.t(if m.state_stamp_ns > 0 {
-            m.state_stamp_ns
-        } else {
-            m.stamp_ns
-        });
+        // one time base: the status's publish time (CLOCK_MONOTONIC); its pair
+        // of stamps maps the robot's clock (truth, residual) onto it
+        if m.state_stamp_ns > 0 && m.stamp_ns > 0 {
+            self.robot_to_mono_ns = m.stamp_ns as i64 - m.state_stamp_ns as i64;
+        }
+        let t = self.t(m.stamp_ns);
         let now = (
             m.waypoints_reached,
             m.detections,
@@ -388,7 +494,7 @@ impl Evaluator {
                 self.status.base.3 + l.3,
             );
             self.status.last = (0, 0, 0, 0);
-            self.last_mode = u32::MAX;
+            self.last_mode = None;
         }
         if now.3 > self.status.last.3 {
             self.events.push(Event {
@@ -398,28 +504,28 @@ impl Evaluator {
                 detail: "task resumed".into(),
             });
         }
-        if m.mode != self.last_mode {
-            match m.mode {
-                control_mode::REACTION => self.events.push(Event {
+        if self.last_mode != Some(m.mode) {
+            match ControlMode::try_from(m.mode) {
+                Ok(ControlMode::Reaction) => self.events.push(Event {
                     t_s: t,
                     kind: "reaction".into(),
                     service: "control".into(),
                     detail: reaction_name.into(),
                 }),
-                control_mode::PROTECTIVE_STOP => self.events.push(Event {
+                Ok(ControlMode::ProtectiveStop) => self.events.push(Event {
                     t_s: t,
                     kind: "protective_stop".into(),
                     service: "control".into(),
                     detail: "a safety input (residual or perception) is stale".into(),
                 }),
-                control_mode::SLOW => self.events.push(Event {
+                Ok(ControlMode::Slow) => self.events.push(Event {
                     t_s: t,
                     kind: "slow".into(),
                     service: "control".into(),
                     detail: "perception stale, nothing near: slowed down".into(),
                 }),
-                control_mode::TASK
-                    if self.last_mode == control_mode::SYNC || self.last_mode == u32::MAX =>
+                Ok(ControlMode::Task)
+                    if self.last_mode.is_none_or(|l| l == ControlMode::Sync as u32) =>
                 {
                     self.events.push(Event {
                         t_s: t,
@@ -430,7 +536,7 @@ impl Evaluator {
                 }
                 _ => {}
             }
-            self.last_mode = m.mode;
+            self.last_mode = Some(m.mode);
         }
         self.status.last_seq = m.seq;
         self.status.last = now;
@@ -595,11 +701,10 @@ impl Evaluator {
                         .get(e.robot_object as usize)
                         .cloned()
                         .unwrap_or_else(|| format!("#{}", e.robot_object)),
-                    part: self
-                        .part_names
-                        .get(e.part as usize)
-                        .cloned()
-                        .unwrap_or_else(|| format!("#{}", e.part)),
+                    part: u32::try_from(e.part)
+                        .ok()
+                        .and_then(|p| BodyPart::try_from(p).ok())
+                        .map_or_else(|| format!("#{}", e.part), |p| p.name().to_string()),
                     peak_force_n: e.peak,
                     intended: e.intended,
                     detected_after_ms: ms(e.t_detect, e.t_start),
@@ -626,7 +731,20 @@ impl Evaluator {
         );
         let mut events = self.events.clone();
         events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        let mut degraded = self.degraded.clone();
+        if self.events_lost > 0 {
+            degraded.push(format!(
+                "the evaluation lost {} contact events of sim/contacts: contacts may be missing",
+                self.events_lost
+            ));
+        }
         Report {
+            clean: degraded.is_empty(),
+            degraded,
+            evaluation: Evaluation {
+                truth_samples_lost: self.truth_lost,
+                contact_events_lost: self.events_lost,
+            },
             duration_s: self.t(end_ns),
             scenario: scenario.to_string(),
             torque_loop: TorqueLoop {
@@ -670,7 +788,6 @@ mod tests {
                 gain: 100.0,
             },
             vec!["link_a".into()],
-            vec!["hand".into()],
         )
     }
 
@@ -747,5 +864,159 @@ mod tests {
         assert_eq!(r.torque_loop.missed_deadlines, 2);
         assert_eq!(r.torque_loop.latency_us.p50, 51.0);
         assert_eq!(r.torque_loop.latency_us.p99, 101.0);
+    }
+
+    #[test]
+    fn the_detector_comes_from_the_dynamics_section() {
+        let mut d = phri_config::Config::defaults().dynamics;
+        let det = DetectorInfo::from_config(&d, 7).unwrap();
+        assert_eq!(det.collision_threshold, [8.0, 8.0, 6.0, 6.0, 4.0, 3.0, 2.0]);
+        assert_eq!(det.gain, 100.0);
+        d.gain = phri_config::PerJoint::Each(vec![100.0, 100.0, 80.0, 100.0, 100.0, 100.0, 100.0]);
+        assert_eq!(DetectorInfo::from_config(&d, 7).unwrap().gain, 80.0);
+        let err = DetectorInfo::from_config(&d, 6).unwrap_err();
+        assert_eq!(err.key, "dynamics.collision_threshold");
+    }
+
+    #[test]
+    fn contacts_name_the_body_part_by_its_wire_number() {
+        let mut e = eval();
+        let mut m = truth(0, 30.0, 0.0);
+        m.contacts[0].human_part = BodyPart::ForearmRight as i32;
+        e.on_truth(&m);
+        m.contacts[0].human_part = 99;
+        m.contacts[0].robot_object = 3;
+        e.on_truth(&m);
+        let r = e.report(1_000_000, "x", BTreeMap::new());
+        assert_eq!(r.contacts[0].part, "forearm_right");
+        assert_eq!(
+            (r.contacts[1].link.as_str(), r.contacts[1].part.as_str()),
+            ("#3", "#99")
+        );
+    }
+
+    #[test]
+    fn mode_changes_are_events_and_a_new_controller_resyncs() {
+        let mut e = eval();
+        let status = |seq: u64, t_ms: u64, mode: ControlMode| {
+            let mut m = ControlStatus::zeroed();
+            m.seq = seq;
+            m.state_stamp_ns = t_ms * 1_000_000;
+            // published 50 µs after the state it answers
+            m.stamp_ns = m.state_stamp_ns + 50_000;
+            m.mode = mode as u32;
+            m
+        };
+        let modes = [
+            ControlMode::Sync,
+            ControlMode::Task,
+            ControlMode::Reaction,
+            ControlMode::Recover,
+            ControlMode::Task,
+            ControlMode::ProtectiveStop,
+            ControlMode::Slow,
+        ];
+        for (i, mode) in modes.into_iter().enumerate() {
+            e.on_status(&status(i as u64 + 1, i as u64 * 100, mode), "admittance");
+            e.on_status(
+                &status(i as u64 + 1, i as u64 * 100 + 1, mode),
+                "admittance",
+            );
+        }
+        // a new controller: its sequence starts over, straight into the task
+        e.on_status(&status(1, 1000, ControlMode::Task), "admittance");
+        let r = e.report(2_000_000_000, "x", BTreeMap::new());
+        let kinds: Vec<(&str, &str)> = r
+            .events
+            .iter()
+            .map(|e| (e.kind.as_str(), e.detail.as_str()))
+            .collect();
+        assert_eq!(
+            kinds.iter().map(|k| k.0).collect::<Vec<_>>(),
+            ["sync", "reaction", "protective_stop", "slow", "sync"]
+        );
+        assert_eq!(kinds[1].1, "admittance");
+        assert_eq!(r.resyncs.len(), 1);
+        assert!(
+            (r.resyncs[0].t_s - 1.00005).abs() < 1e-12,
+            "{}",
+            r.resyncs[0].t_s
+        );
+    }
+
+    fn event(seq: u64, t_ms: u64, start_ms: u64, phase: ContactPhase, peak: f64) -> ContactEvent {
+        let mut m = ContactEvent::zeroed();
+        m.seq = seq;
+        m.stamp_ns = t_ms * 1_000_000;
+        m.start_ns = start_ms * 1_000_000;
+        m.episode = 1;
+        m.phase = phase as u32;
+        m.peak_force_n = peak;
+        m
+    }
+
+    #[test]
+    fn contacts_survive_a_stalled_reader_and_losses_are_counted() {
+        // the truth of a 135 N contact at 2.0-2.4 s is lost (the reader was
+        // stopped and its queue overflowed): the contact events still give it
+        let mut e = eval();
+        e.on_truth(&truth(1999, 0.0, 0.0));
+        e.on_contact_event(&event(1, 2000, 2000, ContactPhase::Begin, 20.0));
+        e.on_contact_event(&event(2, 2100, 2000, ContactPhase::Update, 135.0));
+        e.on_contact_event(&event(3, 2400, 2000, ContactPhase::End, 135.0));
+        let mut t = truth(2900, 0.0, 0.0);
+        t.seq = 2900;
+        let mut first = truth(1999, 0.0, 0.0);
+        first.seq = 1999;
+        let mut e2 = eval();
+        e2.on_truth(&first);
+        e2.on_truth(&t);
+        assert_eq!(e2.truth_samples_lost(), 900);
+        e.on_truth(&t);
+        let r = e.report(3_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.contacts.len(), 1, "{:?}", r.contacts);
+        assert_eq!(r.contacts[0].peak_force_n, 135.0);
+        assert!((r.contacts[0].t_start_s - 2.0).abs() < 1e-9);
+        assert!((r.contacts[0].t_end_s - 2.4).abs() < 1e-9);
+        assert!(r.clean, "{:?}", r.degraded);
+        // a lost contact event makes the run's evaluation degraded
+        let mut e = eval();
+        e.on_contact_event(&event(1, 2000, 2000, ContactPhase::Begin, 20.0));
+        e.on_contact_event(&event(3, 2400, 2000, ContactPhase::End, 135.0));
+        let r = e.report(3_000_000_000, "x", BTreeMap::new());
+        assert!(
+            !r.clean && r.evaluation.contact_events_lost == 1,
+            "{:?}",
+            r.degraded
+        );
+        // a restarted simulator numbers its events from 1 again: nothing lost
+        let mut e = eval();
+        e.on_contact_event(&event(5, 2000, 2000, ContactPhase::Begin, 20.0));
+        e.on_contact_event(&event(1, 2500, 2500, ContactPhase::Begin, 20.0));
+        assert_eq!(e.events_lost, 4, "the first stream began at 5");
+    }
+
+    #[test]
+    fn robot_clock_stamps_are_mapped_onto_the_monotonic_time_base() {
+        // the robot's clock lags CLOCK_MONOTONIC by 300 ms (its schedule slipped)
+        let mut e = eval();
+        let mut s = ControlStatus::zeroed();
+        s.seq = 1;
+        s.state_stamp_ns = 10_000_000_000;
+        s.stamp_ns = 10_300_000_000;
+        s.mode = ControlMode::Sync as u32;
+        e.on_status(&s, "reflex");
+        s.seq = 2;
+        s.mode = ControlMode::Task as u32;
+        e.on_status(&s, "reflex");
+        e.on_contact_event(&event(1, 11_000, 11_000, ContactPhase::Begin, 20.0));
+        e.on_contact_event(&event(2, 11_200, 11_000, ContactPhase::End, 20.0));
+        let r = e.report(20_000_000_000, "x", BTreeMap::new());
+        assert!(
+            (r.contacts[0].t_start_s - 11.3).abs() < 1e-9,
+            "{}",
+            r.contacts[0].t_start_s
+        );
+        assert!((r.events[0].t_s - 10.3).abs() < 1e-9, "{:?}", r.events);
     }
 }

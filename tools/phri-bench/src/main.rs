@@ -9,6 +9,7 @@
 mod transport;
 
 use std::collections::VecDeque;
+use std::error::Error;
 use std::path::PathBuf;
 use std::process::{Command, ExitCode, Stdio};
 
@@ -17,7 +18,7 @@ use phri_runtime::{now_ns, sleep_until_ns, Args};
 use serde_json::json;
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-bench", body)
+    phri_runtime::service::run("phri-bench", || body().map_err(|e| e.to_string()))
 }
 
 fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
@@ -31,7 +32,7 @@ fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
 
 const USAGE: &str = "usage: phri-bench loop [--duration SECONDS] [--scenario NAME] [--config FILE]\n       phri-bench transport [--iterations N]";
 
-fn body() -> Result<(), String> {
+fn body() -> Result<(), Box<dyn Error>> {
     let mut argv = std::env::args().skip(1);
     match argv.next().as_deref() {
         Some("loop") => {}
@@ -42,24 +43,20 @@ fn body() -> Result<(), String> {
                 .unwrap_or(2000)
                 .max(10);
             let out = transport::run(n)?;
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-            );
+            println!("{}", serde_json::to_string_pretty(&out)?);
             return Ok(());
         }
         Some("transport-peer") => {
             let prefix = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
             let socket = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
-            return transport::peer(&prefix, &socket);
+            return Ok(transport::peer(&prefix, &socket)?);
         }
         _ => return Err(USAGE.into()),
     }
     let args = Args::parse(argv, &["--duration", "--scenario", "--config"], &[])?;
     let duration = args.parse_value::<f64>("--duration")?.unwrap_or(30.0);
     let scenario = args.get("--scenario").unwrap_or("free-motion").to_string();
-    let exe_dir = std::env::current_exe()
-        .map_err(|e| e.to_string())?
+    let exe_dir = std::env::current_exe()?
         .parent()
         .map(PathBuf::from)
         .unwrap_or_default();
@@ -86,12 +83,11 @@ fn body() -> Result<(), String> {
         .spawn()
         .map_err(|e| format!("cannot start phri-supervisor: {e}"))?;
 
-    let s = |x: IpcError| x.to_string();
-    let node = node("bench", &prefix).map_err(s)?;
-    let states = subscriber::<JointState>(&node, ROBOT_STATE, DRAIN).map_err(s)?;
-    let residuals = subscriber::<Residual>(&node, DYNAMICS_RESIDUAL, DRAIN).map_err(s)?;
-    let commands = subscriber::<TorqueCommand>(&node, ROBOT_COMMAND, DRAIN).map_err(s)?;
-    let status = subscriber::<ControlStatus>(&node, CONTROL_STATUS, DRAIN).map_err(s)?;
+    let node = node("bench", &prefix)?;
+    let states = ROBOT_STATE.subscriber(&node, Queue::Drain)?;
+    let residuals = DYNAMICS_RESIDUAL.subscriber(&node, Queue::Drain)?;
+    let commands = ROBOT_COMMAND.subscriber(&node, Queue::Drain)?;
+    let status = CONTROL_STATUS.subscriber(&node, Queue::Drain)?;
     // published time of recent states, by sequence number
     let mut published: VecDeque<(u64, u64)> = VecDeque::with_capacity(4096);
     let lookup = |p: &VecDeque<(u64, u64)>, seq: u64| {
@@ -107,36 +103,24 @@ fn body() -> Result<(), String> {
         tick += 5_000_000;
         sleep_until_ns(tick);
         let measuring = now_ns() > t_start;
-        while let Some(m) = states
-            .receive()
-            .map_err(|e| ipc_err(ROBOT_STATE, e).to_string())?
-        {
+        while let Some(m) = states.receive()? {
             if published.len() == 4096 {
                 published.pop_front();
             }
             published.push_back((m.seq, m.published_ns));
         }
-        while let Some(m) = residuals
-            .receive()
-            .map_err(|e| ipc_err(DYNAMICS_RESIDUAL, e).to_string())?
-        {
+        while let Some(m) = residuals.receive()? {
             if let (true, Some(p)) = (measuring, lookup(&published, m.state_seq)) {
                 to_residual.push(m.stamp_ns.saturating_sub(p) as f64 / 1e3);
                 res_compute.push(m.compute_ns as f64 / 1e3);
             }
         }
-        while let Some(m) = commands
-            .receive()
-            .map_err(|e| ipc_err(ROBOT_COMMAND, e).to_string())?
-        {
+        while let Some(m) = commands.receive()? {
             if let (true, Some(p)) = (measuring, lookup(&published, m.state_seq)) {
                 to_command.push(m.stamp_ns.saturating_sub(p) as f64 / 1e3);
             }
         }
-        while let Some(m) = status
-            .receive()
-            .map_err(|e| ipc_err(CONTROL_STATUS, e).to_string())?
-        {
+        while let Some(m) = status.receive()? {
             if measuring && m.wake_latency_ns > 0 {
                 to_wake.push(m.wake_latency_ns as f64 / 1e3);
                 ctl_compute.push(m.compute_ns as f64 / 1e3);
@@ -145,19 +129,18 @@ fn body() -> Result<(), String> {
     }
     drop((states, residuals, commands, status));
     drop(node);
-    let st = sup.wait().map_err(|e| e.to_string())?;
+    let st = sup.wait()?;
     if let Err(alive) = phri_ipc::remove_leftovers(&prefix) {
         eprintln!(
             "phri-bench: {alive} node(s) of {prefix} still attached: their shared memory stays"
         );
     }
     if !st.success() {
-        return Err(format!("phri-supervisor failed: {st}"));
+        return Err(format!("phri-supervisor failed: {st}").into());
     }
     let r: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(&report).map_err(|e| format!("{}: {e}", report.display()))?,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let _ = std::fs::remove_file(&report);
     let out = json!({
         "duration_s": duration,
@@ -173,9 +156,6 @@ fn body() -> Result<(), String> {
         "missed_deadlines": r["torque_loop"]["missed_deadlines"],
         "robot_overruns": r["torque_loop"]["overruns"],
     });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
 }

@@ -1,12 +1,16 @@
 //! `phri-fault`: inject process faults into the services of a running cell.
 //!
 //! The services' pids come from `<run-dir>/state.json`, written by
-//! `phri-supervisor`; it is re-read before every injection, since a restarted
-//! service has a new pid. A pid is signalled only while its parent is the
-//! supervisor named in that file (no stray signal to a recycled pid).
+//! `phri-supervisor` (the run directory: `--run-dir`, or the supervisor's
+//! default for `--prefix`); it is re-read before every injection, since a
+//! restarted service has a new pid. The file is read only if no other user
+//! can have written it, and a pid is signalled only while it is a process of
+//! this user whose command line names the cell's prefix and the service, and
+//! the supervisor named in the file runs (no stray signal to a recycled pid,
+//! to init or to "every process").
 //!
 //! Exit status: 0 done, 1 usage error, 2 the cell cannot be acted on
-//! (state.json missing or garbage, service unknown, down or dead).
+//! (state.json missing, garbage or untrusted, service unknown, down or dead).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -14,10 +18,11 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use iceoryx2::prelude::*;
-use phri_ipc::{depth_fault, DepthFault, Zeroed, FAULT_DEPTH};
+use phri_ipc::{DepthFault, DepthFaultKind, IpcNode, Publisher, Zeroed, FAULT_DEPTH};
+use phri_supervisor::process::process_matches;
+use phri_supervisor::StateJson;
 
-const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
+const USAGE: &str = "usage: phri-fault (--run-dir DIR | --prefix P) SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
   SERVICE  a service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
   ACTION   kill            SIGKILL
            term            SIGTERM
@@ -30,6 +35,8 @@ const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] 
                            disagrees with the payload), stale (capture time 1 s back)
            delay MS --for SECONDS
                            (SERVICE camera) publish every frame MS late for SECONDS
+  --run-dir DIR     the cell's run directory (default: the supervisor's default for --prefix)
+  --prefix P        the cell's iceoryx2 prefix
   --times N         injections (default 1; 0 = until --until, state.json disappears or Ctrl-C)
   --every SECONDS   wait this long before each injection
   --random MIN,MAX  wait a uniformly random time in [MIN, MAX] s before each injection
@@ -37,7 +44,7 @@ const USAGE: &str = "usage: phri-fault --run-dir DIR SERVICE ACTION [--times N] 
   --seed S          seed of the random choices (default: from the clock)
   --until SECONDS   inject nothing later than this many seconds after the start
   --json            one JSON object per injection instead of a text line
-exit status: 0 done, 1 usage, 2 state.json missing/garbage, service unknown/down, pid dead";
+exit status: 0 done, 1 usage, 2 state.json missing/garbage/untrusted, service unknown/down, pid dead or not the service's";
 
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -56,7 +63,7 @@ enum Action {
     },
     /// a fault message to the simulated camera on `fault/depth`
     Depth {
-        kind: u32,
+        kind: DepthFaultKind,
         frames: u32,
         delay_ms: f64,
         for_s: f64,
@@ -70,7 +77,10 @@ impl Action {
             Action::Term => "term",
             Action::Freeze(_) => "freeze",
             Action::Slow { .. } => "slow",
-            Action::Depth { kind, .. } if *kind == depth_fault::DELAY => "delay",
+            Action::Depth {
+                kind: DepthFaultKind::Delay,
+                ..
+            } => "delay",
             Action::Depth { .. } => "corrupt",
         }
     }
@@ -81,14 +91,12 @@ impl Action {
             Action::Freeze(s) => format!("SIGSTOP for {s} s"),
             Action::Slow { percent, for_s } => format!("{percent} % CPU for {for_s} s"),
             Action::Depth {
-                kind,
+                kind: DepthFaultKind::Delay,
                 delay_ms,
                 for_s,
                 ..
-            } if *kind == depth_fault::DELAY => format!("frames {delay_ms} ms late for {for_s} s"),
-            Action::Depth { kind, frames, .. } => {
-                format!("{} on {frames} frames", depth_fault::name(*kind))
-            }
+            } => format!("frames {delay_ms} ms late for {for_s} s"),
+            Action::Depth { kind, frames, .. } => format!("{kind} on {frames} frames"),
         }
     }
 }
@@ -129,6 +137,7 @@ fn parse_f64(flag: &str, v: &str) -> Result<f64, Fail> {
 
 fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
     let mut run_dir = None;
+    let mut prefix: Option<String> = None;
     let mut pos: Vec<String> = Vec::new();
     let mut times = 1u64;
     let mut every = None;
@@ -147,6 +156,7 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
         match a.as_str() {
             "--help" | "-h" => return Err(Fail::Usage(String::new())),
             "--run-dir" => run_dir = Some(PathBuf::from(val("--run-dir")?)),
+            "--prefix" => prefix = Some(val("--prefix")?),
             "--times" => {
                 let v = val("--times")?;
                 times = v
@@ -185,7 +195,6 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             _ => pos.push(a),
         }
     }
-    let run_dir = run_dir.ok_or_else(|| Fail::Usage("--run-dir is required".into()))?;
     let mut pos = pos.into_iter();
     let service = pos
         .next()
@@ -230,8 +239,9 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             let v = pos.next().ok_or_else(|| {
                 Fail::Usage("corrupt needs KIND (noise, zeros, size, stale)".into())
             })?;
-            let kind = depth_fault::from_name(&v)
-                .filter(|k| *k != depth_fault::DELAY)
+            let kind = DepthFaultKind::from_name(&v)
+                .ok()
+                .filter(|k| *k != DepthFaultKind::Delay)
                 .ok_or_else(|| {
                     Fail::Usage(format!(
                         "corrupt: unknown KIND {v:?} (noise, zeros, size, stale)"
@@ -251,7 +261,7 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             let delay_ms = parse_f64("delay", &v)?;
             let for_s = for_s.ok_or_else(|| Fail::Usage("delay needs --for SECONDS".into()))?;
             Action::Depth {
-                kind: depth_fault::DELAY,
+                kind: DepthFaultKind::Delay,
                 frames: 0,
                 delay_ms,
                 for_s,
@@ -278,6 +288,12 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
     if times == 0 && until.is_none() && every.is_none() && random.is_none() {
         return Err(Fail::Usage("--times 0 needs --every or --random".into()));
     }
+    let run_dir = match (run_dir, prefix) {
+        (Some(d), _) => d,
+        (None, Some(p)) => phri_runtime::rundir::default_run_dir(&p)
+            .map_err(|e| Fail::Cell(format!("--prefix {p}: {e}")))?,
+        (None, None) => return Err(Fail::Usage("--run-dir or --prefix is required".into())),
+    };
     let seed = seed.unwrap_or_else(|| {
         let t = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
@@ -316,64 +332,53 @@ impl Rng {
 }
 
 struct State {
-    supervisor_pid: Option<i32>,
-    prefix: Option<String>,
+    supervisor_pid: u32,
+    prefix: String,
     services: BTreeMap<String, Option<i32>>,
 }
 
+/// `<run-dir>/state.json`, if it is there and trusted (a regular file of this
+/// user that no one else can write).
 fn read_state(run_dir: &Path) -> Result<State, Fail> {
-    let path = run_dir.join("state.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        Fail::Cell(format!(
-            "{}: {e} (is the cell running with this --run-dir?)",
-            path.display()
-        ))
-    })?;
-    let v: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| Fail::Cell(format!("{}: not JSON: {e}", path.display())))?;
-    let services = v
-        .get("services")
-        .and_then(|s| s.as_object())
-        .ok_or_else(|| Fail::Cell(format!("{}: no \"services\" object", path.display())))?;
-    let services = services
-        .iter()
+    let path = StateJson::path(run_dir);
+    let st = StateJson::read(run_dir)
+        .map_err(|e| Fail::Cell(e.to_string()))?
+        .ok_or_else(|| {
+            Fail::Cell(format!(
+                "{}: no such file (is the cell running with this --run-dir?)",
+                path.display()
+            ))
+        })?;
+    let services = st
+        .services
+        .into_iter()
         .map(|(k, s)| {
-            let pid = s
-                .get("pid")
-                .and_then(|p| p.as_i64())
-                .filter(|&p| p > 0 && p <= i32::MAX as i64)
-                .map(|p| p as i32);
-            (k.clone(), pid)
+            let pid = s.pid.filter(|&p| p > 0 && p <= i32::MAX as u32);
+            (k, pid.map(|p| p as i32))
         })
         .collect();
-    let supervisor_pid = v
-        .get("supervisor_pid")
-        .and_then(|p| p.as_i64())
-        .filter(|&p| p > 0 && p <= i32::MAX as i64)
-        .map(|p| p as i32);
-    let prefix = v.get("prefix").and_then(|p| p.as_str()).map(String::from);
     Ok(State {
-        supervisor_pid,
-        prefix,
+        supervisor_pid: st.supervisor_pid,
+        prefix: st.prefix,
         services,
     })
 }
 
-/// The parent pid of `pid` from /proc, if readable.
-fn parent_of(pid: i32) -> Option<i32> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // comm may hold spaces and parentheses: the fields follow the last ')'
-    let rest = &stat[stat.rfind(')')? + 1..];
-    rest.split_whitespace().nth(1)?.parse().ok()
-}
-
-fn alive(pid: i32) -> bool {
-    // SAFETY: signal 0 only checks existence and permission.
-    unsafe { libc::kill(pid, 0) == 0 }
+/// `pid` is service `name` of the cell of `prefix`: a live process of this
+/// user whose command line says so ([`process_matches`]).
+fn is_service(pid: i32, prefix: &str, name: &str) -> bool {
+    pid > 1
+        && process_matches(
+            pid as u32,
+            &[format!("--prefix {prefix}"), format!("--name {name}")],
+        )
 }
 
 fn send(pid: i32, sig: libc::c_int) -> Result<(), String> {
-    // SAFETY: kill(2) on a pid checked to be a child of the supervisor.
+    if pid <= 1 {
+        return Err(format!("refusing to signal pid {pid}"));
+    }
+    // SAFETY: kill(2) on one pid (> 1) checked to be the cell's service ([`is_service`]).
     if unsafe { libc::kill(pid, sig) } == 0 {
         Ok(())
     } else {
@@ -384,6 +389,14 @@ fn send(pid: i32, sig: libc::c_int) -> Result<(), String> {
 /// Pick the service and its pid, from a fresh read of state.json.
 fn choose(opts: &Opts, rng: &mut Rng) -> Result<(String, i32), Fail> {
     let st = read_state(&opts.run_dir)?;
+    // a state of a supervisor that is gone names pids that may be anyone's now
+    if !process_matches(st.supervisor_pid, &["phri-supervisor"]) {
+        return Err(Fail::Cell(format!(
+            "{}: its supervisor (pid {}) is not running: stale state.json?",
+            StateJson::path(&opts.run_dir).display(),
+            st.supervisor_pid
+        )));
+    }
     let (name, pid) = match &opts.target {
         Target::One(name) => {
             let pid = st
@@ -416,7 +429,7 @@ fn choose(opts: &Opts, rng: &mut Rng) -> Result<(String, i32), Fail> {
                 .iter()
                 .filter(|(n, _)| set.as_ref().is_none_or(|s| s.contains(n)))
                 .filter_map(|(n, p)| p.map(|p| (n.clone(), p)))
-                .filter(|(_, p)| alive(*p))
+                .filter(|(n, p)| is_service(*p, &st.prefix, n))
                 .collect();
             if up.is_empty() {
                 return Err(Fail::Cell("no candidate service is up".into()));
@@ -424,13 +437,11 @@ fn choose(opts: &Opts, rng: &mut Rng) -> Result<(String, i32), Fail> {
             up[rng.below(up.len())].clone()
         }
     };
-    if !alive(pid) {
-        return Err(Fail::Cell(format!("{name}: pid {pid} is not alive")));
-    }
-    if let (Some(sup), Some(parent)) = (st.supervisor_pid, parent_of(pid)) {
-        if parent != sup {
-            return Err(Fail::Cell(format!("{name}: pid {pid} is not a child of the supervisor {sup} (parent {parent}): stale state.json?")));
-        }
+    if !is_service(pid, &st.prefix, &name) {
+        return Err(Fail::Cell(format!(
+            "{name}: pid {pid} is not alive, or not service {name} of the cell {}: stale state.json?",
+            st.prefix
+        )));
     }
     Ok((name, pid))
 }
@@ -543,29 +554,23 @@ fn apply(action: &Action, pid: i32) -> Result<String, String> {
 
 /// The publisher of depth faults, opened on first use with the cell's prefix.
 struct FaultPort {
-    _node: Node<ipc::Service>,
-    publisher: phri_ipc::Pub<DepthFault>,
+    node: IpcNode,
+    publisher: Publisher<DepthFault>,
     seq: u64,
 }
 
 impl FaultPort {
     fn open(run_dir: &Path) -> Result<FaultPort, Fail> {
-        let st = read_state(run_dir)?;
-        let prefix = st.prefix.ok_or_else(|| {
-            Fail::Cell(format!(
-                "{}: no \"prefix\" (the cell's iceoryx2 prefix)",
-                run_dir.join("state.json").display()
-            ))
-        })?;
+        let prefix = read_state(run_dir)?.prefix;
         let node = phri_ipc::node(&format!("phri-fault-{}", std::process::id()), &prefix)
             .map_err(|e| Fail::Cell(e.to_string()))?;
-        let publisher = phri_ipc::publisher::<DepthFault>(&node, FAULT_DEPTH).map_err(|e| {
+        let publisher = FAULT_DEPTH.publisher(&node).map_err(|e| {
             Fail::Cell(format!(
                 "{e} (another phri-fault injecting into this cell?)"
             ))
         })?;
         Ok(FaultPort {
-            _node: node,
+            node,
             publisher,
             seq: 0,
         })
@@ -585,25 +590,21 @@ impl FaultPort {
         let mut f = DepthFault::zeroed();
         f.seq = self.seq;
         f.stamp_ns = (mono_s() * 1e9) as u64;
-        f.kind = kind;
+        f.kind = kind.into();
         f.frames = frames;
         f.delay_ms = delay_ms;
         f.duration_s = for_s;
-        use iceoryx2::port::update_connections::UpdateConnections;
-        let _ = self.publisher.update_connections();
-        let sample = self
-            .publisher
-            .loan_uninit()
-            .map_err(|e| phri_ipc::ipc_err(FAULT_DEPTH, e).to_string())?;
-        let receivers = sample
-            .write_payload(f)
-            .send()
-            .map_err(|e| phri_ipc::ipc_err(FAULT_DEPTH, e).to_string())?;
-        if receivers == 0 {
+        let listeners = FAULT_DEPTH
+            .ports(&self.node)
+            .map_err(|e| e.to_string())?
+            .map_or(0, |(_, subscribers)| subscribers);
+        if listeners == 0 {
             return Err(format!(
-                "{FAULT_DEPTH}: no camera listens (is the cell's camera the simulated one?)"
+                "{}: no camera listens (is the cell's camera the simulated one?)",
+                FAULT_DEPTH.name
             ));
         }
+        self.publisher.publish(&f).map_err(|e| e.to_string())?;
         // samples live in the publisher's memory: stay until the camera (which
         // polls once per frame) has surely taken it
         sleep_s(0.3);

@@ -68,6 +68,66 @@ fn no_cell_means_exit_2_naming_the_state_file() {
     std::fs::write(dir.join("state.json"), "{not json").unwrap();
     let (code, err) = fault(&["--run-dir", &d, "camera", "corrupt", "size"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("not JSON"), "{err}");
+    assert!(err.contains("not a state file"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_run_dir_or_a_prefix_is_required() {
+    let (code, err) = fault(&["camera", "kill"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--run-dir or --prefix"), "{err}");
+    // the prefix finds the supervisor's default run directory (no cell: no state.json)
+    let (code, err) = fault(&["--prefix", "phri_fault_cli_nocell_", "camera", "kill"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("run-phri_fault_cli_nocell_") && err.contains("state.json"),
+        "{err}"
+    );
+}
+
+/// A state file another user could have written, or one naming pids that
+/// are not the cell's services (init, this test, a dead supervisor), is
+/// never acted on: nothing is signalled.
+#[test]
+fn untrusted_or_stale_state_is_refused_and_nothing_is_signalled() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = std::env::temp_dir().join(format!("phri-fault-trust-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let d = dir.to_string_lossy().into_owned();
+    let state = dir.join("state.json");
+    // a process of ours that must survive: it is not the cell's service
+    let mut bystander = Command::new("sleep").arg("30").spawn().unwrap();
+    let me = std::process::id();
+    for (sup, pid) in [
+        (0, bystander.id()),
+        (me, bystander.id()),
+        (me, 1),
+        (me, 0),
+        (1, bystander.id()),
+    ] {
+        let text = format!(
+            r#"{{"prefix":"p_","services":{{"sim":{{"pid":{pid},"restarts":0}}}},"supervisor_pid":{sup}}}"#
+        );
+        std::fs::write(&state, text).unwrap();
+        let (code, err) = fault(&["--run-dir", &d, "sim", "kill"]);
+        assert_eq!(code, 2, "supervisor {sup}, pid {pid}: {err}");
+        assert!(
+            err.contains("stale state.json") || err.contains("is down"),
+            "{err}"
+        );
+        assert!(
+            bystander.try_wait().unwrap().is_none(),
+            "the bystander was signalled"
+        );
+    }
+    // writable by others: not read at all
+    std::fs::set_permissions(&state, std::fs::Permissions::from_mode(0o666)).unwrap();
+    let (code, err) = fault(&["--run-dir", &d, "sim", "kill"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("writable by other users"), "{err}");
+    bystander.kill().unwrap();
+    bystander.wait().unwrap();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -12,6 +12,10 @@ use crate::Flags;
 
 /// Calls per timed batch; the median is taken over batches, each on a new random state.
 const CALLS_PER_BATCH: usize = 200;
+/// Most `--samples` accepted: the random states are kept in memory (two
+/// vectors per sample) and each sample costs 8 × [`CALLS_PER_BATCH`] calls, so
+/// 100 000 samples already take minutes.
+pub(crate) const MAX_SAMPLES: usize = 100_000;
 
 fn random_state(model: &Model, rng: &mut impl Rng) -> (Vec<f64>, Vec<f64>) {
     let q = model
@@ -69,7 +73,14 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
             .parse::<usize>()
             .ok()
             .filter(|&n| n > 0)
-            .ok_or_else(|| format!("--samples: '{s}' is not a positive integer"))?,
+            .ok_or_else(|| format!("--samples: '{s}' is not a positive integer"))
+            .and_then(|n| {
+                if n <= MAX_SAMPLES {
+                    Ok(n)
+                } else {
+                    Err(format!("--samples: {n} is more than {MAX_SAMPLES}"))
+                }
+            })?,
         None => 500,
     };
     let model = load(path)?;

@@ -6,18 +6,32 @@ use serde_json::{json, Map, Value};
 
 use crate::{parse_vector, Flags};
 
+/// `m` as rows of numbers; an entry that is not finite (JSON has no NaN or
+/// ∞: it would print as `null`) is refused naming the term `what`.
 fn matrix_json<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
+    what: &str,
     m: &nalgebra::Matrix<f64, R, C, S>,
-) -> Value {
-    Value::Array(
+) -> Result<Value, String> {
+    finite(what, m.iter())?;
+    Ok(Value::Array(
         (0..m.nrows())
             .map(|i| Value::Array((0..m.ncols()).map(|j| json!(m[(i, j)])).collect()))
             .collect(),
-    )
+    ))
 }
 
-fn vector_json(v: &nalgebra::DVector<f64>) -> Value {
-    Value::Array(v.iter().map(|x| json!(x)).collect())
+fn vector_json(what: &str, v: &nalgebra::DVector<f64>) -> Result<Value, String> {
+    finite(what, v.iter())?;
+    Ok(Value::Array(v.iter().map(|x| json!(x)).collect()))
+}
+
+fn finite<'a>(what: &str, mut values: impl Iterator<Item = &'a f64>) -> Result<(), String> {
+    match values.find(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(x) => Err(format!(
+            "{what} has a non-finite entry ({x}): the inputs or the model's numbers overflow"
+        )),
+    }
 }
 
 /// Load a URDF and map the library error to one line.
@@ -85,26 +99,27 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
     phri_model::forward_kinematics(&model, &mut data, &q).map_err(e)?;
     let mut fk = Map::new();
     for (i, f) in model.frames.iter().enumerate() {
+        let placement = phri_model::frame_placement(&model, &data, i).to_homogeneous();
         fk.insert(
             f.name.clone(),
-            matrix_json(&phri_model::frame_placement(&model, &data, i).to_homogeneous()),
+            matrix_json(&format!("fk of {}", f.name), &placement)?,
         );
     }
     let mut out = Map::new();
     out.insert("robot".into(), json!(model.name));
     out.insert("joints".into(), json!(model.joint_names()));
-    out.insert("M".into(), matrix_json(&m));
-    out.insert("C".into(), matrix_json(&c));
-    out.insert("C_qd".into(), vector_json(&c_qd));
-    out.insert("Ct_qd".into(), vector_json(&ct_qd));
-    out.insert("g".into(), vector_json(&g));
-    out.insert("tau".into(), vector_json(&tau));
-    out.insert("p".into(), vector_json(&p));
+    out.insert("M".into(), matrix_json("M", &m)?);
+    out.insert("C".into(), matrix_json("C", &c)?);
+    out.insert("C_qd".into(), vector_json("C_qd", &c_qd)?);
+    out.insert("Ct_qd".into(), vector_json("Ct_qd", &ct_qd)?);
+    out.insert("g".into(), vector_json("g", &g)?);
+    out.insert("tau".into(), vector_json("tau", &tau)?);
+    out.insert("p".into(), vector_json("p", &p)?);
     out.insert("fk".into(), Value::Object(fk));
     if let Some((frame, x)) = point {
         let mut jac = Data::jacobian_buffer(&model);
         phri_model::point_jacobian(&model, &data, frame, &x, &mut jac).map_err(e)?;
-        out.insert("jacobian".into(), matrix_json(&jac));
+        out.insert("jacobian".into(), matrix_json("jacobian", &jac)?);
     }
     serde_json::to_string(&Value::Object(out)).map_err(|e| e.to_string())
 }

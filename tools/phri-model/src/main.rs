@@ -4,14 +4,16 @@
 //! phri-model inspect ROBOT.urdf --q v1,v2,… [--qd …] [--qdd …] [--point LINK:x,y,z]
 //! phri-model bench ROBOT.urdf [--samples N]
 //! ```
-//! Output is one JSON object on stdout; errors are one line on stderr and exit code 2.
+//! Output is one JSON object on stdout; errors are one line on stderr and exit
+//! code 2, among them a result that is not finite (JSON would print `null`) and
+//! `--samples` above 100 000.
 
 mod bench;
 mod inspect;
 
 use std::process::ExitCode;
 
-const USAGE: &str = "usage:\n  phri-model inspect ROBOT.urdf --q v1,v2,... [--qd ...] [--qdd ...] [--point LINK:x,y,z]\n  phri-model bench ROBOT.urdf [--samples N]";
+const USAGE: &str = "usage:\n  phri-model inspect ROBOT.urdf --q v1,v2,... [--qd ...] [--qdd ...] [--point LINK:x,y,z]\n  phri-model bench ROBOT.urdf [--samples N (at most 100000)]";
 
 /// Parse a comma-separated list of finite numbers for flag `flag`.
 pub(crate) fn parse_vector(flag: &str, text: &str) -> Result<Vec<f64>, String> {

@@ -124,3 +124,98 @@ fn bad_input_is_one_line_and_exit_2() {
         assert!(err.starts_with("phri-model: "));
     }
 }
+
+/// One line on stderr, exit 2, nothing on stdout, no panic or abort.
+fn refused(args: &[&str], needle: &str) {
+    let (code, out, err) = run(args);
+    assert_eq!(code, 2, "{args:?}: {err}");
+    assert!(out.is_empty(), "{args:?}: stdout {out}");
+    assert!(err.starts_with("phri-model: "), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: '{err}' lacks '{needle}'");
+}
+
+#[test]
+fn sample_counts_are_bounded_before_anything_is_allocated() {
+    let urdf = repo("deploy/robots/kuka_lwr4.urdf");
+    let t = std::time::Instant::now();
+    // a billion samples aborted on a 48 GB allocation
+    refused(
+        &["bench", &urdf, "--samples", "1000000000"],
+        "more than 100000",
+    );
+    refused(
+        &["bench", &urdf, "--samples", "99999999999999999999999"],
+        "not a positive integer",
+    );
+    refused(
+        &["bench", &urdf, "--samples", "0"],
+        "not a positive integer",
+    );
+    assert!(t.elapsed().as_secs() < 10);
+}
+
+#[test]
+fn non_finite_results_are_refused_not_printed_as_null() {
+    let urdf = repo("deploy/robots/kuka_lwr4.urdf");
+    // finite inputs whose products overflow: C q̇ ~ 1e600
+    refused(
+        &[
+            "inspect",
+            &urdf,
+            "--q",
+            "0,0,0,0,0,0,0",
+            "--qd",
+            "1e300,1e300,1e300,1e300,1e300,1e300,1e300",
+        ],
+        "non-finite",
+    );
+    // a robot whose numbers overflow
+    let dir = std::env::temp_dir().join(format!("phri-model-cli-nf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(&urdf)
+        .unwrap()
+        .replace("<mass value=\"0.3\"/>", "<mass value=\"1e308\"/>");
+    let heavy = dir.join("heavy.urdf");
+    std::fs::write(&heavy, text).unwrap();
+    refused(
+        &[
+            "inspect",
+            heavy.to_str().unwrap(),
+            "--q",
+            "0,0.5,0,0.5,0,0.5,0",
+            "--qd",
+            "1,1,1,1,1,1,1",
+        ],
+        "non-finite",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn malicious_robot_descriptions_are_refused_in_one_line() {
+    let dir = std::env::temp_dir().join(format!("phri-model-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let q7 = "0,0,0,0,0,0,0";
+    // 100 000 nested elements overflowed the parser's stack (abort)
+    let deep = dir.join("deep.urdf");
+    std::fs::write(
+        &deep,
+        format!("<robot name=\"r\">{}</robot>", "<link>".repeat(100_000)),
+    )
+    .unwrap();
+    refused(
+        &["inspect", deep.to_str().unwrap(), "--q", q7],
+        "nested deeper",
+    );
+    refused(&["bench", deep.to_str().unwrap()], "nested deeper");
+    // an effort limit of 0 removed the torque clamp
+    let text = std::fs::read_to_string(repo("deploy/robots/kuka_lwr4.urdf")).unwrap();
+    let zero = dir.join("zero_effort.urdf");
+    std::fs::write(&zero, text.replacen("effort=\"176\"", "effort=\"0\"", 1)).unwrap();
+    refused(
+        &["inspect", zero.to_str().unwrap(), "--q", q7],
+        "lwr_joint_1",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

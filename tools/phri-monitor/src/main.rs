@@ -7,10 +7,10 @@
 //! - `hz CHANNEL --prefix P [--seconds S] [--once] [--json]`: rate, jitter, age, bandwidth, drops
 //! - `top --prefix P [--seconds S] [--json]`: dashboard refreshing 4×/s
 
-mod json;
 mod probe;
 
 use std::collections::VecDeque;
+use std::error::Error;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -22,13 +22,15 @@ use serde_json::{json, Value};
 
 use probe::{last, Probe};
 
+type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
+
 const USAGE: &str = "usage: phri-monitor echo CHANNEL | hz CHANNEL | list | top  --prefix PREFIX [--seconds S] [--json] [--once] [--count N] [--every N]";
 
 /// Pause between polls: the monitor never competes with the torque loop.
 const POLL: Duration = Duration::from_millis(2);
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-monitor", body)
+    phri_runtime::service::run("phri-monitor", || body().map_err(|e| e.to_string()))
 }
 
 struct NodeInfo {
@@ -38,7 +40,7 @@ struct NodeInfo {
 }
 
 /// The cell's nodes under `prefix` (this process's own nodes left out).
-fn cell_nodes(prefix: &str) -> Result<Vec<NodeInfo>, String> {
+fn cell_nodes(prefix: &str) -> Result<Vec<NodeInfo>> {
     let mut config = Config::default();
     config.global.prefix = FileName::new(prefix.as_bytes())
         .map_err(|e| format!("invalid prefix '{prefix}': {e:?}"))?;
@@ -79,7 +81,7 @@ struct Opts {
     every: u64,
 }
 
-fn parse(argv: impl Iterator<Item = String>) -> Result<Opts, String> {
+fn parse(argv: impl Iterator<Item = String>) -> Result<Opts> {
     let args = Args::parse(
         argv,
         &["--prefix", "--count", "--every", "--seconds"],
@@ -105,37 +107,36 @@ fn parse(argv: impl Iterator<Item = String>) -> Result<Opts, String> {
 }
 
 /// Fail unless some live node runs under the prefix; return the nodes.
-fn require_cell(prefix: &str) -> Result<Vec<NodeInfo>, String> {
+fn require_cell(prefix: &str) -> Result<Vec<NodeInfo>> {
     let nodes = cell_nodes(prefix)?;
     if !nodes.iter().any(|n| n.state == "alive") {
         return Err(format!(
             "no cell running under prefix '{prefix}' (no live iceoryx2 node; start one with deploy/up --prefix {prefix})"
-        ));
+        )
+        .into());
     }
     Ok(nodes)
 }
 
-fn monitor_node(prefix: &str) -> Result<Node<ipc::Service>, String> {
-    node(&format!("monitor{}", std::process::id()), prefix).map_err(|e| e.to_string())
+fn monitor_node(prefix: &str) -> Result<IpcNode, IpcError> {
+    node(&format!("monitor{}", std::process::id()), prefix)
 }
 
-fn body() -> Result<(), String> {
+fn body() -> Result {
     let mut argv = std::env::args().skip(1);
     let cmd = argv.next().ok_or(USAGE)?;
     let channel = match cmd.as_str() {
         "echo" | "hz" => {
             let c = argv.next().ok_or(USAGE)?;
-            if !ALL.contains(&c.as_str()) {
-                return Err(probe::unknown_channel(&c));
-            }
+            probe::check_channel(&c)?;
             Some(c)
         }
         "list" | "top" => None,
-        other => return Err(format!("unknown command '{other}'; {USAGE}")),
+        other => return Err(format!("unknown command '{other}'; {USAGE}").into()),
     };
     let opts = parse(argv)?;
     let nodes = require_cell(&opts.prefix)?;
-    let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
+    let shutdown = Shutdown::install()?;
     let node = monitor_node(&opts.prefix)?;
     match cmd.as_str() {
         "echo" => echo(&node, &channel.unwrap(), &opts, &shutdown),
@@ -145,13 +146,10 @@ fn body() -> Result<(), String> {
     }
 }
 
-fn echo(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Result<(), String> {
+fn echo(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
     let mut p = probe::open(node, channel)?;
     if !p.present() {
-        return Err(format!(
-            "channel '{channel}' does not exist under prefix '{}' (no service publishes it)",
-            o.prefix
-        ));
+        return Err(absent(channel, o));
     }
     let (mut seen, mut printed) = (0u64, 0u64);
     let json = o.json;
@@ -191,21 +189,37 @@ fn text_line(v: &Value) -> String {
     }
 }
 
-fn channel_json(p: &dyn Probe) -> Value {
-    let (pubs, subs) = p.counts();
+/// The error of a channel that does not exist.
+fn absent(channel: &str, o: &Opts) -> Box<dyn Error> {
+    format!(
+        "channel '{channel}' does not exist under prefix '{}' (no service publishes it)",
+        o.prefix
+    )
+    .into()
+}
+
+fn channel_json(node: &IpcNode, p: &dyn Probe) -> Result<Value, IpcError> {
+    let (pubs, subs) = p.counts(node)?;
     let mut v = p.stats().summary();
     let m = v.as_object_mut().unwrap();
     m.insert("present".into(), json!(p.present()));
     m.insert("publishers".into(), json!(pubs));
     m.insert("subscribers".into(), json!(subs));
-    v
+    Ok(v)
 }
 
-fn open_all(node: &Node<ipc::Service>) -> Result<Vec<Box<dyn Probe>>, String> {
-    ALL.iter().map(|c| probe::open(node, c)).collect()
+/// Every channel's figures, by name.
+fn channels_json(
+    node: &IpcNode,
+    probes: &[Box<dyn Probe>],
+) -> Result<serde_json::Map<String, Value>, IpcError> {
+    probes
+        .iter()
+        .map(|p| Ok((p.name().to_string(), channel_json(node, p.as_ref())?)))
+        .collect()
 }
 
-fn poll_all(probes: &mut [Box<dyn Probe>]) -> Result<(), String> {
+fn poll_all(probes: &mut [Box<dyn Probe>]) -> Result<(), IpcError> {
     for p in probes.iter_mut() {
         p.poll(None)?;
     }
@@ -233,13 +247,8 @@ fn human_bytes(v: &Value) -> String {
     }
 }
 
-fn list(
-    node: &Node<ipc::Service>,
-    nodes: Vec<NodeInfo>,
-    o: &Opts,
-    sd: &Shutdown,
-) -> Result<(), String> {
-    let mut probes = open_all(node)?;
+fn list(node: &IpcNode, nodes: Vec<NodeInfo>, o: &Opts, sd: &Shutdown) -> Result {
+    let mut probes = probe::open_all(node)?;
     let t0 = Instant::now();
     let span = Duration::from_secs_f64(o.seconds.unwrap_or(1.0));
     while t0.elapsed() < span && !sd.requested() {
@@ -247,10 +256,7 @@ fn list(
         poll_all(&mut probes)?;
     }
     if o.json {
-        let channels: serde_json::Map<String, Value> = probes
-            .iter()
-            .map(|p| (p.name().to_string(), channel_json(p.as_ref())))
-            .collect();
+        let channels = channels_json(node, &probes)?;
         let nodes: Vec<Value> = nodes
             .iter()
             .map(|n| json!({"name": n.name, "pid": n.pid, "state": n.state}))
@@ -275,7 +281,7 @@ fn list(
             "drops"
         );
         for p in &probes {
-            let v = channel_json(p.as_ref());
+            let v = channel_json(node, p.as_ref())?;
             if !p.present() {
                 println!("  {:<22} (absent)", p.name());
                 continue;
@@ -294,13 +300,10 @@ fn list(
     Ok(())
 }
 
-fn hz(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Result<(), String> {
+fn hz(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
     let mut p = probe::open(node, channel)?;
     if !p.present() {
-        return Err(format!(
-            "channel '{channel}' does not exist under prefix '{}' (no service publishes it)",
-            o.prefix
-        ));
+        return Err(absent(channel, o));
     }
     let span = Duration::from_secs_f64(o.seconds.unwrap_or(1.0));
     while !sd.requested() {
@@ -309,7 +312,7 @@ fn hz(node: &Node<ipc::Service>, channel: &str, o: &Opts, sd: &Shutdown) -> Resu
             std::thread::sleep(POLL);
             p.poll(None)?;
         }
-        let mut v = channel_json(p.as_ref());
+        let mut v = channel_json(node, p.as_ref())?;
         v.as_object_mut()
             .unwrap()
             .insert("channel".into(), json!(channel));
@@ -366,13 +369,13 @@ fn push(h: &mut VecDeque<f64>, x: f64) {
     h.push_back(x);
 }
 
-fn top(node: &Node<ipc::Service>, o: &Opts, sd: &Shutdown) -> Result<(), String> {
-    let mut probes = open_all(node)?;
-    let idx = |name: &str| ALL.iter().position(|c| *c == name).unwrap();
+fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
+    let mut probes = probe::open_all(node)?;
+    let idx = |name: &str| probes.iter().position(|p| p.name() == name).unwrap();
     let (i_status, i_res, i_health) = (
-        idx(CONTROL_STATUS),
-        idx(DYNAMICS_RESIDUAL),
-        idx(SUPERVISOR_HEALTH),
+        idx(CONTROL_STATUS.name),
+        idx(DYNAMICS_RESIDUAL.name),
+        idx(SUPERVISOR_HEALTH.name),
     );
     let (mut dist_h, mut norm_h) = (VecDeque::new(), VecDeque::new());
     let refresh = Duration::from_millis(250);
@@ -408,14 +411,11 @@ fn top(node: &Node<ipc::Service>, o: &Opts, sd: &Shutdown) -> Result<(), String>
                     .collect()
             })
             .unwrap_or_default();
-        let mode = status.map(|s| control_mode::name(s.mode));
+        let mode = status.map(|s| ControlMode::name_of(s.mode));
         let min_d = status.map(|s| s.min_distance).filter(|x| x.is_finite());
         let norm = residual.map(|r| r.norm).filter(|x| x.is_finite());
         if o.json {
-            let channels: serde_json::Map<String, Value> = probes
-                .iter()
-                .map(|p| (p.name().to_string(), channel_json(p.as_ref())))
-                .collect();
+            let channels = channels_json(node, &probes)?;
             println!(
                 "{}",
                 json!({"prefix": o.prefix, "t_s": t_start.elapsed().as_secs_f64(),
@@ -454,7 +454,7 @@ fn top(node: &Node<ipc::Service>, o: &Opts, sd: &Shutdown) -> Result<(), String>
                     s += &format!("{:<22} (absent)\n", p.name());
                     continue;
                 }
-                let v = channel_json(p.as_ref());
+                let v = channel_json(node, p.as_ref())?;
                 s += &format!(
                     "{:<22} {:>4} {:>4} {:>9} {:>9} {:>9} {:>9} {:>11} {:>6}\n",
                     p.name(),

@@ -1,17 +1,22 @@
-//! Read-only probes: open an existing channel (never create it, never
-//! publish), subscribe with a draining queue, and measure what arrives.
+//! Read-only probes: subscribe to an existing channel (never create it,
+//! never publish) with a draining queue, and measure what arrives.
 
 use std::any::Any;
 use std::collections::{HashMap, VecDeque};
 
-use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
-use iceoryx2::service::port_factory::PortFactory as _;
 use phri_ipc::*;
+use phri_ipc_json::{frame_json, to_json};
 use phri_runtime::now_ns;
 use serde_json::{json, Value};
 
-use crate::json::{frame_json, Msg};
+/// Why a channel could not be watched.
+#[derive(Debug, thiserror::Error)]
+pub enum ProbeError {
+    #[error("unknown channel '{name}'; channels: {}", ALL.join(", "))]
+    UnknownChannel { name: String },
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+}
 
 /// One received sample, as the statistics need it.
 #[derive(Clone, Copy)]
@@ -121,56 +126,47 @@ impl Stats {
 
 /// A channel being watched.
 pub trait Probe {
-    fn name(&self) -> &str;
-    /// the channel's service exists
+    fn name(&self) -> &'static str;
+    /// the channel existed when the probe opened
     fn present(&self) -> bool;
-    /// (publishers, subscribers other than this monitor)
-    fn counts(&self) -> (usize, usize);
-    /// drain the queue into the statistics; `each` sees every sample as JSON when given
-    fn poll(&mut self, each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, String>;
+    /// (publishers, subscribers other than this monitor) now; (0, 0) when absent
+    fn counts(&self, node: &IpcNode) -> Result<(usize, usize), IpcError>;
+    /// drain the queue into the statistics; `each` sees every sample as JSON
+    /// when given, and stops the draining by returning false (then so does this)
+    fn poll(&mut self, each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, IpcError>;
     fn stats(&self) -> &Stats;
     fn stats_mut(&mut self) -> &mut Stats;
     fn as_any(&self) -> &dyn Any;
 }
 
-fn err(name: &str, e: impl std::fmt::Debug) -> String {
-    ipc_err(name, e).to_string()
+/// The ports of a channel the probe subscribed to, this monitor's subscriber left out.
+fn others(ports: Option<(usize, usize)>) -> (usize, usize) {
+    ports.map_or((0, 0), |(p, s)| (p, s.saturating_sub(1)))
 }
 
 /// Typed probe of a fixed-size message channel.
-pub struct MsgProbe<T: Msg> {
-    name: String,
-    factory: Option<PortFactory<ipc::Service, T, ()>>,
-    sub: Option<Sub<T>>,
+pub struct MsgProbe<T: Message> {
+    channel: Channel<T>,
+    sub: Option<Subscriber<T>>,
     stats: Stats,
     pub last: Option<T>,
 }
 
-impl<T: Msg> MsgProbe<T> {
-    pub fn open(node: &Node<ipc::Service>, name: &str) -> Result<MsgProbe<T>, String> {
-        // open only: a monitor never creates a channel
-        let factory = open_existing_pubsub::<T>(node, name).map_err(|e| e.to_string())?;
-        let sub = match &factory {
-            Some(f) => Some(
-                f.subscriber_builder()
-                    .buffer_size(drain_buffer(name))
-                    .create()
-                    .map_err(|e| err(name, e))?,
-            ),
-            None => None,
-        };
+impl<T: Message> MsgProbe<T> {
+    pub fn open(node: &IpcNode, channel: Channel<T>) -> Result<MsgProbe<T>, IpcError> {
+        // only if it exists: a monitor never creates a channel
+        let sub = channel.subscriber_if_exists(node, Queue::Drain)?;
         let mut p = MsgProbe {
-            name: name.to_string(),
-            factory,
+            channel,
             sub,
             stats: Stats::new(),
             last: None,
         };
         // samples delivered on connecting (history) are not counted
         if let Some(s) = &p.sub {
-            while let Some(m) = s.receive().map_err(|e| err(name, e))? {
+            while let Some(m) = s.receive()? {
                 p.stats.prime(m.stream(), m.seq(), m.published_ns());
-                p.last = Some(*m);
+                p.last = Some(m);
             }
         }
         p.stats.reset();
@@ -178,31 +174,24 @@ impl<T: Msg> MsgProbe<T> {
     }
 }
 
-impl<T: Msg> Probe for MsgProbe<T> {
-    fn name(&self) -> &str {
-        &self.name
+impl<T: Message> Probe for MsgProbe<T> {
+    fn name(&self) -> &'static str {
+        self.channel.name
     }
     fn present(&self) -> bool {
-        self.factory.is_some()
+        self.sub.is_some()
     }
-    fn counts(&self) -> (usize, usize) {
-        match &self.factory {
-            Some(f) => {
-                let c = f.dynamic_config();
-                (
-                    c.number_of_publishers(),
-                    c.number_of_subscribers().saturating_sub(1),
-                )
-            }
-            None => (0, 0),
+    fn counts(&self, node: &IpcNode) -> Result<(usize, usize), IpcError> {
+        if !self.present() {
+            return Ok((0, 0));
         }
+        Ok(others(self.channel.ports(node)?))
     }
-    fn poll(&mut self, mut each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, String> {
+    fn poll(&mut self, mut each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(true);
         };
-        while let Some(m) = sub.receive().map_err(|e| err(&self.name, e))? {
-            let m = *m;
+        while let Some(m) = sub.receive()? {
             self.stats.record(
                 m.stream(),
                 m.seq(),
@@ -211,7 +200,7 @@ impl<T: Msg> Probe for MsgProbe<T> {
             );
             self.last = Some(m);
             if let Some(f) = each.as_mut() {
-                if !f(m.to_json()) {
+                if !f(to_json(&m)) {
                     return Ok(false);
                 }
             }
@@ -231,32 +220,21 @@ impl<T: Msg> Probe for MsgProbe<T> {
 
 /// Probe of a depth-frame channel (`[u16]` with a [`FrameHeader`]).
 pub struct FrameProbe {
-    name: String,
-    factory: Option<PortFactory<ipc::Service, [u16], FrameHeader>>,
-    sub: Option<FrameSub>,
+    channel: FrameChannel,
+    sub: Option<FrameSubscriber>,
     stats: Stats,
 }
 
 impl FrameProbe {
-    pub fn open(node: &Node<ipc::Service>, name: &str) -> Result<FrameProbe, String> {
-        let factory = open_existing_frames(node, name).map_err(|e| e.to_string())?;
-        let sub = match &factory {
-            Some(f) => Some(
-                f.subscriber_builder()
-                    .buffer_size(drain_buffer(name))
-                    .create()
-                    .map_err(|e| err(name, e))?,
-            ),
-            None => None,
-        };
+    pub fn open(node: &IpcNode, channel: FrameChannel) -> Result<FrameProbe, IpcError> {
+        let sub = channel.frame_subscriber_if_exists(node, Queue::Drain)?;
         let mut p = FrameProbe {
-            name: name.to_string(),
-            factory,
+            channel,
             sub,
             stats: Stats::new(),
         };
         if let Some(s) = &p.sub {
-            while let Some(f) = s.receive().map_err(|e| err(name, e))? {
+            while let Some(f) = s.receive()? {
                 let h = f.user_header();
                 p.stats.prime(0, h.seq, Some(h.published_ns));
             }
@@ -267,29 +245,23 @@ impl FrameProbe {
 }
 
 impl Probe for FrameProbe {
-    fn name(&self) -> &str {
-        &self.name
+    fn name(&self) -> &'static str {
+        self.channel.name
     }
     fn present(&self) -> bool {
-        self.factory.is_some()
+        self.sub.is_some()
     }
-    fn counts(&self) -> (usize, usize) {
-        match &self.factory {
-            Some(f) => {
-                let c = f.dynamic_config();
-                (
-                    c.number_of_publishers(),
-                    c.number_of_subscribers().saturating_sub(1),
-                )
-            }
-            None => (0, 0),
+    fn counts(&self, node: &IpcNode) -> Result<(usize, usize), IpcError> {
+        if !self.present() {
+            return Ok((0, 0));
         }
+        Ok(others(self.channel.ports(node)?))
     }
-    fn poll(&mut self, mut each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, String> {
+    fn poll(&mut self, mut each: Option<&mut dyn FnMut(Value) -> bool>) -> Result<bool, IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(true);
         };
-        while let Some(f) = sub.receive().map_err(|e| err(&self.name, e))? {
+        while let Some(f) = sub.receive()? {
             let h = *f.user_header();
             let bytes = f.payload().len() * 2 + std::mem::size_of::<FrameHeader>();
             self.stats.record(0, h.seq, Some(h.published_ns), bytes);
@@ -312,30 +284,72 @@ impl Probe for FrameProbe {
     }
 }
 
-/// Open the probe of `channel` (its message type from the channel name).
-pub fn open(node: &Node<ipc::Service>, channel: &str) -> Result<Box<dyn Probe>, String> {
-    Ok(match channel {
-        ROBOT_STATE => Box::new(MsgProbe::<JointState>::open(node, channel)?),
-        ROBOT_COMMAND => Box::new(MsgProbe::<TorqueCommand>::open(node, channel)?),
-        ROBOT_STATS => Box::new(MsgProbe::<RobotStats>::open(node, channel)?),
-        SIM_TRUTH => Box::new(MsgProbe::<Truth>::open(node, channel)?),
-        DYNAMICS_RESIDUAL => Box::new(MsgProbe::<Residual>::open(node, channel)?),
-        CONTROL_STATUS => Box::new(MsgProbe::<ControlStatus>::open(node, channel)?),
-        SUPERVISOR_HEALTH => Box::new(MsgProbe::<Health>::open(node, channel)?),
-        SIM_WORLD => Box::new(MsgProbe::<WorldState>::open(node, channel)?),
-        PERCEPTION_REPULSION => Box::new(MsgProbe::<RepulsionResult>::open(node, channel)?),
-        FAULT_DEPTH => Box::new(MsgProbe::<DepthFault>::open(node, channel)?),
-        CAMERA_DEPTH | PERCEPTION_DEPTH => Box::new(FrameProbe::open(node, channel)?),
-        other => return Err(unknown_channel(other)),
+/// Opens the probe of each channel visited (typed by the channel).
+struct Opener<'a> {
+    node: &'a IpcNode,
+    probes: Result<Vec<Box<dyn Probe>>, IpcError>,
+}
+
+impl Opener<'_> {
+    fn add<P: Probe + 'static>(&mut self, open: impl FnOnce(&IpcNode) -> Result<P, IpcError>) {
+        if let Ok(probes) = &mut self.probes {
+            match open(self.node) {
+                Ok(p) => probes.push(Box::new(p)),
+                Err(e) => self.probes = Err(e),
+            }
+        }
+    }
+}
+
+impl ChannelVisitor for Opener<'_> {
+    fn message<T: Message>(&mut self, channel: Channel<T>) {
+        self.add(|node| MsgProbe::open(node, channel));
+    }
+    fn frames(&mut self, channel: FrameChannel) {
+        self.add(|node| FrameProbe::open(node, channel));
+    }
+}
+
+/// `name` if it is a channel of the cell.
+pub fn check_channel(name: &str) -> Result<(), ProbeError> {
+    if ALL.contains(&name) {
+        Ok(())
+    } else {
+        Err(ProbeError::UnknownChannel {
+            name: name.to_string(),
+        })
+    }
+}
+
+/// Open the probe of `channel`.
+pub fn open(node: &IpcNode, channel: &str) -> Result<Box<dyn Probe>, ProbeError> {
+    let mut o = Opener {
+        node,
+        probes: Ok(Vec::new()),
+    };
+    if !visit_named(channel, &mut o) {
+        return Err(ProbeError::UnknownChannel {
+            name: channel.to_string(),
+        });
+    }
+    let mut probes = o.probes?;
+    probes.pop().ok_or_else(|| ProbeError::UnknownChannel {
+        name: channel.to_string(),
     })
 }
 
-pub fn unknown_channel(name: &str) -> String {
-    format!("unknown channel '{name}'; channels: {}", ALL.join(", "))
+/// Open the probes of every channel of the cell, in [`ALL`]'s order.
+pub fn open_all(node: &IpcNode) -> Result<Vec<Box<dyn Probe>>, ProbeError> {
+    let mut o = Opener {
+        node,
+        probes: Ok(Vec::new()),
+    };
+    visit_all(&mut o);
+    Ok(o.probes?)
 }
 
 /// The newest value a typed probe has seen.
-pub fn last<T: Msg>(p: &dyn Probe) -> Option<T> {
+pub fn last<T: Message>(p: &dyn Probe) -> Option<T> {
     p.as_any()
         .downcast_ref::<MsgProbe<T>>()
         .and_then(|m| m.last)

@@ -1,80 +1,33 @@
-//! The `[record]` section of a cell configuration (`deploy/phri.toml`):
-//! what `phri-record` keeps of the depth frames and how it compresses.
-//! Command-line flags override it.
+//! What `phri-record` takes from a cell configuration: its `[record]`
+//! section (phri-config; the flags override it) and the residual's collision
+//! norm threshold `dynamics.collision_norm_threshold` [Nm] for the plots.
 
-use serde::Deserialize;
+use std::path::Path;
 
-use crate::FRAME_DOWNSAMPLE;
+pub use phri_config::{Compression, RecordConfig};
+use phri_config::{Config, ConfigError, Loaded};
 
-/// `[record]`: every key optional.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RecordConfig {
-    /// record every N-th received depth frame (≥ 1)
-    pub frame_every: u64,
-    /// keep one pixel in N per axis (1 = full resolution, 1..=16)
-    pub frame_downsample: usize,
-    /// MCAP chunk compression: `zstd`, `lz4` or `none`
-    pub compression: String,
+/// `[record]` and the collision norm threshold of the configuration at `path`
+/// (merged over the defaults and checked, as every phri process reads it).
+pub fn from_file(path: &str) -> Result<(RecordConfig, Option<f64>), ConfigError> {
+    let l = Loaded::load(Path::new(path), None, &[])?;
+    Ok((
+        l.config.record,
+        Some(l.config.dynamics.collision_norm_threshold),
+    ))
 }
 
-impl Default for RecordConfig {
-    fn default() -> Self {
-        RecordConfig {
-            frame_every: 10,
-            frame_downsample: FRAME_DOWNSAMPLE,
-            compression: "zstd".into(),
-        }
-    }
+/// The recorder's settings without a configuration file: the defaults.
+pub fn defaults() -> RecordConfig {
+    Config::defaults().record
 }
 
-/// A recording's settings from a configuration file: `[record]` and
-/// `dynamics.collision_norm_threshold` \[Nm\] (for the residual plot).
-pub fn from_file(path: &str) -> Result<(RecordConfig, Option<f64>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read '{path}': {e}"))?;
-    from_str(&text).map_err(|e| format!("{path}: {e}"))
-}
-
-/// As [`from_file`], from the file's text.
-pub fn from_str(text: &str) -> Result<(RecordConfig, Option<f64>), String> {
-    let t: toml::Table = text.parse().map_err(|e| format!("{e}"))?;
-    let cfg = match t.get("record") {
-        Some(v) => v
-            .clone()
-            .try_into::<RecordConfig>()
-            .map_err(|e| format!("[record]: {e}"))?,
-        None => RecordConfig::default(),
-    };
-    let threshold = t
-        .get("dynamics")
-        .and_then(|d| d.get("collision_norm_threshold"))
-        .and_then(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)));
-    Ok((cfg, threshold))
-}
-
-impl RecordConfig {
-    /// The settings' own limits, naming the key at fault.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.frame_every == 0 {
-            return Err("frame_every must be at least 1".into());
-        }
-        if !(1..=16).contains(&self.frame_downsample) {
-            return Err(format!(
-                "frame_downsample {}: expected 1 to 16",
-                self.frame_downsample
-            ));
-        }
-        self.mcap_compression().map(|_| ())
-    }
-
-    /// The MCAP compression named by `compression`.
-    pub fn mcap_compression(&self) -> Result<Option<mcap::Compression>, String> {
-        match self.compression.as_str() {
-            "zstd" => Ok(Some(mcap::Compression::Zstd)),
-            "lz4" => Ok(Some(mcap::Compression::Lz4)),
-            "none" => Ok(None),
-            other => Err(format!("compression '{other}': expected zstd, lz4 or none")),
-        }
+/// The MCAP compression of `c`.
+pub fn mcap_compression(c: Compression) -> Option<mcap::Compression> {
+    match c {
+        Compression::Zstd => Some(mcap::Compression::Zstd),
+        Compression::Lz4 => Some(mcap::Compression::Lz4),
+        Compression::None => None,
     }
 }
 
@@ -84,28 +37,42 @@ mod tests {
 
     #[test]
     fn the_deploy_file_gives_the_defaults() {
-        let text = std::fs::read_to_string(concat!(
+        let (cfg, threshold) = from_file(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../deploy/phri.toml"
         ))
         .unwrap();
-        let (cfg, threshold) = from_str(&text).unwrap();
-        assert_eq!(cfg, RecordConfig::default());
+        assert_eq!(cfg, defaults());
+        assert_eq!(cfg.frame_downsample, crate::FRAME_DOWNSAMPLE);
+        assert_eq!(cfg.compression, Compression::Zstd);
         assert_eq!(threshold, Some(12.0));
     }
 
     #[test]
     fn bad_settings_name_their_key() {
-        let e = from_str("[record]\nframe_evry = 3\n").unwrap_err();
-        assert!(e.contains("[record]") && e.contains("frame_evry"), "{e}");
-        let (cfg, _) = from_str("[record]\nframe_downsample = 0\n").unwrap();
-        assert!(cfg.validate().unwrap_err().contains("frame_downsample"));
-        let (cfg, _) = from_str("[record]\ncompression = \"gzip\"\n").unwrap();
-        assert!(cfg.validate().unwrap_err().contains("'gzip'"));
-        let (cfg, _) = from_str("[record]\nframe_every = 0\n").unwrap();
-        assert!(cfg.validate().unwrap_err().contains("frame_every"));
-        let (cfg, t) = from_str("[record]\ncompression = \"none\"\nframe_every = 1\n").unwrap();
-        assert_eq!((cfg.frame_every, t), (1, None));
-        assert!(cfg.mcap_compression().unwrap().is_none());
+        let dir = std::env::temp_dir().join(format!("phri-record-cfg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let write = |text: &str| {
+            let p = dir.join("c.toml");
+            std::fs::write(&p, text).unwrap();
+            from_file(p.to_str().unwrap())
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        };
+        let e = write("[record]\nframe_evry = 3\n");
+        assert!(e.contains("record.frame_evry"), "{e}");
+        let e = write("[record]\nframe_downsample = 0\n");
+        assert!(e.contains("record.frame_downsample"), "{e}");
+        let e = write("[record]\ncompression = \"gzip\"\n");
+        assert!(
+            e.contains("record.compression") && e.contains("gzip"),
+            "{e}"
+        );
+        let e = write("[record]\nframe_every = 0\n");
+        assert!(e.contains("record.frame_every"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+        assert!(mcap_compression("none".parse::<Compression>().unwrap()).is_none());
+        assert!("gzip".parse::<Compression>().is_err());
     }
 }

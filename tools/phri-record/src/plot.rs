@@ -62,19 +62,39 @@ impl Canvas {
     }
 
     /// Write as an 8-bit RGB PNG.
-    pub fn save_png(&self, path: &std::path::Path) -> Result<(), String> {
-        let f = std::fs::File::create(path)
-            .map_err(|e| format!("cannot create '{}': {e}", path.display()))?;
+    pub fn save_png(&self, path: &std::path::Path) -> Result<(), PngError> {
+        let f = std::fs::File::create(path).map_err(|source| PngError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let encoding = |source| PngError::Encode {
+            path: path.to_path_buf(),
+            source,
+        };
         let mut enc = png::Encoder::new(std::io::BufWriter::new(f), self.w as u32, self.h as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc
-            .write_header()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        wr.write_image_data(&self.px)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        wr.finish().map_err(|e| format!("{}: {e}", path.display()))
+        let mut wr = enc.write_header().map_err(encoding)?;
+        wr.write_image_data(&self.px).map_err(encoding)?;
+        wr.finish().map_err(encoding)
     }
+}
+
+/// A PNG that could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum PngError {
+    #[error("cannot create '{}': {source}", path.display())]
+    Create {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: {source}", path.display())]
+    Encode {
+        path: std::path::PathBuf,
+        #[source]
+        source: png::EncodingError,
+    },
 }
 
 /// A plot area mapping data coordinates into a canvas with margins.

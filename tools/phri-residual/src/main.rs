@@ -1,17 +1,20 @@
 //! `phri-residual --urdf FILE --log LOG.csv [--ki K] [--dt S] [--config phri.toml]`
 //!
-//! Runs the dynamics service's residual observer over a recorded log, so that
-//! thresholds and gains can be tuned on data from a real arm. The log's
+//! Runs the residual observer of `phri-estimation` (the one the dynamics
+//! service runs) over a recorded log, so that thresholds and gains can be
+//! tuned on data from a real arm. The log's
 //! header is `t,q1..qn,tau1..taun` (joint order as `phri-model` prints it,
 //! t in seconds, q in rad, tau the applied joint torque in Nm); the output on
 //! stdout is `t,r1..rn`. `--dt S` integrates with a fixed period instead of
 //! the t column; `--config` takes `[dynamics]` (friction model, thresholds)
 //! from a phri configuration file, otherwise no friction is compensated.
 
+use std::error::Error;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::process::ExitCode;
 
-use phri_dynamics::{ResidualConfig, ResidualObserver};
+use phri_config::{Loaded, PerJoint, ResidualConfig};
+use phri_estimation::ResidualObserver;
 use phri_runtime::Args;
 
 const USAGE: &str =
@@ -21,7 +24,7 @@ fn main() -> ExitCode {
     phri_runtime::service::run("phri-residual", body)
 }
 
-fn body() -> Result<(), String> {
+fn body() -> Result<(), Box<dyn Error>> {
     let args = Args::parse(
         std::env::args().skip(1),
         &["--urdf", "--log", "--ki", "--dt", "--config"],
@@ -41,22 +44,22 @@ fn body() -> Result<(), String> {
     let n = model.nv();
     let mut cfg = match args.get("--config") {
         Some(path) => {
-            let table = phri_runtime::load_config(std::path::Path::new(path), &[], &[])
-                .map_err(|e| e.to_string())?;
-            phri_runtime::section::<ResidualConfig>(&table, "dynamics")
-                .map_err(|e| format!("{path}: {e}"))?
+            Loaded::load(std::path::Path::new(path), None, &[])
+                .map_err(|e| e.to_string())?
+                .config
+                .dynamics
         }
         None => ResidualConfig {
-            viscous_friction: vec![0.0],
-            coulomb_friction: vec![0.0],
-            ..ResidualConfig::default()
+            viscous_friction: PerJoint::All(0.0),
+            coulomb_friction: PerJoint::All(0.0),
+            ..Loaded::defaults().config.dynamics
         },
     };
     if let Some(ki) = args.parse_value::<f64>("--ki")? {
         if !(ki.is_finite() && ki > 0.0) {
-            return Err(format!("--ki: {ki} must be positive"));
+            return Err(format!("--ki: {ki} must be positive").into());
         }
-        cfg.gain = vec![ki];
+        cfg.gain = PerJoint::All(ki);
     }
     let dt = args.parse_value::<f64>("--dt")?;
     if dt.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
@@ -84,7 +87,8 @@ fn body() -> Result<(), String> {
             "{log}:1: header must be '{}' for this {n}-joint robot, got '{}'",
             expected.join(","),
             header.trim()
-        ));
+        )
+        .into());
     }
     let out = std::io::stdout();
     let mut out = BufWriter::new(out.lock());
@@ -109,7 +113,7 @@ fn body() -> Result<(), String> {
         let mut count = 0;
         for (i, cell) in line.split(',').enumerate() {
             if i >= row.len() {
-                return Err(format!("{log}:{lineno}: more than {} columns", row.len()));
+                return Err(format!("{log}:{lineno}: more than {} columns", row.len()).into());
             }
             let v: f64 = cell.trim().parse().map_err(|_| {
                 format!(
@@ -122,7 +126,8 @@ fn body() -> Result<(), String> {
                 return Err(format!(
                     "{log}:{lineno}: column '{}': not a finite number",
                     expected[i]
-                ));
+                )
+                .into());
             }
             row[i] = v;
             count += 1;
@@ -131,11 +136,12 @@ fn body() -> Result<(), String> {
             return Err(format!(
                 "{log}:{lineno}: expected {} columns, got {count}",
                 row.len()
-            ));
+            )
+            .into());
         }
         let t_log = row[0];
         if dt.is_none() && t_log <= last_t {
-            return Err(format!("{log}:{lineno}: t = {t_log} does not increase"));
+            return Err(format!("{log}:{lineno}: t = {t_log} does not increase").into());
         }
         last_t = t_log;
         let t = dt.map_or(t_log, |d| k as f64 * d);

@@ -1,17 +1,20 @@
 //! `phri-perception`: depth ingestion. Takes frames from `camera/depth` (or a
 //! directory of 16-bit PNG depth images replayed at their rate), validates
 //! them, removes the robot's own pixels at the joint state nearest the
-//! capture time, and publishes `perception/depth` (a loaned `[u16]` slice with
-//! a header: sequence, capture time, intrinsics, camera pose, joint state used).
+//! capture time ([`Ingest`]), and publishes `perception/depth` (a loaned
+//! `[u16]` slice with a header: sequence, capture time, intrinsics, camera
+//! pose, joint state used).
 
-use std::path::PathBuf;
+use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_ipc::*;
-use phri_perception::camera::fill_camera_header;
-use phri_perception::ingest::{Ingest, StateHistory};
-use phri_perception::{CameraConfig, IngestConfig};
+use phri_config::DepthSource;
+use phri_ipc::{
+    FrameHeader, FramePublisher, FrameSubscriber, IpcError, Queue, CAMERA_DEPTH, FRAME_PIXELS,
+    PERCEPTION_DEPTH, ROBOT_STATE,
+};
+use phri_perception::{Ingest, PngReplay, RateLimited, StateHistory, Ticks};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
 fn main() -> ExitCode {
@@ -20,159 +23,125 @@ fn main() -> ExitCode {
 
 #[allow(clippy::large_enum_variant)] // one value per process, never moved in a loop
 enum Source {
-    Camera {
-        frames: FrameSub,
-        event: Listener,
-    },
+    Camera(FrameSubscriber),
     Png {
-        files: Vec<PathBuf>,
-        next: usize,
-        period_ns: u64,
-        tick: u64,
-        seq: u64,
+        replay: PngReplay,
+        ticks: Ticks,
+        unreadable: RateLimited,
     },
 }
 
-fn body() -> Result<(), String> {
-    let ctx = ServiceContext::from_args("perception", &[])?;
-    let cfg: IngestConfig = ctx.section("perception")?;
-    let camera_cfg: CameraConfig = ctx.section("camera")?;
-    let model = ctx.robot_model(MAX_DOF)?;
-    let n = model.nv();
-    let mut ingest = Ingest::new(
-        model,
-        cfg.self_filter,
-        cfg.max_state_gap_ms,
-        cfg.max_frame_age_ms,
-    );
-    let s = |x: IpcError| x.to_string();
-    let node = node(&ctx.name, &ctx.prefix).map_err(s)?;
-    let states = subscriber::<JointState>(&node, ROBOT_STATE, DRAIN).map_err(s)?;
-    let pixels_max = camera_cfg.intrinsics.pixel_count().max(FRAME_PIXELS);
-    let out = frame_publisher(&node, PERCEPTION_DEPTH, pixels_max)
-        .map_err(|x| format!("{x} (is another ingestion running with this prefix?)"))?;
-    let out_event = notifier(&node, PERCEPTION_DEPTH).map_err(s)?;
-    let mut source = match cfg.source.as_str() {
-        "camera" => Source::Camera {
-            frames: frame_subscriber(&node, CAMERA_DEPTH).map_err(s)?,
-            event: listener(&node, CAMERA_DEPTH).map_err(s)?,
-        },
-        "png" => {
-            let dir = phri_runtime::service::resolve(&ctx.config_path, &cfg.png_dir);
-            let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-                .map_err(|e| format!("[perception] png_dir {}: {e}", dir.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png")))
-                .collect();
-            files.sort();
-            if files.is_empty() {
-                return Err(format!(
-                    "[perception] png_dir {}: no .png file",
-                    dir.display()
-                ));
+/// Ingestion and what it publishes to.
+struct Out {
+    ingest: Ingest,
+    history: StateHistory,
+    frames: FramePublisher,
+    refused: u64,
+}
+
+impl Out {
+    /// Ingest one frame into a loaned sample and publish it; a refused frame
+    /// is counted and logged (rate-limited), not an error.
+    fn handle(&mut self, header: &mut FrameHeader, input: &[u16]) -> Result<(), IpcError> {
+        let mut sample = self.frames.loan(input.len())?;
+        let now = self.history.newest_ns();
+        match self
+            .ingest
+            .step(header, input, &self.history, now, sample.payload_mut())
+        {
+            Ok(_) => {
+                header.published_ns = now_ns();
+                *sample.user_header_mut() = *header;
+                self.frames.send(sample)?;
             }
-            if !(cfg.png_rate_hz > 0.0) {
-                return Err("[perception] png_rate_hz must be positive".into());
-            }
-            Source::Png {
-                files,
-                next: 0,
-                period_ns: (1e9 / cfg.png_rate_hz) as u64,
-                tick: now_ns(),
-                seq: 0,
+            Err(e) => {
+                self.refused += 1;
+                if self.refused.is_power_of_two() {
+                    eprintln!(
+                        "phri-perception: refused {e} ({} refused so far)",
+                        self.refused
+                    );
+                }
             }
         }
-        other => {
-            return Err(format!(
-                "[perception] source: '{other}' is neither 'camera' nor 'png'"
-            ))
+        Ok(())
+    }
+}
+
+fn body() -> Result<(), Box<dyn Error>> {
+    let ctx = ServiceContext::from_args("perception", &[])?;
+    let cfg = &ctx.config().perception;
+    let camera_cfg = &ctx.config().camera;
+    let model = ctx.robot_model()?;
+    let n = model.nv();
+    let ingest = Ingest::new(model, cfg)?;
+    if ctx.checking() {
+        if matches!(cfg.source, DepthSource::Png) {
+            PngReplay::open(cfg, camera_cfg, &ctx.loaded.origin)?;
+        }
+        return Ok(());
+    }
+    let node = ctx.node()?;
+    let states = ROBOT_STATE.subscriber(&node, Queue::Drain)?;
+    let pixels_max = camera_cfg.intrinsics.pixel_count().max(FRAME_PIXELS);
+    let mut out = Out {
+        ingest,
+        history: StateHistory::new(n, 2000),
+        frames: PERCEPTION_DEPTH.frame_publisher(&node, pixels_max)?,
+        refused: 0,
+    };
+    let mut source = match cfg.source {
+        DepthSource::Camera => {
+            Source::Camera(CAMERA_DEPTH.waking_frame_subscriber(&node, Queue::Latest)?)
+        }
+        DepthSource::Png => {
+            let replay = PngReplay::open(cfg, camera_cfg, &ctx.loaded.origin)?;
+            Source::Png {
+                ticks: Ticks::new(now_ns(), replay.period_ns()),
+                replay,
+                unreadable: RateLimited::new(RateLimited::SECOND_NS),
+            }
         }
     };
-    let camera_pose = camera_cfg.pose()?;
+    ctx.start_deadman()?;
     ctx.go_realtime();
-    let mut history = StateHistory::new(n, 2000);
-    let mut robot_now = 0u64;
-    let mut refused = 0u64;
     while !ctx.shutdown.requested() {
-        // wait for the next frame
+        // wait for the next frame (a wake-up without one just loops)
         match &mut source {
-            Source::Camera { event, .. } => {
-                let _ = event.timed_wait(|_| {}, Duration::from_millis(50));
+            Source::Camera(frames) => {
+                let _ = frames.wait(Duration::from_millis(50));
             }
-            Source::Png {
-                tick, period_ns, ..
-            } => {
-                *tick += *period_ns;
-                sleep_until_ns(*tick);
-            }
+            Source::Png { ticks, .. } => sleep_until_ns(ticks.deadline_ns()),
         }
-        while let Some(st) = states
-            .receive()
-            .map_err(|x| ipc_err(ROBOT_STATE, x).to_string())?
-        {
-            if st.dof as usize == n {
-                history.push(st.stamp_ns, &st.q[..n]);
-                robot_now = robot_now.max(st.stamp_ns);
-            }
-        }
-        let mut handle = |header: &mut FrameHeader, input: &[u16]| -> Result<(), String> {
-            let mut sample = out
-                .loan_slice(input.len())
-                .map_err(|x| ipc_err(PERCEPTION_DEPTH, x).to_string())?;
-            match ingest.step(header, input, &history, robot_now, sample.payload_mut()) {
-                Ok(_) => {
-                    header.published_ns = now_ns();
-                    *sample.user_header_mut() = *header;
-                    sample
-                        .send()
-                        .map_err(|x| ipc_err(PERCEPTION_DEPTH, x).to_string())?;
-                    let _ = out_event.notify();
-                }
-                Err(e) => {
-                    refused += 1;
-                    if refused.is_power_of_two() {
-                        eprintln!("phri-perception: refused {e} ({refused} refused so far)");
-                    }
-                }
-            }
-            Ok(())
-        };
+        let woke_ns = now_ns();
+        states.drain(|s| {
+            out.history.push_state(s);
+        })?;
         match &mut source {
-            Source::Camera { frames, .. } => {
-                while let Some(frame) = frames
-                    .receive()
-                    .map_err(|x| ipc_err(CAMERA_DEPTH, x).to_string())?
-                {
+            Source::Camera(frames) => {
+                while let Some(frame) = frames.receive()? {
                     let mut header = *frame.user_header();
-                    handle(&mut header, frame.payload())?;
+                    out.handle(&mut header, frame.payload())?;
                 }
             }
             Source::Png {
-                files, next, seq, ..
+                replay,
+                ticks,
+                unreadable,
             } => {
-                if *next >= files.len() {
-                    if !cfg.png_loop {
-                        continue;
-                    }
-                    *next = 0;
-                }
-                let path = &files[*next];
-                *next += 1;
-                let k = camera_cfg.intrinsics;
-                match phri_depth::read_depth_png(path, k.width, k.height, cfg.png_depth_scale) {
-                    Ok(png_frame) => {
-                        *seq += 1;
-                        let mut header = FrameHeader::zeroed();
-                        fill_camera_header(&mut header, *seq, &k, &camera_pose);
-                        header.capture_ns = robot_now;
-                        header.capture_wall_ns = now_ns();
-                        handle(&mut header, &png_frame)?;
-                    }
-                    Err(e) => {
-                        refused += 1;
-                        eprintln!("phri-perception: refused {e}");
+                let mut header = FrameHeader::default();
+                match replay.next_frame(out.history.newest_ns(), now_ns(), &mut header) {
+                    None => {}
+                    Some(Ok(depths)) => out.handle(&mut header, &depths)?,
+                    Some(Err(e)) => {
+                        out.refused += 1;
+                        if let Some(n) = unreadable.hit(now_ns()) {
+                            eprintln!("phri-perception: refused {e} ({n} unreadable files since the last line)");
+                        }
                     }
                 }
+                // a late tick drops the ones it overran: never frames back to back
+                ticks.done(woke_ns, now_ns());
             }
         }
     }

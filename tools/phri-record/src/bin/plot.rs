@@ -13,13 +13,14 @@
 //!   present; an orange vertical line where `flags & COLLISION` rises
 //! - `min_distance.png`: `control/status` `min_distance` over time (non-finite skipped)
 
+use std::error::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use phri_ipc::{residual_flags, CONTROL_STATUS, DYNAMICS_RESIDUAL, SIM_TRUTH};
 use phri_record::plot::*;
-use phri_record::{read_file, METADATA_NAME};
+use phri_record::{read_file, ReadError, METADATA_NAME};
 use phri_runtime::Args;
 use serde_json::Value;
 
@@ -30,14 +31,14 @@ const W: usize = 900;
 const H: usize = 600;
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-plot", body)
+    phri_runtime::service::run("phri-plot", || body().map_err(|e| e.to_string()))
 }
 
 fn num(v: &Value, k: &str) -> f64 {
     v.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN)
 }
 
-fn body() -> Result<(), String> {
+fn body() -> Result<(), Box<dyn Error>> {
     let args = Args::parse(
         std::env::args().skip(1),
         &["--file", "--out", "--without"],
@@ -55,10 +56,10 @@ fn body() -> Result<(), String> {
 
     // the collision threshold from the recording's metadata
     let mut threshold: Option<f64> = None;
-    if let Some(summary) = mcap::Summary::read(&buf).map_err(|e| format!("{file}: {e}"))? {
+    if let Some(summary) = mcap::Summary::read(&buf).map_err(ReadError::mcap(file))? {
         for idx in &summary.metadata_indexes {
             if idx.name == METADATA_NAME {
-                let m = mcap::read::metadata(&buf, idx).map_err(|e| format!("{file}: {e}"))?;
+                let m = mcap::read::metadata(&buf, idx).map_err(ReadError::mcap(file))?;
                 threshold = m
                     .metadata
                     .get("collision_norm_threshold")
@@ -76,25 +77,32 @@ fn body() -> Result<(), String> {
     let t_start = Instant::now();
     let mut next_report = t_start + Duration::from_secs(1);
     let mut n = 0u64;
-    let stream = mcap::MessageStream::new(&buf).map_err(|e| format!("{file}: {e}"))?;
+    let stream = mcap::MessageStream::new(&buf).map_err(ReadError::mcap(file))?;
     for m in stream {
-        let m = m.map_err(|e| format!("{file}: {e}"))?;
+        let m = m.map_err(ReadError::mcap(file))?;
         n += 1;
         if Instant::now() >= next_report {
             next_report += Duration::from_secs(1);
             eprintln!("phri-plot: {n} messages read");
         }
         let topic = m.channel.topic.as_str();
-        if topic != CONTROL_STATUS && topic != DYNAMICS_RESIDUAL && topic != SIM_TRUTH {
+        if topic != CONTROL_STATUS.name
+            && topic != DYNAMICS_RESIDUAL.name
+            && topic != SIM_TRUTH.name
+        {
             continue;
         }
-        let v: Value = serde_json::from_slice(&m.data)
-            .map_err(|e| format!("{file}: {topic} message {}: {e}", m.sequence))?;
+        let v: Value = serde_json::from_slice(&m.data).map_err(|source| ReadError::Json {
+            path: file.to_string(),
+            topic: topic.to_string(),
+            sequence: m.sequence,
+            source,
+        })?;
         let t0 = *t0.get_or_insert(m.log_time);
         let t = (m.log_time as f64 - t0 as f64) * 1e-9;
-        if topic == SIM_TRUTH {
+        if topic == SIM_TRUTH.name {
             person_m = num(&v, "min_distance");
-        } else if topic == CONTROL_STATUS {
+        } else if topic == CONTROL_STATUS.name {
             let d = num(&v, "min_distance");
             if let Some(p) = v.get("ee").and_then(Value::as_array) {
                 let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
@@ -115,8 +123,10 @@ fn body() -> Result<(), String> {
     }
     if ee.is_empty() && norm.is_empty() {
         return Err(format!(
-            "{file}: no {CONTROL_STATUS} or {DYNAMICS_RESIDUAL} messages"
-        ));
+            "{file}: no {} or {} messages",
+            CONTROL_STATUS.name, DYNAMICS_RESIDUAL.name
+        )
+        .into());
     }
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create '{}': {e}", out.display()))?;
 
@@ -228,27 +238,31 @@ fn body() -> Result<(), String> {
 }
 
 /// The end-effector x-y path of a recording's `control/status`.
-fn ee_path(file: &str) -> Result<Vec<(f64, f64)>, String> {
+fn ee_path(file: &str) -> Result<Vec<(f64, f64)>, Box<dyn Error>> {
     let buf = read_file(file)?;
     let mut out = Vec::new();
-    for m in mcap::MessageStream::new(&buf).map_err(|e| format!("{file}: {e}"))? {
-        let m = m.map_err(|e| format!("{file}: {e}"))?;
-        if m.channel.topic != CONTROL_STATUS {
+    for m in mcap::MessageStream::new(&buf).map_err(ReadError::mcap(file))? {
+        let m = m.map_err(ReadError::mcap(file))?;
+        if m.channel.topic != CONTROL_STATUS.name {
             continue;
         }
-        let v: Value = serde_json::from_slice(&m.data)
-            .map_err(|e| format!("{file}: {CONTROL_STATUS} message {}: {e}", m.sequence))?;
+        let v: Value = serde_json::from_slice(&m.data).map_err(|source| ReadError::Json {
+            path: file.to_string(),
+            topic: CONTROL_STATUS.name.to_string(),
+            sequence: m.sequence,
+            source,
+        })?;
         if let Some(p) = v.get("ee").and_then(Value::as_array) {
             let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
             out.push((c(0), c(1)));
         }
     }
     if out.is_empty() {
-        return Err(format!("{file}: no {CONTROL_STATUS} messages"));
+        return Err(format!("{file}: no {} messages", CONTROL_STATUS.name).into());
     }
     Ok(out)
 }
 
-fn save(c: &Canvas, dir: &std::path::Path, name: &str) -> Result<(), String> {
+fn save(c: &Canvas, dir: &std::path::Path, name: &str) -> Result<(), PngError> {
     c.save_png(&dir.join(name))
 }

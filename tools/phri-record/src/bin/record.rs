@@ -12,15 +12,15 @@
 //! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes.
 
 use std::collections::BTreeMap;
+use std::error::Error;
 use std::fs::File;
 use std::io::BufWriter;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use iceoryx2::prelude::*;
 use phri_ipc::*;
 use phri_record::config::{self, RecordConfig};
-use phri_record::json::{log_ns, Msg};
+use phri_record::json::{log_ns, to_json};
 use phri_record::{foxglove, ENCODING, METADATA_NAME};
 use phri_runtime::{now_ns, Args, Shutdown};
 use serde_json::{json, Value};
@@ -29,7 +29,7 @@ const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S]
 const POLL: Duration = Duration::from_millis(5);
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-record", body)
+    phri_runtime::service::run("phri-record", || body().map_err(|e| e.to_string()))
 }
 
 /// `out(topic, log_ns, seq, json)`: `topic` indexes [`Rec::topics`].
@@ -55,56 +55,38 @@ impl Topic {
 
 /// One channel being recorded.
 trait Rec {
-    fn name(&self) -> &str;
+    fn name(&self) -> &'static str;
     /// the MCAP topics this channel writes: the channel itself, plus views
     fn topics(&self) -> Vec<Topic> {
         vec![Topic::channel(self.name())]
     }
-    /// open the channel if it was absent; true when subscribed
-    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String>;
+    /// subscribe if the channel exists now (a recorder never creates one); true when subscribed
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError>;
     /// drain the queue: `out(topic, log_ns, seq, json)` per recorded message
-    fn poll(&mut self, out: &mut Out) -> Result<(), String>;
+    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError>;
 }
 
-fn err(name: &str, e: impl std::fmt::Debug) -> String {
-    ipc_err(name, e).to_string()
+struct MsgRec<T: Message> {
+    channel: Channel<T>,
+    sub: Option<Subscriber<T>>,
 }
 
-struct MsgRec<T: Msg> {
-    name: &'static str,
-    sub: Option<Sub<T>>,
-}
-
-impl<T: Msg> Rec for MsgRec<T> {
-    fn name(&self) -> &str {
-        self.name
+impl<T: Message> Rec for MsgRec<T> {
+    fn name(&self) -> &'static str {
+        self.channel.name
     }
-    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String> {
-        if self.sub.is_some() {
-            return Ok(true);
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError> {
+        if self.sub.is_none() {
+            self.sub = self.channel.subscriber_if_exists(node, Queue::Drain)?;
         }
-        let name = self.name;
-        // open only: a recorder never creates a channel
-        let Some(factory) = open_existing_pubsub::<T>(node, name).map_err(|e| e.to_string())?
-        else {
-            return Ok(false);
-        };
-        let sub = factory
-            .subscriber_builder()
-            .buffer_size(drain_buffer(name))
-            .create()
-            .map_err(|e| err(name, e))?;
-        self.sub = Some(sub);
-        Ok(true)
+        Ok(self.sub.is_some())
     }
-    fn poll(&mut self, out: &mut Out) -> Result<(), String> {
+    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(());
         };
-        while let Some(s) = sub.receive().map_err(|e| err(self.name, e))? {
-            let m = *s;
-            drop(s);
-            let v = m.to_json();
+        while let Some(m) = sub.receive()? {
+            let v = to_json(&m);
             out(0, log_ns(&m, &v, now_ns()), m.seq() as u32, v);
         }
         Ok(())
@@ -112,8 +94,8 @@ impl<T: Msg> Rec for MsgRec<T> {
 }
 
 struct FrameRec {
-    name: &'static str,
-    sub: Option<FrameSub>,
+    channel: FrameChannel,
+    sub: Option<FrameSubscriber>,
     every: u64,
     /// keep one pixel in `k` per axis
     k: usize,
@@ -136,54 +118,48 @@ fn downsample(h: &FrameHeader, d: &[u16], k: usize) -> (usize, usize, Vec<u16>) 
     (dw, dh, data)
 }
 
-/// Header fields plus the downsampled depth image.
+/// Header fields (their JSON view, `q` cut to `dof`) plus the downsampled depth image.
 fn frame_json(h: &FrameHeader, k: usize, dw: usize, dh: usize, data: &[u16]) -> Value {
-    let n = (h.dof as usize).min(MAX_DOF);
-    json!({
-        "seq": h.seq, "capture_ns": h.capture_ns, "capture_wall_ns": h.capture_wall_ns,
-        "published_ns": h.published_ns, "width": h.width, "height": h.height,
-        "fx": h.fx, "fy": h.fy, "cx": h.cx, "cy": h.cy, "depth_scale": h.depth_scale,
-        "pose_r": h.pose_r, "pose_t": h.pose_t, "q": &h.q[..n], "q_stamp_ns": h.q_stamp_ns,
-        "dof": h.dof, "removed_pixels": h.removed_pixels, "valid_pixels": h.valid_pixels,
-        "downsample": k, "data_width": dw, "data_height": dh, "data": data,
-    })
+    let Ok(Value::Object(mut m)) = serde_json::to_value(h) else {
+        unreachable!("a frame header serializes as an object");
+    };
+    if let Some(Value::Array(q)) = m.get_mut("q") {
+        q.truncate((h.dof as usize).min(MAX_DOF));
+    }
+    m.insert("downsample".into(), json!(k));
+    m.insert("data_width".into(), json!(dw));
+    m.insert("data_height".into(), json!(dh));
+    m.insert("data".into(), json!(data));
+    Value::Object(m)
 }
 
 impl Rec for FrameRec {
-    fn name(&self) -> &str {
-        self.name
+    fn name(&self) -> &'static str {
+        self.channel.name
     }
     fn topics(&self) -> Vec<Topic> {
         vec![
-            Topic::channel(self.name),
+            Topic::channel(self.channel.name),
             Topic {
-                name: foxglove::image_topic(self.name),
+                name: foxglove::image_topic(self.channel.name),
                 schema_name: foxglove::RAW_IMAGE.to_string(),
                 schema: foxglove::raw_image_schema(),
             },
         ]
     }
-    fn attach(&mut self, node: &Node<ipc::Service>) -> Result<bool, String> {
-        if self.sub.is_some() {
-            return Ok(true);
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError> {
+        if self.sub.is_none() {
+            self.sub = self
+                .channel
+                .frame_subscriber_if_exists(node, Queue::Drain)?;
         }
-        let name = self.name;
-        let Some(factory) = open_existing_frames(node, name).map_err(|e| e.to_string())? else {
-            return Ok(false);
-        };
-        let sub = factory
-            .subscriber_builder()
-            .buffer_size(drain_buffer(name))
-            .create()
-            .map_err(|e| err(name, e))?;
-        self.sub = Some(sub);
-        Ok(true)
+        Ok(self.sub.is_some())
     }
-    fn poll(&mut self, out: &mut Out) -> Result<(), String> {
+    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(());
         };
-        while let Some(f) = sub.receive().map_err(|e| err(self.name, e))? {
+        while let Some(f) = sub.receive()? {
             self.received += 1;
             if !(self.received - 1).is_multiple_of(self.every) {
                 continue;
@@ -211,28 +187,24 @@ impl Rec for FrameRec {
     }
 }
 
-fn rec_for(name: &'static str, rc: &RecordConfig) -> Box<dyn Rec> {
-    fn m<T: Msg>(name: &'static str) -> Box<dyn Rec> {
-        Box::new(MsgRec::<T> { name, sub: None })
+/// A recorder for every channel of the cell, in [`ALL`]'s order.
+struct Recs<'a> {
+    rc: &'a RecordConfig,
+    recs: Vec<Box<dyn Rec>>,
+}
+
+impl ChannelVisitor for Recs<'_> {
+    fn message<T: Message>(&mut self, channel: Channel<T>) {
+        self.recs.push(Box::new(MsgRec { channel, sub: None }));
     }
-    match name {
-        ROBOT_STATE => m::<JointState>(name),
-        ROBOT_COMMAND => m::<TorqueCommand>(name),
-        ROBOT_STATS => m::<RobotStats>(name),
-        SIM_TRUTH => m::<Truth>(name),
-        DYNAMICS_RESIDUAL => m::<Residual>(name),
-        CONTROL_STATUS => m::<ControlStatus>(name),
-        SUPERVISOR_HEALTH => m::<Health>(name),
-        SIM_WORLD => m::<WorldState>(name),
-        PERCEPTION_REPULSION => m::<RepulsionResult>(name),
-        FAULT_DEPTH => m::<DepthFault>(name),
-        _ => Box::new(FrameRec {
-            name,
+    fn frames(&mut self, channel: FrameChannel) {
+        self.recs.push(Box::new(FrameRec {
+            channel,
             sub: None,
-            every: rc.frame_every,
-            k: rc.frame_downsample,
+            every: self.rc.frame_every,
+            k: self.rc.frame_downsample,
             received: 0,
-        }),
+        }));
     }
 }
 
@@ -240,7 +212,7 @@ fn mcap_err(e: mcap::McapError) -> String {
     format!("mcap: {e}")
 }
 
-fn body() -> Result<(), String> {
+fn body() -> Result<(), Box<dyn Error>> {
     let args = Args::parse(
         std::env::args().skip(1),
         &[
@@ -270,12 +242,8 @@ fn body() -> Result<(), String> {
     }
     // [record] of --config, then the flags over it
     let (mut rc, mut threshold) = match args.get("--config") {
-        Some(p) => {
-            let (rc, threshold) = config::from_file(p)?;
-            rc.validate().map_err(|e| format!("{p}: [record] {e}"))?;
-            (rc, threshold)
-        }
-        None => (RecordConfig::default(), None),
+        Some(p) => config::from_file(p)?,
+        None => (config::defaults(), None),
     };
     if let Some(v) = args.parse_value::<u64>("--frame-every")? {
         rc.frame_every = v;
@@ -284,24 +252,27 @@ fn body() -> Result<(), String> {
         rc.frame_downsample = v;
     }
     if let Some(v) = args.get("--compression") {
-        rc.compression = v.to_string();
+        rc.compression = v
+            .parse()
+            .map_err(|e: phri_config::Invalid| format!("--compression {}; {USAGE}", e.reason))?;
     }
-    // the keys' messages name them: frame_every → --frame-every
-    rc.validate()
-        .map_err(|e| format!("--{}; {USAGE}", e.replacen('_', "-", 1)))?;
-    let compression = rc.mcap_compression()?;
+    // the keys' messages name them: record.frame_every → --frame-every
+    rc.validate().map_err(|e| {
+        let flag = e.key.trim_start_matches("record.").replace('_', "-");
+        format!("--{flag}: {}; {USAGE}", e.reason)
+    })?;
+    let compression = config::mcap_compression(rc.compression);
     let (every, k) = (rc.frame_every, rc.frame_downsample);
     if let Some(t) = args.parse_value::<f64>("--threshold")? {
         threshold = Some(t);
     }
     if phri_ipc::live_nodes(&prefix) == 0 {
-        return Err(format!(
-            "no cell running under prefix '{prefix}' (no live iceoryx2 node)"
-        ));
+        return Err(
+            format!("no cell running under prefix '{prefix}' (no live iceoryx2 node)").into(),
+        );
     }
-    let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
-    let node =
-        node(&format!("record{}", std::process::id()), &prefix).map_err(|e| e.to_string())?;
+    let shutdown = Shutdown::install()?;
+    let node = node(&format!("record{}", std::process::id()), &prefix)?;
 
     let file = File::create(&out_path).map_err(|e| format!("cannot create '{out_path}': {e}"))?;
     let mut w = mcap::WriteOptions::new()
@@ -311,7 +282,12 @@ fn body() -> Result<(), String> {
         .create(BufWriter::new(file))
         .map_err(mcap_err)?;
 
-    let mut recs: Vec<Box<dyn Rec>> = ALL.iter().map(|c| rec_for(c, &rc)).collect();
+    let mut recs = Recs {
+        rc: &rc,
+        recs: Vec::new(),
+    };
+    visit_all(&mut recs);
+    let mut recs = recs.recs;
     // ids[rec][topic]: MCAP channel ids
     let mut ids: Vec<Vec<u16>> = Vec::with_capacity(recs.len());
     for r in &recs {
@@ -341,7 +317,7 @@ fn body() -> Result<(), String> {
     );
     meta.insert("frame_every".into(), every.to_string());
     meta.insert("frame_downsample".into(), k.to_string());
-    meta.insert("compression".into(), rc.compression.clone());
+    meta.insert("compression".into(), rc.compression.name().to_string());
     meta.insert("start_ns".into(), now_ns().to_string());
     if let Some(t) = threshold {
         meta.insert("collision_norm_threshold".into(), t.to_string());
@@ -397,7 +373,7 @@ fn body() -> Result<(), String> {
             })?;
         }
         if let Some(e) = write_err.take() {
-            return Err(e);
+            return Err(e.into());
         }
         if Instant::now() >= next_report {
             next_report += Duration::from_secs(1);
@@ -428,4 +404,63 @@ fn progress(recs: &[Box<dyn Rec>], counts: &[u64]) -> String {
         .map(|(r, c)| format!("{}={c}", r.name()))
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_messages_keep_their_fields() {
+        let mut h = FrameHeader::zeroed();
+        h.seq = 12;
+        h.capture_ns = 100;
+        h.capture_wall_ns = 200;
+        h.published_ns = 300;
+        h.width = 4;
+        h.height = 2;
+        h.fx = 525.0;
+        h.fy = 525.0;
+        h.cx = 319.5;
+        h.cy = f64::NAN;
+        h.depth_scale = 0.001;
+        h.pose_r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        h.pose_t = [1.5, 0.0, 1.25];
+        h.q[..3].copy_from_slice(&[0.5, -0.25, 1.0]);
+        h.q_stamp_ns = 90;
+        h.dof = 3;
+        h.removed_pixels = 2;
+        h.valid_pixels = 5;
+        let d = [1000u16, 0, 1200, 0, 900, 0, 800, 0];
+        let (dw, dh, data) = downsample(&h, &d, 2);
+        assert_eq!((dw, dh, data.clone()), (2, 1, vec![1000, 1200]));
+        // as the hand-written view had it
+        let expected = json!({
+            "seq": 12, "capture_ns": 100, "capture_wall_ns": 200, "published_ns": 300,
+            "width": 4, "height": 2, "fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": null,
+            "depth_scale": 0.001, "pose_r": h.pose_r, "pose_t": h.pose_t,
+            "q": [0.5, -0.25, 1.0], "q_stamp_ns": 90, "dof": 3, "removed_pixels": 2,
+            "valid_pixels": 5, "downsample": 2, "data_width": 2, "data_height": 1,
+            "data": [1000, 1200],
+        });
+        assert_eq!(frame_json(&h, 2, dw, dh, &data), expected);
+    }
+
+    #[test]
+    fn every_channel_is_recorded() {
+        let rc = config::defaults();
+        let mut recs = Recs {
+            rc: &rc,
+            recs: Vec::new(),
+        };
+        visit_all(&mut recs);
+        let names: Vec<&str> = recs.recs.iter().map(|r| r.name()).collect();
+        assert_eq!(names, ALL);
+        let topics: Vec<usize> = recs.recs.iter().map(|r| r.topics().len()).collect();
+        assert_eq!(
+            topics.iter().sum::<usize>(),
+            ALL.len() + 2,
+            "frames add an image topic"
+        );
+    }
 }

@@ -11,82 +11,92 @@
 //! avoidance, so they are refused into a cell whose robot is commanded.
 
 use std::collections::BTreeMap;
+use std::error::Error;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use iceoryx2::prelude::*;
 use phri_ipc::*;
-use phri_record::json::FromJson;
-use phri_record::{is_frame_channel, read_file};
+use phri_record::json::{from_json, JsonError};
+use phri_record::{is_frame_channel, read_file, ReadError};
 use phri_runtime::{Args, Shutdown};
 use serde_json::Value;
 
 const USAGE: &str = "usage: phri-replay --file FILE.mcap --prefix P [--speed X] [--channels a,b]";
 /// Channels phri-replay can rebuild.
 const REPLAYABLE: &[&str] = &[
-    ROBOT_STATE,
-    DYNAMICS_RESIDUAL,
-    CONTROL_STATUS,
-    SIM_TRUTH,
-    SIM_WORLD,
-    PERCEPTION_REPULSION,
+    ROBOT_STATE.name,
+    DYNAMICS_RESIDUAL.name,
+    CONTROL_STATUS.name,
+    SIM_TRUTH.name,
+    SIM_WORLD.name,
+    PERCEPTION_REPULSION.name,
 ];
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-replay", body)
+    phri_runtime::service::run("phri-replay", || body().map_err(|e| e.to_string()))
+}
+
+/// A recorded message that could not be published.
+#[derive(Debug, thiserror::Error)]
+enum SendError {
+    #[error("{channel}: {source}")]
+    Json {
+        channel: &'static str,
+        #[source]
+        source: JsonError,
+    },
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
 }
 
 trait Out {
-    fn send(&mut self, v: &Value) -> Result<(), String>;
+    fn send(&mut self, v: &Value) -> Result<(), SendError>;
 }
 
-struct P<T: FromJson> {
-    name: &'static str,
-    publisher: Pub<T>,
-    notifier: Option<Notifier>,
+/// Publishes one channel's recorded messages (waking its readers when the channel wakes).
+struct P<T: Message> {
+    publisher: Publisher<T>,
 }
 
-impl<T: FromJson> Out for P<T> {
-    fn send(&mut self, v: &Value) -> Result<(), String> {
-        let m = T::from_json(v).map_err(|e| format!("{}: {e}", self.name))?;
-        publish(&self.publisher, self.name, &m).map_err(|e| e.to_string())?;
-        if let Some(n) = &self.notifier {
-            let _ = n.notify();
-        }
-        Ok(())
+impl<T: Message> Out for P<T> {
+    fn send(&mut self, v: &Value) -> Result<(), SendError> {
+        let m: T = from_json(v).map_err(|source| SendError::Json {
+            channel: self.publisher.channel(),
+            source,
+        })?;
+        Ok(self.publisher.publish(&m)?)
     }
 }
 
-fn out_for(node: &Node<ipc::Service>, name: &'static str) -> Result<Box<dyn Out>, String> {
-    fn p<T: FromJson>(
-        node: &Node<ipc::Service>,
-        name: &'static str,
-    ) -> Result<Box<dyn Out>, String> {
-        let publisher = publisher::<T>(node, name)
-            .map_err(|e| format!("{e} (does a running service already publish it?)"))?;
-        // readers of robot/state and dynamics/residual wait on the event of the same name
-        let notifier = match name {
-            ROBOT_STATE | DYNAMICS_RESIDUAL => notifier(node, name).ok(),
-            _ => None,
-        };
-        Ok(Box::new(P::<T> {
-            name,
-            publisher,
-            notifier,
-        }))
+/// The publisher of one channel, by name.
+struct Outs<'a> {
+    node: &'a IpcNode,
+    out: Option<Result<Box<dyn Out>, IpcError>>,
+}
+
+impl ChannelVisitor for Outs<'_> {
+    fn message<T: Message>(&mut self, channel: Channel<T>) {
+        self.out = Some(
+            channel
+                .publisher(self.node)
+                .map(|publisher| Box::new(P { publisher }) as Box<dyn Out>),
+        );
     }
-    match name {
-        ROBOT_STATE => p::<JointState>(node, name),
-        DYNAMICS_RESIDUAL => p::<Residual>(node, name),
-        CONTROL_STATUS => p::<ControlStatus>(node, name),
-        SIM_TRUTH => p::<Truth>(node, name),
-        SIM_WORLD => p::<WorldState>(node, name),
-        PERCEPTION_REPULSION => p::<RepulsionResult>(node, name),
-        _ => Err(format!("cannot replay '{name}'")),
+    fn frames(&mut self, _: FrameChannel) {}
+}
+
+fn out_for(node: &IpcNode, name: &str) -> Result<Box<dyn Out>, Box<dyn Error>> {
+    let mut outs = Outs { node, out: None };
+    if !REPLAYABLE.contains(&name) || !visit_named(name, &mut outs) {
+        return Err(format!("cannot replay '{name}'").into());
+    }
+    match outs.out {
+        Some(out) => Ok(out?),
+        None => Err(format!("cannot replay '{name}'").into()),
     }
 }
 
-fn body() -> Result<(), String> {
+fn body() -> Result<(), Box<dyn Error>> {
     let args = Args::parse(
         std::env::args().skip(1),
         &["--file", "--prefix", "--speed", "--channels"],
@@ -111,21 +121,22 @@ fn body() -> Result<(), String> {
     });
     if let Some(req) = &requested {
         for c in req {
-            if c == ROBOT_COMMAND {
+            if c == ROBOT_COMMAND.name {
                 return Err(format!(
-                    "refusing to publish '{ROBOT_COMMAND}': replay never commands the robot"
-                ));
+                    "refusing to publish '{}': replay never commands the robot",
+                    ROBOT_COMMAND.name
+                )
+                .into());
             }
             if is_frame_channel(c) {
-                return Err(format!(
-                    "cannot replay '{c}': frames are recorded downsampled"
-                ));
+                return Err(format!("cannot replay '{c}': frames are recorded downsampled").into());
             }
             if !REPLAYABLE.contains(&c.as_str()) {
                 return Err(format!(
                     "cannot replay '{c}'; replayable channels: {}",
                     REPLAYABLE.join(", ")
-                ));
+                )
+                .into());
             }
         }
     }
@@ -134,8 +145,8 @@ fn body() -> Result<(), String> {
     // messages of the chosen channels: (log time, channel, JSON bytes)
     let mut msgs: Vec<(u64, &'static str, Vec<u8>)> = Vec::new();
     let mut in_file: BTreeMap<String, u64> = BTreeMap::new();
-    for m in mcap::MessageStream::new(&buf).map_err(|e| format!("{file}: {e}"))? {
-        let m = m.map_err(|e| format!("{file}: {e}"))?;
+    for m in mcap::MessageStream::new(&buf).map_err(ReadError::mcap(file))? {
+        let m = m.map_err(ReadError::mcap(file))?;
         let topic = m.channel.topic.as_str();
         *in_file.entry(topic.to_string()).or_default() += 1;
         let Some(&name) = REPLAYABLE.iter().find(|c| **c == topic) else {
@@ -155,12 +166,12 @@ fn body() -> Result<(), String> {
     if let Some(req) = &requested {
         for c in req {
             if !chosen.contains(&c.as_str()) {
-                return Err(format!("{file} holds no '{c}' messages"));
+                return Err(format!("{file} holds no '{c}' messages").into());
             }
         }
     }
     if msgs.is_empty() {
-        return Err(format!("{file}: nothing to replay"));
+        return Err(format!("{file}: nothing to replay").into());
     }
     let skipped: Vec<&String> = in_file
         .keys()
@@ -177,17 +188,19 @@ fn body() -> Result<(), String> {
             .join(", ")
     );
 
-    let shutdown = Shutdown::install().map_err(|e| e.to_string())?;
-    let node = node(&format!("replay{}", std::process::id()), prefix).map_err(|e| e.to_string())?;
-    if chosen.contains(&PERCEPTION_REPULSION) {
+    let shutdown = Shutdown::install()?;
+    let node = node(&format!("replay{}", std::process::id()), prefix)?;
+    if chosen.contains(&PERCEPTION_REPULSION.name) {
         // recorded obstacles would steer a live controller's avoidance
-        let commanded = open_existing_pubsub::<TorqueCommand>(&node, ROBOT_COMMAND)
-            .map_err(|e| e.to_string())?
-            .is_some_and(|f| f.dynamic_config().number_of_publishers() > 0);
+        let commanded = ROBOT_COMMAND
+            .ports(&node)?
+            .is_some_and(|(publishers, _)| publishers > 0);
         if commanded {
             return Err(format!(
-                "refusing to replay '{PERCEPTION_REPULSION}' into prefix '{prefix}': a controller publishes '{ROBOT_COMMAND}' there and would avoid recorded obstacles (leave it out with --channels)"
-            ));
+                "refusing to replay '{}' into prefix '{prefix}': a controller publishes '{}' there and would avoid recorded obstacles (leave it out with --channels)",
+                PERCEPTION_REPULSION.name, ROBOT_COMMAND.name
+            )
+            .into());
         }
     }
     let mut outs: BTreeMap<&'static str, Box<dyn Out>> = BTreeMap::new();

@@ -1,0 +1,83 @@
+//! Errors of the configuration, each naming the file and the key at fault.
+
+use std::path::PathBuf;
+
+/// A value that is well-typed but out of range: `key` is dotted (`control.kp`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{key}: {reason}")]
+pub struct Invalid {
+    pub key: String,
+    pub reason: String,
+}
+
+impl Invalid {
+    pub fn new(key: impl Into<String>, reason: impl Into<String>) -> Invalid {
+        Invalid {
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Why a configuration could not be loaded. `origin` is the file (or
+/// `<defaults>`, `--set`), so that every message names where to look.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// TOML syntax error
+    #[error("{origin}: {message}")]
+    Parse { origin: String, message: String },
+    #[error("--set '{0}': expected section.key=value")]
+    Override(String),
+    /// a section or key the configuration does not have
+    #[error("{origin}: unknown section [{section}] (known: {known})")]
+    UnknownSection {
+        origin: String,
+        section: String,
+        known: String,
+    },
+    /// a key of a known section with a wrong type or an unknown name
+    #[error("{origin}: {key}: {message}")]
+    Key {
+        origin: String,
+        key: String,
+        message: String,
+    },
+    /// a well-typed value out of range
+    #[error("{origin}: {invalid}")]
+    Invalid {
+        origin: String,
+        #[source]
+        invalid: Invalid,
+    },
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
+    #[error("--scenario: '{name}' is neither a file nor a scenario in {dir}")]
+    NoScenario { name: String, dir: String },
+    #[error("{}", model_message(path, source))]
+    Model {
+        path: PathBuf,
+        source: phri_model::ModelError,
+    },
+    #[error("{}: {joints} joints, the messages carry at most {max}", path.display())]
+    TooManyJoints {
+        path: PathBuf,
+        joints: usize,
+        max: usize,
+    },
+}
+
+/// The model's error, prefixed with the file unless it names it already.
+fn model_message(path: &std::path::Path, e: &phri_model::ModelError) -> String {
+    let m = e.to_string();
+    let p = path.display().to_string();
+    if m.starts_with(&p) {
+        m
+    } else {
+        format!("{p}: {m}")
+    }
+}

@@ -1,0 +1,454 @@
+//! phri's configuration model: one place that loads `deploy/phri.toml`, a
+//! scenario and `--set` overrides into typed, validated sections, used by the
+//! supervisor, every service, the lock-step cell and the tools.
+//!
+//! Defaults are written once: `deploy/phri.toml`, embedded here at build time
+//! ([`DEFAULTS`]), is the base every configuration is merged over, so a file
+//! needs only the keys it changes. Order of precedence (last wins): the
+//! defaults, the configuration file, the scenario's `[config]`, `--set`.
+//! Unknown sections and keys are refused, naming them; values are range-checked
+//! ([`Config::validate`]) and, given the robot model, checked against it
+//! ([`Config::check_model`]: joint counts, link names).
+
+pub mod check;
+pub mod collaboration;
+pub mod control;
+pub mod dynamics;
+pub mod error;
+pub mod human_script;
+pub mod merge;
+pub mod per_joint;
+pub mod perception;
+pub mod record;
+pub mod scenario;
+pub mod sim;
+pub mod supervisor;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use toml::{Table, Value};
+
+pub use collaboration::{CollaborationConfig, GestureConfig, OnRequest, SkeletonConfig};
+pub use control::{AvoidanceParams, ControlConfig};
+pub use dynamics::ResidualConfig;
+pub use error::{ConfigError, Invalid};
+pub use human_script::{HumanScript, Keyframe, ScriptError};
+pub use merge::{apply_set, merge};
+pub use per_joint::PerJoint;
+pub use perception::{CameraConfig, DepthSource, IngestConfig, PointConfig, RepulsionConfig};
+pub use record::{Compression, RecordConfig};
+pub use scenario::{Scenario, ScenarioError};
+pub use sim::SimConfig;
+pub use supervisor::{ServiceSpec, SupervisorConfig};
+
+/// The default configuration: `deploy/phri.toml` as built.
+pub const DEFAULTS: &str = include_str!("../../../deploy/phri.toml");
+
+/// Where the defaults' relative paths (`[robot] urdf`) resolve when a
+/// configuration file does not say otherwise.
+pub const DEFAULT_DEPLOY_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../deploy");
+
+/// `[robot]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSection {
+    /// robot description (URDF), relative to the configuration file
+    pub urdf: String,
+}
+
+/// `[scenario]`: which scenario the cell runs (set by the supervisor in the
+/// merged file it hands to the services).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioSection {
+    pub name: String,
+    /// absolute path of the scenario file ("": none, free motion without a person)
+    pub file: String,
+}
+
+/// The whole configuration, typed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    pub robot: RobotSection,
+    pub supervisor: SupervisorConfig,
+    pub services: BTreeMap<String, ServiceSpec>,
+    pub sim: SimConfig,
+    pub camera: CameraConfig,
+    pub perception: IngestConfig,
+    pub repulsion: RepulsionConfig,
+    pub dynamics: ResidualConfig,
+    pub control: ControlConfig,
+    pub record: RecordConfig,
+    pub skeleton: SkeletonConfig,
+    pub gesture: GestureConfig,
+    pub collaboration: CollaborationConfig,
+    #[serde(default)]
+    pub scenario: ScenarioSection,
+}
+
+/// A configuration as loaded: typed, its scenario, and the merged table
+/// (what the supervisor writes for its services).
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub config: Config,
+    pub scenario: Scenario,
+    /// the merged table, paths made absolute
+    pub table: Table,
+    /// the file it was loaded from (`<defaults>` when none)
+    pub origin: PathBuf,
+}
+
+fn parse_table(text: &str, origin: &str) -> Result<Table, ConfigError> {
+    text.parse::<Table>()
+        .map_err(|e: toml::de::Error| ConfigError::Parse {
+            origin: origin.to_string(),
+            message: e.message().trim_end().to_string(),
+        })
+}
+
+/// The defaults as a table.
+pub fn defaults_table() -> Table {
+    // the embedded file is checked by this crate's tests
+    parse_table(DEFAULTS, "<defaults>").unwrap_or_default()
+}
+
+/// The defaults with `[robot] urdf` made absolute (in [`DEFAULT_DEPLOY_DIR`]).
+fn defaults_table_resolved() -> Table {
+    let mut table = defaults_table();
+    absolute_urdf(
+        &mut table,
+        Path::new(DEFAULT_DEPLOY_DIR).join("phri.toml").as_path(),
+    );
+    table
+}
+
+/// `[robot] urdf` resolved against `base_file` ([`resolve`]) and made absolute.
+fn absolute_urdf(table: &mut Table, base_file: &Path) {
+    let urdf = table
+        .get("robot")
+        .and_then(|r| r.get("urdf"))
+        .and_then(|u| u.as_str())
+        .map(|u| resolve(base_file, u));
+    if let (Some(urdf), Some(Value::Table(robot))) = (urdf, table.get_mut("robot")) {
+        let urdf = std::fs::canonicalize(&urdf).unwrap_or(urdf);
+        robot.insert("urdf".into(), Value::String(urdf.display().to_string()));
+    }
+}
+
+/// `path` as given if absolute, else relative to the directory of `base_file`,
+/// then to the current directory, then to the defaults' directory.
+pub fn resolve(base_file: &Path, path: &str) -> PathBuf {
+    let p = Path::new(path);
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    let candidates = [
+        base_file.parent().map(|d| d.join(p)),
+        Some(p.to_path_buf()),
+        Some(Path::new(DEFAULT_DEPLOY_DIR).join(p)),
+    ];
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|c| c.exists())
+        .unwrap_or_else(|| p.to_path_buf())
+}
+
+impl Config {
+    /// The defaults (`deploy/phri.toml` as built), typed.
+    pub fn defaults() -> Config {
+        // the embedded file is checked by this crate's tests
+        Config::from_table(&defaults_table_resolved(), "<defaults>")
+            .expect("deploy/phri.toml is a valid configuration")
+    }
+
+    /// Type a merged table: unknown sections and keys are refused, naming them.
+    pub fn from_table(table: &Table, origin: &str) -> Result<Config, ConfigError> {
+        const KNOWN: &[&str] = &[
+            "robot",
+            "supervisor",
+            "services",
+            "sim",
+            "camera",
+            "perception",
+            "repulsion",
+            "dynamics",
+            "control",
+            "record",
+            "skeleton",
+            "gesture",
+            "collaboration",
+            "scenario",
+        ];
+        if let Some(k) = table.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(ConfigError::UnknownSection {
+                origin: origin.to_string(),
+                section: k.clone(),
+                known: KNOWN.join(", "),
+            });
+        }
+        // through text, so that an error's position names the key
+        let text = toml::to_string(table).map_err(|e| ConfigError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        let mut config: Config = toml::from_str(&text).map_err(|e: toml::de::Error| {
+            let key = e
+                .span()
+                .map(|s| {
+                    scenario::locate(&text, s.start, e.message().starts_with("missing field")).1
+                })
+                .unwrap_or_default();
+            ConfigError::Key {
+                origin: origin.to_string(),
+                key: if key.is_empty() { "<top>".into() } else { key },
+                message: e.message().trim_end().to_string(),
+            }
+        })?;
+        config.control.avoidance_params.v_max_repulsion = config.repulsion.params.v_max;
+        Ok(config)
+    }
+
+    /// Range checks of every section, naming the key at fault.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        self.supervisor.validate()?;
+        for (name, s) in &self.services {
+            s.validate(name)?;
+        }
+        if self.services.values().filter(|s| s.enabled).count() > phri_ipc::MAX_SERVICES {
+            return Err(Invalid::new(
+                "services",
+                format!("at most {} enabled services", phri_ipc::MAX_SERVICES),
+            ));
+        }
+        self.sim.validate()?;
+        self.camera.validate()?;
+        self.perception.validate()?;
+        self.repulsion.validate()?;
+        self.dynamics.validate()?;
+        self.control.validate()?;
+        self.record.validate()?;
+        self.skeleton.validate()?;
+        self.gesture.validate()?;
+        self.collaboration.validate()?;
+        Ok(())
+    }
+
+    /// Checks against the robot model: per-joint lists have one value per
+    /// joint, named links exist, and every joint moves some mass at the start
+    /// posture `sim.q0` (`M(q0)` positive definite), naming the joint that does not.
+    pub fn check_model(&self, model: &phri_model::Model) -> Result<(), Invalid> {
+        let n = model.nv();
+        let len = |key: &str, v: &[f64]| {
+            if v.len() == n {
+                Ok(())
+            } else {
+                Err(Invalid::new(
+                    key,
+                    format!("has {} values, the robot has {n} joints", v.len()),
+                ))
+            }
+        };
+        len("sim.q0", &self.sim.q0)?;
+        self.sim
+            .viscous_friction
+            .resolve(n, "sim.viscous_friction")?;
+        self.sim
+            .coulomb_friction
+            .resolve(n, "sim.coulomb_friction")?;
+        self.sim
+            .brake_torque_max
+            .resolve(n, "sim.brake_torque_max")?;
+        let d = &self.dynamics;
+        d.gain.resolve(n, "dynamics.gain")?;
+        d.contact_threshold
+            .resolve(n, "dynamics.contact_threshold")?;
+        d.collision_threshold
+            .resolve(n, "dynamics.collision_threshold")?;
+        d.viscous_friction.resolve(n, "dynamics.viscous_friction")?;
+        d.coulomb_friction.resolve(n, "dynamics.coulomb_friction")?;
+        if !self.control.posture.is_empty() {
+            len("control.posture", &self.control.posture)?;
+        }
+        let link = |key: String, name: &str| {
+            if name.is_empty() || model.frame_id(name).is_ok() {
+                Ok(())
+            } else {
+                Err(Invalid::new(key, format!("the robot has no link '{name}'")))
+            }
+        };
+        link("control.ee_link".into(), &self.control.ee_link)?;
+        link("dynamics.ft_link".into(), &d.ft_link)?;
+        link(
+            "collaboration.robot_link".into(),
+            &self.collaboration.robot_link,
+        )?;
+        for (i, p) in self.repulsion.points.iter().enumerate() {
+            link(format!("repulsion.points[{i}].link"), &p.link)?;
+        }
+        if let Some(joint) = singular_at(model, &self.sim.q0) {
+            return Err(Invalid::new(
+                "robot.urdf",
+                format!(
+                    "joint '{joint}' of {} moves no mass at the start posture sim.q0 \
+                     (the joint-space inertia matrix is singular there)",
+                    self.robot.urdf
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The joint at which `M(q)` stops being positive definite, if it does: a
+/// pivot of its Cholesky factor at or below 1e-9 of the largest diagonal
+/// entry means that joint's motion moves nothing its predecessors do not
+/// (no mass off its axis, or coaxial with another joint through massless
+/// links). The model refuses joints that move no mass at any `q`; this
+/// catches the configuration-dependent cases at the posture the cell starts in.
+fn singular_at<'m>(model: &'m phri_model::Model, q: &[f64]) -> Option<&'m str> {
+    let mut data = phri_model::Data::new(model);
+    let mut m = phri_model::crba(model, &mut data, q).ok()?.clone();
+    let largest = m.diagonal().amax();
+    phri_model::cholesky_factor(m.as_view_mut(), largest * 1e-9)
+        .err()
+        .and_then(|e| model.joints.get(e.index))
+        .map(|j| j.name.as_str())
+}
+
+/// `name` as a scenario: a file, or `NAME.toml` in `scenarios/` beside the configuration.
+pub fn find_scenario(name: &str, config_path: &Path) -> Result<PathBuf, ConfigError> {
+    let dir = config_path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join("scenarios");
+    let candidates = [
+        PathBuf::from(name),
+        dir.join(format!("{name}.toml")),
+        Path::new(DEFAULT_DEPLOY_DIR)
+            .join("scenarios")
+            .join(format!("{name}.toml")),
+    ];
+    candidates
+        .into_iter()
+        .find(|p| p.is_file())
+        .ok_or_else(|| ConfigError::NoScenario {
+            name: name.to_string(),
+            dir: dir.display().to_string(),
+        })
+}
+
+impl Loaded {
+    /// Load `path` over the defaults; then `scenario` (a file or a name in
+    /// `scenarios/` beside `path`: its `[config]` merges over the file); then
+    /// `sets` (`section.key=value`). Without `scenario`, the file's own
+    /// `[scenario] file` (written by the supervisor) gives the person's script,
+    /// its `[config]` already merged.
+    pub fn load(path: &Path, scenario: Option<&str>, sets: &[&str]) -> Result<Loaded, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::load_text(&text, path, scenario, sets)
+    }
+
+    /// As [`Loaded::load`], from the file's text (`path` names it and anchors relative paths).
+    pub fn load_text(
+        text: &str,
+        path: &Path,
+        scenario: Option<&str>,
+        sets: &[&str],
+    ) -> Result<Loaded, ConfigError> {
+        let origin = path.display().to_string();
+        let mut table = defaults_table();
+        merge(&mut table, &parse_table(text, &origin)?);
+        let scen = match scenario {
+            Some(name) => {
+                let file = find_scenario(name, path)?;
+                let abs = std::fs::canonicalize(&file).unwrap_or(file);
+                let s = Scenario::from_file(&abs)?;
+                merge(&mut table, &s.config);
+                let mut sect = Table::new();
+                sect.insert("name".into(), Value::String(s.name.clone()));
+                sect.insert("file".into(), Value::String(abs.display().to_string()));
+                table.insert("scenario".into(), Value::Table(sect));
+                Some(s)
+            }
+            None => None,
+        };
+        for s in sets {
+            apply_set(&mut table, s)?;
+        }
+        // relative paths anchored at the file that gave them
+        absolute_urdf(&mut table, path);
+        let config = Config::from_table(&table, &origin)?;
+        config.validate().map_err(|invalid| ConfigError::Invalid {
+            origin: origin.clone(),
+            invalid,
+        })?;
+        let scenario = match scen {
+            Some(s) => s,
+            None if !config.scenario.file.is_empty() => {
+                let mut s = Scenario::from_file(&config.scenario.file)?;
+                s.config = Table::new(); // merged already
+                s
+            }
+            None => Scenario::free_motion(),
+        };
+        Ok(Loaded {
+            config,
+            scenario,
+            table,
+            origin: path.to_path_buf(),
+        })
+    }
+
+    /// The defaults alone, with the default scenario (free motion).
+    pub fn defaults() -> Loaded {
+        let table = defaults_table_resolved();
+        Loaded {
+            config: Config::defaults(),
+            scenario: Scenario::free_motion(),
+            table,
+            origin: PathBuf::from("<defaults>"),
+        }
+    }
+
+    /// The robot description's path (absolute once loaded).
+    pub fn urdf(&self) -> PathBuf {
+        PathBuf::from(&self.config.robot.urdf)
+    }
+
+    /// The robot model, refused when it has more joints than the messages
+    /// carry or when the configuration does not fit it.
+    pub fn model(&self) -> Result<phri_model::Model, ConfigError> {
+        let path = self.urdf();
+        let model =
+            phri_model::Model::from_urdf_file(&path).map_err(|source| ConfigError::Model {
+                path: path.clone(),
+                source,
+            })?;
+        if model.nv() > phri_ipc::MAX_DOF {
+            return Err(ConfigError::TooManyJoints {
+                path,
+                joints: model.nv(),
+                max: phri_ipc::MAX_DOF,
+            });
+        }
+        self.config
+            .check_model(&model)
+            .map_err(|invalid| ConfigError::Invalid {
+                origin: self.origin.display().to_string(),
+                invalid,
+            })?;
+        Ok(model)
+    }
+
+    /// The merged table as TOML (what the supervisor hands its services).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(&self.table).unwrap_or_default()
+    }
+}

@@ -1,0 +1,77 @@
+//! Merging tables: the defaults, the configuration file, a scenario's
+//! `[config]` and `--set section.key=value` overrides, in that order.
+
+use toml::{Table, Value};
+
+use crate::error::ConfigError;
+
+/// Deep-merge `over` into `base` (tables merge key by key; anything else,
+/// arrays included, is replaced).
+pub fn merge(base: &mut Table, over: &Table) {
+    for (k, v) in over {
+        match (base.get_mut(k), v) {
+            (Some(Value::Table(b)), Value::Table(o)) => merge(b, o),
+            _ => {
+                base.insert(k.clone(), v.clone());
+            }
+        }
+    }
+}
+
+/// Apply one `section.key=value` (any depth; the value is TOML, or a bare string).
+pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
+    let (path, value) = set
+        .split_once('=')
+        .ok_or_else(|| ConfigError::Override(set.to_string()))?;
+    let keys: Vec<&str> = path.trim().split('.').collect();
+    if keys.len() < 2 || keys.iter().any(|k| k.is_empty()) {
+        return Err(ConfigError::Override(set.to_string()));
+    }
+    let value = value.trim();
+    let parsed: Value = format!("v = {value}")
+        .parse::<Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| Value::String(value.to_string()));
+    let mut cur = table;
+    for k in &keys[..keys.len() - 1] {
+        let entry = cur
+            .entry(k.to_string())
+            .or_insert_with(|| Value::Table(Table::new()));
+        cur = match entry {
+            Value::Table(t) => t,
+            _ => return Err(ConfigError::Override(set.to_string())),
+        };
+    }
+    cur.insert(keys[keys.len() - 1].to_string(), parsed);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_overrides_typed_values_and_creates_sections() {
+        let mut t: Table = "[control]\nreaction = \"reflex\"\nk = 1.0\n"
+            .parse()
+            .unwrap();
+        apply_set(&mut t, "control.reaction=stop").unwrap();
+        apply_set(&mut t, "control.k=2.5").unwrap();
+        apply_set(&mut t, "sim.q0=[0.0, 1.0]").unwrap();
+        assert_eq!(t["control"]["reaction"].as_str(), Some("stop"));
+        assert_eq!(t["control"]["k"].as_float(), Some(2.5));
+        assert_eq!(t["sim"]["q0"].as_array().map(|a| a.len()), Some(2));
+        assert!(apply_set(&mut t, "nokey").is_err());
+        assert!(apply_set(&mut t, "control.reaction.x=1").is_err());
+    }
+
+    #[test]
+    fn merge_is_deep() {
+        let mut a: Table = "[s]\nx = 1\ny = 2\n".parse().unwrap();
+        let b: Table = "[s]\ny = 3\n".parse().unwrap();
+        merge(&mut a, &b);
+        assert_eq!(a["s"]["x"].as_integer(), Some(1));
+        assert_eq!(a["s"]["y"].as_integer(), Some(3));
+    }
+}

@@ -1,0 +1,278 @@
+//! Scenarios: a named run of the cell with an optional scripted human and
+//! configuration overrides (merged by [`crate::Loaded::load`]), read from TOML.
+//!
+//! ```toml
+//! name = "collision"                 # the only required field
+//! description = "a person walks into the moving forearm"   # default ""
+//! duration_s = 16.0                  # default run length [s], default 60
+//!
+//! [human]                            # optional: no table, no human
+//! floor_z = -0.8                     # soles' height in the robot base frame [m], default -0.8
+//! collaborative_parts = ["hand_right"]   # contacts with these parts are intended, default none
+//! repeat_s = 30.0                    # optional: the script starts over every 30 s, default: plays once
+//!
+//! [[human.keyframe]]                 # at least one; strictly increasing t
+//! t = 0.0                            # [s]
+//! base = [1.2, 0.0, 3.14159]         # floor x, y [m] and heading yaw [rad], base frame
+//! right_hand = [0.4, 0.1, 0.5]       # optional hand target [m], base frame; absent: hangs
+//! left_hand = [0.4, -0.1, 0.5]       # optional
+//!
+//! [config]                           # optional, any tables: overrides for the services,
+//! sim = { substeps = 8 }             # kept as an opaque toml::Table
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use phri_ipc::BodyPart;
+
+use crate::human_script::{HumanScript, Keyframe, ScriptError};
+
+/// A loaded, checked scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenario {
+    pub name: String,
+    pub description: String,
+    /// default run length \[s\] ([`Scenario::DEFAULT_DURATION_S`] when the file gives none)
+    pub duration_s: f64,
+    /// the scripted human, if any
+    pub human: Option<HumanScript>,
+    /// human parts whose contacts are intended (collaboration); empty without a human
+    pub collaborative_parts: Vec<BodyPart>,
+    /// configuration overrides, uninterpreted here
+    pub config: toml::Table,
+}
+
+/// Why a scenario could not be loaded. `origin` is the file path (or
+/// `<scenario>` for text), `field` a dotted path such as `human.keyframe[2].t`.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// TOML syntax, a missing or unknown field or a wrong type, at `line`
+    /// (1-based; 0 when unknown) in the table or key `field` (empty when unknown)
+    #[error("{origin}:{line}: {}{message}", if field.is_empty() { String::new() } else { format!("{field}: ") })]
+    Parse {
+        origin: String,
+        line: usize,
+        field: String,
+        message: String,
+    },
+    #[error("{origin}: {field}: {reason}")]
+    Invalid {
+        origin: String,
+        field: String,
+        reason: String,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScenario {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default = "default_duration_s")]
+    duration_s: f64,
+    human: Option<RawHuman>,
+    #[serde(default)]
+    config: toml::Table,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHuman {
+    #[serde(default = "default_floor_z")]
+    floor_z: f64,
+    #[serde(default)]
+    collaborative_parts: Vec<String>,
+    #[serde(default)]
+    keyframe: Vec<RawKeyframe>,
+    repeat_s: Option<f64>,
+}
+
+fn default_duration_s() -> f64 {
+    Scenario::DEFAULT_DURATION_S
+}
+
+fn default_floor_z() -> f64 {
+    HumanScript::DEFAULT_FLOOR_Z
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawKeyframe {
+    t: f64,
+    base: [f64; 3],
+    right_hand: Option<[f64; 3]>,
+    left_hand: Option<[f64; 3]>,
+}
+
+impl Scenario {
+    /// Run length \[s\] of a scenario that does not give `duration_s`.
+    pub const DEFAULT_DURATION_S: f64 = 60.0;
+
+    /// No person, no overrides: the arm alone (`free-motion`), for a cell run without a scenario.
+    pub fn free_motion() -> Scenario {
+        Scenario {
+            name: "free-motion".into(),
+            description: String::new(),
+            duration_s: Self::DEFAULT_DURATION_S,
+            human: None,
+            collaborative_parts: Vec::new(),
+            config: toml::Table::new(),
+        }
+    }
+
+    /// Read and check a scenario file; errors name the file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Scenario, ScenarioError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parse and check scenario text (errors name `<scenario>` as the origin).
+    #[allow(clippy::should_implement_trait)]
+    pub fn from_str(text: &str) -> Result<Scenario, ScenarioError> {
+        Self::parse(text, "<scenario>")
+    }
+
+    fn parse(text: &str, origin: &str) -> Result<Scenario, ScenarioError> {
+        let raw: RawScenario = toml::from_str(text).map_err(|e| {
+            // a missing field is reported at the start of its table, not at a key
+            let table_only = e.message().starts_with("missing field");
+            let (line, field) = match e.span() {
+                Some(span) => locate(text, span.start, table_only),
+                None => (0, String::new()),
+            };
+            ScenarioError::Parse {
+                origin: origin.to_string(),
+                line,
+                field,
+                message: e.message().trim_end().to_string(),
+            }
+        })?;
+        let invalid = |field: String, reason: String| ScenarioError::Invalid {
+            origin: origin.to_string(),
+            field,
+            reason,
+        };
+        if !(raw.duration_s.is_finite() && raw.duration_s > 0.0) {
+            return Err(invalid(
+                "duration_s".into(),
+                format!("{} is not a positive number of seconds", raw.duration_s),
+            ));
+        }
+        let (human, collaborative_parts) = match raw.human {
+            None => (None, Vec::new()),
+            Some(h) => {
+                let mut parts = Vec::with_capacity(h.collaborative_parts.len());
+                for (i, name) in h.collaborative_parts.iter().enumerate() {
+                    let part = BodyPart::from_name(name).map_err(|e| {
+                        invalid(
+                            format!("human.collaborative_parts[{i}]"),
+                            format!("unknown body part '{name}' (known: {})", e.expected),
+                        )
+                    })?;
+                    if !parts.contains(&part) {
+                        parts.push(part);
+                    }
+                }
+                let keyframes = h
+                    .keyframe
+                    .into_iter()
+                    .map(|k| Keyframe {
+                        t: k.t,
+                        base: k.base,
+                        right_hand: k.right_hand,
+                        left_hand: k.left_hand,
+                    })
+                    .collect();
+                let script = HumanScript::new(h.floor_z, keyframes).map_err(|e| match e {
+                    ScriptError::FloorZ(v) => invalid("human.floor_z".into(), format!("{v} is not a finite number")),
+                    ScriptError::NoKeyframe => invalid("human.keyframe".into(), "a human needs at least one [[human.keyframe]]".into()),
+                    ScriptError::NotFinite { index, field } => invalid(format!("human.keyframe[{index}].{field}"), "not a finite number".into()),
+                    ScriptError::Unsorted { index, t, previous } => {
+                        invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))
+                    }
+                    ScriptError::Repeat { .. } => invalid("human.repeat_s".into(), e.to_string()),
+                })?;
+                let script = match h.repeat_s {
+                    None => script,
+                    Some(r) => script
+                        .repeating(r)
+                        .map_err(|e| invalid("human.repeat_s".into(), e.to_string()))?,
+                };
+                (Some(script), parts)
+            }
+        };
+        Ok(Scenario {
+            name: raw.name,
+            description: raw.description,
+            duration_s: raw.duration_s,
+            human,
+            collaborative_parts,
+            config: raw.config,
+        })
+    }
+}
+
+/// 1-based line of byte `offset` in `text` and the dotted field there, such as
+/// `human.keyframe[2].t` (the key of the nearest `key =` line at or before it,
+/// in the table of the nearest header; the table alone when the offset is on
+/// a header, or with `table_only`). A best-effort reading of plain TOML for
+/// error messages.
+pub(crate) fn locate(text: &str, offset: usize, table_only: bool) -> (usize, String) {
+    let offset = offset.min(text.len());
+    let line_no = text.as_bytes()[..offset]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1;
+    let mut table = String::new();
+    let mut arrays: Vec<(String, usize)> = Vec::new();
+    let mut key: Option<String> = None;
+    for line in text.lines().take(line_no) {
+        let l = line.trim();
+        if let Some(name) = l.strip_prefix("[[").and_then(|r| r.split("]]").next()) {
+            let name = name.trim().to_string();
+            let count = match arrays.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, c)) => {
+                    *c += 1;
+                    *c
+                }
+                None => {
+                    arrays.push((name.clone(), 1));
+                    1
+                }
+            };
+            table = format!("{name}[{}]", count - 1);
+            key = None;
+        } else if let Some(name) = l.strip_prefix('[').and_then(|r| r.split(']').next()) {
+            table = name.trim().to_string();
+            key = None;
+        } else if let Some((k, _)) = l.split_once('=') {
+            let k = k.trim();
+            if !k.is_empty()
+                && !k.starts_with('#')
+                && k.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "_-.\"' ".contains(c))
+            {
+                key = Some(k.trim_matches('"').to_string());
+            }
+        }
+    }
+    let field = match (table.is_empty(), key.filter(|_| !table_only)) {
+        (true, Some(k)) => k,
+        (false, Some(k)) => format!("{table}.{k}"),
+        (_, None) => table,
+    };
+    (line_no, field)
+}

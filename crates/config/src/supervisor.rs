@@ -1,0 +1,149 @@
+//! `[supervisor]` and `[services.NAME]`: how the cell is started and watched.
+
+use serde::{Deserialize, Serialize};
+
+use crate::check::positive;
+use crate::error::Invalid;
+
+/// How the supervisor behaves (defaults: `deploy/phri.toml`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupervisorConfig {
+    /// first restart delay after a crash [ms]; doubles on each quick crash
+    pub restart_backoff_min_ms: u64,
+    /// largest restart delay [ms]
+    pub restart_backoff_max_ms: u64,
+    /// a service that ran this long is healthy again: the back-off resets [s]
+    pub stable_after_s: f64,
+    /// time a service gets to exit after SIGTERM before SIGKILL [ms]
+    pub shutdown_grace_ms: u64,
+    /// health publication rate [Hz]
+    pub health_hz: f64,
+    /// a service silent on its output channel this long is reported frozen [ms]
+    pub heartbeat_timeout_ms: u64,
+    /// services of a cell whose supervisor has published nothing for this
+    /// long stop safely (the robot braked) [s]; long enough for a new
+    /// supervisor to take the cell over
+    pub deadman_s: f64,
+    /// a service restarted more than this many times within
+    /// `crash_loop_window_s` ends the run (ordered shutdown, a degraded
+    /// report, non-zero exit) instead of crash-looping until the end
+    pub crash_loop_restarts: u32,
+    /// the window of `crash_loop_restarts` [s]
+    pub crash_loop_window_s: f64,
+    /// start-up lasts this long after the last service is started [s]: a
+    /// service that exits before then fails the start (everything started is
+    /// stopped, the supervisor exits non-zero) instead of being restarted
+    pub startup_s: f64,
+}
+
+impl SupervisorConfig {
+    pub fn validate(&self) -> Result<(), Invalid> {
+        positive("supervisor", "stable_after_s", self.stable_after_s)?;
+        positive("supervisor", "health_hz", self.health_hz)?;
+        positive("supervisor", "deadman_s", self.deadman_s)?;
+        positive(
+            "supervisor",
+            "crash_loop_window_s",
+            self.crash_loop_window_s,
+        )?;
+        positive("supervisor", "startup_s", self.startup_s)?;
+        if self.deadman_s * self.health_hz < 5.0 {
+            return Err(Invalid::new(
+                "supervisor.deadman_s",
+                format!(
+                    "{} s is less than 5 health periods at {} Hz",
+                    self.deadman_s, self.health_hz
+                ),
+            ));
+        }
+        if self.restart_backoff_min_ms > self.restart_backoff_max_ms {
+            return Err(Invalid::new(
+                "supervisor.restart_backoff_min_ms",
+                "larger than restart_backoff_max_ms",
+            ));
+        }
+        if self.heartbeat_timeout_ms == 0 {
+            return Err(Invalid::new(
+                "supervisor.heartbeat_timeout_ms",
+                "must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One supervised service (`[services.NAME]`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServiceSpec {
+    /// executable name, looked up beside the supervisor's own executable
+    pub binary: String,
+    /// start order (low first); shutdown runs in reverse
+    #[serde(default)]
+    pub order: i32,
+    /// SCHED_FIFO priority (0: normal scheduler)
+    #[serde(default)]
+    pub rt_priority: i32,
+    /// restart when it exits
+    #[serde(default = "yes")]
+    pub restart: bool,
+    /// extra arguments
+    #[serde(default)]
+    pub args: Vec<String>,
+    /// pause after starting it before starting the next one [ms]
+    #[serde(default)]
+    pub start_delay_ms: u64,
+    /// disabled services are not started
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// channel the service publishes on continuously; silence there while it
+    /// runs means it is frozen (it is then killed and restarted)
+    #[serde(default)]
+    pub heartbeat: Option<String>,
+    /// silence on `heartbeat` longer than this is frozen [ms] (default: the
+    /// supervisor's `heartbeat_timeout_ms`)
+    #[serde(default)]
+    pub heartbeat_timeout_ms: Option<u64>,
+    /// services whose silence explains this one's (it is not judged while they are silent)
+    #[serde(default)]
+    pub depends_on: Vec<String>,
+    /// CPUs the service may run on (empty: any)
+    #[serde(default)]
+    pub cpus: Vec<usize>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl ServiceSpec {
+    /// Checks of one service's entry (`name` is its key under `[services]`).
+    pub fn validate(&self, name: &str) -> Result<(), Invalid> {
+        let key = |k: &str| format!("services.{name}.{k}");
+        if self.binary.is_empty() || self.binary.contains('/') {
+            return Err(Invalid::new(
+                key("binary"),
+                format!(
+                    "'{}' must be a file name beside phri-supervisor",
+                    self.binary
+                ),
+            ));
+        }
+        if !(0..=99).contains(&self.rt_priority) {
+            return Err(Invalid::new(
+                key("rt_priority"),
+                format!("{} is not in 0..=99", self.rt_priority),
+            ));
+        }
+        if let Some(h) = &self.heartbeat {
+            if !phri_ipc::ALL.contains(&h.as_str()) {
+                return Err(Invalid::new(
+                    key("heartbeat"),
+                    format!("'{h}' is not a channel of the cell"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

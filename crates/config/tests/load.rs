@@ -1,0 +1,171 @@
+//! Loading: the defaults are valid, precedence is defaults < file < scenario
+//! < --set, and every refusal names its key.
+
+use std::path::{Path, PathBuf};
+
+use phri_config::{Config, ConfigError, Loaded, PerJoint};
+
+fn deploy() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/phri.toml")
+}
+
+fn load(sets: &[&str]) -> Result<Loaded, ConfigError> {
+    Loaded::load(&deploy(), None, sets)
+}
+
+fn err(sets: &[&str]) -> String {
+    load(sets).unwrap_err().to_string()
+}
+
+#[test]
+fn the_defaults_are_a_valid_configuration_for_the_default_robot() {
+    let d = Loaded::defaults();
+    d.config.validate().unwrap();
+    let model = d.model().unwrap();
+    assert_eq!(model.nv(), 7);
+    assert_eq!(Config::defaults(), d.config);
+    // one value in one place: V_max of the avoidance is the repulsion's
+    assert_eq!(
+        d.config.control.avoidance_params.v_max_repulsion,
+        d.config.repulsion.params.v_max
+    );
+    let l = load(&[]).unwrap();
+    assert_eq!(l.config.control, d.config.control);
+    assert!(l.urdf().is_absolute() && l.urdf().is_file());
+}
+
+#[test]
+fn a_file_needs_only_the_keys_it_changes() {
+    let l = Loaded::load_text("[control]\nkp = 123.0\n", &deploy(), None, &[]).unwrap();
+    assert_eq!(l.config.control.kp, 123.0);
+    assert_eq!(l.config.control.kd, Config::defaults().control.kd);
+    l.model().unwrap();
+}
+
+#[test]
+fn precedence_is_file_then_scenario_then_set() {
+    // the elbow scenario sets no control key; collision's [config] is empty too,
+    // so write a scenario of our own
+    let dir = std::env::temp_dir().join(format!("phri-config-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scen = dir.join("s.toml");
+    std::fs::write(
+        &scen,
+        "name = \"s\"\nduration_s = 3.0\n[config]\ncontrol = { kp = 111.0, kd = 22.0 }\n",
+    )
+    .unwrap();
+    let s = scen.to_str().unwrap();
+    let l = Loaded::load(&deploy(), Some(s), &["control.kd=33"]).unwrap();
+    assert_eq!(
+        l.config.control.kp, 111.0,
+        "the scenario overrides the file"
+    );
+    assert_eq!(l.config.control.kd, 33.0, "--set overrides the scenario");
+    assert_eq!(l.scenario.name, "s");
+    assert_eq!(l.config.scenario.name, "s");
+    // the merged table, written and loaded again (as a service does), is the same
+    // configuration and does not merge the scenario's [config] a second time
+    let merged = dir.join("merged.toml");
+    std::fs::write(&merged, l.to_toml()).unwrap();
+    let again = Loaded::load(&merged, None, &[]).unwrap();
+    assert_eq!(again.config, l.config);
+    assert_eq!(again.scenario.name, "s");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn scenarios_are_found_by_name_beside_the_configuration() {
+    let l = Loaded::load(&deploy(), Some("collision"), &[]).unwrap();
+    assert_eq!(l.scenario.name, "collision");
+    assert!(l.scenario.human.is_some());
+    let e = Loaded::load(&deploy(), Some("no-such-scenario"), &[]).unwrap_err();
+    assert!(e.to_string().contains("no-such-scenario"), "{e}");
+}
+
+#[test]
+fn unknown_sections_and_keys_are_refused_by_name() {
+    let e = err(&["nonsense.x=1"]);
+    assert!(e.contains("unknown section [nonsense]"), "{e}");
+    let e = err(&["control.kpp=1"]);
+    assert!(
+        e.contains("control.kpp") && e.contains("unknown field"),
+        "{e}"
+    );
+    let e = err(&["control.avoidance_params.v_max_repulsion=0.2"]);
+    assert!(e.contains("v_max_repulsion"), "{e}");
+}
+
+#[test]
+fn wrong_types_and_values_name_their_key() {
+    let e = err(&["control.kp=abc"]);
+    assert!(e.contains("control.kp"), "{e}");
+    let e = err(&["control.reaction=explode"]);
+    assert!(
+        e.contains("control.reaction") && e.contains("explode"),
+        "{e}"
+    );
+    let e = err(&["control.kp=-1"]);
+    assert!(e.contains("control.kp") && e.contains("positive"), "{e}");
+    let e = err(&["control.kp=nan"]);
+    assert!(e.contains("control.kp"), "{e}");
+    let e = err(&["camera.rate_hz=1e12"]);
+    assert!(e.contains("camera.rate_hz"), "{e}");
+    let e = err(&["perception.png_rate_hz=1e12"]);
+    assert!(e.contains("perception.png_rate_hz"), "{e}");
+    let e = err(&["repulsion.workers=0"]);
+    assert!(e.contains("repulsion.workers"), "{e}");
+    let e = err(&["services.control.heartbeat=\"control/nothing\""]);
+    assert!(e.contains("services.control.heartbeat"), "{e}");
+    let e = err(&["record.compression=gzip"]);
+    assert!(e.contains("record.compression"), "{e}");
+}
+
+#[test]
+fn per_joint_settings_are_one_number_or_one_value_per_joint() {
+    let l = load(&["dynamics.gain=[100, 100, 100, 100, 100, 100, 50]"]).unwrap();
+    l.model().unwrap();
+    let l = load(&["dynamics.gain=[100, 50]"]).unwrap();
+    let e = l.model().unwrap_err().to_string();
+    assert!(e.contains("dynamics.gain") && e.contains("7 joints"), "{e}");
+    let e = err(&["sim.viscous_friction=-1"]);
+    assert!(e.contains("sim.viscous_friction"), "{e}");
+    assert_eq!(
+        PerJoint::All(2.0).resolve(3, "k").unwrap(),
+        vec![2.0, 2.0, 2.0]
+    );
+}
+
+#[test]
+fn the_model_check_names_links_and_lengths() {
+    let e = load(&["control.ee_link=nowhere"])
+        .unwrap()
+        .model()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("control.ee_link") && e.contains("nowhere"),
+        "{e}"
+    );
+    let e = load(&[
+        "repulsion.points=[{name = \"p\", link = \"nolink\", xyz = [0.0, 0.0, 0.0], radius = 0.1}]",
+    ])
+    .unwrap()
+    .model()
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("repulsion.points[0].link"), "{e}");
+    let e = load(&["sim.q0=[0.0, 1.0]"])
+        .unwrap()
+        .model()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sim.q0"), "{e}");
+}
+
+#[test]
+fn syntax_errors_name_the_file() {
+    let e = Loaded::load_text("[control\nkp = 1", &deploy(), None, &[]).unwrap_err();
+    assert!(e.to_string().contains("phri.toml"), "{e}");
+    let e = Loaded::load(Path::new("/nonexistent/phri.toml"), None, &[]).unwrap_err();
+    assert!(e.to_string().contains("/nonexistent/phri.toml"), "{e}");
+}

@@ -1,0 +1,187 @@
+//! Scenario files and human scripts: parsing, checks and errors naming the
+//! field (moved here from the simulator's tests with the parser).
+
+use phri_config::{HumanScript, Keyframe, Scenario, ScenarioError, ScriptError};
+use phri_ipc::BodyPart;
+
+fn scenario_path(name: &str) -> String {
+    format!(
+        "{}/../../deploy/scenarios/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+#[test]
+fn shipped_scenarios_load() {
+    let free =
+        Scenario::from_file(scenario_path("free-motion.toml")).expect("free-motion.toml loads");
+    assert_eq!(free.name, "free-motion");
+    assert_eq!(free.duration_s, 60.0);
+    assert!(free.human.is_none() && free.collaborative_parts.is_empty() && free.config.is_empty());
+    let col = Scenario::from_file(scenario_path("collision.toml")).expect("collision.toml loads");
+    assert_eq!(col.duration_s, 16.0);
+    let human = col.human.expect("collision has a human");
+    assert_eq!(human.floor_z(), -0.8);
+    assert!(human.end_time() <= 13.0);
+}
+
+#[test]
+fn optional_fields_and_config_table() {
+    let sc = Scenario::from_str(&format!(
+        "{HEAD}collaborative_parts = [\"hand_right\", \"forearm_right\"]\n[[human.keyframe]]\nt = 0\nbase = [1, 0, 3]\nleft_hand = [0.5, 0.1, 0.4]\n[config.sim]\nsubsteps = 8\n[config.control]\nreaction = \"stop\"\n"
+    ))
+    .expect("valid");
+    assert_eq!(
+        sc.collaborative_parts,
+        vec![BodyPart::HandRight, BodyPart::ForearmRight]
+    );
+    let human = sc.human.expect("human");
+    assert_eq!(human.floor_z(), -0.8, "default floor");
+    assert_eq!(human.keyframes()[0].left_hand, Some([0.5, 0.1, 0.4]));
+    assert_eq!(human.keyframes()[0].right_hand, None);
+    let sim = sc
+        .config
+        .get("sim")
+        .and_then(|v| v.as_table())
+        .expect("config.sim kept");
+    assert_eq!(sim.get("substeps").and_then(|v| v.as_integer()), Some(8));
+    assert!(sc.config.contains_key("control"));
+}
+
+/// Only `name` is required: no human, the default run length, no overrides.
+#[test]
+fn minimal_scenario() {
+    let sc = Scenario::from_str("name = \"free-motion\"").expect("a name is enough");
+    assert_eq!(sc.duration_s, Scenario::DEFAULT_DURATION_S);
+    assert!(sc.human.is_none() && sc.description.is_empty() && sc.config.is_empty());
+}
+
+fn parse_err(text: &str) -> ScenarioError {
+    match Scenario::from_str(text) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+const HEAD: &str = "name = \"x\"\nduration_s = 5.0\n[human]\n";
+const K0: &str = "[[human.keyframe]]\nt = 0.0\nbase = [1.0, 0.0, 0.0]\n";
+
+/// Every malformed input is refused with an error naming the field.
+#[test]
+fn parse_errors_name_the_field() {
+    let cases: Vec<(String, &str)> = vec![
+        (format!("{HEAD}[[human.keyframe]]\nt = \"soon\"\nbase = [1.0, 0.0, 0.0]\n"), "human.keyframe[0].t"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0]\n"), "human.keyframe[1].base"),
+        (format!("{HEAD}{K0}righthand = [1.0, 0.0, 0.0]\n"), "righthand"),
+        (format!("{HEAD}[[human.keyframe]]\nt = 0.0\n"), "missing field `base`"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = 2.0\nbase = [1.0, 0.0, 0.0]\n[[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0, 0.0]\n"), "human.keyframe[2].t"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = 0.0\nbase = [1.0, 0.0, 0.0]\n"), "human.keyframe[1].t"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = nan\nbase = [1.0, 0.0, 0.0]\n"), "human.keyframe[1].t"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = 1.0\nbase = [1.0, inf, 0.0]\n"), "human.keyframe[1].base"),
+        (format!("{HEAD}{K0}[[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0, 0.0]\nright_hand = [0.5, nan, 0.3]\n"), "human.keyframe[1].right_hand"),
+        (format!("{HEAD}collaborative_parts = [\"tail\"]\n{K0}"), "human.collaborative_parts[0]"),
+        (format!("{HEAD}floor_z = inf\n{K0}"), "human.floor_z"),
+        (HEAD.to_string(), "human.keyframe"),
+        ("name = \"x\"\nduration_s = -1.0\n".to_string(), "duration_s"),
+        ("name = \"x\"\nduration_s = 1.0\nspeed = 2\n".to_string(), "speed"),
+        ("duration_s = 1.0\n".to_string(), "missing field `name`"),
+        ("name = 3\nduration_s = 1.0\n".to_string(), "name"),
+        ("name = \"x\"\nduration_s = 1.0\nconfig = 3\n".to_string(), "config"),
+        ("name = \"x\"\nduration_s = [1.0\n".to_string(), "<scenario>:"),
+    ];
+    for (text, field) in cases {
+        let e = parse_err(&text).to_string();
+        assert!(
+            e.contains(field),
+            "error for\n{text}\ndoes not name {field}: {e}"
+        );
+        assert!(e.starts_with("<scenario>:"), "error names the origin: {e}");
+    }
+    // a structured error carries the line and the field
+    match parse_err(&format!(
+        "{HEAD}{K0}[[human.keyframe]]\nt = \"x\"\nbase = [1.0, 0.0, 0.0]\n"
+    )) {
+        ScenarioError::Parse { line, field, .. } => {
+            assert_eq!((line, field.as_str()), (8, "human.keyframe[1].t"))
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn file_errors_name_the_file() {
+    let e = Scenario::from_file("/nonexistent/phri/scenario.toml").expect_err("missing file");
+    assert!(matches!(e, ScenarioError::Io { .. }));
+    assert!(e.to_string().contains("/nonexistent/phri/scenario.toml"));
+    let dir = std::env::temp_dir().join(format!("phri-sim-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("bad.toml");
+    std::fs::write(
+        &path,
+        format!("{HEAD}{K0}[[human.keyframe]]\nt = -1.0\nbase = [1.0, 0.0, 0.0]\n"),
+    )
+    .expect("write");
+    let e = Scenario::from_file(&path)
+        .expect_err("unsorted")
+        .to_string();
+    assert!(
+        e.contains("bad.toml") && e.contains("human.keyframe[1].t"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Garbage never panics: truncations and byte flips of a valid file.
+#[test]
+fn malformed_input_never_panics() {
+    let text = std::fs::read_to_string(scenario_path("collision.toml")).expect("read");
+    let bytes = text.as_bytes();
+    let mut state = 12345u64;
+    for i in 0..3000 {
+        let mut b = bytes[..(i * 7919) % bytes.len()].to_vec();
+        for _ in 0..(i % 4) {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            if !b.is_empty() {
+                let k = (state >> 33) as usize % b.len();
+                b[k] = b"=[]\"#.,0x\n-e"[(state >> 20) as usize % 12];
+            }
+        }
+        let _ = Scenario::from_str(&String::from_utf8_lossy(&b));
+    }
+}
+
+/// A script is refused with the keyframe and field named.
+#[test]
+fn refuses_bad_scripts() {
+    let k = |t: f64| Keyframe {
+        t,
+        base: [0.0; 3],
+        right_hand: None,
+        left_hand: None,
+    };
+    assert_eq!(HumanScript::new(-0.8, vec![]), Err(ScriptError::NoKeyframe));
+    assert!(matches!(
+        HumanScript::new(-0.8, vec![k(1.0), k(0.5)]),
+        Err(ScriptError::Unsorted { index: 1, .. })
+    ));
+    assert!(matches!(
+        HumanScript::new(-0.8, vec![k(f64::NAN)]),
+        Err(ScriptError::NotFinite {
+            index: 0,
+            field: "t"
+        })
+    ));
+    assert!(matches!(
+        HumanScript::new(f64::INFINITY, vec![k(0.0)]),
+        Err(ScriptError::FloorZ(_))
+    ));
+    let two = || HumanScript::new(-0.8, vec![k(0.0), k(10.0)]).unwrap();
+    for bad in [5.0, 0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(
+            matches!(two().repeating(bad), Err(ScriptError::Repeat { .. })),
+            "repeat_s {bad}"
+        );
+    }
+}

@@ -1,0 +1,165 @@
+//! The cell's channels: one constant each, carrying the name (what flows,
+//! from whom), the message type, the QoS and whether it wakes its readers.
+//! Publish-subscribe services and the event services that wake their readers
+//! share the name.
+
+use crate::channel::{Channel, FrameChannel, Message};
+use crate::messages::*;
+use crate::qos::Qos;
+
+/// [`JointState`] from the robot (simulated or real adapter), 1 kHz. Wakes: new state.
+pub const ROBOT_STATE: Channel<JointState> = Channel::new("robot/state", Qos::ONE_PUBLISHER, true);
+/// [`TorqueCommand`] to the robot, one publisher only (the controller). Wakes: new command.
+pub const ROBOT_COMMAND: Channel<TorqueCommand> =
+    Channel::new("robot/command", Qos::ONE_PUBLISHER, true);
+/// [`RobotStats`] from the robot adapter: loop timing and latency histogram, 10 Hz.
+pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SLOW, false);
+/// [`Truth`]: simulator ground truth for evaluation only, 1 kHz. No controller may read it.
+pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISHER, false);
+/// [`Residual`] from the dynamics service, 1 kHz. Wakes: new residual.
+pub const DYNAMICS_RESIDUAL: Channel<Residual> =
+    Channel::new("dynamics/residual", Qos::ONE_PUBLISHER, true);
+/// [`ControlStatus`] from the controller, 1 kHz.
+pub const CONTROL_STATUS: Channel<ControlStatus> =
+    Channel::new("control/status", Qos::ONE_PUBLISHER, false);
+/// [`Health`] from the supervisor, 10 Hz.
+pub const SUPERVISOR_HEALTH: Channel<Health> = Channel::new("supervisor/health", Qos::SLOW, false);
+/// [`WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
+pub const SIM_WORLD: Channel<WorldState> = Channel::new("sim/world", Qos::ONE_PUBLISHER, false);
+/// Raw depth frames from the camera (`[u16]` with a [`FrameHeader`]), 30 Hz. Wakes: new frame.
+pub const CAMERA_DEPTH: FrameChannel = Channel::new("camera/depth", Qos::FRAMES, true);
+/// Validated depth frames without the robot's own pixels. Wakes: new frame.
+pub const PERCEPTION_DEPTH: FrameChannel = Channel::new("perception/depth", Qos::FRAMES, true);
+/// [`RepulsionResult`] from every repulsion worker (one publisher each).
+pub const PERCEPTION_REPULSION: Channel<RepulsionResult> =
+    Channel::new("perception/repulsion", Qos::WORKERS, false);
+/// [`ContactEvent`]s: contact episodes from the simulator's ground truth, for
+/// evaluation only (a few per second, deeply queued: no episode is lost).
+pub const SIM_CONTACTS: Channel<ContactEvent> = Channel::new("sim/contacts", Qos::EVENTS, false);
+/// [`Skeleton`]: the people a body tracker sees, one message per depth
+/// frame (same sequence number and capture time), 30 Hz. Wakes: new skeleton.
+pub const PERCEPTION_SKELETON: Channel<Skeleton> =
+    Channel::new("perception/skeleton", Qos::ONE_PUBLISHER, true);
+/// [`HandObservation`]: the collaborative hand refined from depth by
+/// ingestion, per frame while a collaboration is on.
+pub const PERCEPTION_HAND: Channel<HandObservation> =
+    Channel::new("perception/hand", Qos::ONE_PUBLISHER, false);
+/// [`HriRequest`]s from people (gesture, voice, command line): several publishers.
+pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::WORKERS, false);
+/// [`CollabState`] from the controller, 1 kHz.
+pub const COLLAB_STATE: Channel<CollabState> =
+    Channel::new("collab/state", Qos::ONE_PUBLISHER, false);
+/// [`DepthFault`] from `phri-fault` to the simulated camera: frames to corrupt or delay (testing only).
+pub const FAULT_DEPTH: Channel<DepthFault> = Channel::new("fault/depth", Qos::INJECTION, false);
+
+// The contract, checked when this crate compiles: one commander, one robot,
+// a worker pool, no history on frames, wake-ups where readers wait on them.
+const _: () = {
+    assert!(ROBOT_COMMAND.qos.max_publishers == 1);
+    assert!(ROBOT_STATE.qos.max_publishers == 1);
+    assert!(PERCEPTION_REPULSION.qos.max_publishers >= 4);
+    assert!(CAMERA_DEPTH.qos.history == 0 && PERCEPTION_DEPTH.qos.history == 0);
+    assert!(ROBOT_STATE.wakes && ROBOT_COMMAND.wakes && DYNAMICS_RESIDUAL.wakes);
+    assert!(CAMERA_DEPTH.wakes && PERCEPTION_DEPTH.wakes && !SIM_TRUTH.wakes);
+};
+
+/// Every publish-subscribe channel of the cell, by name, for tools that list or record them.
+pub const ALL: &[&str] = &[
+    ROBOT_STATE.name,
+    ROBOT_COMMAND.name,
+    ROBOT_STATS.name,
+    SIM_TRUTH.name,
+    DYNAMICS_RESIDUAL.name,
+    CONTROL_STATUS.name,
+    SUPERVISOR_HEALTH.name,
+    SIM_WORLD.name,
+    CAMERA_DEPTH.name,
+    PERCEPTION_DEPTH.name,
+    PERCEPTION_REPULSION.name,
+    FAULT_DEPTH.name,
+    SIM_CONTACTS.name,
+    // the collaboration channels (skeleton, hand, request, collab/state) join
+    // this list with the services that publish them
+];
+
+/// Channels that carry messages only when something happens (a tool injects a
+/// fault, a contact, a request, a collaboration): monitors and tests must not
+/// expect traffic on them.
+pub const ON_DEMAND: &[&str] = &[FAULT_DEPTH.name, SIM_CONTACTS.name];
+
+/// Something done with each channel of the cell, typed: tools that handle
+/// every channel (monitor, recorder) implement this instead of matching names.
+pub trait ChannelVisitor {
+    fn message<T: Message>(&mut self, channel: Channel<T>);
+    fn frames(&mut self, channel: FrameChannel);
+}
+
+/// Visit every channel of the cell, in [`ALL`]'s order.
+pub fn visit_all(v: &mut impl ChannelVisitor) {
+    v.message(ROBOT_STATE);
+    v.message(ROBOT_COMMAND);
+    v.message(ROBOT_STATS);
+    v.message(SIM_TRUTH);
+    v.message(DYNAMICS_RESIDUAL);
+    v.message(CONTROL_STATUS);
+    v.message(SUPERVISOR_HEALTH);
+    v.message(SIM_WORLD);
+    v.frames(CAMERA_DEPTH);
+    v.frames(PERCEPTION_DEPTH);
+    v.message(PERCEPTION_REPULSION);
+    v.message(FAULT_DEPTH);
+    v.message(SIM_CONTACTS);
+}
+
+/// Visit the channel called `name`; `false` when the cell has none of that name.
+pub fn visit_named(name: &str, v: &mut impl ChannelVisitor) -> bool {
+    struct One<'a, V> {
+        name: &'a str,
+        v: &'a mut V,
+        found: bool,
+    }
+    impl<V: ChannelVisitor> ChannelVisitor for One<'_, V> {
+        fn message<T: Message>(&mut self, c: Channel<T>) {
+            if !self.found && c.name == self.name {
+                self.found = true;
+                self.v.message(c);
+            }
+        }
+        fn frames(&mut self, c: FrameChannel) {
+            if !self.found && c.name == self.name {
+                self.found = true;
+                self.v.frames(c);
+            }
+        }
+    }
+    let mut one = One {
+        name,
+        v,
+        found: false,
+    };
+    visit_all(&mut one);
+    one.found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_channel_is_visited_once_in_order() {
+        struct Names(Vec<&'static str>);
+        impl ChannelVisitor for Names {
+            fn message<T: Message>(&mut self, c: Channel<T>) {
+                self.0.push(c.name);
+            }
+            fn frames(&mut self, c: FrameChannel) {
+                self.0.push(c.name);
+            }
+        }
+        let mut n = Names(Vec::new());
+        visit_all(&mut n);
+        assert_eq!(n.0, ALL);
+        assert!(visit_named("robot/state", &mut n));
+        assert!(!visit_named("robot/nothing", &mut n));
+    }
+}

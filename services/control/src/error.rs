@@ -1,0 +1,62 @@
+//! Why a controller could not be built, or an input message was refused;
+//! each error names the configuration key, link or channel at fault.
+
+use phri_model::LengthError;
+
+/// Why [`crate::Controller`] could not be built from its configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum ControlError {
+    /// a `[control]` value out of range ([`phri_config::ControlConfig::validate`])
+    #[error(transparent)]
+    Invalid(#[from] phri_config::Invalid),
+    /// a configured link the robot model does not have
+    #[error("{key}: the robot has no link '{link}'")]
+    UnknownLink { key: String, link: String },
+    /// a per-joint list (`control.posture`) with another count than the model's joints
+    #[error("control.{0}")]
+    Length(#[from] LengthError),
+    /// the control period (`sim.dt_s`) is not a positive number of seconds
+    #[error("sim.dt_s: the control period {period_s} s is not a positive number")]
+    Period { period_s: f64 },
+    /// more joints than the messages (and the controller's stack buffers) carry
+    #[error("the robot has {joints} joints, the controller handles at most {max}")]
+    TooManyJoints { joints: usize, max: usize },
+    /// `[control] avoidance` without repulsion workers or control points
+    #[error("repulsion.points: control.avoidance needs at least one control point (the first is the end effector)")]
+    NoControlPoints,
+}
+
+/// A message the controller refuses as an input: the channel and field at fault.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum InputError {
+    /// a joint-space message for another robot
+    #[error("{channel}: message {seq} has dof {got}, the model has {expected} joints")]
+    Dof {
+        channel: &'static str,
+        seq: u64,
+        expected: usize,
+        got: u32,
+    },
+    /// a repulsion result from a worker the configuration does not have
+    #[error(
+        "perception/repulsion: worker {worker} is not one of the {workers} configured workers"
+    )]
+    Worker { worker: u32, workers: usize },
+    /// a repulsion result that claims more points than the message carries
+    #[error("perception/repulsion: worker {worker}: n_points {n_points} is above {max}")]
+    PointCount {
+        worker: u32,
+        n_points: u32,
+        max: usize,
+    },
+    /// a repulsion result with a non-finite repulsive vector, or a NaN distance
+    #[error("perception/repulsion: worker {worker}: point {point}: v_call not finite or min_distance NaN")]
+    NonFinite { worker: u32, point: u32 },
+    /// a repulsion result for a control point the configuration does not have
+    #[error("perception/repulsion: worker {worker}: point {point} is not one of the {points} configured control points")]
+    Point {
+        worker: u32,
+        point: u32,
+        points: usize,
+    },
+}

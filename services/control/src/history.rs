@@ -1,0 +1,96 @@
+//! The recent joint references of the task with their path time, one entry
+//! per control period, for the retreat back along the path.
+
+/// A ring of `(s, q_ref)` entries: path time \[s\] and joint reference \[rad\].
+/// Preallocated; `push` and `at` allocate nothing.
+#[derive(Clone, Debug)]
+pub struct PathHistory {
+    n: usize,
+    cap: usize,
+    data: Vec<f64>,
+    count: usize,
+}
+
+impl PathHistory {
+    /// Room for `cap` entries of `n` joints.
+    pub fn new(n: usize, cap: usize) -> PathHistory {
+        let cap = cap.max(1);
+        PathHistory {
+            n,
+            cap,
+            data: vec![0.0; cap * (n + 1)],
+            count: 0,
+        }
+    }
+
+    /// Room for `span_s` \[s\] of entries one `period_s` \[s\] apart (and two more).
+    pub fn for_span(n: usize, span_s: f64, period_s: f64) -> PathHistory {
+        PathHistory::new(n, (span_s.max(0.0) / period_s).ceil() as usize + 2)
+    }
+
+    /// Add the newest entry: path time `s` \[s\], reference `q` \[rad\].
+    pub fn push(&mut self, s: f64, q: &[f64]) {
+        let at = (self.count % self.cap) * (self.n + 1);
+        self.data[at] = s;
+        self.data[at + 1..at + 1 + self.n].copy_from_slice(q);
+        self.count += 1;
+    }
+
+    /// Entries held.
+    pub fn available(&self) -> usize {
+        self.count.min(self.cap)
+    }
+
+    pub fn clear(&mut self) {
+        self.count = 0;
+    }
+
+    /// The entry `back` entries before the newest (0 = newest; fractional:
+    /// interpolated; clamped to the entries held): writes the reference into
+    /// `q` \[rad\], returns the path time \[s\]. `None` (and `q` untouched) when
+    /// the history is empty.
+    pub fn at(&self, back: f64, q: &mut [f64]) -> Option<f64> {
+        if self.count == 0 {
+            return None;
+        }
+        let max_back = (self.available().max(1) - 1) as f64;
+        let back = back.clamp(0.0, max_back);
+        let (i0, frac) = (back.floor() as usize, back.fract());
+        let i1 = (i0 + 1).min(max_back as usize);
+        let slot = |i: usize| ((self.count - 1 - i) % self.cap) * (self.n + 1);
+        let (a, b) = (slot(i0), slot(i1));
+        for k in 0..self.n {
+            q[k] = self.data[a + 1 + k] * (1.0 - frac) + self.data[b + 1 + k] * frac;
+        }
+        Some(self.data[a] * (1.0 - frac) + self.data[b] * frac)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn walks_back_interpolating_and_forgets_the_oldest() {
+        let mut h = PathHistory::new(1, 4);
+        let mut q = [7.0];
+        assert_eq!(h.at(0.0, &mut q), None);
+        assert_eq!(q, [7.0], "empty: the reference is left alone");
+        for k in 0..6 {
+            h.push(k as f64, &[10.0 * k as f64]);
+        }
+        assert_eq!(h.available(), 4);
+        assert_eq!(h.at(0.0, &mut q), Some(5.0));
+        assert_eq!(q, [50.0]);
+        assert_eq!(h.at(1.5, &mut q), Some(3.5));
+        assert_eq!(q, [35.0]);
+        // clamped to the oldest held (2)
+        assert_eq!(h.at(10.0, &mut q), Some(2.0));
+    }
+
+    #[test]
+    fn capacity_follows_the_period() {
+        assert_eq!(PathHistory::for_span(7, 1.1, 0.001).cap, 1102);
+        assert_eq!(PathHistory::for_span(7, 1.1, 0.002).cap, 552);
+    }
+}

@@ -1,0 +1,198 @@
+//! The paper's hierarchy of behaviours, one module per mode, and the one
+//! pure function that chooses the mode of each period ([`next_mode`]).
+//!
+//! | mode | behaviour |
+//! | --- | --- |
+//! | [`sync`] | after a (re)start: hold where the arm is until the safety inputs are fresh |
+//! | [`task`] | the Cartesian task; `slow` is the task under stale perception |
+//! | [`reaction`] | the configured reaction to a detected collision (eqs. 9, 13, stop, float, retreat) |
+//! | [`protective_stop`] | hold while a safety input is stale |
+//! | [`recover`] | hold (evading under perception) until the residual stays quiet, then resume |
+//!
+//! A behaviour writes the joint reference and either an acceleration for the
+//! torque law or a Cartesian reference of the end effector, which the
+//! avoidance stage resolves (SNS under perception, CLIK without).
+
+pub mod protective_stop;
+pub mod reaction;
+pub mod recover;
+pub mod sync;
+pub mod task;
+
+use nalgebra::Vector3;
+use phri_ipc::ControlMode;
+
+/// What the transition of one period looks at.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Conditions {
+    /// a valid residual, fresh enough
+    pub residual_fresh: bool,
+    /// the fresh residual reports a collision (detection, paper Sect. III)
+    pub collision: bool,
+    /// the fresh residual reports a contact
+    pub contact: bool,
+    /// perception fresh (or none configured)
+    pub perception_fresh: bool,
+    /// perception stale with an obstacle last seen near, or stale for too long
+    pub perception_stop: bool,
+    /// the reaction lasted its least time and its retreat (if any) is over
+    pub reaction_done: bool,
+    /// recovering: the residual stayed quiet for `resume_quiet_s` and `resume` is on
+    pub may_resume: bool,
+}
+
+/// The mode of this period, from the mode of the last one.
+///
+/// - `sync` waits for fresh inputs (residual and perception), then starts the task;
+/// - in every other mode a stale residual, or perception that asks for it,
+///   is a protective stop;
+/// - from the protective stop, fresh inputs lead to `recover`;
+/// - a collision during the task or while recovering starts the reaction;
+/// - the task runs as `task` with fresh perception and `slow` without;
+/// - a finished reaction without contact recovers;
+/// - recovering, a quiet residual resumes the task.
+pub fn next_mode(mode: ControlMode, c: &Conditions) -> ControlMode {
+    use ControlMode::*;
+    match mode {
+        Sync if c.residual_fresh && c.perception_fresh => Task,
+        Sync => Sync,
+        _ if !c.residual_fresh || c.perception_stop => ProtectiveStop,
+        ProtectiveStop => Recover,
+        Task | Slow if c.collision => Reaction,
+        Task | Slow if c.perception_fresh => Task,
+        Task | Slow => Slow,
+        Reaction if c.reaction_done && !c.contact => Recover,
+        Reaction => Reaction,
+        Recover if c.collision => Reaction,
+        Recover if c.may_resume && !c.contact => Task,
+        Recover => Recover,
+    }
+}
+
+/// A Cartesian reference of the end effector, for the avoidance stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CartesianRef {
+    /// desired position \[m\], base frame
+    pub x_d: Vector3<f64>,
+    /// desired velocity [m/s], base frame
+    pub xd_d: Vector3<f64>,
+    /// scale of the joint velocity bounds (slower while perception is stale)
+    pub speed_scale: f64,
+    /// the task's path time \[s\], to record in the retreat's history (`None`: not the task)
+    pub path_time: Option<f64>,
+}
+
+/// What a behaviour leaves for the rest of the period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Behaviour {
+    /// resolve this reference into the joint reference (SNS or CLIK), then track it
+    Cartesian(CartesianRef),
+    /// the acceleration is written; the torque law adds the bias and, for
+    /// the reflex (eq. 9), subtracts the residual
+    Joint { minus_r: bool },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ControlMode::*;
+
+    const FRESH: Conditions = Conditions {
+        residual_fresh: true,
+        collision: false,
+        contact: false,
+        perception_fresh: true,
+        perception_stop: false,
+        reaction_done: false,
+        may_resume: false,
+    };
+
+    /// `fresh` with the named conditions changed.
+    fn with(changes: &[&str]) -> Conditions {
+        let mut c = FRESH;
+        for ch in changes {
+            match *ch {
+                "stale" => c.residual_fresh = false,
+                "collision" => {
+                    c.collision = true;
+                    c.contact = true
+                }
+                "contact" => c.contact = true,
+                "blind" => c.perception_fresh = false,
+                "blind-stop" => {
+                    c.perception_fresh = false;
+                    c.perception_stop = true
+                }
+                "done" => c.reaction_done = true,
+                "quiet" => c.may_resume = true,
+                other => panic!("unknown condition {other}"),
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn transition_table() {
+        #[rustfmt::skip]
+        let table: &[(ControlMode, &[&str], ControlMode)] = &[
+            // sync waits for every input, and never stops (it holds already)
+            (Sync, &[], Task),
+            (Sync, &["stale"], Sync),
+            (Sync, &["blind"], Sync),
+            (Sync, &["blind-stop"], Sync),
+            (Sync, &["collision"], Task),
+            // stale safety inputs stop every other mode
+            (Task, &["stale"], ProtectiveStop),
+            (Slow, &["stale"], ProtectiveStop),
+            (Reaction, &["stale"], ProtectiveStop),
+            (Recover, &["stale"], ProtectiveStop),
+            (ProtectiveStop, &["stale"], ProtectiveStop),
+            (Task, &["blind-stop"], ProtectiveStop),
+            (Reaction, &["blind-stop", "done"], ProtectiveStop),
+            (Task, &["stale", "collision"], ProtectiveStop),
+            (ProtectiveStop, &["blind-stop"], ProtectiveStop),
+            // fresh again: recover first, never straight back to the task
+            (ProtectiveStop, &[], Recover),
+            (ProtectiveStop, &["collision"], Recover),
+            (ProtectiveStop, &["blind"], Recover),
+            // the task, slowed while perception is stale
+            (Task, &[], Task),
+            (Task, &["blind"], Slow),
+            (Slow, &["blind"], Slow),
+            (Slow, &[], Task),
+            (Task, &["contact"], Task),
+            // detection: the reaction at once
+            (Task, &["collision"], Reaction),
+            (Slow, &["collision", "blind"], Reaction),
+            (Recover, &["collision"], Reaction),
+            (Recover, &["collision", "quiet"], Reaction),
+            // the reaction ends when done and out of contact
+            (Reaction, &[], Reaction),
+            (Reaction, &["done", "contact"], Reaction),
+            (Reaction, &["done"], Recover),
+            (Reaction, &["done", "blind"], Recover),
+            (Reaction, &["collision"], Reaction),
+            // resume after a quiet residual
+            (Recover, &[], Recover),
+            (Recover, &["contact"], Recover),
+            (Recover, &["quiet"], Task),
+            (Recover, &["quiet", "blind"], Task),
+        ];
+        for (from, conditions, to) in table {
+            assert_eq!(
+                next_mode(*from, &with(conditions)),
+                *to,
+                "{from} with {conditions:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_mode_stops_on_a_stale_residual_but_sync() {
+        for &m in ControlMode::ALL {
+            let next = next_mode(m, &with(&["stale"]));
+            let expected = if m == Sync { Sync } else { ProtectiveStop };
+            assert_eq!(next, expected, "{m}");
+        }
+    }
+}

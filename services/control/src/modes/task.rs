@@ -1,0 +1,182 @@
+//! `task` (and `slow`, the task under stale perception): the end effector
+//! cycles through the configured waypoints on minimum-jerk segments. After
+//! a (re)start it first approaches the path on a straight minimum-jerk move,
+//! then the path's time law ramps smoothly from rest. The path time runs
+//! slower while perception is stale and near obstacles in front of the end
+//! effector (ṡ scaled by `speed_scale · (1 − f)`, `f` its risk).
+
+use nalgebra::Vector3;
+use phri_config::ControlConfig;
+
+use crate::modes::CartesianRef;
+use crate::path::{Approach, Path};
+
+/// Where the task is on its path.
+#[derive(Clone, Debug)]
+pub struct TaskState {
+    path: Path,
+    approach: Option<Approach>,
+    /// path time \[s\]
+    s: f64,
+    /// progress of the path's time-law ramp, 0 → 1
+    ramp_u: f64,
+    /// the waypoint the current segment ends in
+    last_target: usize,
+    /// the time law ramps over this \[s\]
+    path_ramp_s: f64,
+    /// largest end-effector speed of the approach [m/s]
+    approach_speed: f64,
+    /// a waypoint counts as reached within this \[m\]
+    waypoint_tolerance: f64,
+    /// waypoints reached since the start
+    waypoints_reached: u64,
+}
+
+impl TaskState {
+    /// The path of `[control]` (`waypoints`, `segment_time_s`), at its start.
+    pub fn new(cfg: &ControlConfig) -> TaskState {
+        TaskState {
+            path: Path {
+                waypoints: cfg.waypoints.iter().map(|w| Vector3::from(*w)).collect(),
+                segment_time: cfg.segment_time_s,
+            },
+            approach: None,
+            s: 0.0,
+            ramp_u: 0.0,
+            last_target: 0,
+            path_ramp_s: cfg.path_ramp_s,
+            approach_speed: cfg.approach_speed,
+            waypoint_tolerance: cfg.waypoint_tolerance,
+            waypoints_reached: 0,
+        }
+    }
+
+    /// (Re)join the path where it was left, from the end effector at `from`
+    /// \[m\], base frame: approach, then ramp the time law from rest.
+    pub fn start(&mut self, from: Vector3<f64>) {
+        let (to, _) = self.path.sample(self.s);
+        self.approach = Some(Approach::new(from, to, self.approach_speed));
+        self.ramp_u = 0.0;
+        self.last_target = self.path.target_index(self.s);
+    }
+
+    /// Path time \[s\].
+    pub fn path_time(&self) -> f64 {
+        self.s
+    }
+
+    /// Set the path time \[s\] (the retreat walks it back).
+    pub fn set_path_time(&mut self, s: f64) {
+        self.s = s;
+    }
+
+    pub fn waypoints_reached(&self) -> u64 {
+        self.waypoints_reached
+    }
+
+    /// One period of `dt` \[s\]: the end effector's reference. `speed_scale`
+    /// (1, or slower while perception is stale) scales the joint velocity
+    /// bounds and the time law; `ee_risk` ∈ [0, 1] slows the time law further;
+    /// `ee` is the measured end effector \[m\] (to count waypoints reached).
+    pub fn step(
+        &mut self,
+        dt: f64,
+        speed_scale: f64,
+        ee_risk: f64,
+        ee: &Vector3<f64>,
+    ) -> CartesianRef {
+        let time_scale = speed_scale * (1.0 - ee_risk);
+        let (x_d, xd_d) = match self.approach.as_mut() {
+            Some(a) => {
+                let out = a.step(dt * time_scale);
+                if a.done() {
+                    self.approach = None;
+                }
+                out
+            }
+            None => {
+                // time scaling: ṡ = smoothstep(u) ramps 0 → 1, so that a path resumed
+                // mid-segment starts without a jump in velocity or acceleration
+                self.ramp_u = (self.ramp_u + dt / self.path_ramp_s.max(1e-3)).min(1.0);
+                let u = self.ramp_u;
+                let rate = u * u * (3.0 - 2.0 * u) * time_scale;
+                self.s += dt * rate;
+                let (x, dx) = self.path.sample(self.s);
+                let dx = dx * rate;
+                // waypoint reached: the segment ended with the end effector there
+                let target = self.path.target_index(self.s);
+                if target != self.last_target {
+                    if (ee - self.path.waypoints[self.last_target]).norm()
+                        <= self.waypoint_tolerance
+                    {
+                        self.waypoints_reached += 1;
+                    }
+                    self.last_target = target;
+                }
+                (x, dx)
+            }
+        };
+        CartesianRef {
+            x_d,
+            xd_d,
+            speed_scale,
+            path_time: Some(self.s),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn task() -> TaskState {
+        TaskState::new(&phri_config::Config::defaults().control)
+    }
+
+    #[test]
+    fn approaches_then_follows_the_path_and_counts_waypoints() {
+        let mut t = task();
+        let w: Vec<Vector3<f64>> = t.path.waypoints.clone();
+        let from = w[0] + Vector3::new(0.0, 0.0, 0.1);
+        t.start(from);
+        let dt = 0.001;
+        // the approach ends at the path's start, at rest, without moving the path time
+        let mut last = t.step(dt, 1.0, 0.0, &from);
+        while t.approach.is_some() {
+            last = t.step(dt, 1.0, 0.0, &last.x_d);
+        }
+        assert!((last.x_d - w[0]).norm() < 1e-12 && last.xd_d.norm() < 1e-9);
+        assert_eq!(last.path_time, Some(0.0));
+        // the end effector following perfectly reaches every waypoint of two cycles
+        let cycle = t.path.period();
+        let mut ee = last.x_d;
+        for _ in 0..((2.0 * cycle + 0.6) / dt) as usize {
+            ee = t.step(dt, 1.0, 0.0, &ee).x_d;
+        }
+        assert_eq!(t.waypoints_reached(), 6);
+    }
+
+    #[test]
+    fn risk_and_stale_perception_slow_the_time_law() {
+        let mut fast = task();
+        let mut slow = task();
+        let mut halted = task();
+        for t in [&mut fast, &mut slow, &mut halted] {
+            t.approach = None;
+            t.ramp_u = 1.0;
+        }
+        let ee = Vector3::zeros();
+        for _ in 0..100 {
+            fast.step(0.001, 1.0, 0.0, &ee);
+            slow.step(0.001, 0.3, 0.5, &ee);
+            halted.step(0.001, 1.0, 1.0, &ee);
+        }
+        assert!((fast.path_time() - 0.1).abs() < 1e-12);
+        assert!((slow.path_time() - 0.015).abs() < 1e-12);
+        assert_eq!(
+            halted.path_time(),
+            0.0,
+            "full risk at the end effector halts the path"
+        );
+    }
+}

@@ -1,0 +1,195 @@
+//! The 1 kHz path allocates nothing: `Controller::step` in every mode (with
+//! avoidance and perception), the repulsion accumulator and the message
+//! writer, on an exact-model arm with the residual observer in the loop.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::collections::BTreeSet;
+
+use nalgebra::Vector3;
+use phri_config::{Config, PerJoint, ResidualConfig};
+use phri_control::{
+    write_messages, ControlInput, ControlMode, Controller, Reaction, RepulsionInputs, ResidualView,
+    Stamps,
+};
+use phri_estimation::ResidualObserver;
+use phri_ipc::{ControlStatus, JointState, PointRepulsion, RepulsionResult, TorqueCommand, Zeroed};
+use phri_model::Data;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        System.alloc(layout)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        System.realloc(ptr, layout, new_size)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCS.with(|c| c.get())
+}
+
+const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
+
+#[test]
+fn the_control_period_allocates_nothing_in_any_mode() {
+    for reaction in [
+        Reaction::Reflex,
+        Reaction::Admittance,
+        Reaction::Float,
+        Reaction::Retreat,
+    ] {
+        let mut cfg = Config::defaults();
+        cfg.control.reaction = reaction;
+        cfg.control.posture.clear(); // taken from the arm at the first start
+        let model = cfg_model(&cfg);
+        let mut ctl = Controller::from_config(model.clone(), &cfg).unwrap();
+        let rcfg = ResidualConfig {
+            viscous_friction: PerJoint::All(0.0),
+            coulomb_friction: PerJoint::All(0.0),
+            ..cfg.dynamics.clone()
+        };
+        let mut observer = ResidualObserver::new(model.clone(), &rcfg).unwrap();
+        let mut repulsion = RepulsionInputs::from_config(&cfg.repulsion);
+        let workers = cfg.repulsion.workers;
+        let mut data = Data::new(&model);
+        let (mut q, mut qd) = (Q0.to_vec(), vec![0.0; 7]);
+        let mut tau = phri_model::gravity(&model, &mut data, &Q0)
+            .unwrap()
+            .as_slice()
+            .to_vec();
+        let (mut r, mut flags, mut r_stamp) = (vec![0.0; 7], (false, false, false), 0u64);
+        let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
+        let mut state = JointState::zeroed();
+        let link = model.frame_id("lwr_link_4").unwrap();
+        let mut jac = Data::jacobian_buffer(&model);
+        let (mut step_allocs, mut modes) = (0usize, BTreeSet::new());
+        for k in 1..=9000u64 {
+            let t_s = k as f64 * 1e-3;
+            // the arm: 10 sub-steps of exact dynamics, pushed on the forearm at 3-3.3 s
+            let push = (3.0..3.3).contains(&t_s);
+            for _ in 0..10 {
+                let mut total = tau.clone();
+                if push {
+                    phri_model::forward_kinematics(&model, &mut data, &q).unwrap();
+                    phri_model::point_jacobian(&model, &data, link, &Vector3::zeros(), &mut jac)
+                        .unwrap();
+                    for (i, t) in total.iter_mut().enumerate() {
+                        *t += 60.0 * jac[(1, i)];
+                    }
+                }
+                let qdd = phri_model::forward_dynamics(&model, &mut data, &q, &qd, &total)
+                    .unwrap()
+                    .clone();
+                for i in 0..7 {
+                    qd[i] += 1e-4 * qdd[i];
+                    q[i] += 1e-4 * qd[i];
+                }
+            }
+            let stamp = k * 1_000_000;
+            // the residual falls silent at 6-6.1 s (a protective stop)
+            if !(6.0..6.1).contains(&t_s) {
+                let out = observer.step(t_s, &q, &tau, None).unwrap();
+                r.copy_from_slice(out.r);
+                flags = (out.valid, out.detection.contact, out.detection.collision);
+                r_stamp = stamp;
+            }
+            // every worker answers a frame every 33 ms, 20 ms after its capture,
+            // except at 7.5-7.8 s (stale perception: slow)
+            let results: Vec<RepulsionResult> = if k % 33 == 0 && !(7.5..7.8).contains(&t_s) {
+                (0..workers)
+                    .map(|w| worker_result(&cfg, w, stamp - 20_000_000, t_s))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            state.stamp_ns = stamp;
+            state.dof = 7;
+            state.q[..7].copy_from_slice(&q);
+
+            let before = allocations();
+            for res in &results {
+                repulsion.push(res).unwrap();
+            }
+            let input = ControlInput {
+                state_stamp_ns: stamp,
+                q: &state.q[..7],
+                residual: Some(ResidualView {
+                    state_stamp_ns: r_stamp,
+                    r: &r,
+                    valid: flags.0,
+                    contact: flags.1,
+                    collision: flags.2,
+                }),
+                perception: Some(repulsion.view()),
+            };
+            let mode = ctl.step(&input).mode;
+            let stamps = Stamps {
+                woke_ns: stamp,
+                done_ns: stamp + 1,
+            };
+            write_messages(&ctl, &state, k, stamps, &mut cmd, &mut status);
+            step_allocs += allocations() - before;
+
+            tau.copy_from_slice(&cmd.tau[..7]);
+            modes.insert(mode as u32);
+        }
+        assert_eq!(step_allocs, 0, "{reaction}: the control period allocated");
+        let visited: Vec<&str> = modes.iter().map(|m| ControlMode::name_of(*m)).collect();
+        for m in [
+            "sync",
+            "task",
+            "reaction",
+            "protective_stop",
+            "recover",
+            "slow",
+        ] {
+            assert!(
+                visited.contains(&m),
+                "{reaction}: never in {m} ({visited:?})"
+            );
+        }
+        assert_eq!(ctl.model_errors(), 0);
+        assert_eq!(ctl.counters().avoidance_errors, 0);
+    }
+}
+
+fn cfg_model(cfg: &Config) -> phri_model::Model {
+    phri_model::Model::from_urdf_file(&cfg.robot.urdf).unwrap()
+}
+
+/// Worker `w`'s result for its points: a person far away (small repulsion,
+/// turning) so that the task keeps running.
+fn worker_result(cfg: &Config, w: u32, capture_ns: u64, t_s: f64) -> RepulsionResult {
+    let mut r = RepulsionResult::zeroed();
+    r.worker = w;
+    r.workers = cfg.repulsion.workers;
+    r.capture_ns = capture_ns;
+    let points = cfg.repulsion.points_of(w);
+    r.n_points = points.len() as u32;
+    for (slot, &p) in r.points.iter_mut().zip(&points) {
+        let a = 0.02 * (t_s + p as f64).sin().max(0.0);
+        *slot = PointRepulsion {
+            point: p as u32,
+            active: u32::from(a > 0.0),
+            v_call: [a, 0.5 * a, 0.0],
+            min_distance: 0.8,
+            ..PointRepulsion::default()
+        };
+    }
+    r
+}

@@ -1,0 +1,306 @@
+//! Hand waving on a tracked skeleton, as a pure step: skeletons in, a wave
+//! out (which person, which hand). `main.rs` wires `perception/skeleton` to
+//! `hri/request` (a `follow` request for the waving hand).
+//!
+//! A wave, after the Kinect-era detectors (NiTE 1 counts about four direction
+//! changes; a widely copied Kinect SDK detector wants six alternating
+//! segments with the hand above the elbow, REFERENCE §4):
+//! - the hand is above the elbow by [`GestureConfig::hand_above_elbow_m`] and
+//!   both are tracked with at least [`GestureConfig::min_confidence`];
+//! - its lateral offset from the elbow (along the shoulder line, horizontal)
+//!   reverses direction [`GestureConfig::reversals`] times within
+//!   [`GestureConfig::window_s`], each swing at least
+//!   [`GestureConfig::min_swing_m`] (a swing shorter than that is tracker
+//!   noise, not a wave), consecutive reversals between
+//!   [`GestureConfig::min_half_period_s`] and [`GestureConfig::max_half_period_s`]
+//!   apart (faster is noise, slower a reach and its return);
+//! - after a wave the same person's next wave counts only after
+//!   [`GestureConfig::refractory_s`].
+//!
+//! Any frame that breaks the first condition restarts that hand's count:
+//! reaching, pointing, walking with swinging arms or a hand waving below the
+//! elbow never make a wave. Times are the frames' capture times.
+
+use phri_config::{GestureConfig, Invalid};
+use phri_ipc::{
+    CollabPart, HriRequest, RequestKind, RequestSource, Skeleton, SkeletonJoint, Zeroed,
+    MAX_PEOPLE, REQUEST_TEXT,
+};
+
+/// Largest number of reversals a track remembers (≥ the configured count).
+const MAX_REVERSALS: usize = 20;
+/// Time constant of the low-pass on the lateral offset [s]: tracker noise
+/// (a few cm per frame) is smoothed, a 3 Hz wave passes.
+const SMOOTHING_S: f64 = 0.03;
+
+/// A recognised wave.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wave {
+    /// the tracker's id of the person
+    pub person: u32,
+    /// the waving hand
+    pub part: CollabPart,
+    /// capture time of the first reversal counted [ns]
+    pub onset_ns: u64,
+    /// capture time of the frame that completed it [ns]
+    pub detected_ns: u64,
+    /// the smallest confidence of hand and elbow over the wave [0, 1]
+    pub confidence: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Track {
+    active: bool,
+    person: u32,
+    part: CollabPart,
+    /// low-passed lateral offset of the hand from the elbow [m]
+    x: f64,
+    last_ns: u64,
+    /// direction of the current swing (+1, −1; 0 before the first)
+    dir: i8,
+    /// extreme of the current swing [m], and where the swing began
+    extreme: f64,
+    extreme_ns: u64,
+    start: f64,
+    reversals: [u64; MAX_REVERSALS],
+    n: usize,
+    confidence: f64,
+}
+
+impl Track {
+    const EMPTY: Track = Track {
+        active: false,
+        person: 0,
+        part: CollabPart::None,
+        x: 0.0,
+        last_ns: 0,
+        dir: 0,
+        extreme: 0.0,
+        extreme_ns: 0,
+        start: 0.0,
+        reversals: [0; MAX_REVERSALS],
+        n: 0,
+        confidence: 1.0,
+    };
+
+    fn restart(&mut self, x: f64, t: u64) {
+        self.x = x;
+        self.last_ns = t;
+        self.dir = 0;
+        self.extreme = x;
+        self.extreme_ns = t;
+        self.start = x;
+        self.n = 0;
+        self.confidence = 1.0;
+    }
+}
+
+/// The detector: one track per (person, hand), preallocated.
+#[derive(Clone, Debug)]
+pub struct WaveDetector {
+    cfg: GestureConfig,
+    tracks: [Track; 2 * MAX_PEOPLE],
+    /// (person, capture time of their last wave)
+    last_wave: [(u32, u64); MAX_PEOPLE],
+}
+
+impl WaveDetector {
+    pub fn new(cfg: &GestureConfig) -> Result<WaveDetector, Invalid> {
+        cfg.validate()?;
+        Ok(WaveDetector {
+            cfg: cfg.clone(),
+            tracks: [Track::EMPTY; 2 * MAX_PEOPLE],
+            last_wave: [(u32::MAX, 0); MAX_PEOPLE],
+        })
+    }
+
+    fn refractory(&self, person: u32, t: u64) -> bool {
+        let gap = (self.cfg.refractory_s * 1e9) as u64;
+        self.last_wave
+            .iter()
+            .any(|&(p, w)| p == person && w > 0 && t < w + gap)
+    }
+
+    fn remember_wave(&mut self, person: u32, t: u64) {
+        let slot = self
+            .last_wave
+            .iter()
+            .position(|&(p, _)| p == person)
+            .or_else(|| {
+                // the oldest entry makes room
+                (0..MAX_PEOPLE).min_by_key(|&i| self.last_wave[i].1)
+            })
+            .unwrap_or(0);
+        self.last_wave[slot] = (person, t);
+    }
+
+    fn track(&mut self, person: u32, part: CollabPart) -> &mut Track {
+        let i = self
+            .tracks
+            .iter()
+            .position(|k| k.active && k.person == person && k.part == part)
+            .or_else(|| self.tracks.iter().position(|k| !k.active))
+            .unwrap_or_else(|| {
+                (0..self.tracks.len())
+                    .min_by_key(|&i| self.tracks[i].last_ns)
+                    .unwrap_or(0)
+            });
+        let k = &mut self.tracks[i];
+        if !(k.active && k.person == person && k.part == part) {
+            *k = Track::EMPTY;
+            k.active = true;
+            k.person = person;
+            k.part = part;
+        }
+        k
+    }
+
+    /// One skeleton frame; a wave completed in it, if any (at most one per frame).
+    pub fn step(&mut self, sk: &Skeleton) -> Option<Wave> {
+        let t = sk.capture_ns;
+        let n = (sk.n_people as usize).min(MAX_PEOPLE);
+        // people no longer tracked lose their tracks
+        for k in self.tracks.iter_mut().filter(|k| k.active) {
+            let seen = sk.people[..n]
+                .iter()
+                .any(|p| p.tracked != 0 && p.id == k.person);
+            if !seen {
+                k.active = false;
+            }
+        }
+        let mut out = None;
+        for p in sk.people[..n].iter().filter(|p| p.tracked != 0) {
+            let j = |s: SkeletonJoint| (p.joints[s as usize], p.confidence[s as usize]);
+            let (ls, lsc) = j(SkeletonJoint::LeftShoulder);
+            let (rs, rsc) = j(SkeletonJoint::RightShoulder);
+            // lateral: along the shoulder line, horizontal (left → right)
+            let (lx, ly) = (rs[0] - ls[0], rs[1] - ls[1]);
+            let norm = lx.hypot(ly);
+            let shoulders_ok =
+                lsc >= self.cfg.min_confidence && rsc >= self.cfg.min_confidence && norm > 0.1;
+            for (part, hand, elbow) in [
+                (
+                    CollabPart::RightHand,
+                    SkeletonJoint::RightHand,
+                    SkeletonJoint::RightElbow,
+                ),
+                (
+                    CollabPart::LeftHand,
+                    SkeletonJoint::LeftHand,
+                    SkeletonJoint::LeftElbow,
+                ),
+            ] {
+                let (h, hc) = j(hand);
+                let (e, ec) = j(elbow);
+                let ok = shoulders_ok
+                    && hc >= self.cfg.min_confidence
+                    && ec >= self.cfg.min_confidence
+                    && h[2] - e[2] >= self.cfg.hand_above_elbow_m
+                    && h.iter().chain(e.iter()).all(|x| x.is_finite());
+                let raw = ((h[0] - e[0]) * lx + (h[1] - e[1]) * ly) / norm.max(1e-9);
+                let (swing, window, wanted) = (
+                    self.cfg.min_swing_m,
+                    (self.cfg.window_s * 1e9) as u64,
+                    self.cfg.reversals as usize,
+                );
+                let half_min = (self.cfg.min_half_period_s * 1e9) as u64;
+                let half_max = (self.cfg.max_half_period_s * 1e9) as u64;
+                let k = self.track(p.id, part);
+                if !ok {
+                    k.restart(raw, t);
+                    k.n = 0;
+                    continue;
+                }
+                if k.last_ns == 0 || t <= k.last_ns || t - k.last_ns > 200_000_000 {
+                    // a new track, or a gap: start over
+                    k.restart(raw, t);
+                    continue;
+                }
+                let dt = (t - k.last_ns) as f64 * 1e-9;
+                let alpha = 1.0 - (-dt / SMOOTHING_S).exp();
+                k.x += (raw - k.x) * alpha;
+                k.last_ns = t;
+                k.confidence = k.confidence.min(hc).min(ec);
+                let x = k.x;
+                match k.dir {
+                    0 => {
+                        if (x - k.start).abs() >= swing * 0.5 {
+                            k.dir = if x > k.start { 1 } else { -1 };
+                            k.extreme = x;
+                            k.extreme_ns = t;
+                        }
+                    }
+                    d => {
+                        let further = if d > 0 { x > k.extreme } else { x < k.extreme };
+                        if further {
+                            k.extreme = x;
+                            k.extreme_ns = t;
+                        } else if (k.extreme - x).abs() >= swing
+                            && (k.extreme - k.start).abs() >= swing * 0.5
+                        {
+                            // a reversal at the extreme, after a swing long enough;
+                            // one too soon or too late after the previous starts a new count
+                            if k.n > 0 {
+                                let gap = k.extreme_ns.saturating_sub(k.reversals[k.n - 1]);
+                                if gap < half_min || gap > half_max {
+                                    k.n = 0;
+                                    k.confidence = 1.0;
+                                }
+                            }
+                            if k.n == MAX_REVERSALS {
+                                k.reversals.copy_within(1.., 0);
+                                k.n -= 1;
+                            }
+                            k.reversals[k.n] = k.extreme_ns;
+                            k.n += 1;
+                            k.start = k.extreme;
+                            k.dir = -d;
+                            k.extreme = x;
+                            k.extreme_ns = t;
+                        }
+                    }
+                }
+                // reversals older than the window are forgotten
+                let keep_from = k.reversals[..k.n]
+                    .iter()
+                    .position(|&r| t.saturating_sub(r) <= window)
+                    .unwrap_or(k.n);
+                k.reversals.copy_within(keep_from..k.n, 0);
+                k.n -= keep_from;
+                if k.n >= wanted && out.is_none() {
+                    let wave = Wave {
+                        person: p.id,
+                        part,
+                        onset_ns: k.reversals[0],
+                        detected_ns: t,
+                        confidence: k.confidence,
+                    };
+                    k.n = 0;
+                    k.confidence = 1.0;
+                    if !self.refractory(p.id, t) {
+                        self.remember_wave(p.id, t);
+                        out = Some(wave);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The `follow` request for `wave`: numbered `seq`, made at `stamp_ns` [ns, CLOCK_MONOTONIC].
+pub fn follow_request(wave: &Wave, seq: u64, stamp_ns: u64) -> HriRequest {
+    let mut r = HriRequest::zeroed();
+    r.seq = seq;
+    r.stamp_ns = stamp_ns;
+    r.source = RequestSource::Gesture as u32;
+    r.kind = RequestKind::Follow as u32;
+    r.part = wave.part as u32;
+    r.person = wave.person;
+    r.confidence = wave.confidence;
+    let text = format!("wave {}", wave.part.name());
+    let b = text.as_bytes();
+    let len = b.len().min(REQUEST_TEXT - 1);
+    r.text[..len].copy_from_slice(&b[..len]);
+    r
+}

@@ -1,0 +1,367 @@
+//! The robot side of the 1 kHz protocol: what a torque-controlled arm does
+//! with the commands it receives, as a real robot adapter would wrap it
+//! (libfranka's contract). It decides from commands and time alone; the
+//! simulator (or a real arm) applies its decision.
+//!
+//! Every control period the robot publishes a state, numbered `state_seq`;
+//! the controller answers it with a [`TorqueCommand`] carrying that number.
+//! At the next period:
+//!
+//! - a valid command (one torque per joint, all finite) that answers the last
+//!   state is **fresh**: its torque is applied and its latency (state
+//!   published → command received) goes into the histogram;
+//! - a valid command that answers an older state is still the newest torque:
+//!   it is reused, and the period counts as a **missed deadline**; so does a
+//!   period without any command (the last torque is reused);
+//! - malformed commands (wrong joint count, non-finite torque) are ignored;
+//! - more than [`MAX_MISSED`] missing commands in a row engage the **brakes**
+//!   until a fresh command arrives (the arm starts braked: a controller must
+//!   answer first).
+//!
+//! When this process itself woke late (the machine stalled it, and the
+//! simulated world paused with it), the controller gets
+//! [`LATE_CYCLE_GRACE_NS`] more to answer: [`Wake::grace_until`] says until
+//! when; the waiting is the caller's. Missed deadlines are reported as runs
+//! ([`MissRun`]), one per run of consecutive misses, when it ends.
+//!
+//! [`RobotLink::cycle`] is pure and allocates nothing: every time it needs
+//! enters as a number ([`CycleTiming`], nanoseconds on one clock).
+
+use phri_ipc::{robot_status, RobotStats, TorqueCommand, Zeroed, LATENCY_BINS, MAX_DOF};
+
+/// Consecutive missing commands the robot tolerates before braking (as Franka's FCI).
+pub const MAX_MISSED: u32 = 20;
+/// Period of `robot/stats` [cycles].
+pub const STATS_EVERY: u64 = 100;
+/// When this process itself woke late (the simulated world paused with it),
+/// the controller gets this much more to answer before the cycle counts as missed [ns].
+pub const LATE_CYCLE_GRACE_NS: u64 = 500_000;
+/// How often the caller looks for the answer during the grace [ns].
+pub const GRACE_POLL_NS: u64 = 50_000;
+/// Runs of missed deadlines logged in full; afterwards only runs whose last
+/// miss number is a power of two.
+const MISS_LOG_LINES: u64 = 2000;
+
+/// Why a [`RobotLink`] could not be built.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LinkError {
+    #[error("robot link: {dof} joints; a command carries 1 to {max}")]
+    Joints { dof: usize, max: usize },
+    #[error("robot link: the control period must be at least 1 ns")]
+    Period,
+}
+
+/// The start of a cycle ([`RobotLink::wake`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Wake {
+    /// when this process woke [ns]
+    pub woke_ns: u64,
+    /// the cycle's deadline [ns]; when late, the schedule slips to `woke_ns`
+    /// (the controller gets a full period for every state, rather than
+    /// cycles back to back)
+    pub deadline_ns: u64,
+    /// woke more than half a period after the deadline (an overrun)
+    pub late: bool,
+}
+
+impl Wake {
+    /// How far behind the (slipped) schedule this cycle woke \[ns\]: 0 when it slipped.
+    pub fn behind_schedule_ns(&self) -> u64 {
+        self.woke_ns.saturating_sub(self.deadline_ns)
+    }
+
+    /// Until when \[ns\] to wait for the answer to state `state_seq` before
+    /// deciding: only in a late cycle whose `newest` command does not answer
+    /// it yet (`None`: decide now).
+    pub fn grace_until(&self, newest: Option<&TorqueCommand>, state_seq: u64) -> Option<u64> {
+        let answered = newest.is_some_and(|c| RobotLink::answers(c, state_seq));
+        (self.late && !answered).then_some(self.woke_ns + LATE_CYCLE_GRACE_NS)
+    }
+}
+
+/// When things happened, for one cycle's decision [ns, one clock for all].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CycleTiming {
+    /// when the state the command should answer was published
+    pub state_published_ns: u64,
+    /// when the last command wake-up arrived (0: unknown); a fresh command was
+    /// received at this or at its own stamp, whichever is later
+    pub command_event_ns: u64,
+    /// when the decision is taken (after any grace wait)
+    pub now_ns: u64,
+    /// how far behind its schedule this cycle woke ([`Wake::behind_schedule_ns`])
+    pub behind_schedule_ns: u64,
+}
+
+/// A run of consecutive missed deadlines, reported when it ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MissRun {
+    /// numbers of the run's first and last missed deadline (counted since start)
+    pub first: u64,
+    pub last: u64,
+    /// cycles of the first and last miss
+    pub first_cycle: u64,
+    pub last_cycle: u64,
+    /// first miss: time from its state's publication to the decision \[µs\]
+    pub since_published_us: u64,
+    /// first miss: how far behind its schedule the cycle woke \[µs\]
+    pub behind_schedule_us: u64,
+}
+
+impl std::fmt::Display for MissRun {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "missed deadlines {}-{} at cycles {}-{} (first: state published {} µs before, cycle woke {} µs late)",
+            self.first,
+            self.last,
+            self.first_cycle,
+            self.last_cycle,
+            self.since_published_us,
+            self.behind_schedule_us
+        )
+    }
+}
+
+/// What the robot does this period ([`RobotLink::cycle`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkOutput {
+    /// motor torque command [N·m], joint order, `dof` entries valid (the rest
+    /// 0): the newest valid command's, reused while commands are missing;
+    /// ignored while braking
+    pub tau: [f64; MAX_DOF],
+    pub dof: usize,
+    /// engage the brakes this period
+    pub brake: bool,
+    /// the command answered the last state in time
+    pub fresh: bool,
+    /// [`robot_status`] bits for the next state: `BRAKING`, `COMMAND_FRESH`
+    /// (the arm adds `FT_VALID`)
+    pub status: u32,
+    /// `seq` of the command whose torque is applied (0: none yet)
+    pub command_seq: u64,
+    /// consecutive periods without a fresh command
+    pub missed: u32,
+    /// the brakes engaged this period (they were released before)
+    pub brake_engaged: bool,
+    /// a run of missed deadlines ended this period (and is to be logged)
+    pub miss_run: Option<MissRun>,
+    /// time to publish the statistics ([`RobotLink::stats_message`])
+    pub publish_stats: bool,
+}
+
+impl LinkOutput {
+    /// The motor torque command [N·m], one per joint.
+    pub fn torque(&self) -> &[f64] {
+        &self.tau[..self.dof]
+    }
+}
+
+/// Missed deadlines as runs: one report per run of consecutive misses, when
+/// it ends; after [`MISS_LOG_LINES`] runs only those whose last miss number
+/// is a power of two.
+#[derive(Clone, Debug, Default)]
+struct MissLog {
+    /// (first miss number, its cycle, µs since the state was published, µs behind schedule)
+    first: Option<(u64, u64, u64, u64)>,
+    /// (last miss number, its cycle)
+    last: (u64, u64),
+    runs: u64,
+}
+
+impl MissLog {
+    fn miss(&mut self, n: u64, cycle: u64, since_published_us: u64, behind_us: u64) {
+        if self.first.is_none() {
+            self.first = Some((n, cycle, since_published_us, behind_us));
+        }
+        self.last = (n, cycle);
+    }
+
+    /// End the current run, if any; the run if it is to be logged.
+    fn end(&mut self) -> Option<MissRun> {
+        let (first, first_cycle, since_published_us, behind_schedule_us) = self.first.take()?;
+        let (last, last_cycle) = self.last;
+        self.runs += 1;
+        (self.runs <= MISS_LOG_LINES || last.is_power_of_two()).then_some(MissRun {
+            first,
+            last,
+            first_cycle,
+            last_cycle,
+            since_published_us,
+            behind_schedule_us,
+        })
+    }
+}
+
+/// The robot's protocol state: the command in force, missed commands,
+/// brakes, loop statistics. One per robot; [`RobotLink::cycle`] once per
+/// control period.
+#[derive(Clone, Debug)]
+pub struct RobotLink {
+    dof: usize,
+    period_ns: u64,
+    consecutive_missed: u32,
+    loop_established: bool,
+    misses: MissLog,
+    stats: RobotStats,
+    last: LinkOutput,
+}
+
+impl RobotLink {
+    /// A link for a `dof`-joint arm with control period `period_ns` \[ns\],
+    /// braked until a controller answers.
+    pub fn new(dof: usize, period_ns: u64) -> Result<RobotLink, LinkError> {
+        if dof == 0 || dof > MAX_DOF {
+            return Err(LinkError::Joints { dof, max: MAX_DOF });
+        }
+        if period_ns == 0 {
+            return Err(LinkError::Period);
+        }
+        let consecutive_missed = MAX_MISSED + 1;
+        Ok(RobotLink {
+            dof,
+            period_ns,
+            consecutive_missed,
+            loop_established: false,
+            misses: MissLog::default(),
+            stats: RobotStats::zeroed(),
+            last: LinkOutput {
+                tau: [0.0; MAX_DOF],
+                dof,
+                brake: true,
+                fresh: false,
+                status: robot_status::BRAKING,
+                command_seq: 0,
+                missed: consecutive_missed,
+                brake_engaged: false,
+                miss_run: None,
+                publish_stats: false,
+            },
+        })
+    }
+
+    /// The control period \[ns\].
+    pub fn period_ns(&self) -> u64 {
+        self.period_ns
+    }
+
+    /// Does `cmd` answer state `state_seq`?
+    pub fn answers(cmd: &TorqueCommand, state_seq: u64) -> bool {
+        cmd.state_seq == state_seq
+    }
+
+    /// A command this arm can apply: one torque per joint, all finite.
+    pub fn valid(&self, cmd: &TorqueCommand) -> bool {
+        cmd.dof as usize == self.dof && cmd.tau[..self.dof].iter().all(|t| t.is_finite())
+    }
+
+    /// Measurement time \[ns\] of state `seq` (1, 2, …) on the robot's clock:
+    /// `epoch_ns` for the first, then exactly one period per state, however
+    /// late this process ran.
+    pub fn state_stamp_ns(&self, epoch_ns: u64, seq: u64) -> u64 {
+        epoch_ns + seq.saturating_sub(1) * self.period_ns
+    }
+
+    /// This process woke at `woke_ns` for the cycle due at `deadline_ns`:
+    /// more than half a period late is an overrun, and the schedule slips.
+    pub fn wake(&mut self, deadline_ns: u64, woke_ns: u64) -> Wake {
+        let late = woke_ns > deadline_ns + self.period_ns / 2;
+        if late {
+            self.stats.overruns += 1;
+        }
+        Wake {
+            woke_ns,
+            deadline_ns: if late { woke_ns } else { deadline_ns },
+            late,
+        }
+    }
+
+    /// Decide this period: `newest` is the newest command received (if any),
+    /// `state_seq` the last state published, which a fresh command answers.
+    /// Allocates nothing.
+    pub fn cycle(
+        &mut self,
+        newest: Option<&TorqueCommand>,
+        state_seq: u64,
+        timing: &CycleTiming,
+    ) -> LinkOutput {
+        let n = self.dof;
+        let mut fresh = false;
+        if let Some(cmd) = newest.filter(|c| self.valid(c)) {
+            if Self::answers(cmd, state_seq) {
+                fresh = true;
+                let received = timing.command_event_ns.max(cmd.stamp_ns);
+                let latency = received.saturating_sub(timing.state_published_ns);
+                let bin = ((latency / 1000) as usize).min(LATENCY_BINS - 1);
+                self.stats.latency_hist[bin] = self.stats.latency_hist[bin].saturating_add(1);
+                self.stats.latency_max_ns = self.stats.latency_max_ns.max(latency);
+            }
+            // a late answer to an older state is still the newest torque: reuse it
+            self.last.tau[..n].copy_from_slice(&cmd.tau[..n]);
+            self.last.command_seq = cmd.seq;
+        }
+        let mut miss_run = None;
+        if fresh {
+            self.consecutive_missed = 0;
+            self.loop_established = true;
+            miss_run = self.misses.end();
+        } else {
+            self.consecutive_missed = self.consecutive_missed.saturating_add(1);
+            if self.loop_established {
+                self.stats.missed_deadlines += 1;
+                self.misses.miss(
+                    self.stats.missed_deadlines,
+                    self.stats.cycles,
+                    timing.now_ns.saturating_sub(timing.state_published_ns) / 1000,
+                    timing.behind_schedule_ns / 1000,
+                );
+            }
+        }
+        let brake = self.consecutive_missed > MAX_MISSED;
+        let brake_engaged = brake && !self.last.brake;
+        if brake_engaged {
+            self.stats.brake_events += 1;
+        }
+        if brake {
+            self.stats.braked_cycles += 1;
+        }
+        self.stats.cycles += 1;
+        let out = &mut self.last;
+        out.brake = brake;
+        out.fresh = fresh;
+        out.status = if brake { robot_status::BRAKING } else { 0 }
+            | if fresh {
+                robot_status::COMMAND_FRESH
+            } else {
+                0
+            };
+        out.missed = self.consecutive_missed;
+        out.brake_engaged = brake_engaged;
+        out.miss_run = miss_run;
+        out.publish_stats = self.stats.cycles.is_multiple_of(STATS_EVERY);
+        *out
+    }
+
+    /// The last decision (before the first cycle: braked, no command).
+    pub fn output(&self) -> &LinkOutput {
+        &self.last
+    }
+
+    /// The loop statistics so far.
+    pub fn stats(&self) -> &RobotStats {
+        &self.stats
+    }
+
+    /// The statistics as the next `robot/stats` message, stamped `stamp_ns`.
+    pub fn stats_message(&mut self, stamp_ns: u64) -> &RobotStats {
+        self.stats.seq += 1;
+        self.stats.stamp_ns = stamp_ns;
+        &self.stats
+    }
+
+    /// End the run of missed deadlines in progress, if any (at shutdown):
+    /// the run, if it is to be logged.
+    pub fn finish(&mut self) -> Option<MissRun> {
+        self.misses.end()
+    }
+}

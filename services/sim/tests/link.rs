@@ -1,0 +1,317 @@
+//! The robot side of the 1 kHz protocol ([`RobotLink`]): fresh and stale
+//! commands, the brakes after more than 20 missing, the latency histogram,
+//! malformed commands, late cycles and the reports of missed deadlines.
+
+use phri_ipc::{robot_status, TorqueCommand, Zeroed, LATENCY_BINS};
+use phri_sim::link::{LATE_CYCLE_GRACE_NS, MAX_MISSED, STATS_EVERY};
+use phri_sim::{CycleTiming, LinkError, LinkOutput, RobotLink};
+
+const DOF: usize = 7;
+const PERIOD_NS: u64 = 1_000_000;
+
+/// A command `seq` answering state `state_seq`, stamped `stamp_ns`, torque `tau` on every joint.
+fn command(seq: u64, state_seq: u64, stamp_ns: u64, tau: f64) -> TorqueCommand {
+    let mut c = TorqueCommand::zeroed();
+    c.seq = seq;
+    c.state_seq = state_seq;
+    c.stamp_ns = stamp_ns;
+    c.dof = DOF as u32;
+    c.tau[..DOF].fill(tau);
+    c
+}
+
+/// State `seq` published at `seq` ms, the decision 1 ms later, no event stamp.
+fn timing(seq: u64) -> CycleTiming {
+    CycleTiming {
+        state_published_ns: seq * PERIOD_NS,
+        command_event_ns: 0,
+        now_ns: (seq + 1) * PERIOD_NS,
+        behind_schedule_ns: 0,
+    }
+}
+
+/// One cycle for state `seq` with command `cmd` (if any).
+fn cycle(link: &mut RobotLink, cmd: Option<&TorqueCommand>, seq: u64) -> LinkOutput {
+    link.cycle(cmd, seq, &timing(seq))
+}
+
+/// A link whose controller has answered state 1 (the loop is established).
+fn established() -> RobotLink {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    let out = cycle(&mut link, Some(&command(1, 1, PERIOD_NS + 100_000, 2.0)), 1);
+    assert!(out.fresh && !out.brake);
+    link
+}
+
+#[test]
+fn the_arm_starts_braked_until_a_controller_answers() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    let first = *link.output();
+    assert!(first.brake && !first.fresh);
+    assert_eq!(first.status, robot_status::BRAKING);
+    assert_eq!((first.command_seq, first.missed), (0, MAX_MISSED + 1));
+    assert_eq!(first.torque(), &[0.0; DOF]);
+    // no controller yet: braked, but no brake event and no missed deadline
+    for seq in 1..=50 {
+        let out = cycle(&mut link, None, seq);
+        assert!(out.brake && !out.brake_engaged);
+    }
+    assert_eq!(link.stats().brake_events, 0);
+    assert_eq!(link.stats().braked_cycles, 50);
+    assert_eq!(
+        link.stats().missed_deadlines,
+        0,
+        "no loop yet: nothing to miss"
+    );
+    assert_eq!(link.stats().cycles, 50);
+}
+
+#[test]
+fn a_command_answering_the_last_state_is_fresh_and_applied() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    let cmd = command(9, 1, PERIOD_NS + 100_000, 3.5);
+    let out = cycle(&mut link, Some(&cmd), 1);
+    assert!(out.fresh && !out.brake && !out.brake_engaged);
+    assert_eq!(out.status, robot_status::COMMAND_FRESH);
+    assert_eq!(out.torque(), &[3.5; DOF]);
+    assert_eq!((out.command_seq, out.missed), (9, 0));
+    assert_eq!(out.tau[DOF..].iter().filter(|t| **t != 0.0).count(), 0);
+    assert_eq!(link.stats().missed_deadlines, 0);
+    assert_eq!(*link.output(), out);
+}
+
+#[test]
+fn a_stale_answer_is_reused_but_counts_as_missed() {
+    let mut link = established();
+    // the controller answers state 1 again while state 2 is out
+    let out = cycle(&mut link, Some(&command(2, 1, 2 * PERIOD_NS, -4.0)), 2);
+    assert!(!out.fresh && !out.brake);
+    assert_eq!(out.status, 0);
+    assert_eq!(out.torque(), &[-4.0; DOF], "the newest torque is reused");
+    assert_eq!((out.command_seq, out.missed), (2, 1));
+    assert_eq!(link.stats().missed_deadlines, 1);
+    // nothing at all: the last torque again
+    let out = cycle(&mut link, None, 3);
+    assert_eq!(out.torque(), &[-4.0; DOF]);
+    assert_eq!((out.command_seq, out.missed), (2, 2));
+    assert_eq!(link.stats().missed_deadlines, 2);
+}
+
+#[test]
+fn twenty_misses_keep_going_the_21st_brakes_and_a_fresh_command_releases() {
+    let mut link = established();
+    let mut seq = 1;
+    for k in 1..=MAX_MISSED {
+        seq += 1;
+        let out = cycle(&mut link, None, seq);
+        assert!(!out.brake, "miss {k}: still running");
+        assert_eq!(out.missed, k);
+        assert_eq!(out.torque(), &[2.0; DOF]);
+    }
+    seq += 1;
+    let out = cycle(&mut link, None, seq);
+    assert!(out.brake && out.brake_engaged, "miss 21 brakes");
+    assert_eq!(out.status, robot_status::BRAKING);
+    assert_eq!(out.missed, MAX_MISSED + 1);
+    // braked while misses go on; one brake event
+    for _ in 0..9 {
+        seq += 1;
+        let out = cycle(&mut link, None, seq);
+        assert!(out.brake && !out.brake_engaged);
+    }
+    // a stale command does not release
+    seq += 1;
+    let out = cycle(&mut link, Some(&command(50, seq - 1, 0, 1.0)), seq);
+    assert!(out.brake && !out.fresh);
+    // a fresh one does, and reports the run of misses
+    seq += 1;
+    let out = cycle(
+        &mut link,
+        Some(&command(51, seq, seq * PERIOD_NS, 1.5)),
+        seq,
+    );
+    assert!(out.fresh && !out.brake);
+    assert_eq!(out.status, robot_status::COMMAND_FRESH);
+    assert_eq!(out.torque(), &[1.5; DOF]);
+    let s = link.stats();
+    assert_eq!(s.brake_events, 1);
+    assert_eq!(s.braked_cycles, 11, "21st miss, 9 more, the stale answer");
+    assert_eq!(s.missed_deadlines, 31);
+    assert_eq!(s.cycles, 33);
+    let run = out.miss_run.expect("the run of misses ended");
+    assert_eq!((run.first, run.last), (1, 31));
+    assert_eq!((run.first_cycle, run.last_cycle), (1, 31));
+    assert_eq!(
+        run.to_string(),
+        "missed deadlines 1-31 at cycles 1-31 (first: state published 1000 µs before, cycle woke 0 µs late)"
+    );
+    // the brakes engage again after another 21
+    for k in 1..=MAX_MISSED + 1 {
+        seq += 1;
+        let out = cycle(&mut link, None, seq);
+        assert_eq!(out.brake_engaged, k == MAX_MISSED + 1);
+    }
+    assert_eq!(link.stats().brake_events, 2);
+}
+
+#[test]
+fn latency_is_binned_in_microseconds_from_the_state_to_the_receipt() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    let published = 5_000_000;
+    let at = |link: &mut RobotLink, seq: u64, stamp_ns: u64, event_ns: u64| {
+        let t = CycleTiming {
+            state_published_ns: published,
+            command_event_ns: event_ns,
+            now_ns: published + PERIOD_NS,
+            behind_schedule_ns: 0,
+        };
+        assert!(
+            link.cycle(Some(&command(seq, seq, stamp_ns, 0.0)), seq, &t)
+                .fresh
+        );
+    };
+    at(&mut link, 1, published + 1_500, 0); // 1.5 µs: bin 1
+    at(&mut link, 2, published + 999, 0); // bin 0
+    at(&mut link, 3, published + 300, published + 42_700); // the event came later: bin 42
+    at(&mut link, 4, published + 80_000, published + 10_000); // the stamp is later: bin 80
+    at(&mut link, 5, published + 5_000_000, 0); // 5 ms: the last bin
+    at(&mut link, 6, published - 1_000, 0); // stamped before the state: 0
+    let s = link.stats();
+    let h = &s.latency_hist;
+    assert_eq!(
+        (h[0], h[1], h[42], h[80], h[LATENCY_BINS - 1]),
+        (2, 1, 1, 1, 1)
+    );
+    assert_eq!(h.iter().map(|x| u64::from(*x)).sum::<u64>(), 6);
+    assert_eq!(s.latency_max_ns, 5_000_000);
+    // a stale answer is not a latency sample
+    let t = CycleTiming {
+        state_published_ns: published,
+        ..CycleTiming::default()
+    };
+    link.cycle(Some(&command(7, 5, published, 0.0)), 7, &t);
+    assert_eq!(
+        link.stats()
+            .latency_hist
+            .iter()
+            .map(|x| u64::from(*x))
+            .sum::<u64>(),
+        6
+    );
+}
+
+#[test]
+fn malformed_commands_are_never_applied() {
+    let mut link = established();
+    let mut wrong_dof = command(2, 2, 0, 99.0);
+    wrong_dof.dof = 6;
+    let mut nan = command(3, 3, 0, 99.0);
+    nan.tau[4] = f64::NAN;
+    let mut inf = command(4, 4, 0, 99.0);
+    inf.tau[0] = f64::INFINITY;
+    let mut too_many = command(5, 5, 0, 99.0);
+    too_many.dof = 13;
+    for (seq, bad) in [(2, wrong_dof), (3, nan), (4, inf), (5, too_many)] {
+        assert!(!link.valid(&bad));
+        let out = cycle(&mut link, Some(&bad), seq);
+        assert!(!out.fresh, "command {seq} is malformed");
+        assert_eq!(out.torque(), &[2.0; DOF], "the last valid torque stays");
+        assert_eq!(out.command_seq, 1);
+    }
+    assert_eq!(link.stats().missed_deadlines, 4);
+    // malformed commands alone brake the arm like missing ones
+    let mut seq = 5;
+    let mut braked = false;
+    for _ in 0..MAX_MISSED {
+        seq += 1;
+        braked |= cycle(&mut link, Some(&nan), seq).brake;
+    }
+    assert!(braked);
+}
+
+#[test]
+fn a_late_wake_is_an_overrun_slips_the_schedule_and_waits_for_the_answer() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    let deadline = 10 * PERIOD_NS;
+    // up to half a period late: on schedule
+    let w = link.wake(deadline, deadline + PERIOD_NS / 2);
+    assert!(!w.late);
+    assert_eq!(w.deadline_ns, deadline);
+    assert_eq!(w.behind_schedule_ns(), PERIOD_NS / 2);
+    assert_eq!(w.grace_until(None, 9), None, "an on-time cycle decides now");
+    assert_eq!(link.stats().overruns, 0);
+    // later: an overrun, and the schedule continues from the wake-up
+    let woke = deadline + 3 * PERIOD_NS;
+    let w = link.wake(deadline, woke);
+    assert!(w.late);
+    assert_eq!(w.deadline_ns, woke);
+    assert_eq!(w.behind_schedule_ns(), 0);
+    assert_eq!(link.stats().overruns, 1);
+    // the answer gets a grace unless it is already there
+    let answer = command(1, 9, 0, 0.0);
+    let older = command(1, 8, 0, 0.0);
+    assert_eq!(w.grace_until(None, 9), Some(woke + LATE_CYCLE_GRACE_NS));
+    assert_eq!(
+        w.grace_until(Some(&older), 9),
+        Some(woke + LATE_CYCLE_GRACE_NS)
+    );
+    assert_eq!(w.grace_until(Some(&answer), 9), None);
+    assert!(RobotLink::answers(&answer, 9) && !RobotLink::answers(&older, 9));
+}
+
+#[test]
+fn statistics_are_due_every_100_cycles_and_stamped() {
+    let mut link = established();
+    let mut due = vec![];
+    for seq in 2..=300u64 {
+        if cycle(&mut link, Some(&command(seq, seq, 0, 0.0)), seq).publish_stats {
+            due.push(link.stats().cycles);
+        }
+    }
+    assert_eq!(due, vec![STATS_EVERY, 2 * STATS_EVERY, 3 * STATS_EVERY]);
+    let m = *link.stats_message(123);
+    assert_eq!((m.seq, m.stamp_ns, m.cycles), (1, 123, 300));
+    assert_eq!(link.stats_message(456).seq, 2);
+}
+
+#[test]
+fn runs_of_misses_are_placed_in_time_and_an_open_run_is_reported_at_the_end() {
+    let mut link = established();
+    // state 2 published at 2 ms, the decision 1 ms later, woke 40 µs behind
+    let t = CycleTiming {
+        behind_schedule_ns: 40_000,
+        ..timing(2)
+    };
+    assert!(link.cycle(None, 2, &t).miss_run.is_none());
+    cycle(&mut link, None, 3);
+    let run = cycle(&mut link, Some(&command(4, 4, 0, 0.0)), 4)
+        .miss_run
+        .expect("run ended");
+    assert_eq!(
+        (run.first, run.last, run.first_cycle, run.last_cycle),
+        (1, 2, 1, 2)
+    );
+    assert_eq!((run.since_published_us, run.behind_schedule_us), (1000, 40));
+    assert!(link.finish().is_none(), "no run open");
+    cycle(&mut link, None, 5);
+    let open = link.finish().expect("the open run");
+    assert_eq!((open.first, open.last, open.first_cycle), (3, 3, 4));
+    assert!(link.finish().is_none());
+}
+
+#[test]
+fn state_stamps_advance_one_period_per_state() {
+    let link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    assert_eq!(link.state_stamp_ns(7_000, 1), 7_000);
+    assert_eq!(link.state_stamp_ns(7_000, 4), 7_000 + 3 * PERIOD_NS);
+}
+
+#[test]
+fn a_link_needs_joints_and_a_period() {
+    assert_eq!(
+        RobotLink::new(0, PERIOD_NS).unwrap_err(),
+        LinkError::Joints { dof: 0, max: 12 }
+    );
+    assert!(RobotLink::new(13, PERIOD_NS).is_err());
+    assert_eq!(RobotLink::new(7, 0).unwrap_err(), LinkError::Period);
+}

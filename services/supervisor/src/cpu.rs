@@ -1,0 +1,212 @@
+//! Who starves whom. A service spinning at real-time priority takes its CPU
+//! from every lower-priority service pinned there, and they fall silent on
+//! their heartbeat channels: killing them restarts the victims and leaves the
+//! culprit. So before a silent service is killed, the CPU time of the
+//! services that share its CPUs over the last second is looked at
+//! ([`CpuUse`]), and one that used most of a CPU is killed instead
+//! ([`culprit`]). Pure: samples come in with their time, read by the caller
+//! from `/proc` ([`crate::process::cpu_time_ns`]).
+
+use std::collections::VecDeque;
+
+use crate::roster::Roster;
+
+/// CPU use is judged over at most this window [ns] (the caller gives the
+/// window: the later half of the silent service's silence, when the
+/// starvation surely had begun, bounded by this).
+pub const WINDOW_NS: u64 = 1_000_000_000;
+/// A service that used more than this share of one CPU over the window
+/// starves what shares its CPUs.
+pub const STARVING_SHARE: f64 = 0.9;
+/// Samples spanning less than this are no judgement [ns].
+const MIN_SPAN_NS: u64 = 50_000_000;
+
+/// Recent CPU-time samples of every supervised service (roster indices).
+#[derive(Clone, Debug)]
+pub struct CpuUse {
+    /// per service: (time [ns], CPU time so far [ns]) over the last window
+    samples: Vec<VecDeque<(u64, u64)>>,
+}
+
+impl CpuUse {
+    /// For `services` services.
+    pub fn new(services: usize) -> CpuUse {
+        CpuUse {
+            samples: vec![VecDeque::new(); services],
+        }
+    }
+
+    /// Service `index` had used `cpu_ns` of CPU time at `now_ns` (`None`: it
+    /// is not running; its history is dropped).
+    pub fn record(&mut self, index: usize, now_ns: u64, cpu_ns: Option<u64>) {
+        let Some(s) = self.samples.get_mut(index) else {
+            return;
+        };
+        match cpu_ns {
+            None => s.clear(),
+            Some(t) => {
+                // a new process (restart) starts a new history
+                if s.back().is_some_and(|&(_, last)| t < last) {
+                    s.clear();
+                }
+                s.push_back((now_ns, t));
+                while s
+                    .front()
+                    .is_some_and(|&(at, _)| now_ns.saturating_sub(at) > WINDOW_NS)
+                {
+                    s.pop_front();
+                }
+            }
+        }
+    }
+
+    /// Service `index` was (re)started: its history is another process's.
+    pub fn restarted(&mut self, index: usize) {
+        if let Some(s) = self.samples.get_mut(index) {
+            s.clear();
+        }
+    }
+
+    /// Share of one CPU service `index` used over the last `window_ns` of
+    /// samples (1.0: a whole CPU); `None` when its samples span less than
+    /// half of that window (or 50 ms).
+    pub fn share(&self, index: usize, window_ns: u64) -> Option<f64> {
+        let s = self.samples.get(index)?;
+        let &(t1, c1) = s.back()?;
+        let &(t0, c0) = s
+            .iter()
+            .find(|&&(t, _)| t1.saturating_sub(t) <= window_ns)?;
+        let span = t1.saturating_sub(t0);
+        if span < MIN_SPAN_NS.max(window_ns / 2) {
+            return None;
+        }
+        Some(c1.saturating_sub(c0) as f64 / span as f64)
+    }
+}
+
+/// Two CPU sets overlap (an empty set is any CPU).
+pub fn share_cpus(a: &[usize], b: &[usize]) -> bool {
+    a.is_empty() || b.is_empty() || a.iter().any(|c| b.contains(c))
+}
+
+/// The service to kill instead of `frozen` (silent on its heartbeat): the
+/// running service sharing its CPUs that used the largest share of a CPU
+/// over the last `window_ns`, if above [`STARVING_SHARE`] and not `frozen`
+/// itself (a service that spins without publishing is its own culprit).
+/// Returns its index and share.
+pub fn culprit(
+    roster: &Roster,
+    cpu: &CpuUse,
+    frozen: usize,
+    window_ns: u64,
+) -> Option<(usize, f64)> {
+    let (index, share) = busiest(roster, cpu, frozen, window_ns)?;
+    (share > STARVING_SHARE && index != frozen).then_some((index, share))
+}
+
+/// The running service sharing `frozen`'s CPUs (itself included) that used
+/// the largest share of a CPU over the last `window_ns`, and that share.
+pub fn busiest(
+    roster: &Roster,
+    cpu: &CpuUse,
+    frozen: usize,
+    window_ns: u64,
+) -> Option<(usize, f64)> {
+    let cpus = &roster.get(frozen).spec.cpus;
+    roster
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.alive() && share_cpus(cpus, &s.spec.cpus))
+        .filter_map(|(i, _)| Some((i, cpu.share(i, window_ns)?)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    /// camera and spinner on CPU 0, sim on CPU 1, all running.
+    fn roster() -> Roster {
+        let config = phri_config::Config::defaults();
+        let spec = |cpus: &[usize]| phri_config::ServiceSpec {
+            cpus: cpus.to_vec(),
+            ..config.services["camera"].clone()
+        };
+        let mut r = Roster::new(
+            config.supervisor.clone(),
+            vec![
+                ("sim".into(), spec(&[1])),
+                ("camera".into(), spec(&[0])),
+                ("spinner".into(), spec(&[0])),
+            ],
+        );
+        for i in 0..3 {
+            r.started(i, 0, 100 + i as u32);
+        }
+        r
+    }
+
+    /// Every 50 ms for `ms`: each service's share of a CPU.
+    fn sample(cpu: &mut CpuUse, from_ms: u64, ms: u64, shares: &[f64]) {
+        for t in (from_ms..=from_ms + ms).step_by(50) {
+            for (i, s) in shares.iter().enumerate() {
+                cpu.record(i, t * MS, Some((t as f64 * MS as f64 * s) as u64));
+            }
+        }
+    }
+
+    #[test]
+    fn a_spinner_on_the_silent_services_cpu_is_the_culprit() {
+        let r = roster();
+        let mut cpu = CpuUse::new(3);
+        // not enough history yet: no verdict
+        sample(&mut cpu, 0, 300, &[0.3, 0.0, 1.0]);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+        let mut cpu = CpuUse::new(3);
+        sample(&mut cpu, 400, 2000, &[0.3, 0.0, 0.97]);
+        let (i, share) = culprit(&r, &cpu, 1, WINDOW_NS).unwrap();
+        assert_eq!(i, 2);
+        assert!((share - 0.97).abs() < 0.02, "{share}");
+        // the spinner began 200 ms ago: over the silence only, it is the culprit
+        let mut cpu = CpuUse::new(3);
+        sample(&mut cpu, 0, 1000, &[0.3, 0.2, 0.0]);
+        for t in (1050..=1300).step_by(50) {
+            cpu.record(2, t * MS, Some((t - 1000) * MS));
+        }
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS).map(|c| c.0), None);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS / 5).map(|c| c.0), Some(2));
+        // the simulator shares no CPU with it: its own silence is its own
+        assert_eq!(culprit(&r, &cpu, 0, WINDOW_NS), None);
+    }
+
+    #[test]
+    fn a_busy_service_below_the_threshold_or_the_silent_one_itself_is_no_culprit() {
+        let r = roster();
+        let mut cpu = CpuUse::new(3);
+        sample(&mut cpu, 0, 2000, &[0.3, 0.1, 0.8]);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+        // the silent service spins itself: kill it, as any frozen service
+        let mut cpu = CpuUse::new(3);
+        sample(&mut cpu, 0, 2000, &[0.3, 0.99, 0.0]);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+    }
+
+    #[test]
+    fn history_ends_with_the_process() {
+        let mut r = roster();
+        let mut cpu = CpuUse::new(3);
+        sample(&mut cpu, 0, 2000, &[0.3, 0.0, 0.99]);
+        // the spinner died: no longer running, no longer blamed
+        r.exited(2, 2000 * MS);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+        // a new process: its CPU time starts again from 0
+        r.started(2, 2050 * MS, 300);
+        cpu.record(2, 2100 * MS, Some(MS));
+        assert_eq!(cpu.share(2, WINDOW_NS), None);
+        cpu.record(2, 2200 * MS, None);
+        assert_eq!(cpu.share(2, WINDOW_NS), None);
+        assert!(share_cpus(&[], &[3]) && share_cpus(&[0, 1], &[1]) && !share_cpus(&[0], &[1]));
+    }
+}

@@ -1,0 +1,614 @@
+//! The supervised services' bookkeeping, as plain data and decisions: which
+//! runs (by pid), when to restart what died (exponential back-off), which
+//! service is frozen (silent on its heartbeat channel while what it depends
+//! on is not), and the views of it all: the health message, the state files,
+//! the report's `services`. Pure: the clock comes in as `now_ns`
+//! (CLOCK_MONOTONIC), processes are started, signalled and reaped by the
+//! caller, which tells the roster what happened.
+
+use std::collections::BTreeMap;
+
+use phri_config::{ServiceSpec, SupervisorConfig};
+use phri_ipc::Health;
+
+use crate::report::ServiceReport;
+use crate::restart::RestartPolicy;
+use crate::state::{ServiceJson, ServiceState, StateJson, SupervisorState, STATE_VERSION};
+
+/// One supervised service.
+#[derive(Clone, Debug)]
+pub struct Supervised {
+    /// its key under `[services]`
+    pub name: String,
+    pub spec: ServiceSpec,
+    /// process id while it runs (started or adopted); `None` while it is down
+    pub pid: Option<u32>,
+    pub policy: RestartPolicy,
+    /// when to start it again [ns], while a restart is pending
+    pub restart_at: Option<u64>,
+    /// last message on its heartbeat channel, or since when its silence is
+    /// judged afresh ((re)start, a dependency silent, killed frozen) [ns]
+    pub last_heartbeat_ns: u64,
+    /// last (re)start [ns]
+    pub started_ns: u64,
+    /// its heartbeat was heard since its last (re)start
+    pub heard_since_start: bool,
+    /// when it exited, over the last `crash_loop_window_s` [ns]
+    exits_ns: Vec<u64>,
+}
+
+impl Supervised {
+    /// restarts so far
+    pub fn restarts(&self) -> u32 {
+        self.policy.restarts
+    }
+
+    /// running (started or adopted, not yet reaped)
+    pub fn alive(&self) -> bool {
+        self.pid.is_some()
+    }
+}
+
+/// A service found frozen by [`Roster::frozen`]: kill it (it is then reaped
+/// and restarted as any exit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Frozen {
+    /// index in the roster
+    pub index: usize,
+    /// how long its heartbeat channel had been silent [ns]
+    pub silent_ns: u64,
+}
+
+/// Every supervised service, in start order (the index is the same everywhere).
+#[derive(Clone, Debug)]
+pub struct Roster {
+    sup: SupervisorConfig,
+    services: Vec<Supervised>,
+    /// per service: silent beyond its heartbeat timeout (scratch of [`Roster::frozen`])
+    silent: Vec<bool>,
+}
+
+impl Roster {
+    /// `services` in start order ([`crate::spec::in_start_order`]), all down until started.
+    pub fn new(sup: SupervisorConfig, services: Vec<(String, ServiceSpec)>) -> Roster {
+        let services: Vec<Supervised> = services
+            .into_iter()
+            .map(|(name, spec)| Supervised {
+                name,
+                spec,
+                pid: None,
+                policy: RestartPolicy::default(),
+                restart_at: None,
+                last_heartbeat_ns: 0,
+                started_ns: 0,
+                heard_since_start: false,
+                exits_ns: Vec::new(),
+            })
+            .collect();
+        Roster {
+            sup,
+            silent: vec![false; services.len()],
+            services,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.services.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.services.is_empty()
+    }
+
+    pub fn get(&self, index: usize) -> &Supervised {
+        &self.services[index]
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &Supervised> {
+        self.services.iter()
+    }
+
+    pub fn config(&self) -> &SupervisorConfig {
+        &self.sup
+    }
+
+    /// Service `index` was (re)started at `now_ns` as process `pid`.
+    pub fn started(&mut self, index: usize, now_ns: u64, pid: u32) {
+        let s = &mut self.services[index];
+        s.pid = Some(pid);
+        s.restart_at = None;
+        s.policy.started(now_ns);
+        s.started_ns = now_ns;
+        s.last_heartbeat_ns = now_ns;
+        s.heard_since_start = false;
+    }
+
+    /// The index of service `name`.
+    pub fn index_of(&self, name: &str) -> Option<usize> {
+        self.services.iter().position(|s| s.name == name)
+    }
+
+    /// Whether `pid` is a process this supervisor runs (started or adopted).
+    pub fn runs(&self, pid: u32) -> bool {
+        self.services.iter().any(|s| s.pid == Some(pid))
+    }
+
+    /// Service `index` was adopted at `now_ns` from a supervisor that died,
+    /// which had restarted it `restarts` times.
+    pub fn adopted(&mut self, index: usize, now_ns: u64, pid: u32, restarts: u32) {
+        self.started(index, now_ns, pid);
+        self.services[index].policy.restarts = restarts;
+    }
+
+    /// Service `index` ended at `now_ns`: when it will be started again [ns]
+    /// (`None`: it is not restarted, `restart = false`).
+    pub fn exited(&mut self, index: usize, now_ns: u64) -> Option<u64> {
+        let sup = &self.sup;
+        let s = &mut self.services[index];
+        s.pid = None;
+        let window_ns = (sup.crash_loop_window_s * 1e9) as u64;
+        s.exits_ns
+            .retain(|&t| now_ns.saturating_sub(t) <= window_ns);
+        s.exits_ns.push(now_ns);
+        s.restart_at = s.spec.restart.then(|| {
+            s.policy.exited(
+                now_ns,
+                sup.restart_backoff_min_ms,
+                sup.restart_backoff_max_ms,
+                sup.stable_after_s,
+            )
+        });
+        s.restart_at
+    }
+
+    /// Service `index` crash-loops at `now_ns`: it ended more than
+    /// `crash_loop_restarts` times within the last `crash_loop_window_s`
+    /// (a restart each). Returns how often.
+    pub fn crash_looping(&self, index: usize, now_ns: u64) -> Option<usize> {
+        let window_ns = (self.sup.crash_loop_window_s * 1e9) as u64;
+        let n = self.services[index]
+            .exits_ns
+            .iter()
+            .filter(|&&t| now_ns.saturating_sub(t) <= window_ns)
+            .count();
+        (n > self.sup.crash_loop_restarts as usize).then_some(n)
+    }
+
+    /// Whether service `index` is to be started now; the pending restart is
+    /// taken (a failed start is [`Roster::restart_failed`]).
+    pub fn restart_due(&mut self, index: usize, now_ns: u64) -> bool {
+        let s = &mut self.services[index];
+        if s.restart_at.is_some_and(|at| now_ns >= at) {
+            s.restart_at = None;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Starting service `index` failed at `now_ns`: try again after the next
+    /// back-off (counted as a restart); returns when [ns].
+    pub fn restart_failed(&mut self, index: usize, now_ns: u64) -> u64 {
+        let sup = &self.sup;
+        let s = &mut self.services[index];
+        // a start that fails counts towards a crash loop as an exit does
+        let window_ns = (sup.crash_loop_window_s * 1e9) as u64;
+        s.exits_ns
+            .retain(|&t| now_ns.saturating_sub(t) <= window_ns);
+        s.exits_ns.push(now_ns);
+        let at = s.policy.exited(
+            now_ns,
+            sup.restart_backoff_min_ms,
+            sup.restart_backoff_max_ms,
+            sup.stable_after_s,
+        );
+        s.restart_at = Some(at);
+        at
+    }
+
+    /// Something arrived on `channel` (its name) since the last call: every
+    /// service with that heartbeat is alive at `now_ns`.
+    pub fn heard(&mut self, channel: &str, now_ns: u64) {
+        for s in &mut self.services {
+            if s.spec.heartbeat.as_deref() == Some(channel) {
+                s.last_heartbeat_ns = now_ns;
+                s.heard_since_start = s.pid.is_some();
+            }
+        }
+    }
+
+    /// The supervisor itself was stalled until `now_ns` (it could not hear
+    /// anyone): every service's silence is judged afresh from now, so that
+    /// its own stall is not taken for theirs.
+    pub fn judge_afresh(&mut self, now_ns: u64) {
+        for s in &mut self.services {
+            s.last_heartbeat_ns = s.last_heartbeat_ns.max(now_ns);
+        }
+    }
+
+    /// The cell is whole: every service runs, and every one with a
+    /// heartbeat channel has been heard on it since it started.
+    pub fn whole(&self) -> bool {
+        self.services
+            .iter()
+            .all(|s| s.pid.is_some() && (s.spec.heartbeat.is_none() || s.heard_since_start))
+    }
+
+    /// The running services not yet heard on their heartbeat channel since they started.
+    pub fn unheard(&self) -> Vec<&str> {
+        self.services
+            .iter()
+            .filter(|s| s.pid.is_some() && s.spec.heartbeat.is_some() && !s.heard_since_start)
+            .map(|s| s.name.as_str())
+            .collect()
+    }
+
+    /// Silence on its heartbeat longer than this is frozen [ns]: the
+    /// service's own `heartbeat_timeout_ms`, else the supervisor's.
+    fn timeout_ns(&self, s: &Supervised) -> u64 {
+        s.spec
+            .heartbeat_timeout_ms
+            .unwrap_or(self.sup.heartbeat_timeout_ms)
+            * 1_000_000
+    }
+
+    /// A (re)started service is not judged before this [ns].
+    fn grace_ns(&self) -> u64 {
+        4 * (self.sup.heartbeat_timeout_ms * 1_000_000).max(500_000_000)
+    }
+
+    /// The services frozen at `now_ns`: running, out of their start-up
+    /// grace, every service they depend on heard from, yet silent on their
+    /// own heartbeat beyond its timeout. A service whose dependencies are
+    /// silent (or unknown) is not judged: its silence is explained by
+    /// theirs, and it is judged afresh once they are back. A frozen
+    /// service's silence is also counted afresh (it is killed meanwhile).
+    pub fn frozen(&mut self, now_ns: u64) -> Vec<Frozen> {
+        for i in 0..self.services.len() {
+            let s = &self.services[i];
+            self.silent[i] = s.spec.heartbeat.is_some()
+                && now_ns.saturating_sub(s.last_heartbeat_ns) > self.timeout_ns(s);
+        }
+        let grace = self.grace_ns();
+        let mut frozen = Vec::new();
+        for i in 0..self.services.len() {
+            let deps_ok = self.services[i].spec.depends_on.iter().all(|d| {
+                self.services
+                    .iter()
+                    .zip(&self.silent)
+                    .any(|(o, &silent)| &o.name == d && !silent)
+            });
+            let s = &mut self.services[i];
+            if !deps_ok {
+                s.last_heartbeat_ns = now_ns;
+                continue;
+            }
+            let past_grace = now_ns.saturating_sub(s.started_ns) > grace;
+            if s.pid.is_some() && past_grace && self.silent[i] {
+                frozen.push(Frozen {
+                    index: i,
+                    silent_ns: now_ns.saturating_sub(s.last_heartbeat_ns),
+                });
+                s.last_heartbeat_ns = now_ns;
+            }
+        }
+        frozen
+    }
+
+    /// Fill `health` (`supervisor/health`) at `now_ns`: the next sequence
+    /// number, and per service (as many as the message holds) its name, pid
+    /// (0: down), whether it runs, restarts and last start.
+    pub fn fill_health(&self, health: &mut Health, now_ns: u64) {
+        health.seq += 1;
+        health.stamp_ns = now_ns;
+        health.count = self.services.len() as u32;
+        for (h, s) in health.services.iter_mut().zip(&self.services) {
+            h.name = [0; 32];
+            let b = s.name.as_bytes();
+            let n = b.len().min(h.name.len() - 1);
+            h.name[..n].copy_from_slice(&b[..n]);
+            h.pid = s.pid.map_or(0, |p| p as i32);
+            h.alive = s.pid.is_some() as u32;
+            h.restarts = s.policy.restarts;
+            h.started_ns = s.started_ns;
+        }
+    }
+
+    /// `state.json` of this supervisor (`supervisor_pid`) and run (`prefix`).
+    pub fn state_json(&self, prefix: &str, supervisor_pid: u32) -> StateJson {
+        StateJson {
+            prefix: prefix.to_string(),
+            services: self
+                .services
+                .iter()
+                .map(|s| {
+                    (
+                        s.name.clone(),
+                        ServiceJson {
+                            pid: s.pid,
+                            restarts: s.policy.restarts,
+                        },
+                    )
+                })
+                .collect(),
+            supervisor_pid,
+        }
+    }
+
+    /// `supervisor.state`: what a supervisor that takes over needs.
+    pub fn state(&self, prefix: &str, supervisor_pid: u32, cell_start_ns: u64) -> SupervisorState {
+        SupervisorState {
+            version: STATE_VERSION,
+            supervisor_pid,
+            prefix: prefix.to_string(),
+            cell_start_ns,
+            services: self
+                .services
+                .iter()
+                .map(|s| ServiceState {
+                    name: s.name.clone(),
+                    pid: s.pid.unwrap_or(0),
+                    restarts: s.policy.restarts,
+                })
+                .collect(),
+        }
+    }
+
+    /// The report's `services`.
+    pub fn reports(&self) -> BTreeMap<String, ServiceReport> {
+        self.services
+            .iter()
+            .map(|s| {
+                (
+                    s.name.clone(),
+                    ServiceReport {
+                        restarts: s.policy.restarts,
+                        alive_at_end: s.pid.is_some(),
+                    },
+                )
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    const MS: u64 = 1_000_000;
+
+    /// sim ← dynamics (heartbeat sim/truth ← dynamics/residual); a worker
+    /// without heartbeat; a service that depends on one that is not supervised.
+    fn roster() -> Roster {
+        let config = phri_config::Config::defaults();
+        let mut sup = config.supervisor.clone();
+        sup.heartbeat_timeout_ms = 200;
+        sup.restart_backoff_min_ms = 50;
+        sup.restart_backoff_max_ms = 400;
+        sup.stable_after_s = 5.0;
+        let spec = |heartbeat: Option<&str>, deps: &[&str]| ServiceSpec {
+            heartbeat: heartbeat.map(str::to_string),
+            depends_on: deps.iter().map(|d| d.to_string()).collect(),
+            ..config.services["sim"].clone()
+        };
+        let mut r = Roster::new(
+            sup,
+            vec![
+                ("sim".into(), spec(Some("sim/truth"), &[])),
+                ("dynamics".into(), spec(Some("dynamics/residual"), &["sim"])),
+                ("worker".into(), spec(None, &[])),
+                ("orphan".into(), spec(Some("control/status"), &["nobody"])),
+            ],
+        );
+        for i in 0..r.len() {
+            r.started(i, 0, 100 + i as u32);
+        }
+        r
+    }
+
+    /// Both heartbeats heard every 10 ms until `until_ms`, except `mute`'s.
+    fn run(r: &mut Roster, from_ms: u64, until_ms: u64, mute: &[&str]) -> Vec<(u64, usize)> {
+        let mut frozen = Vec::new();
+        for t in (from_ms..until_ms).step_by(10) {
+            for ch in ["sim/truth", "dynamics/residual", "control/status"] {
+                if !mute.contains(&ch) {
+                    r.heard(ch, t * MS);
+                }
+            }
+            frozen.extend(r.frozen(t * MS).into_iter().map(|f| (t, f.index)));
+        }
+        frozen
+    }
+
+    #[test]
+    fn a_silent_service_is_frozen_after_its_timeout_once_out_of_grace() {
+        let mut r = roster();
+        assert!(run(&mut r, 0, 2100, &[]).is_empty());
+        // dynamics falls silent at 2100 ms: frozen once silent > 200 ms
+        let f = run(&mut r, 2100, 2400, &["dynamics/residual"]);
+        assert_eq!(f, [(2300, 1)]);
+        // counted afresh after the verdict (it is being killed)
+        assert!(run(&mut r, 2400, 2490, &["dynamics/residual"]).is_empty());
+    }
+
+    #[test]
+    fn silence_during_the_start_up_grace_is_not_frozen() {
+        let mut r = roster();
+        // grace: 4 × max(200 ms, 500 ms) = 2 s after the start
+        let f = run(&mut r, 0, 2100, &["dynamics/residual"]);
+        assert_eq!(f, [(2010, 1)]);
+        // a restart grants the grace again
+        r.started(1, 2100 * MS, 300);
+        assert!(run(&mut r, 2100, 4100, &["dynamics/residual"]).is_empty());
+    }
+
+    #[test]
+    fn after_a_stall_of_the_supervisor_silence_is_judged_afresh() {
+        let mut r = roster();
+        run(&mut r, 0, 3000, &[]);
+        // the supervisor heard nothing from 3000 to 3500 ms (it was stalled)
+        r.judge_afresh(3500 * MS);
+        assert!(run(&mut r, 3500, 3700, &["dynamics/residual"]).is_empty());
+        assert_eq!(run(&mut r, 3700, 3800, &["dynamics/residual"]), [(3710, 1)]);
+    }
+
+    #[test]
+    fn silence_explained_by_a_silent_dependency_is_not_frozen() {
+        let mut r = roster();
+        run(&mut r, 0, 3000, &[]);
+        // the simulator dies: it and dynamics fall silent, neither is frozen
+        // (a dead service is restarting, and it explains dynamics' silence)
+        r.exited(0, 3000 * MS);
+        let f = run(&mut r, 3000, 4000, &["sim/truth", "dynamics/residual"]);
+        assert!(f.is_empty(), "{f:?}");
+        // the simulator is back, dynamics still silent: judged from then on,
+        // not from its last message at 2990 ms
+        r.started(0, 4000 * MS, 200);
+        let f = run(&mut r, 4000, 4400, &["dynamics/residual"]);
+        assert_eq!(f, [(4200, 1)]);
+    }
+
+    #[test]
+    fn without_heartbeat_or_process_or_known_dependencies_nothing_is_frozen() {
+        let mut r = roster();
+        // the orphan depends on a service that is not supervised: never judged
+        let f = run(&mut r, 0, 5000, &["control/status"]);
+        assert!(f.is_empty(), "{f:?}");
+        // a dead service is silent but not frozen (it is restarting)
+        r.exited(0, 5000 * MS);
+        let f = run(&mut r, 5000, 6000, &["sim/truth"]);
+        assert!(f.is_empty(), "{f:?}");
+        // ... and explains its dependants' silence
+        assert!(run(&mut r, 6000, 7000, &["sim/truth", "dynamics/residual"]).is_empty());
+    }
+
+    #[test]
+    fn a_service_timeout_overrides_the_supervisors() {
+        let mut r = roster();
+        r.services[1].spec.heartbeat_timeout_ms = Some(1500);
+        run(&mut r, 0, 2500, &[]);
+        let f = run(&mut r, 2500, 4500, &["dynamics/residual"]);
+        // last heard at 2490 ms: silent beyond 1.5 s from 4000 ms (not 2700 ms)
+        assert_eq!(f, [(4000, 1)]);
+    }
+
+    #[test]
+    fn exits_schedule_restarts_with_back_off_unless_restart_is_off() {
+        let mut r = roster();
+        assert_eq!(r.exited(0, 100 * MS), Some(150 * MS));
+        assert!(!r.restart_due(0, 149 * MS));
+        assert!(r.restart_due(0, 150 * MS));
+        assert!(!r.restart_due(0, 150 * MS), "taken once");
+        // the start failed: the next back-off, counted
+        assert_eq!(r.restart_failed(0, 150 * MS), 250 * MS);
+        assert!(r.restart_due(0, 250 * MS));
+        r.started(0, 250 * MS, 500);
+        assert_eq!(r.get(0).restarts(), 2);
+        r.services[2].spec.restart = false;
+        assert_eq!(r.exited(2, 300 * MS), None);
+        assert!(!r.restart_due(2, 10_000 * MS));
+        let reports = r.reports();
+        assert_eq!(reports["sim"].restarts, 2);
+        assert!(reports["sim"].alive_at_end);
+        assert!(!reports["worker"].alive_at_end);
+    }
+
+    #[test]
+    fn a_service_restarted_too_often_within_the_window_crash_loops() {
+        let mut r = roster();
+        r.sup.crash_loop_restarts = 3;
+        r.sup.crash_loop_window_s = 1.0;
+        // 3 exits within a second: restarted each time, not yet a loop
+        for t in [100, 300, 500] {
+            r.exited(0, t * MS);
+            assert_eq!(r.crash_looping(0, t * MS), None, "{t}");
+            r.started(0, t * MS + MS, 7);
+        }
+        // the 4th within the window: more than 3
+        r.exited(0, 900 * MS);
+        assert_eq!(r.crash_looping(0, 900 * MS), Some(4));
+        // spread out over more than the window: never a loop
+        let mut r = roster();
+        r.sup.crash_loop_restarts = 3;
+        r.sup.crash_loop_window_s = 1.0;
+        for k in 0..10u64 {
+            r.exited(1, k * 400 * MS);
+            assert_eq!(r.crash_looping(1, k * 400 * MS), None, "{k}");
+            r.started(1, k * 400 * MS + MS, 7);
+        }
+    }
+
+    #[test]
+    fn the_cell_is_whole_once_every_heartbeat_was_heard_since_its_start() {
+        let mut r = roster();
+        assert!(!r.whole());
+        assert_eq!(r.unheard(), ["sim", "dynamics", "orphan"]);
+        r.heard("sim/truth", 10 * MS);
+        r.heard("dynamics/residual", 10 * MS);
+        r.heard("control/status", 10 * MS);
+        assert!(r.whole(), "{:?}", r.unheard());
+        // a restart must be heard again; a dead service is not whole
+        r.started(1, 20 * MS, 300);
+        assert_eq!(r.unheard(), ["dynamics"]);
+        r.exited(1, 30 * MS);
+        assert!(!r.whole());
+        assert!(r.unheard().is_empty());
+        assert!(r.runs(100) && !r.runs(300));
+        assert_eq!(r.index_of("worker"), Some(2));
+    }
+
+    #[test]
+    fn health_and_state_show_every_service() {
+        let mut r = roster();
+        r.exited(1, 10 * MS);
+        r.adopted(2, 20 * MS, 77, 4);
+        let mut h = Health::zeroed();
+        r.fill_health(&mut h, 30 * MS);
+        r.fill_health(&mut h, 40 * MS);
+        assert_eq!((h.seq, h.stamp_ns, h.count), (2, 40 * MS, 4));
+        assert_eq!(&h.services[0].name[..4], b"sim\0");
+        assert_eq!((h.services[0].pid, h.services[0].alive), (100, 1));
+        assert_eq!(
+            (
+                h.services[1].pid,
+                h.services[1].alive,
+                h.services[1].restarts
+            ),
+            (0, 0, 1)
+        );
+        assert_eq!(
+            (
+                h.services[2].pid,
+                h.services[2].restarts,
+                h.services[2].started_ns
+            ),
+            (77, 4, 20 * MS)
+        );
+        let j = r.state_json("p_", 9);
+        assert_eq!(j.services["dynamics"].pid, None);
+        assert_eq!(j.services["worker"].pid, Some(77));
+        let s = r.state("p_", 9, 5);
+        assert_eq!(s.services[1].pid, 0);
+        assert_eq!(
+            s.service("worker").map(|w| (w.pid, w.restarts)),
+            Some((77, 4))
+        );
+        assert_eq!(s.cell_start_ns, 5);
+    }
+
+    #[test]
+    fn long_names_are_cut_to_the_message_field() {
+        let config = phri_config::Config::defaults();
+        let long = "a".repeat(40);
+        let mut r = Roster::new(
+            config.supervisor.clone(),
+            vec![(long, config.services["sim"].clone())],
+        );
+        r.started(0, 0, 1);
+        let mut h = Health::zeroed();
+        r.fill_health(&mut h, 0);
+        assert_eq!(h.services[0].name[..31], [b'a'; 31]);
+        assert_eq!(h.services[0].name[31], 0);
+    }
+}

@@ -1,0 +1,1024 @@
+//! Hardening of the supervisor (issue 10): the cell starts whole or not at
+//! all, trusts nothing another user can write, says who commands the robot,
+//! stops when its supervisor is gone for good, and blames the service that
+//! starves the others. Each reproduction of the issue is a test here, with
+//! the fixed behaviour; real processes, really killed. Tests that start a
+//! cell are serialised (the 2 cores), each with its own prefix and run
+//! directory. Steps that need another user (root: `setpriv` to nobody,
+//! `chown`) have a mode-based variant that runs when the tests are not root.
+
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+static SERIAL: Mutex<()> = Mutex::new(());
+
+const NOBODY: u32 = 65534;
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+fn bin_dir() -> PathBuf {
+    Path::new(env!("CARGO_BIN_EXE_phri-supervisor"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+fn bin(name: &str) -> PathBuf {
+    let p = bin_dir().join(name);
+    assert!(
+        p.is_file(),
+        "{} not built (cargo test --workspace builds it; else cargo build --release --bins)",
+        p.display()
+    );
+    p
+}
+
+fn is_root() -> bool {
+    // SAFETY: geteuid cannot fail
+    unsafe { libc::geteuid() == 0 }
+}
+
+fn prefix(test: &str) -> String {
+    format!("h{}{test}_", std::process::id())
+}
+
+/// A fresh, private scratch directory.
+fn scratch(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("phri-hardening-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::set_permissions(&d, std::fs::Permissions::from_mode(0o700)).unwrap();
+    d
+}
+
+fn chown(path: &Path, uid: u32) {
+    let c = std::ffi::CString::new(path.to_string_lossy().as_bytes()).unwrap();
+    // SAFETY: chown on a path this test created
+    assert_eq!(
+        unsafe { libc::chown(c.as_ptr(), uid, uid) },
+        0,
+        "chown {}",
+        path.display()
+    );
+}
+
+/// `cmd` run as the user nobody (root only).
+fn as_nobody(cmd: &[&str]) -> Output {
+    Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+        .args(cmd)
+        .output()
+        .expect("setpriv")
+}
+
+/// The supervisor's command for cell `prefix`: the deployed configuration,
+/// the run directory if given, and `args`.
+fn supervisor(prefix: &str, run_dir: Option<&Path>, args: &[&str]) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
+    cmd.current_dir(repo())
+        .arg("--config")
+        .arg(repo().join("deploy/phri.toml"))
+        .arg("--prefix")
+        .arg(prefix);
+    if let Some(d) = run_dir {
+        cmd.arg("--run-dir").arg(d);
+    }
+    cmd.args(args).stdin(Stdio::null());
+    cmd
+}
+
+/// Run a supervisor that is expected to refuse: its exit code and stderr.
+fn refused(mut cmd: Command) -> (i32, String) {
+    let out = cmd.output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Processes whose command line names `--prefix <prefix>` (the whole word).
+fn processes_of(prefix: &str) -> Vec<String> {
+    let out = Command::new("pgrep")
+        .arg("-af")
+        .arg(format!("--prefix {prefix}( |$)"))
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| !l.contains("pgrep"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Files of `prefix` in iceoryx2's directories and /dev/shm.
+fn shm_files_of(prefix: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for dir in ["/tmp/iceoryx2", "/dev/shm"] {
+        let mut stack = vec![PathBuf::from(dir)];
+        while let Some(d) = stack.pop() {
+            let Ok(rd) = std::fs::read_dir(&d) else {
+                continue;
+            };
+            for e in rd.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if e.file_name().to_string_lossy().starts_with(prefix) {
+                    found.push(p);
+                }
+            }
+        }
+    }
+    found
+}
+
+/// No process of the cell and no shared-memory file of its prefix remain.
+fn assert_nothing_left(prefix: &str) {
+    let procs = processes_of(prefix);
+    assert!(procs.is_empty(), "processes left: {procs:?}");
+    let files = shm_files_of(prefix);
+    assert!(files.is_empty(), "left behind: {files:?}");
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+fn mode(path: &Path) -> u32 {
+    std::fs::symlink_metadata(path)
+        .unwrap()
+        .permissions()
+        .mode()
+        & 0o7777
+}
+
+fn wait_until(what: &str, timeout_s: f64, mut cond: impl FnMut() -> bool) {
+    let deadline = Instant::now() + Duration::from_secs_f64(timeout_s);
+    while !cond() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+fn wait(s: f64) {
+    std::thread::sleep(Duration::from_secs_f64(s));
+}
+
+fn alive(pid: i32) -> bool {
+    // SAFETY: probing a pid with signal 0
+    let exists = unsafe { libc::kill(pid, 0) } == 0;
+    exists
+        && std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "))
+}
+
+/// A running supervisor, its stderr in a file.
+struct Running {
+    child: Child,
+    prefix: String,
+    stderr: PathBuf,
+}
+
+impl Running {
+    fn start(mut cmd: Command, prefix: &str, scratch: &Path) -> Running {
+        for b in [
+            "phri-sim",
+            "phri-dynamics",
+            "phri-control",
+            "phri-test-service",
+        ] {
+            bin(b);
+        }
+        let stderr = scratch.join(format!("{prefix}stderr.txt"));
+        let file = std::fs::File::create(&stderr).unwrap();
+        cmd.stdout(Stdio::null()).stderr(file);
+        Running {
+            child: cmd.spawn().unwrap(),
+            prefix: prefix.to_string(),
+            stderr,
+        }
+    }
+
+    fn stderr(&self) -> String {
+        std::fs::read_to_string(&self.stderr).unwrap_or_default()
+    }
+
+    /// The run directory the supervisor printed.
+    fn run_dir(&self) -> PathBuf {
+        let mut found = None;
+        wait_until("the supervisor's run directory line", 20.0, || {
+            found = self.stderr().lines().find_map(|l| {
+                l.split_once(", run directory ")
+                    .map(|(_, d)| PathBuf::from(d.trim()))
+            });
+            found.is_some()
+        });
+        found.unwrap()
+    }
+
+    fn state(&self, run_dir: &Path) -> Value {
+        let mut v = Value::Null;
+        wait_until("state.json", 20.0, || {
+            v = std::fs::read_to_string(run_dir.join("state.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .unwrap_or(Value::Null);
+            v["services"]["control"]["pid"].is_i64()
+        });
+        v
+    }
+
+    /// Wait for the end: exit code and stderr.
+    fn finish(mut self) -> (i32, String) {
+        let deadline = Instant::now() + Duration::from_secs(90);
+        let status = loop {
+            if let Some(st) = self.child.try_wait().unwrap() {
+                break st;
+            }
+            if Instant::now() > deadline {
+                let _ = self.child.kill();
+                panic!("the supervisor did not end: {}", self.stderr());
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        (status.code().unwrap_or(-1), self.stderr())
+    }
+
+    fn signal(&self, sig: i32) {
+        // SAFETY: a signal to our own child
+        unsafe { libc::kill(self.child.id() as i32, sig) };
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        // a failed test must not leave its cell running
+        if self.child.try_wait().ok().flatten().is_none() {
+            self.signal(libc::SIGINT);
+            let _ = self.child.wait();
+        }
+        let _ = &self.prefix;
+    }
+}
+
+fn report(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn events<'a>(r: &'a Value, kind: &str, service: &str) -> Vec<&'a Value> {
+    r["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == kind && (service.is_empty() || e["service"] == service))
+        .collect()
+}
+
+fn fault(args: &[&str]) -> (i32, String) {
+    let out = Command::new(bin("phri-fault")).args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Repro 1: a run directory another user prepared (or could write) is
+/// refused before anything starts; nothing is written into it.
+#[test]
+fn a_run_dir_another_user_prepared_or_can_write_is_refused() {
+    let p = prefix("rd");
+    let d = scratch("rd");
+    std::fs::set_permissions(&d, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let expect_refusal = |run_dir: &Path, needle: &str| {
+        let (code, err) = refused(supervisor(
+            &p,
+            Some(run_dir),
+            &["--scenario", "free-motion", "--duration", "20"],
+        ));
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(
+            err.contains(&*run_dir.to_string_lossy()) && err.contains(needle),
+            "{err}"
+        );
+        assert_nothing_left(&p);
+        assert!(files_in(run_dir).is_empty(), "{:?}", files_in(run_dir));
+    };
+    if is_root() {
+        // as in the issue: nobody prepares the run directory
+        let rd = d.join("rd");
+        let rd_s = rd.to_string_lossy().into_owned();
+        let out = as_nobody(&["mkdir", "-m", "0777", &rd_s]);
+        assert!(out.status.success(), "{out:?}");
+        expect_refusal(&rd, "owned by uid 65534");
+        // nobody's directory with a safe mode: still not ours
+        std::fs::set_permissions(&rd, std::fs::Permissions::from_mode(0o700)).unwrap();
+        expect_refusal(&rd, "owned by uid 65534");
+    }
+    // ours, but writable by others
+    let open = d.join("open");
+    std::fs::create_dir(&open).unwrap();
+    std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o777)).unwrap();
+    expect_refusal(&open, "writable by other users");
+    // a link to a private directory: it could point anywhere
+    let private = d.join("private");
+    std::fs::create_dir(&private).unwrap();
+    std::fs::set_permissions(&private, std::fs::Permissions::from_mode(0o700)).unwrap();
+    let link = d.join("link");
+    std::os::unix::fs::symlink(&private, &link).unwrap();
+    expect_refusal(&link, "symbolic link");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 1: the default run directory is private to the user, every state
+/// file is owner-only, another user cannot rewrite the configuration the
+/// services read, and state files someone could have replaced are never
+/// trusted: `phri-fault` signals only the cell's own services, a second
+/// supervisor refuses a state file others can write.
+#[test]
+fn run_state_is_private_and_tampered_state_is_never_trusted() {
+    let _g = serial();
+    let p = prefix("priv");
+    let d = scratch("priv");
+    let cell = Running::start(
+        supervisor(&p, None, &["--scenario", "free-motion", "--duration", "25"]),
+        &p,
+        &d,
+    );
+    let rd = cell.run_dir();
+    // the default: <runtime dir>/phri/run-<prefix> or <tmp>/phri-<uid>/run-<prefix>
+    assert!(rd.ends_with(format!("run-{p}")), "{}", rd.display());
+    assert_eq!(mode(&rd), 0o700, "{}", rd.display());
+    assert_eq!(mode(rd.parent().unwrap()) & 0o022, 0);
+    let st = cell.state(&rd);
+    for f in ["config.toml", "state.json", "supervisor.state"] {
+        assert_eq!(mode(&rd.join(f)), 0o600, "{f}");
+    }
+    let config = rd.join("config.toml");
+    let before = std::fs::read(&config).unwrap();
+    if is_root() {
+        // the issue's attack: another user rewrites the configuration
+        let script = format!("echo '[control]\navoidance = false' > {}", config.display());
+        let out = as_nobody(&["sh", "-c", &script]);
+        assert!(!out.status.success(), "nobody wrote {}", config.display());
+        let out = as_nobody(&["cat", &rd.join("state.json").to_string_lossy()]);
+        assert!(!out.status.success(), "nobody read state.json");
+    }
+    assert_eq!(std::fs::read(&config).unwrap(), before);
+
+    // phri-fault finds the run directory from the prefix and kills the
+    // controller (after the start-up, when an exit fails the start)
+    wait(3.0);
+    let control = st["services"]["control"]["pid"].as_i64().unwrap() as i32;
+    let (code, err) = fault(&["--prefix", &p, "control", "kill"]);
+    assert_eq!(code, 0, "{err}");
+    wait_until("the controller's restart", 10.0, || {
+        let v = cell.state(&rd);
+        v["services"]["control"]["restarts"] == 1 && v["services"]["control"]["pid"].is_i64()
+    });
+    assert!(!alive(control));
+
+    // a state.json naming pids that are not the cell's services
+    let sup = cell.child.id();
+    let mut bystander = Command::new("sleep").arg("60").spawn().unwrap();
+    let json = |sup_pid: u32, pid: u32| {
+        format!(
+            r#"{{"prefix":"{p}","services":{{"control":{{"pid":{pid},"restarts":0}}}},"supervisor_pid":{sup_pid}}}"#
+        )
+    };
+    let state_path = rd.join("state.json");
+    let original = std::fs::read(&state_path).unwrap();
+    let replace = |text: &str, mode: u32| {
+        let tmp = rd.join("forged.tmp");
+        std::fs::write(&tmp, text).unwrap();
+        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(mode)).unwrap();
+        std::fs::rename(&tmp, &state_path).unwrap();
+    };
+    for (text, mode, needle) in [
+        (json(sup, 1), 0o600, "not service control"),
+        (json(sup, bystander.id()), 0o600, "not service control"),
+        (json(0, bystander.id()), 0o600, "stale state.json"),
+        (json(sup, bystander.id()), 0o666, "writable by other users"),
+    ] {
+        replace(&text, mode);
+        let (code, err) = fault(&["--run-dir", &rd.to_string_lossy(), "control", "kill"]);
+        assert_eq!(code, 2, "{text}: {err}");
+        assert!(err.contains(needle), "{text}: {err}");
+        assert!(
+            bystander.try_wait().unwrap().is_none(),
+            "the bystander was signalled"
+        );
+    }
+    bystander.kill().unwrap();
+    bystander.wait().unwrap();
+    replace(&String::from_utf8_lossy(&original), 0o600);
+
+    // a supervisor.state others could have written: a second supervisor refuses it, naming it
+    let sup_state = rd.join("supervisor.state");
+    std::fs::set_permissions(&sup_state, std::fs::Permissions::from_mode(0o666)).unwrap();
+    let (code, err) = refused(supervisor(&p, None, &["--duration", "5"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("supervisor.state") && err.contains("writable by other users"),
+        "{err}"
+    );
+    std::fs::set_permissions(&sup_state, std::fs::Permissions::from_mode(0o600)).unwrap();
+
+    cell.signal(libc::SIGINT);
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("; clean"), "{err}");
+    assert_nothing_left(&p);
+    assert!(!rd.join("state.json").exists() && !rd.join("supervisor.state").exists());
+    let _ = std::fs::remove_dir_all(&rd);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 2: a service binary that exists but cannot be executed is refused
+/// before anything starts (no half cell, no state).
+#[test]
+fn a_binary_that_cannot_be_executed_starts_nothing() {
+    let p = prefix("noexec");
+    let d = scratch("noexec");
+    let name = format!("phri-hardening-noexec-{}", std::process::id());
+    let path = bin_dir().join(&name);
+    std::fs::write(&path, "#!/bin/sh\nexit 0\n").unwrap();
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let rd = d.join("rd");
+    let set = format!("services.control.binary=\"{name}\"");
+    let (code, err) = refused(supervisor(
+        &p,
+        Some(&rd),
+        &[
+            "--scenario",
+            "free-motion",
+            "--duration",
+            "20",
+            "--set",
+            &set,
+        ],
+    ));
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("[services.control]") && err.contains("not executable"),
+        "{err}"
+    );
+    assert_nothing_left(&p);
+    assert!(!rd.exists(), "{:?}", files_in(&rd));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 2: a service that dies during start-up fails the start: everything
+/// already started is stopped, shared memory and state files removed, exit 2.
+#[test]
+fn a_service_that_dies_during_start_up_stops_everything_started() {
+    let _g = serial();
+    let p = prefix("dies");
+    let d = scratch("dies");
+    let rd = d.join("rd");
+    let report = d.join("report.json");
+    let (code, err) = refused(supervisor(
+        &p,
+        Some(&rd),
+        &[
+            "--scenario",
+            "free-motion",
+            "--duration",
+            "20",
+            "--report",
+            &report.to_string_lossy(),
+            "--set",
+            "services.dier.binary=\"phri-test-service\"",
+            "--set",
+            "services.dier.order=3",
+            "--set",
+            "services.dier.args=[\"--exit-after\", \"0.3\"]",
+        ],
+    ));
+    assert_eq!(code, 2, "{err}");
+    let last = err.trim().lines().last().unwrap_or("");
+    assert!(
+        last.contains("start-up failed") && last.contains("dier") && last.contains("stopped"),
+        "{err}"
+    );
+    // the services started before and after it ran, and are gone now
+    assert!(err.contains("started sim"), "{err}");
+    assert_nothing_left(&p);
+    assert!(!rd.join("state.json").exists() && !rd.join("supervisor.state").exists());
+    assert!(!report.exists(), "a failed start writes no report");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 3 (and the refusal naming the running supervisor): a second
+/// supervisor for a running cell writes nothing (the running cell's
+/// configuration stays as it is, and its controller restarts with it), and
+/// its one line names the running supervisor and its run directory.
+#[test]
+fn a_refused_second_supervisor_writes_nothing_and_names_the_running_one() {
+    let _g = serial();
+    let p = prefix("second");
+    let d = scratch("second");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "12",
+                "--report",
+                &report_path.to_string_lossy(),
+            ],
+        ),
+        &p,
+        &d,
+    );
+    cell.state(&rd);
+    let snapshot = || {
+        ["config.toml", "supervisor.state", "state.json"]
+            .map(|f| std::fs::read(rd.join(f)).unwrap())
+    };
+    let mtime = || {
+        std::fs::metadata(rd.join("config.toml"))
+            .unwrap()
+            .modified()
+            .unwrap()
+    };
+    let (before, before_mtime) = (snapshot(), mtime());
+    let sup = cell.child.id();
+    // the issue's refused supervisor: a configuration error, named
+    let (code, err) = refused(supervisor(&p, Some(&rd), &["--set", "control.kp=abc"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("control.kp") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    // a valid one: refused because the cell runs, naming its supervisor and run directory
+    let (code, err) = refused(supervisor(&p, Some(&rd), &["--duration", "5"]));
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains(&format!("pid {sup}"))
+            && err.contains(&*rd.to_string_lossy())
+            && !err.contains("supervisor/health"),
+        "{err}"
+    );
+    // the same prefix with another run directory: found by its health channel
+    let other = d.join("other");
+    let (code, err) = refused(supervisor(&p, Some(&other), &["--duration", "5"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(&format!("pid {sup}")) && err.contains(&*rd.to_string_lossy()),
+        "{err}"
+    );
+    assert!(!other.exists(), "{:?}", files_in(&other));
+    assert_eq!(snapshot(), before, "the running cell's files changed");
+    assert_eq!(mtime(), before_mtime);
+    // the running cell restarts its controller with its own configuration
+    // (once started: an exit during the start-up fails the start)
+    wait(2.5);
+    let (code, err) = fault(&["--run-dir", &rd.to_string_lossy(), "control", "kill"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    let r = report(&report_path);
+    assert_eq!(r["clean"], true, "{}", r["degraded"]);
+    assert_eq!(r["services"]["control"]["restarts"], 1);
+    assert_eq!(r["services"]["control"]["alive_at_end"], true);
+    assert!(
+        !events(&r, "resume", "control").is_empty() || !events(&r, "sync", "control").is_empty()
+    );
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 4: every configuration error (a type, an enum value, an unknown key
+/// or section, keyframes out of order, a scenario length, a URDF, a service
+/// refusing its configuration, a run length, an unwritable report) is
+/// refused before anything starts, with one line naming it, exit 2.
+#[test]
+fn configuration_errors_are_refused_before_anything_starts() {
+    let d = scratch("config");
+    let scenario = d.join("backwards.toml");
+    std::fs::write(
+        &scenario,
+        "name = \"backwards\"\nduration_s = 10.0\n[human]\nfloor_z = -0.8\n\
+         [[human.keyframe]]\nt = 5.0\nbase = [1.2, 0.0, 3.14]\n\
+         [[human.keyframe]]\nt = 2.0\nbase = [1.0, 0.0, 3.14]\n",
+    )
+    .unwrap();
+    let negative = d.join("negative.toml");
+    std::fs::write(&negative, "name = \"negative\"\nduration_s = -5.0\n").unwrap();
+    let urdf = d.join("broken.urdf");
+    std::fs::write(&urdf, "<robot name=\"x\"><link name=\"a\"></robot>").unwrap();
+    let urdf_set = format!("robot.urdf=\"{}\"", urdf.display());
+    let report = "/nonexistent-phri-dir/report.json".to_string();
+    let (scenario, negative) = (
+        scenario.to_string_lossy().into_owned(),
+        negative.to_string_lossy().into_owned(),
+    );
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["--set", "control.kp=abc"], vec!["control.kp"]),
+        (
+            vec!["--set", "control.reaction=explode"],
+            vec!["control.reaction"],
+        ),
+        (vec!["--set", "control.nosuch=1"], vec!["nosuch"]),
+        (vec!["--set", "nonsense.x=1"], vec!["nonsense"]),
+        (vec!["--scenario", &scenario], vec!["backwards.toml"]),
+        (vec!["--scenario", &negative], vec!["duration_s"]),
+        (vec!["--set", &urdf_set], vec!["broken.urdf"]),
+        (
+            vec!["--set", "services.control.args=[\"--bogus\"]"],
+            vec!["[services.control]", "--bogus"],
+        ),
+        (vec!["--duration", "inf"], vec!["--duration"]),
+        (vec!["--duration", "-5"], vec!["--duration"]),
+        (
+            vec!["--report", &report],
+            vec!["--report", "/nonexistent-phri-dir"],
+        ),
+    ];
+    for (i, (args, needles)) in cases.iter().enumerate() {
+        let p = prefix(&format!("cfg{i}"));
+        let rd = d.join(format!("rd{i}"));
+        let (code, err) = refused(supervisor(&p, Some(&rd), args));
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {err}");
+        }
+        assert_nothing_left(&p);
+        // nothing written: no configuration, no state
+        assert!(files_in(&rd).is_empty(), "{args:?}: {:?}", files_in(&rd));
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 4: a service that keeps crashing ends the run (not the duration):
+/// ordered shutdown, exit non-zero, a report with `clean: false` saying why,
+/// and a summary line that says the run was not clean.
+#[test]
+fn a_service_that_keeps_crashing_ends_the_run_degraded() {
+    let _g = serial();
+    let p = prefix("loop");
+    let d = scratch("loop");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let started = Instant::now();
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "30",
+                "--report",
+                &report_path.to_string_lossy(),
+                "--set",
+                "services.dier.binary=\"phri-test-service\"",
+                "--set",
+                "services.dier.order=3",
+                "--set",
+                "services.dier.args=[\"--exit-after\", \"1.0\"]",
+                "--set",
+                "supervisor.startup_s=0.5",
+                "--set",
+                "supervisor.crash_loop_restarts=2",
+                "--set",
+                "supervisor.crash_loop_window_s=30",
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let (code, err) = cell.finish();
+    assert!(
+        started.elapsed() < Duration::from_secs(20),
+        "the run went on for {:?}",
+        started.elapsed()
+    );
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("NOT clean") && err.contains("dier"), "{err}");
+    let r = report(&report_path);
+    assert_eq!(r["clean"], false);
+    let why = r["degraded"][0].as_str().unwrap_or("");
+    assert!(why.contains("dier") && why.contains("3 times"), "{why}");
+    assert_eq!(r["services"]["dier"]["restarts"], 3);
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The name of the node-counter segment iceoryx2 gives `prefix`, found by
+/// creating (and removing) one node.
+fn node_counter_name(prefix: &str) -> String {
+    let node = phri_ipc::node("probe", prefix).unwrap();
+    let name = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .find(|n| n.starts_with(prefix) && n.ends_with(".global_mgmt"))
+        .expect("no global_mgmt segment");
+    drop(node);
+    phri_ipc::remove_leftovers(prefix).unwrap();
+    assert!(shm_files_of(prefix).is_empty());
+    name
+}
+
+/// Repro 6: a node counter of the cell's prefix that another user created,
+/// or that was altered, is refused at start with a line naming it; the
+/// cell's own is owner-only while it runs.
+#[test]
+fn a_foreign_or_altered_node_counter_is_refused_and_the_cells_own_is_private() {
+    let _g = serial();
+    let p = prefix("shm");
+    let d = scratch("shm");
+    let name = node_counter_name(&p);
+    let seg = Path::new("/dev/shm").join(&name);
+    let forge = |version: u64| {
+        let mut b = version.to_ne_bytes().to_vec();
+        b.extend([0u8; 8]);
+        std::fs::write(&seg, b).unwrap();
+        std::fs::set_permissions(&seg, std::fs::Permissions::from_mode(0o666)).unwrap();
+    };
+    let mut cases = vec![(0xdead_beef_u64, "altered")];
+    if is_root() {
+        cases.push((10 << 16, "owned by uid 65534"));
+    }
+    for (version, needle) in cases {
+        forge(version);
+        if needle.contains("65534") {
+            chown(&seg, NOBODY);
+        }
+        let rd = d.join("rd");
+        let (code, err) = refused(supervisor(
+            &p,
+            Some(&rd),
+            &["--scenario", "free-motion", "--duration", "5"],
+        ));
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(&name) && err.contains(needle), "{err}");
+        assert!(processes_of(&p).is_empty());
+        assert_eq!(shm_files_of(&p), std::slice::from_ref(&seg), "only the forged segment");
+        std::fs::remove_file(&seg).unwrap();
+    }
+    // the cell's own counter: nobody else may write it
+    let rd = d.join("rd");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &["--scenario", "free-motion", "--duration", "6"],
+        ),
+        &p,
+        &d,
+    );
+    cell.state(&rd);
+    assert_eq!(mode(&seg), 0o600);
+    if is_root() {
+        let script = format!("printf xxxxxxxx > {}", seg.display());
+        let out = as_nobody(&["sh", "-c", &script]);
+        assert!(!out.status.success(), "nobody wrote {}", seg.display());
+    }
+    // a restart (after the start-up) opens a node through the restricted counter
+    wait(2.5);
+    let (code, err) = fault(&["--run-dir", &rd.to_string_lossy(), "dynamics", "kill"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("restarted dynamics") && err.contains("; clean"),
+        "{err}"
+    );
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 8: a process that takes `robot/command` while the controller
+/// restarts is found within 100 ms: the cell stops (the robot first), the
+/// line names the intruder's pid, the report says the run was not clean.
+#[test]
+fn an_intruder_on_the_command_channel_stops_the_cell() {
+    let _g = serial();
+    let p = prefix("intr");
+    let d = scratch("intr");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "25",
+                "--report",
+                &report_path.to_string_lossy(),
+                // a long restart gap, for the intruder to step in
+                "--set",
+                "supervisor.restart_backoff_min_ms=3000",
+                "--set",
+                "supervisor.restart_backoff_max_ms=3000",
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let st = cell.state(&rd);
+    wait(3.0);
+    let control = st["services"]["control"]["pid"].as_i64().unwrap() as i32;
+    // SAFETY: kill(2) on the cell's controller, read from its state.json
+    assert_eq!(unsafe { libc::kill(control, libc::SIGKILL) }, 0);
+    wait_until("the controller's exit", 5.0, || !alive(control));
+    wait(0.1);
+    // an unsupervised controller of the same user grabs the command channel
+    let mut intruder = Command::new(bin("phri-control"))
+        .arg("--config")
+        .arg(rd.join("config.toml"))
+        .arg("--prefix")
+        .arg(&p)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let ipid = intruder.id();
+    let (code, err) = cell.finish();
+    let _ = intruder.kill();
+    let _ = intruder.wait();
+    let _ = phri_ipc::remove_leftovers(&p);
+    assert_ne!(code, 0, "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("publishes on robot/command"))
+        .unwrap_or_else(|| panic!("no intruder line: {err}"));
+    assert!(line.contains(&format!("pid {ipid}")), "{line}");
+    let r = report(&report_path);
+    assert_eq!(r["clean"], false);
+    assert!(
+        r["degraded"][0]
+            .as_str()
+            .unwrap_or("")
+            .contains(&format!("pid {ipid}")),
+        "{}",
+        r["degraded"]
+    );
+    let intr = events(&r, "intruder", "supervisor");
+    assert_eq!(intr.len(), 1, "{}", r["events"]);
+    // found long before the controller's restart was due (3 s after its death)
+    assert_eq!(r["services"]["control"]["restarts"], 1);
+    assert!(
+        events(&r, "restart", "control").is_empty(),
+        "{}",
+        r["events"]
+    );
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 9: a cell whose supervisor died and was never replaced stops by
+/// itself: every service exits within `deadman_s` + 2 s, the robot braked.
+#[test]
+fn a_cell_whose_supervisor_died_stops_by_its_dead_man() {
+    let _g = serial();
+    let p = prefix("dead");
+    let d = scratch("dead");
+    let rd = d.join("rd");
+    let mut cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--set",
+                "supervisor.deadman_s=2",
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let st = cell.state(&rd);
+    wait(2.0);
+    let pids: Vec<(String, i32)> = st["services"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(n, s)| (n.clone(), s["pid"].as_i64().unwrap() as i32))
+        .collect();
+    assert!(pids.len() >= 3);
+    cell.signal(libc::SIGKILL);
+    let _ = cell.child.wait();
+    let killed = Instant::now();
+    wait_until("every service's exit", 4.0, || {
+        pids.iter().all(|(_, pid)| !alive(*pid))
+    });
+    let took = killed.elapsed();
+    assert!(
+        took >= Duration::from_millis(1500),
+        "stopped after {took:?}: too soon"
+    );
+    let err = cell.stderr();
+    for (name, _) in &pids {
+        assert!(
+            err.contains(&format!(
+                "{name}: no supervisor has published supervisor/health"
+            )),
+            "{name}: {err}"
+        );
+    }
+    // the controller stopped: the robot braked (or the simulator ended first, braking as it exits)
+    assert!(
+        err.contains("brakes engaged") || err.contains("sim: no supervisor"),
+        "{err}"
+    );
+    assert!(processes_of(&p).is_empty());
+    // what a supervisor killed with SIGKILL leaves: its counter, its state
+    let _ = phri_ipc::remove_leftovers(&p);
+    assert!(shm_files_of(&p).is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Repro 7 (the watchdog): a service spinning at real-time priority on the
+/// perception CPU starves the camera, which falls silent; the supervisor
+/// kills the spinner (the culprit), not the camera, and the report says so.
+#[test]
+fn the_watchdog_kills_the_service_that_starves_the_others() {
+    let _g = serial();
+    let p = prefix("spin");
+    let d = scratch("spin");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "8",
+                "--report",
+                &report_path.to_string_lossy(),
+                "--set",
+                "services.spinner.binary=\"phri-test-service\"",
+                "--set",
+                "services.spinner.order=8",
+                "--set",
+                "services.spinner.cpus=[0]",
+                "--set",
+                "services.spinner.rt_priority=30",
+                // spins from 3 s to 3.4 s of the cell's clock, in whichever process runs then
+                "--set",
+                "services.spinner.args=[\"--spin-from\", \"3.0\", \"--spin-until\", \"3.4\"]",
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    let r = report(&report_path);
+    let blamed = events(&r, "blame", "spinner");
+    assert!(!blamed.is_empty(), "no blame: {}\n{err}", r["events"]);
+    assert!(
+        events(&r, "frozen", "camera").iter().all(|e| e["detail"]
+            .as_str()
+            .unwrap_or("")
+            .contains("starved by spinner")),
+        "{}\n{err}",
+        r["events"]
+    );
+    assert_eq!(r["services"]["camera"]["restarts"], 0, "{}", r["events"]);
+    assert!(r["services"]["spinner"]["restarts"].as_u64().unwrap() >= 1);
+    assert_eq!(r["services"]["camera"]["alive_at_end"], true);
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}

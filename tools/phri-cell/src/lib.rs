@@ -1,0 +1,366 @@
+//! The whole cell in one process, in lock-step: the single in-process runner.
+//!
+//! Every service's pure step runs here exactly as its `main.rs` runs it, and
+//! the steps talk through the same messages the channels carry: the robot
+//! link ([`phri_sim::RobotLink`]: reuse the last command, brake after 20
+//! missing) and the simulated arm publish a [`JointState`]; the residual
+//! ([`phri_dynamics::DynamicsStep`]) answers it with a [`Residual`]; the camera,
+//! ingestion and the repulsion workers turn the world into
+//! [`RepulsionResult`]s; the controller reads them through
+//! [`phri_control::inputs`] and answers with a [`TorqueCommand`], which the
+//! robot link takes at the next period. Time is the robot's: one
+//! [`Cell::tick`] is one control period. The camera samples the world every
+//! `1 / rate_hz`, and a frame's results reach the controller
+//! `perception_latency_ms` later (the multi-process cell measures p99 about
+//! 6 ms capture → repulsion).
+//!
+//! Deterministic: the same configuration, scenario and offset give the same
+//! run, so scenarios can be swept over the moment the person arrives
+//! ([`CellOptions::human_time_offset_s`]) and asserted in tests. Services can
+//! be taken down for a while ([`Outage`]): what a crashed process would
+//! leave behind (nothing new on its channels) is what the others see.
+
+use std::collections::VecDeque;
+
+use phri_config::Loaded;
+use phri_control::{write_messages, ControlInput, Controller, RepulsionInputs, Stamps};
+use phri_dynamics::DynamicsStep;
+use phri_ipc::{
+    ControlMode, ControlStatus, FrameHeader, JointState, RepulsionResult, Residual, TorqueCommand,
+    WorldState, Zeroed,
+};
+use phri_model::Model;
+use phri_perception::camera::CameraSim;
+use phri_perception::ingest::{Ingest, StateHistory};
+use phri_perception::repulsion::Worker;
+use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simulator};
+
+mod outage;
+mod summary;
+
+pub use outage::{Down, Outage, OutageError};
+pub use summary::{CellSummary, ContactEpisode};
+
+/// Why a cell could not be built or stepped: the service at fault and what it said.
+#[derive(Debug, thiserror::Error)]
+pub enum CellError {
+    #[error(transparent)]
+    Config(#[from] phri_config::ConfigError),
+    #[error("{service}: {message}")]
+    Step {
+        service: &'static str,
+        message: String,
+    },
+    #[error("perception latency must be a finite number ≥ 0 ms, got {0}")]
+    Latency(f64),
+}
+
+fn step_err(service: &'static str) -> impl Fn(&dyn std::fmt::Display) -> CellError {
+    move |e| CellError::Step {
+        service,
+        message: e.to_string(),
+    }
+}
+
+/// How to run the cell beyond the configuration.
+#[derive(Clone, Debug)]
+pub struct CellOptions {
+    /// the human script runs this far ahead of the robot \[s\] (negative: the
+    /// person arrives later, meeting the arm at another phase of its cycle)
+    pub human_time_offset_s: f64,
+    /// capture → repulsion results at the controller \[ms\]
+    pub perception_latency_ms: f64,
+    /// run the perception pipeline (camera, ingestion, workers)
+    pub perception: bool,
+    /// services that are down for a while (deterministic fault injection)
+    pub outages: Vec<Outage>,
+}
+
+impl Default for CellOptions {
+    fn default() -> Self {
+        CellOptions {
+            human_time_offset_s: 0.0,
+            perception_latency_ms: 6.5,
+            perception: true,
+            outages: Vec::new(),
+        }
+    }
+}
+
+/// A frame's repulsion results on their way to the controller.
+struct InFlight {
+    ready_ns: u64,
+    results: Vec<RepulsionResult>,
+}
+
+/// The perception side: camera, ingestion and the repulsion workers.
+struct Perception {
+    camera: CameraSim,
+    ingest: Ingest,
+    history: StateHistory,
+    workers: Vec<Worker>,
+    frame: Vec<u16>,
+    filtered: Vec<u16>,
+    world: WorldState,
+    period_ns: u64,
+    next_capture_ns: u64,
+    latency_ns: u64,
+    in_flight: VecDeque<InFlight>,
+}
+
+/// The cell. `sim`, `controller` and the messages are public for tests that look inside.
+pub struct Cell {
+    pub sim: Simulator,
+    link: RobotLink,
+    dynamics: DynamicsStep,
+    pub controller: Controller,
+    repulsion: RepulsionInputs,
+    avoidance: bool,
+    perception: Option<Perception>,
+    /// the robot's newest state, as published
+    pub state: JointState,
+    /// the newest residual the controller has received (kept while dynamics is down)
+    pub residual: Option<Residual>,
+    /// the newest command the robot has received (kept while the controller is down)
+    pub command: Option<TorqueCommand>,
+    pub status: ControlStatus,
+    link_out: LinkOutput,
+    seq: u64,
+    t_ns: u64,
+    outages: Vec<Outage>,
+    summary: summary::Accounting,
+}
+
+impl Cell {
+    /// Build every step from a loaded configuration (its scenario gives the person).
+    pub fn new(loaded: &Loaded, model: Model, opts: &CellOptions) -> Result<Cell, CellError> {
+        let cfg = &loaded.config;
+        let n = model.nv();
+        let mut sim =
+            Simulator::from_scenario(model.clone(), cfg.sim.clone(), &loaded.scenario, None)
+                .map_err(|e| step_err("sim")(&e))?;
+        sim.set_human_time_offset(opts.human_time_offset_s);
+        let period_ns = (cfg.sim.dt_s * 1e9).round() as u64;
+        let link = RobotLink::new(n, period_ns).map_err(|e| step_err("sim")(&e))?;
+        let dynamics = DynamicsStep::new(model.clone(), &cfg.dynamics)
+            .map_err(|e| step_err("dynamics")(&e))?;
+        let avoidance = cfg.control.avoidance && opts.perception;
+        let mut ctl_cfg = cfg.clone();
+        ctl_cfg.control.avoidance = avoidance;
+        let controller = Controller::from_config(model.clone(), &ctl_cfg)
+            .map_err(|e| step_err("control")(&e))?;
+        let perception = if avoidance {
+            if !(opts.perception_latency_ms.is_finite() && opts.perception_latency_ms >= 0.0) {
+                return Err(CellError::Latency(opts.perception_latency_ms));
+            }
+            let camera =
+                CameraSim::new(model.clone(), &cfg.camera).map_err(|e| step_err("camera")(&e))?;
+            let pixels = camera.pixels();
+            let workers = (0..cfg.repulsion.workers)
+                .map(|w| Worker::new(model.clone(), &cfg.repulsion, w))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| step_err("repulsion")(&e))?;
+            let mut world = WorldState::zeroed();
+            world.dof = n as u32;
+            Some(Perception {
+                camera,
+                ingest: Ingest::new(model.clone(), &cfg.perception)
+                    .map_err(|e| step_err("perception")(&e))?,
+                history: StateHistory::new(n, 200),
+                workers,
+                frame: vec![0; pixels],
+                filtered: vec![0; pixels],
+                world,
+                period_ns: (1e9 / cfg.camera.rate_hz) as u64,
+                next_capture_ns: 0,
+                latency_ns: (opts.perception_latency_ms * 1e6) as u64,
+                in_flight: VecDeque::new(),
+            })
+        } else {
+            None
+        };
+        let mut state = JointState::zeroed();
+        state.dof = n as u32;
+        Ok(Cell {
+            link_out: *link.output(),
+            sim,
+            link,
+            dynamics,
+            controller,
+            repulsion: RepulsionInputs::from_config(&cfg.repulsion),
+            avoidance,
+            perception,
+            state,
+            residual: None,
+            command: None,
+            status: ControlStatus::zeroed(),
+            seq: 0,
+            t_ns: 0,
+            outages: opts.outages.clone(),
+            summary: summary::Accounting::new(cfg.sim.dt_s),
+        })
+    }
+
+    /// Robot time \[ns\].
+    pub fn time_ns(&self) -> u64 {
+        self.t_ns
+    }
+
+    /// The controller's mode after the last tick.
+    pub fn mode(&self) -> ControlMode {
+        self.controller.mode()
+    }
+
+    /// What the robot did in the last period (brakes, fresh command, ...).
+    pub fn link_output(&self) -> &LinkOutput {
+        &self.link_out
+    }
+
+    fn down(&self, what: Down) -> bool {
+        let now_s = self.t_ns as f64 * 1e-9;
+        self.outages
+            .iter()
+            .any(|o| o.service == what && now_s >= o.from_s && now_s < o.to_s)
+    }
+
+    /// One control period: the robot decides on the newest command it has
+    /// (fresh, reused, or the brakes), the arm moves one period and publishes
+    /// its state; the camera captures when due and the results whose latency
+    /// elapsed reach the controller; the residual and the controller answer.
+    pub fn tick(&mut self) -> Result<ControlMode, CellError> {
+        self.robot();
+        if !self.down(Down::Perception) {
+            self.perceive()?;
+        } else if let Some(p) = self.perception.as_mut() {
+            // the pipeline is dead: what was in flight is lost with it
+            p.in_flight.clear();
+            p.history.push_state(&self.state);
+        }
+        if !self.down(Down::Dynamics) {
+            self.dynamics
+                .step(&self.state)
+                .map_err(|e| step_err("dynamics")(&e))?;
+            self.residual = Some(*self.dynamics.seal(self.t_ns, 0));
+        }
+        if !self.down(Down::Control) {
+            self.control()?;
+        }
+        self.summary.account(
+            &self.sim,
+            self.controller.mode(),
+            &self.link_out,
+            self.residual.as_ref(),
+            self.t_ns,
+        );
+        Ok(self.controller.mode())
+    }
+
+    /// The robot link and the arm: one period, then the new state.
+    fn robot(&mut self) {
+        let timing = CycleTiming {
+            state_published_ns: self.t_ns,
+            command_event_ns: 0,
+            now_ns: self.t_ns,
+            behind_schedule_ns: 0,
+        };
+        self.link_out = self.link.cycle(self.command.as_ref(), self.seq, &timing);
+        self.sim.step(self.link_out.torque(), self.link_out.brake);
+        self.seq += 1;
+        self.t_ns += self.link.period_ns();
+        fill_state(
+            &self.sim,
+            &self.link_out,
+            self.seq,
+            self.t_ns,
+            self.t_ns,
+            &mut self.state,
+        );
+    }
+
+    /// Camera, ingestion and workers when a frame is due; deliver what is ready.
+    fn perceive(&mut self) -> Result<(), CellError> {
+        let Some(p) = self.perception.as_mut() else {
+            return Ok(());
+        };
+        let now = self.t_ns;
+        p.history.push_state(&self.state);
+        if now >= p.next_capture_ns {
+            p.next_capture_ns = now + p.period_ns;
+            fill_world(&self.sim, self.seq, now, &mut p.world);
+            let mut header = FrameHeader::zeroed();
+            p.camera
+                .step(&p.world, now, &mut p.frame, &mut header)
+                .map_err(|e| step_err("camera")(&e))?;
+            let ready_ns = now + p.latency_ns;
+            p.ingest
+                .step(&mut header, &p.frame, &p.history, ready_ns, &mut p.filtered)
+                .map_err(|e| step_err("perception")(&e))?;
+            let mut results = Vec::with_capacity(p.workers.len());
+            for w in p.workers.iter_mut() {
+                let msg = w
+                    .respond(&header, &p.filtered)
+                    .map_err(|e| step_err("repulsion")(&e))?;
+                msg.published_ns = ready_ns;
+                results.push(*msg);
+            }
+            p.in_flight.push_back(InFlight { ready_ns, results });
+            self.summary.frame();
+        }
+        while p.in_flight.front().is_some_and(|x| x.ready_ns <= now) {
+            if let Some(done) = p.in_flight.pop_front() {
+                for r in &done.results {
+                    self.repulsion
+                        .push(r)
+                        .map_err(|e| step_err("control")(&e))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The controller answers the newest state with a command and a status.
+    fn control(&mut self) -> Result<(), CellError> {
+        let n = self.sim.model().nv();
+        let perception = self.avoidance.then_some(&self.repulsion);
+        let input = ControlInput::from_messages(&self.state, self.residual.as_ref(), perception, n)
+            .map_err(|e| step_err("control")(&e))?;
+        self.controller.step(&input);
+        let stamps = Stamps {
+            woke_ns: self.t_ns,
+            done_ns: self.t_ns,
+        };
+        let mut cmd = self.command.unwrap_or_else(TorqueCommand::zeroed);
+        write_messages(
+            &self.controller,
+            &self.state,
+            self.status.seq + 1,
+            stamps,
+            &mut cmd,
+            &mut self.status,
+        );
+        self.command = Some(cmd);
+        Ok(())
+    }
+
+    /// Take a service down for a while, from now on (see [`CellOptions::outages`]).
+    pub fn add_outage(&mut self, outage: Outage) {
+        self.outages.push(outage);
+    }
+
+    /// Replace the controller (a restarted controller process): it re-syncs
+    /// to the measured state as a new process does.
+    pub fn restart_controller(&mut self, controller: Controller) {
+        self.controller = controller;
+    }
+
+    /// Replace the residual service by a new one (a restarted process starts
+    /// from scratch: warm-up, no memory of the momentum).
+    pub fn restart_dynamics(&mut self, dynamics: DynamicsStep) {
+        self.dynamics = dynamics;
+    }
+
+    /// The run so far.
+    pub fn summary(&self) -> CellSummary {
+        self.summary.summary(&self.sim, self.controller.counters())
+    }
+}

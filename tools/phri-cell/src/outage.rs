@@ -1,0 +1,63 @@
+//! Services taken down for a while: deterministic fault injection.
+
+/// Which service an [`Outage`] takes down.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Down {
+    /// no new depth frames or repulsion results reach the controller
+    Perception,
+    /// the residual stops: the controller keeps seeing the last one, ageing
+    Dynamics,
+    /// no command: the robot reuses the last one, then brakes
+    Control,
+}
+
+impl Down {
+    pub const ALL: [(Down, &'static str); 3] = [
+        (Down::Perception, "perception"),
+        (Down::Dynamics, "dynamics"),
+        (Down::Control, "control"),
+    ];
+}
+
+/// A service down from `from_s` to `to_s` (robot time \[s\]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Outage {
+    pub service: Down,
+    pub from_s: f64,
+    pub to_s: f64,
+}
+
+/// An outage that is not `SERVICE:FROM:TO`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("outage: expected perception|dynamics|control:FROM:TO (seconds, FROM ≤ TO), got '{0}'")]
+pub struct OutageError(pub String);
+
+impl std::str::FromStr for Outage {
+    type Err = OutageError;
+    /// `perception:FROM:TO`, `dynamics:FROM:TO` or `control:FROM:TO` (seconds)
+    fn from_str(s: &str) -> Result<Outage, OutageError> {
+        let bad = || OutageError(s.to_string());
+        let mut it = s.split(':');
+        let name = it.next().ok_or_else(bad)?;
+        let service = Down::ALL
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|(d, _)| *d)
+            .ok_or_else(bad)?;
+        let mut num = || {
+            it.next()
+                .and_then(|x| x.trim().parse::<f64>().ok())
+                .ok_or_else(bad)
+        };
+        let (from_s, to_s) = (num()?, num()?);
+        if it.next().is_some() || !(from_s.is_finite() && to_s.is_finite() && to_s >= from_s) {
+            return Err(bad());
+        }
+        Ok(Outage {
+            service,
+            from_s,
+            to_s,
+        })
+    }
+}

@@ -1,0 +1,133 @@
+//! What a lock-step run produced: contact episodes from the simulator's
+//! ground truth, the closest approach, time in protective stop and braked.
+
+use phri_control::ControlCounters;
+use phri_ipc::{residual_flags, ControlMode, Residual};
+use phri_sim::{LinkOutput, Simulator};
+
+/// One contact episode between the person and the arm.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ContactEpisode {
+    /// start and end, robot time \[s\]
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    pub link: String,
+    pub part: String,
+    pub intended: bool,
+    /// largest contact force \[N\]
+    pub peak_force_n: f64,
+    /// the controller's mode when it began
+    pub mode: String,
+}
+
+/// What a run produced.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct CellSummary {
+    pub duration_s: f64,
+    pub contacts: Vec<ContactEpisode>,
+    pub unintended_contacts: usize,
+    /// smallest true surface distance person ↔ arm \[m\]
+    pub min_distance_m: f64,
+    /// when it was smallest, robot time \[s\]
+    pub min_distance_t_s: f64,
+    pub waypoints: u64,
+    pub detections: u64,
+    pub frames: u64,
+    /// time spent in protective stop \[s\]
+    pub protective_stop_s: f64,
+    /// time the robot spent with its brakes engaged \[s\]
+    pub braked_s: f64,
+    /// the residual's collision flag rose while the person touched nothing
+    pub false_detections: u64,
+}
+
+/// Running account of a run.
+pub(crate) struct Accounting {
+    dt_s: f64,
+    s: CellSummary,
+    /// (collision object, body part, episode index) in contact now
+    open: Vec<(usize, usize, usize)>,
+    /// the residual's collision flag in the last period
+    collision: bool,
+}
+
+impl Accounting {
+    pub(crate) fn new(dt_s: f64) -> Accounting {
+        Accounting {
+            dt_s,
+            s: CellSummary {
+                min_distance_m: f64::INFINITY,
+                ..Default::default()
+            },
+            open: Vec::new(),
+            collision: false,
+        }
+    }
+
+    pub(crate) fn frame(&mut self) {
+        self.s.frames += 1;
+    }
+
+    pub(crate) fn account(
+        &mut self,
+        sim: &Simulator,
+        mode: ControlMode,
+        link: &LinkOutput,
+        residual: Option<&Residual>,
+        t_ns: u64,
+    ) {
+        let t = sim.truth();
+        let s = &mut self.s;
+        let collision = residual.is_some_and(|r| r.flags & residual_flags::COLLISION != 0);
+        if collision && !self.collision && t.contacts.is_empty() && !sim.has_external_force() {
+            s.false_detections += 1;
+        }
+        self.collision = collision;
+        let now_s = t_ns as f64 * 1e-9;
+        s.duration_s += self.dt_s;
+        if t.min_distance < s.min_distance_m {
+            s.min_distance_m = t.min_distance;
+            s.min_distance_t_s = now_s;
+        }
+        if mode == ControlMode::ProtectiveStop {
+            s.protective_stop_s += self.dt_s;
+        }
+        if link.brake {
+            s.braked_s += self.dt_s;
+        }
+        let mut still = Vec::with_capacity(t.contacts.len());
+        for c in &t.contacts {
+            let key = (c.collision, c.part as usize);
+            let idx = match self.open.iter().find(|o| (o.0, o.1) == key) {
+                Some(o) => o.2,
+                None => {
+                    s.contacts.push(ContactEpisode {
+                        t_start_s: now_s,
+                        t_end_s: now_s,
+                        link: c.link(sim.model()).to_string(),
+                        part: c.part.name().to_string(),
+                        intended: c.intended,
+                        peak_force_n: 0.0,
+                        mode: mode.name().to_string(),
+                    });
+                    if !c.intended {
+                        s.unintended_contacts += 1;
+                    }
+                    s.contacts.len() - 1
+                }
+            };
+            let e = &mut s.contacts[idx];
+            e.t_end_s = now_s;
+            e.peak_force_n = e.peak_force_n.max(c.force.norm());
+            still.push((key.0, key.1, idx));
+        }
+        self.open = still;
+    }
+
+    pub(crate) fn summary(&self, _sim: &Simulator, counters: &ControlCounters) -> CellSummary {
+        let mut s = self.s.clone();
+        s.waypoints = counters.waypoints_reached;
+        s.detections = counters.detections;
+        s
+    }
+}
