@@ -786,7 +786,11 @@ fn a_foreign_or_altered_node_counter_is_refused_and_the_cells_own_is_private() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(err.contains(&name) && err.contains(needle), "{err}");
         assert!(processes_of(&p).is_empty());
-        assert_eq!(shm_files_of(&p), std::slice::from_ref(&seg), "only the forged segment");
+        assert_eq!(
+            shm_files_of(&p),
+            std::slice::from_ref(&seg),
+            "only the forged segment"
+        );
         std::fs::remove_file(&seg).unwrap();
     }
     // the cell's own counter: nobody else may write it

@@ -225,6 +225,47 @@ fn collisions_are_detected_within_the_bound_and_the_reaction_ends_them() {
 }
 
 #[test]
+fn a_stalled_supervisor_loses_no_contact_and_counts_what_it_lost() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // issue 10, reproduction 5: a supervisor stopped for 0.8 s overflows the
+    // 256-deep sim/truth queue; contact episodes come on sim/contacts
+    let cell = Cell::start("stall", "collision", None, &["control.avoidance=false"]);
+    let sup = cell.child.id() as i32;
+    cell.pid_of("control");
+    // stopped 0.8 s of every 1.2 s: every contact of the scenario (the person
+    // reaches for 1.5 s) overlaps a stop
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(17) {
+        // SAFETY: kill(2) on our own child, the supervisor.
+        if unsafe { libc::kill(sup, libc::SIGSTOP) } != 0 {
+            break;
+        }
+        wait(0.8);
+        // SAFETY: as above.
+        unsafe { libc::kill(sup, libc::SIGCONT) };
+        wait(0.4);
+    }
+    let r = cell.finish();
+    let lost = &r["evaluation"];
+    eprintln!("evaluation: {lost}");
+    assert!(
+        lost["truth_samples_lost"].as_u64().unwrap() > 0,
+        "the stops did not overflow sim/truth: the test tests nothing"
+    );
+    assert_eq!(lost["contact_events_lost"], 0);
+    let contacts = r["contacts"].as_array().unwrap();
+    let strong: Vec<&Value> = contacts
+        .iter()
+        .filter(|c| c["intended"] == false && c["peak_force_n"].as_f64() > Some(50.0))
+        .collect();
+    assert!(!strong.is_empty(), "the contacts vanished: {contacts:?}");
+    for c in contacts {
+        assert!(c["t_end_s"].as_f64() >= c["t_start_s"].as_f64(), "{c}");
+        assert!(!c["link"].is_null(), "{c}");
+    }
+}
+
+#[test]
 fn killing_dynamics_means_protective_stop_restart_and_resume() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("kdyn", "free-motion", Some(12.0), &[]);

@@ -78,8 +78,9 @@ pub const ALL: &[&str] = &[
     PERCEPTION_REPULSION.name,
     FAULT_DEPTH.name,
     SIM_CONTACTS.name,
-    // the collaboration channels (skeleton, hand, request, collab/state) join
-    // this list with the services that publish them
+    PERCEPTION_SKELETON.name,
+    // the collaboration channels (hand, request, collab/state) join this
+    // list with the services that publish them
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -109,6 +110,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(PERCEPTION_REPULSION);
     v.message(FAULT_DEPTH);
     v.message(SIM_CONTACTS);
+    v.message(PERCEPTION_SKELETON);
 }
 
 /// Visit the channel called `name`; `false` when the cell has none of that name.

@@ -74,6 +74,11 @@ impl CameraSim {
         })
     }
 
+    /// The camera's pose in the robot base frame.
+    pub fn pose(&self) -> CameraPose {
+        self.pose
+    }
+
     /// Number of pixels of a frame.
     pub fn pixels(&self) -> usize {
         self.intrinsics.pixel_count()

@@ -835,11 +835,17 @@ fn body() -> Result<(), SupervisorError> {
         })?;
         file.write(&json)?;
     }
-    let verdict = if report.clean {
+    let mut verdict = if report.clean {
         "clean".to_string()
     } else {
         format!("NOT clean: {}", report.degraded.join("; "))
     };
+    if report.evaluation.truth_samples_lost > 0 {
+        verdict.push_str(&format!(
+            " ({} ground-truth samples lost: contact timing coarser, no contact missing)",
+            report.evaluation.truth_samples_lost
+        ));
+    }
     eprintln!(
         "phri-supervisor: {} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections; {verdict}",
         report.scenario, report.duration_s, report.torque_loop.cycles, report.torque_loop.missed_deadlines, report.torque_loop.latency_us.p99, report.contacts.len(), report.false_detections

@@ -2,11 +2,16 @@
 //! the newest `sim/world`, renders it straight into a loaned `camera/depth`
 //! sample (zero-copy: the frame is written once, in shared memory), applies
 //! the faults `fault/depth` asked for, waits the sensor latency and publishes.
+//! With `[skeleton] enabled` it also stands in for a body tracker: the
+//! person's skeleton of that frame on `perception/skeleton`, right after it.
 
 use std::error::Error;
 use std::process::ExitCode;
 
-use phri_ipc::{Queue, CAMERA_DEPTH, FAULT_DEPTH, SIM_WORLD};
+use phri_ipc::{
+    Queue, Skeleton, Zeroed, CAMERA_DEPTH, FAULT_DEPTH, PERCEPTION_SKELETON, SIM_WORLD,
+};
+use phri_perception::skeleton::SkeletonTracker;
 use phri_perception::{CameraSim, FaultState};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
@@ -19,6 +24,10 @@ fn body() -> Result<(), Box<dyn Error>> {
     let cfg = &ctx.config().camera;
     let mut camera = CameraSim::new(ctx.robot_model()?, cfg)?;
     let pixels = camera.pixels();
+    let skeleton_cfg = &ctx.config().skeleton;
+    let mut tracker = skeleton_cfg
+        .enabled
+        .then(|| SkeletonTracker::new(skeleton_cfg, cfg.intrinsics, camera.pose()));
     if ctx.checking() {
         return Ok(());
     }
@@ -26,6 +35,11 @@ fn body() -> Result<(), Box<dyn Error>> {
     let mut worlds = SIM_WORLD.latest_reader(&node)?;
     let frames = CAMERA_DEPTH.frame_publisher(&node, pixels)?;
     let fault_requests = FAULT_DEPTH.subscriber(&node, Queue::Drain)?;
+    let skeletons = match tracker {
+        Some(_) => Some(PERCEPTION_SKELETON.publisher(&node)?),
+        None => None,
+    };
+    let mut skeleton = Skeleton::zeroed();
     let mut faults = FaultState::default();
     ctx.start_deadman()?;
     ctx.go_realtime();
@@ -51,11 +65,25 @@ fn body() -> Result<(), Box<dyn Error>> {
         let mut sample = frames.loan(pixels)?;
         let mut header = *sample.user_header();
         camera.step(world, capture_wall, sample.payload_mut(), &mut header)?;
+        // the tracker sees the scene, not the sensor's faults
+        if let Some(t) = tracker.as_mut() {
+            t.step(
+                world,
+                &header,
+                sample.payload(),
+                1.0 / cfg.rate_hz,
+                &mut skeleton,
+            );
+        }
         let extra = faults.apply(sample.payload_mut(), &mut header, capture_wall);
         sleep_until_ns(capture_wall + latency + extra);
         header.published_ns = now_ns();
         *sample.user_header_mut() = header;
         frames.send(sample)?;
+        if let Some(p) = skeletons.as_ref() {
+            skeleton.published_ns = now_ns();
+            p.publish(&skeleton)?;
+        }
     }
     Ok(())
 }
