@@ -613,3 +613,43 @@ fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
         .any(|e| e["t_s"].as_f64().unwrap() > t_frozen));
     assert_eq!(r["false_detections"], 0);
 }
+
+#[test]
+fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // deploy/scenarios/collaboration.toml through the real services: the
+    // camera's skeleton, phri-gesture's request, ingestion's mask and hand,
+    // the controller's phases
+    let r = Cell::start("collab", "collaboration", None, &[]).finish();
+    let contacts = r["contacts"].as_array().unwrap();
+    let unintended: Vec<&Value> = contacts.iter().filter(|c| c["intended"] == false).collect();
+    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
+    let hand: Vec<&Value> = contacts
+        .iter()
+        .filter(|c| c["part"] == "hand_right" && c["link"] == "lwr_link_7")
+        .collect();
+    assert!(
+        !hand.is_empty(),
+        "the robot never reached the hand: {contacts:?}"
+    );
+    for c in &hand {
+        assert!(c["peak_force_n"].as_f64().unwrap() <= 70.0, "{c}");
+    }
+    // no collision reaction: the intended contacts are no collisions
+    assert!(
+        events(&r, "reaction", "control").is_empty(),
+        "{}",
+        r["events"]
+    );
+    let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
+    assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+    // the wrist push (15.5-16.5 s) ended it and the task resumed
+    let resumed = events(&r, "resume", "control");
+    assert!(
+        resumed
+            .iter()
+            .any(|e| (15.5..19.0).contains(&e["t_s"].as_f64().unwrap())),
+        "{}",
+        r["events"]
+    );
+}

@@ -79,14 +79,20 @@ pub const ALL: &[&str] = &[
     FAULT_DEPTH.name,
     SIM_CONTACTS.name,
     PERCEPTION_SKELETON.name,
-    // the collaboration channels (hand, request, collab/state) join this
-    // list with the services that publish them
+    HRI_REQUEST.name,
+    PERCEPTION_HAND.name,
+    COLLAB_STATE.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
 /// fault, a contact, a request, a collaboration): monitors and tests must not
 /// expect traffic on them.
-pub const ON_DEMAND: &[&str] = &[FAULT_DEPTH.name, SIM_CONTACTS.name];
+pub const ON_DEMAND: &[&str] = &[
+    FAULT_DEPTH.name,
+    SIM_CONTACTS.name,
+    HRI_REQUEST.name,
+    PERCEPTION_HAND.name,
+];
 
 /// Something done with each channel of the cell, typed: tools that handle
 /// every channel (monitor, recorder) implement this instead of matching names.
@@ -111,6 +117,9 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(FAULT_DEPTH);
     v.message(SIM_CONTACTS);
     v.message(PERCEPTION_SKELETON);
+    v.message(HRI_REQUEST);
+    v.message(PERCEPTION_HAND);
+    v.message(COLLAB_STATE);
 }
 
 /// Visit the channel called `name`; `false` when the cell has none of that name.

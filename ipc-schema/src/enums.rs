@@ -108,6 +108,12 @@ wire_enum! {
         Recover = 4 => "recover",
         /// slowed down because perception is stale
         Slow = 5 => "slow",
+        /// collaboration: the end effector moves to the collaborative hand
+        Approach = 6 => "approach",
+        /// collaboration: in contact with the hand, compliant to the estimated force
+        Contact = 7 => "contact",
+        /// collaboration: the hand moved away, the end effector follows it
+        Follow = 8 => "follow",
     }
 }
 

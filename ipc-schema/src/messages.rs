@@ -637,7 +637,8 @@ pub struct ContactForce {
     /// the robot link it acts on (index of the model's frames; −1: none)
     pub frame: i32,
     /// 0 when the force is not observable from the residual (a contact on
-    /// links 1-2, or the stacked Jacobian lost rank): then `force` is not a guess but 0
+    /// links 1-2, or the stacked Jacobian lost rank): then `force` holds only
+    /// what the damped pseudoinverse recovers, not the whole force
     #[serde(with = "crate::json::flag")]
     pub observable: u32,
 }

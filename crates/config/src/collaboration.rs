@@ -126,6 +126,10 @@ pub struct CollaborationConfig {
     pub robot_point: [f64; 3],
     /// radius of the robot part around that point [m]
     pub robot_radius_m: f64,
+    /// radius of the hand around the tracked hand joint [m]
+    pub hand_radius_m: f64,
+    /// the link whose frame origin is the wrist centre (a wrist push acts there)
+    pub wrist_link: String,
     /// approach: largest end-effector speed far from the hand [m/s]
     pub approach_speed: f64,
     /// approach: speed at contact [m/s] (ISO/TS 15066's hand figures allow far more; this is gentle)
@@ -178,9 +182,13 @@ impl CollaborationConfig {
         if self.robot_link.is_empty() {
             return Err(Invalid::new("collaboration.robot_link", "must name a link"));
         }
+        if self.wrist_link.is_empty() {
+            return Err(Invalid::new("collaboration.wrist_link", "must name a link"));
+        }
         crate::check::finite(S, "robot_point", &self.robot_point)?;
         for (name, v) in [
             ("robot_radius_m", self.robot_radius_m),
+            ("hand_radius_m", self.hand_radius_m),
             ("contact_gap_m", self.contact_gap_m),
             ("back_off_m", self.back_off_m),
             ("mask_forearm_m", self.mask_forearm_m),

@@ -1,8 +1,89 @@
 //! The scripted person of a scenario, as data: keyframes in time, checked.
 //! The simulator turns it into capsules (`phri-sim`'s `Human`).
+//!
+//! Between two keyframes the body moves linearly from one pose to the next
+//! (base, hand and foot targets). A keyframe can also start an action that
+//! lasts until the next keyframe (or, on the last keyframe, until the script
+//! ends or starts over): a [`Wave`] of one hand or a [`Push`] on a robot link.
 
-/// The human's pose at one instant of the script.
+use phri_ipc::BodyPart;
+
+/// One of the person's hands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hand {
+    Right,
+    Left,
+}
+
+impl Hand {
+    /// The hand's body part ([`BodyPart::HandRight`] or [`BodyPart::HandLeft`]).
+    pub fn part(self) -> BodyPart {
+        match self {
+            Hand::Right => BodyPart::HandRight,
+            Hand::Left => BodyPart::HandLeft,
+        }
+    }
+
+    /// The name in scenario files: `right` or `left`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Hand::Right => "right",
+            Hand::Left => "left",
+        }
+    }
+}
+
+/// A waving hand, from its keyframe until the next: the hand is raised above
+/// its elbow (forearm about vertical, elbow a little below shoulder height,
+/// out to the side) and swings along the person's left–right axis,
+/// `amplitude_m · sin(2π · frequency_hz · (t − t_keyframe))` about the elbow.
+/// The wave blends in and out over 0.5 s at the ends of its interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wave {
+    pub hand: Hand,
+    /// \[Hz\], in (0, [`Wave::MAX_FREQUENCY_HZ`]]
+    pub frequency_hz: f64,
+    /// peak lateral excursion of the hand \[m\], in (0, [`Wave::MAX_AMPLITUDE_M`]]
+    pub amplitude_m: f64,
+}
+
+impl Wave {
+    pub const MAX_FREQUENCY_HZ: f64 = 5.0;
+    pub const MAX_AMPLITUDE_M: f64 = 0.5;
+}
+
+/// A hand pushing a robot link, from its keyframe until the next: the
+/// simulator applies a force of `force_n` at `point` (fixed in `link`'s
+/// frame), horizontal, along the direction from the person's base position
+/// (floor x, y) to the point, ramped up over [`Push::RAMP_S`] after the
+/// keyframe and down over the same time before the next. The `hand` is
+/// placed on the link at the point and the force is a ground-truth contact of
+/// that hand with that link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Push {
+    /// robot link name (checked against the robot model by the simulator)
+    pub link: String,
+    /// point of application \[m\], in the link's frame (|point| ≤ [`Push::MAX_POINT_M`])
+    pub point: [f64; 3],
+    /// force magnitude once ramped up \[N\], in (0, [`Push::MAX_FORCE_N`]]
+    pub force_n: f64,
+    /// the pushing hand
+    pub hand: Hand,
+    /// the contact is intended (collaboration) rather than a collision
+    pub intended: bool,
+}
+
+impl Push {
+    /// Ramp time \[s\] of the force, at the start and the end of the push.
+    pub const RAMP_S: f64 = 0.2;
+    pub const MAX_FORCE_N: f64 = 500.0;
+    pub const MAX_POINT_M: f64 = 1.0;
+}
+
+/// The human's pose at one instant of the script, and the action it starts.
+/// `Keyframe { t, base, ..Keyframe::default() }` is a person standing with
+/// arms hanging.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Keyframe {
     /// time \[s\] (scenario time, the simulator's clock)
     pub t: f64,
@@ -13,6 +94,15 @@ pub struct Keyframe {
     pub right_hand: Option<[f64; 3]>,
     /// left-hand target \[m\], robot base frame; `None`: the arm hangs down
     pub left_hand: Option<[f64; 3]>,
+    /// right-foot (ankle) target \[m\], robot base frame; `None`: the leg
+    /// stands straight under the hip
+    pub right_foot: Option<[f64; 3]>,
+    /// left-foot (ankle) target \[m\], robot base frame; `None`: standing
+    pub left_foot: Option<[f64; 3]>,
+    /// a hand waves from this keyframe until the next
+    pub wave: Option<Wave>,
+    /// a hand pushes a robot link from this keyframe until the next
+    pub push: Option<Push>,
 }
 
 /// A validated human script: keyframes sorted by strictly increasing time,
@@ -38,6 +128,14 @@ pub enum ScriptError {
     Unsorted { index: usize, t: f64, previous: f64 },
     #[error("repeat_s: {repeat_s} s must be finite and at least the last keyframe's time {last} s (and > 0)")]
     Repeat { repeat_s: f64, last: f64 },
+    /// a wave or push value out of range; `field` is the key below the
+    /// keyframe, such as `wave.frequency_hz` or `push.force_n`
+    #[error("keyframe[{index}].{field}: {reason}")]
+    Invalid {
+        index: usize,
+        field: &'static str,
+        reason: String,
+    },
 }
 
 impl HumanScript {
@@ -76,6 +174,19 @@ impl HumanScript {
                     field: "left_hand",
                 });
             }
+            if k.right_foot.is_some_and(|h| !fin(&h)) {
+                return Err(ScriptError::NotFinite {
+                    index,
+                    field: "right_foot",
+                });
+            }
+            if k.left_foot.is_some_and(|h| !fin(&h)) {
+                return Err(ScriptError::NotFinite {
+                    index,
+                    field: "left_foot",
+                });
+            }
+            check_actions(index, k)?;
             if index > 0 {
                 let previous = keyframes[index - 1].t;
                 if k.t <= previous {
@@ -125,4 +236,102 @@ impl HumanScript {
     pub fn end_time(&self) -> f64 {
         self.keyframes.last().map_or(0.0, |k| k.t)
     }
+
+    /// Script time \[s\] at scenario time `t` \[s\]: `t` itself, or within
+    /// the loop period of a repeating script.
+    pub fn script_time(&self, t: f64) -> f64 {
+        match self.repeat_s {
+            Some(period) if t > 0.0 => t.rem_euclid(period),
+            _ => t,
+        }
+    }
+
+    /// The keyframe whose interval holds script time `t` \[s\] (its index,
+    /// the interval's start and end \[s\]): from the keyframe's time until the
+    /// next keyframe's, for the last keyframe until the loop period of a
+    /// repeating script or forever. `None` before the first keyframe (or for NaN).
+    pub fn interval_at(&self, t: f64) -> Option<(usize, f64, f64)> {
+        let ks = &self.keyframes;
+        if !(t >= ks.first()?.t) {
+            return None;
+        }
+        // ks is sorted and t is at or after the first: the last keyframe at or before t
+        let i = ks.partition_point(|k| k.t <= t).max(1) - 1;
+        let end = match ks.get(i + 1) {
+            Some(next) => next.t,
+            None => self.repeat_s.unwrap_or(f64::INFINITY),
+        };
+        Some((i, ks[i].t, end))
+    }
+}
+
+/// The keyframe's wave and push in range, and not both with the same hand.
+fn check_actions(index: usize, k: &Keyframe) -> Result<(), ScriptError> {
+    let invalid = |field: &'static str, reason: String| ScriptError::Invalid {
+        index,
+        field,
+        reason,
+    };
+    if let Some(w) = &k.wave {
+        if !(w.frequency_hz.is_finite()
+            && w.frequency_hz > 0.0
+            && w.frequency_hz <= Wave::MAX_FREQUENCY_HZ)
+        {
+            return Err(invalid(
+                "wave.frequency_hz",
+                format!(
+                    "{} Hz is not in (0, {}]",
+                    w.frequency_hz,
+                    Wave::MAX_FREQUENCY_HZ
+                ),
+            ));
+        }
+        if !(w.amplitude_m.is_finite()
+            && w.amplitude_m > 0.0
+            && w.amplitude_m <= Wave::MAX_AMPLITUDE_M)
+        {
+            return Err(invalid(
+                "wave.amplitude_m",
+                format!(
+                    "{} m is not in (0, {}]",
+                    w.amplitude_m,
+                    Wave::MAX_AMPLITUDE_M
+                ),
+            ));
+        }
+    }
+    if let Some(p) = &k.push {
+        if p.link.trim().is_empty() {
+            return Err(invalid("push.link", "a robot link name is needed".into()));
+        }
+        if !p.point.iter().all(|x| x.is_finite()) {
+            return Err(invalid("push.point", "not a finite number".into()));
+        }
+        let norm = p.point.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm > Push::MAX_POINT_M {
+            return Err(invalid(
+                "push.point",
+                format!(
+                    "{norm} m from the link's origin: more than {} m",
+                    Push::MAX_POINT_M
+                ),
+            ));
+        }
+        if !(p.force_n.is_finite() && p.force_n > 0.0 && p.force_n <= Push::MAX_FORCE_N) {
+            return Err(invalid(
+                "push.force_n",
+                format!("{} N is not in (0, {}]", p.force_n, Push::MAX_FORCE_N),
+            ));
+        }
+        if k.wave.as_ref().is_some_and(|w| w.hand == p.hand) {
+            return Err(invalid(
+                "push.part",
+                format!(
+                    "the {} hand cannot push while it waves (wave.hand)",
+                    p.hand.name()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

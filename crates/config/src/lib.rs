@@ -34,7 +34,7 @@ pub use collaboration::{CollaborationConfig, GestureConfig, OnRequest, SkeletonC
 pub use control::{AvoidanceParams, ControlConfig};
 pub use dynamics::ResidualConfig;
 pub use error::{ConfigError, Invalid};
-pub use human_script::{HumanScript, Keyframe, ScriptError};
+pub use human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};
 pub use merge::{apply_set, merge};
 pub use per_joint::PerJoint;
 pub use perception::{CameraConfig, DepthSource, IngestConfig, PointConfig, RepulsionConfig};
@@ -285,6 +285,10 @@ impl Config {
         link(
             "collaboration.robot_link".into(),
             &self.collaboration.robot_link,
+        )?;
+        link(
+            "collaboration.wrist_link".into(),
+            &self.collaboration.wrist_link,
         )?;
         for (i, p) in self.repulsion.points.iter().enumerate() {
             link(format!("repulsion.points[{i}].link"), &p.link)?;

@@ -8,7 +8,8 @@
 //!
 //! [human]                            # optional: no table, no human
 //! floor_z = -0.8                     # soles' height in the robot base frame [m], default -0.8
-//! collaborative_parts = ["hand_right"]   # contacts with these parts are intended, default none
+//! collaborative_parts = ["hand_right"]   # contacts of these parts (with any robot link) are
+//!                                    # intended, all others collisions; default none
 //! repeat_s = 30.0                    # optional: the script starts over every 30 s, default: plays once
 //!
 //! [[human.keyframe]]                 # at least one; strictly increasing t
@@ -16,6 +17,22 @@
 //! base = [1.2, 0.0, 3.14159]         # floor x, y [m] and heading yaw [rad], base frame
 //! right_hand = [0.4, 0.1, 0.5]       # optional hand target [m], base frame; absent: hangs
 //! left_hand = [0.4, -0.1, 0.5]       # optional
+//! right_foot = [0.9, 0.1, -0.5]      # optional ankle target [m], base frame (a raised leg,
+//! left_foot = [0.9, -0.1, -0.5]      #   knee bent forward); absent: stands straight
+//! # optional actions, from this keyframe until the next one (the last
+//! # keyframe's: until the script ends or starts over):
+//! wave = { hand = "right", frequency_hz = 1.5, amplitude_m = 0.12 }
+//! #   the hand ("right" | "left") is raised above its elbow and swings along
+//! #   the person's left-right axis: frequency in (0, 5] Hz, peak amplitude
+//! #   in (0, 0.5] m about the elbow; blends in and out over 0.5 s
+//! push = { link = "lwr_link_7", point = [0.0, 0.0, 0.04], force_n = 30.0, part = "right_hand", intended = true }
+//! #   the simulator pushes robot link `link` at `point` [m] (link frame) with
+//! #   force_n in (0, 500] N, horizontal, from the person's base position
+//! #   towards the point, ramped over 0.2 s at both ends; the hand `part`
+//! #   ("right_hand" | "left_hand") is put on the link there and the force is
+//! #   a ground-truth contact of that hand on that link. `intended` defaults
+//! #   to whether the hand is one of `collaborative_parts`. The link is checked
+//! #   against the robot model when the simulator is built.
 //!
 //! [config]                           # optional, any tables: overrides for the services,
 //! sim = { substeps = 8 }             # kept as an opaque toml::Table
@@ -27,7 +44,7 @@ use serde::Deserialize;
 
 use phri_ipc::BodyPart;
 
-use crate::human_script::{HumanScript, Keyframe, ScriptError};
+use crate::human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};
 
 /// A loaded, checked scenario.
 #[derive(Clone, Debug, PartialEq)]
@@ -110,6 +127,47 @@ struct RawKeyframe {
     base: [f64; 3],
     right_hand: Option<[f64; 3]>,
     left_hand: Option<[f64; 3]>,
+    right_foot: Option<[f64; 3]>,
+    left_foot: Option<[f64; 3]>,
+    wave: Option<RawWave>,
+    push: Option<RawPush>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWave {
+    hand: String,
+    frequency_hz: f64,
+    amplitude_m: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPush {
+    link: String,
+    point: [f64; 3],
+    force_n: f64,
+    part: String,
+    intended: Option<bool>,
+}
+
+/// `right` / `left` of a wave.
+fn wave_hand(name: &str) -> Option<Hand> {
+    match name {
+        "right" => Some(Hand::Right),
+        "left" => Some(Hand::Left),
+        _ => None,
+    }
+}
+
+/// The pushing hand: `right_hand` / `left_hand` (or its body part name
+/// `hand_right` / `hand_left`).
+fn push_hand(name: &str) -> Option<Hand> {
+    match name {
+        "right_hand" | "hand_right" => Some(Hand::Right),
+        "left_hand" | "hand_left" => Some(Hand::Left),
+        _ => None,
+    }
 }
 
 impl Scenario {
@@ -185,16 +243,50 @@ impl Scenario {
                         parts.push(part);
                     }
                 }
-                let keyframes = h
-                    .keyframe
-                    .into_iter()
-                    .map(|k| Keyframe {
+                let mut keyframes = Vec::with_capacity(h.keyframe.len());
+                for (i, k) in h.keyframe.into_iter().enumerate() {
+                    let wave = match k.wave {
+                        None => None,
+                        Some(w) => Some(Wave {
+                            hand: wave_hand(&w.hand).ok_or_else(|| {
+                                invalid(
+                                    format!("human.keyframe[{i}].wave.hand"),
+                                    format!("'{}' is not \"right\" or \"left\"", w.hand),
+                                )
+                            })?,
+                            frequency_hz: w.frequency_hz,
+                            amplitude_m: w.amplitude_m,
+                        }),
+                    };
+                    let push = match k.push {
+                        None => None,
+                        Some(p) => {
+                            let hand = push_hand(&p.part).ok_or_else(|| {
+                                invalid(
+                                    format!("human.keyframe[{i}].push.part"),
+                                    format!("'{}' is not \"right_hand\" or \"left_hand\"", p.part),
+                                )
+                            })?;
+                            Some(Push {
+                                link: p.link,
+                                point: p.point,
+                                force_n: p.force_n,
+                                hand,
+                                intended: p.intended.unwrap_or(parts.contains(&hand.part())),
+                            })
+                        }
+                    };
+                    keyframes.push(Keyframe {
                         t: k.t,
                         base: k.base,
                         right_hand: k.right_hand,
                         left_hand: k.left_hand,
-                    })
-                    .collect();
+                        right_foot: k.right_foot,
+                        left_foot: k.left_foot,
+                        wave,
+                        push,
+                    });
+                }
                 let script = HumanScript::new(h.floor_z, keyframes).map_err(|e| match e {
                     ScriptError::FloorZ(v) => invalid("human.floor_z".into(), format!("{v} is not a finite number")),
                     ScriptError::NoKeyframe => invalid("human.keyframe".into(), "a human needs at least one [[human.keyframe]]".into()),
@@ -203,6 +295,7 @@ impl Scenario {
                         invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))
                     }
                     ScriptError::Repeat { .. } => invalid("human.repeat_s".into(), e.to_string()),
+                    ScriptError::Invalid { index, field, reason } => invalid(format!("human.keyframe[{index}].{field}"), reason),
                 })?;
                 let script = match h.repeat_s {
                     None => script,

@@ -159,7 +159,7 @@ fn refuses_bad_scripts() {
         t,
         base: [0.0; 3],
         right_hand: None,
-        left_hand: None,
+        ..Keyframe::default()
     };
     assert_eq!(HumanScript::new(-0.8, vec![]), Err(ScriptError::NoKeyframe));
     assert!(matches!(
@@ -184,4 +184,205 @@ fn refuses_bad_scripts() {
             "repeat_s {bad}"
         );
     }
+}
+
+/// `wave`, `push` and foot targets are read into the keyframe; a push's
+/// `intended` defaults to whether its hand is collaborative.
+#[test]
+fn wave_push_and_feet_are_read() {
+    use phri_config::{Hand, Push, Wave};
+    let text = |collab: &str, intended: &str| {
+        format!(
+            "{HEAD}collaborative_parts = [{collab}]\n{K0}\
+             [[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0, 0.0]\n\
+             wave = {{ hand = \"left\", frequency_hz = 1.5, amplitude_m = 0.12 }}\n\
+             push = {{ link = \"lwr_link_7\", point = [0.0, 0.0, 0.04], force_n = 30.0, part = \"right_hand\"{intended} }}\n\
+             right_foot = [0.9, 0.1, -0.5]\nleft_foot = [0.9, -0.1, -0.6]\n"
+        )
+    };
+    let sc = Scenario::from_str(&text("", ", intended = true")).expect("valid");
+    let human = sc.human.expect("human");
+    let k = &human.keyframes()[1];
+    assert_eq!(
+        k.wave,
+        Some(Wave {
+            hand: Hand::Left,
+            frequency_hz: 1.5,
+            amplitude_m: 0.12
+        })
+    );
+    assert_eq!(
+        k.push,
+        Some(Push {
+            link: "lwr_link_7".into(),
+            point: [0.0, 0.0, 0.04],
+            force_n: 30.0,
+            hand: Hand::Right,
+            intended: true,
+        })
+    );
+    assert_eq!(k.right_foot, Some([0.9, 0.1, -0.5]));
+    assert_eq!(k.left_foot, Some([0.9, -0.1, -0.6]));
+    let intended = |collab: &str| {
+        let sc = Scenario::from_str(&text(collab, "")).expect("valid");
+        let h = sc.human.expect("human");
+        h.keyframes()[1].push.as_ref().expect("push").intended
+    };
+    assert!(
+        intended("\"hand_right\""),
+        "a collaborative hand pushes on purpose"
+    );
+    assert!(!intended(""));
+    assert!(!intended("\"hand_left\""));
+    let sc = Scenario::from_str(&text("\"hand_right\"", ", intended = false")).expect("valid");
+    assert!(
+        !sc.human.expect("human").keyframes()[1]
+            .push
+            .as_ref()
+            .expect("push")
+            .intended
+    );
+}
+
+/// Bad wave, push and foot values are refused, naming the key.
+#[test]
+fn bad_wave_push_and_feet_are_refused_by_key() {
+    let k1 = |extra: &str| {
+        format!("{HEAD}{K0}[[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0, 0.0]\n{extra}\n")
+    };
+    let wave = |hand: &str, f: &str, a: &str| {
+        k1(&format!(
+            "wave = {{ hand = \"{hand}\", frequency_hz = {f}, amplitude_m = {a} }}"
+        ))
+    };
+    let push = |link: &str, point: &str, force: &str, part: &str| {
+        k1(&format!(
+            "push = {{ link = \"{link}\", point = {point}, force_n = {force}, part = \"{part}\" }}"
+        ))
+    };
+    let ok_point = "[0.0, 0.0, 0.04]";
+    let cases: Vec<(String, &str)> = vec![
+        (wave("up", "1.5", "0.1"), "human.keyframe[1].wave.hand"),
+        (wave("right", "0.0", "0.1"), "human.keyframe[1].wave.frequency_hz"),
+        (wave("right", "-1.0", "0.1"), "human.keyframe[1].wave.frequency_hz"),
+        (wave("right", "5.5", "0.1"), "human.keyframe[1].wave.frequency_hz"),
+        (wave("right", "nan", "0.1"), "human.keyframe[1].wave.frequency_hz"),
+        (wave("left", "1.0", "0.0"), "human.keyframe[1].wave.amplitude_m"),
+        (wave("left", "1.0", "0.6"), "human.keyframe[1].wave.amplitude_m"),
+        (wave("left", "1.0", "inf"), "human.keyframe[1].wave.amplitude_m"),
+        (k1("wave = { hand = \"left\", frequency_hz = 1.0 }"), "missing field `amplitude_m`"),
+        (k1("wave = { hand = \"left\", frequency_hz = 1.0, amplitude_m = 0.1, speed = 2 }"), "speed"),
+        (push("", ok_point, "30.0", "right_hand"), "human.keyframe[1].push.link"),
+        (push("lwr_link_7", "[0.0, nan, 0.0]", "30.0", "right_hand"), "human.keyframe[1].push.point"),
+        (push("lwr_link_7", "[2.0, 0.0, 0.0]", "30.0", "right_hand"), "human.keyframe[1].push.point"),
+        (push("lwr_link_7", ok_point, "0.0", "right_hand"), "human.keyframe[1].push.force_n"),
+        (push("lwr_link_7", ok_point, "-5.0", "right_hand"), "human.keyframe[1].push.force_n"),
+        (push("lwr_link_7", ok_point, "600.0", "right_hand"), "human.keyframe[1].push.force_n"),
+        (push("lwr_link_7", ok_point, "30.0", "right_foot"), "human.keyframe[1].push.part"),
+        (
+            k1("wave = { hand = \"right\", frequency_hz = 1.0, amplitude_m = 0.1 }\npush = { link = \"lwr_link_7\", point = [0.0, 0.0, 0.0], force_n = 10.0, part = \"right_hand\" }"),
+            "human.keyframe[1].push.part",
+        ),
+        (k1("push = { link = \"lwr_link_7\", point = [0.0, 0.0, 0.0], force_n = 10.0 }"), "missing field `part`"),
+        (k1("right_foot = [0.9, nan, -0.5]"), "human.keyframe[1].right_foot"),
+        (k1("left_foot = [0.9, 0.1]"), "human.keyframe[1].left_foot"),
+        (k1("left_foot = [0.9, 0.1, inf]"), "human.keyframe[1].left_foot"),
+    ];
+    for (text, field) in cases {
+        let e = parse_err(&text).to_string();
+        assert!(
+            e.contains(field),
+            "error for\n{text}\ndoes not name {field}: {e}"
+        );
+        assert!(e.starts_with("<scenario>:"), "error names the origin: {e}");
+    }
+    // the script's own errors, without a scenario file
+    use phri_config::{Hand, Keyframe, Push, Wave};
+    let k = Keyframe {
+        t: 0.0,
+        base: [1.0, 0.0, 0.0],
+        wave: Some(Wave {
+            hand: Hand::Left,
+            frequency_hz: 7.0,
+            amplitude_m: 0.1,
+        }),
+        ..Keyframe::default()
+    };
+    let e =
+        HumanScript::new(-0.8, vec![Keyframe::default(), Keyframe { t: 1.0, ..k }]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ScriptError::Invalid {
+                index: 1,
+                field: "wave.frequency_hz",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string()
+            .starts_with("keyframe[1].wave.frequency_hz: 7 Hz"),
+        "{e}"
+    );
+    let k = Keyframe {
+        push: Some(Push {
+            link: "lwr_link_7".into(),
+            point: [0.0; 3],
+            force_n: f64::NAN,
+            hand: Hand::Right,
+            intended: false,
+        }),
+        ..Keyframe::default()
+    };
+    let e = HumanScript::new(-0.8, vec![k]).unwrap_err();
+    assert!(
+        e.to_string().starts_with("keyframe[0].push.force_n:"),
+        "{e}"
+    );
+    let k = Keyframe {
+        left_foot: Some([0.0, f64::INFINITY, 0.0]),
+        ..Keyframe::default()
+    };
+    assert_eq!(
+        HumanScript::new(-0.8, vec![k]),
+        Err(ScriptError::NotFinite {
+            index: 0,
+            field: "left_foot"
+        })
+    );
+}
+
+/// The shipped `wave.toml` loads: the right hand waves from 3 s to 6 s at
+/// 2 Hz, 0.12 m, and is held out at (0.55, 0.1, 0.35) from 7 s to 10 s.
+#[test]
+fn wave_scenario_loads() {
+    use phri_config::{Hand, Wave};
+    let sc = Scenario::from_file(scenario_path("wave.toml")).expect("wave.toml loads");
+    assert_eq!(sc.name, "wave");
+    assert_eq!(sc.duration_s, 12.0);
+    assert_eq!(sc.collaborative_parts, vec![BodyPart::HandRight]);
+    let h = sc.human.expect("human");
+    let waving: Vec<_> = h.keyframes().iter().filter(|k| k.wave.is_some()).collect();
+    assert_eq!(waving.len(), 1);
+    assert_eq!(waving[0].t, 3.0);
+    assert_eq!(
+        waving[0].wave,
+        Some(Wave {
+            hand: Hand::Right,
+            frequency_hz: 2.0,
+            amplitude_m: 0.12
+        })
+    );
+    let (i, start, end) = h.interval_at(4.0).expect("inside the script");
+    assert_eq!((h.keyframes()[i].t, start, end), (3.0, 3.0, 6.0));
+    let held: Vec<f64> = h
+        .keyframes()
+        .iter()
+        .filter(|k| k.right_hand == Some([0.55, 0.1, 0.35]))
+        .map(|k| k.t)
+        .collect();
+    assert_eq!(held, vec![7.0, 10.0]);
+    assert!(h.end_time() <= 12.0);
 }

@@ -23,6 +23,9 @@ use phri_model::{check_len, cholesky_factor, cholesky_solve, Data, LengthError, 
 /// Contacts estimated at once (eq. 23 with two).
 pub const MAX_FORCE_CONTACTS: usize = 2;
 
+/// Joints whose unexplained residual [`ForceEstimate::left`] keeps, one by one.
+pub const MAX_JOINTS: usize = 16;
+
 /// Why an estimate could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum ForceError {
@@ -60,6 +63,8 @@ pub struct ForceEstimate {
     pub observable: [bool; MAX_FORCE_CONTACTS],
     /// ‖r − J_cᵀ F̂‖: the residual these contacts do not explain [Nm]
     pub unexplained: f64,
+    /// `r − J_cᵀ F̂` joint by joint [Nm] (the first `min(n, MAX_JOINTS)` entries)
+    pub left: [f64; MAX_JOINTS],
 }
 
 /// Relative size of the smallest singular value² of a contact's Jacobian
@@ -93,6 +98,7 @@ impl ForceEstimator {
                 points: [Vector3::zeros(); MAX_FORCE_CONTACTS],
                 observable: [false; MAX_FORCE_CONTACTS],
                 unexplained: 0.0,
+                left: [0.0; MAX_JOINTS],
             },
             model,
         }
@@ -126,7 +132,11 @@ impl ForceEstimator {
             points: [Vector3::zeros(); MAX_FORCE_CONTACTS],
             observable: [true; MAX_FORCE_CONTACTS],
             unexplained: r.iter().map(|x| x * x).sum::<f64>().sqrt(),
+            left: [0.0; MAX_JOINTS],
         };
+        for (l, x) in out.left.iter_mut().zip(r) {
+            *l = *x;
+        }
         if k == 0 {
             self.last = out;
             return Ok(&self.last);
@@ -206,11 +216,23 @@ impl ForceEstimator {
         for j in 0..n {
             let explained: f64 = (0..m).map(|a| row(&self.jac, a, j) * rhs[a]).sum();
             let e = r[j] - explained;
+            if j < MAX_JOINTS {
+                out.left[j] = e;
+            }
             unexplained += e * e;
         }
         out.unexplained = unexplained.sqrt();
         self.last = out;
         Ok(&self.last)
+    }
+
+    /// The origin of `frame` \[m\], base frame, at the joints of the last
+    /// [`ForceEstimator::estimate`] (the origin before the first).
+    pub fn frame_origin(&self, frame: usize) -> Vector3<f64> {
+        if frame >= self.model.frames.len() {
+            return Vector3::zeros();
+        }
+        phri_model::frame_placement(&self.model, &self.data, frame).apply(&Vector3::zeros())
     }
 
     /// The last estimate.

@@ -10,7 +10,7 @@ pub mod observer;
 pub mod velocity;
 
 pub use contact_force::{
-    ContactPoint, ForceError, ForceEstimate, ForceEstimator, MAX_FORCE_CONTACTS,
+    ContactPoint, ForceError, ForceEstimate, ForceEstimator, MAX_FORCE_CONTACTS, MAX_JOINTS,
 };
 pub use detect::{Detection, Detector};
 pub use observer::{ResidualError, ResidualObserver, ResidualOutput};

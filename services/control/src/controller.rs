@@ -6,13 +6,15 @@
 use nalgebra::Vector3;
 use phri_config::{Config, ControlConfig, PointConfig};
 use phri_estimation::VelocityEstimator;
-use phri_ipc::{ControlMode, Reaction, MAX_DOF};
+use phri_ipc::{CollabPhase, ControlMode, Reaction, MAX_DOF};
 use phri_model::{check_len, Data, Model};
 
+use crate::collab::RobotState;
 use crate::error::ControlError;
 use crate::history::PathHistory;
 use crate::inputs::{ControlInput, PerceptionView};
 use crate::limits::{LimitActivity, Limits};
+use crate::modes::collaborate::Collaboration;
 use crate::modes::reaction::{ReactionIo, ReactionState};
 use crate::modes::task::TaskState;
 use crate::modes::{self, protective_stop, recover, sync, Behaviour, CartesianRef, Conditions};
@@ -89,6 +91,8 @@ pub struct Controller {
     history: PathHistory,
     task: TaskState,
     reaction: ReactionState,
+    /// the collaboration layer (`None`: `[collaboration] enabled = false`)
+    collab: Option<Collaboration>,
     mode: ControlMode,
     last_stamp: Option<u64>,
     /// controller time \[s\]: the sum of the periods seen
@@ -165,6 +169,7 @@ impl Controller {
             history: PathHistory::for_span(n, cfg.retreat_path_s.max(0.0) + 0.5, params.period_s),
             task: TaskState::new(&cfg),
             reaction: ReactionState::new(&cfg, params.period_s),
+            collab: None,
             mode: ControlMode::Sync,
             last_stamp: None,
             t: 0.0,
@@ -194,6 +199,9 @@ impl Controller {
             }
             c.set_control_points(&cfg.repulsion.points)?;
         }
+        if cfg.collaboration.enabled {
+            c.collab = Some(Collaboration::new(&c.model, cfg)?);
+        }
         Ok(c)
     }
 
@@ -218,6 +226,7 @@ impl Controller {
         // 1. the safety inputs: a fresh residual, fresh perception?
         let safety = self.safety.assess(input, &self.cfg, n);
         self.measure(q, qd);
+        self.observe_collaboration(q, dt, &safety, input);
 
         // 2. the reaction to a detected collision, and every other change of mode
         let next = modes::next_mode(self.mode, &self.conditions(&safety));
@@ -297,6 +306,29 @@ impl Controller {
         }
     }
 
+    /// The collaboration's requests, hand, force and phase of this period.
+    fn observe_collaboration(&mut self, q: &[f64], dt: f64, s: &Safety, input: &ControlInput<'_>) {
+        let Some(collab) = self.collab.as_mut() else {
+            return;
+        };
+        use ControlMode::*;
+        let robot = match self.mode {
+            Task | Slow | Approach | Contact | Follow => RobotState::Available,
+            Reaction | Recover => RobotState::Reacting,
+            Sync | ProtectiveStop => RobotState::Stopped,
+        };
+        collab.observe(
+            self.t,
+            dt,
+            input.state_stamp_ns,
+            q,
+            input.residual.filter(|r| r.valid).map(|r| r.r),
+            robot,
+            !s.residual_fresh || s.perception_stop,
+            &input.collab,
+        );
+    }
+
     fn conditions(&mut self, s: &Safety) -> Conditions {
         if self.mode == ControlMode::Recover {
             if s.contact || s.collision {
@@ -316,6 +348,14 @@ impl Controller {
             perception_stop: s.perception_stop,
             reaction_done: self.reaction.done(self.t),
             may_resume: self.cfg.resume && quiet,
+            collab: self
+                .collab
+                .as_ref()
+                .map(Collaboration::phase)
+                .filter(|p| *p != CollabPhase::Idle),
+            collab_collision: self.collab.as_ref().is_some_and(Collaboration::collision),
+            rearming: self.collab.as_ref().is_some_and(Collaboration::rearming),
+            stop_requested: self.collab.as_mut().is_some_and(Collaboration::take_stop),
         }
     }
 
@@ -326,6 +366,13 @@ impl Controller {
         match (from, next) {
             _ if next == from => {}
             (Task | Slow, Task | Slow) => {}
+            (Approach | Contact | Follow, Approach | Contact | Follow) => {}
+            (_, Approach | Contact | Follow) => {
+                let ee = self.ee;
+                if let Some(c) = self.collab.as_mut() {
+                    c.enter(ee);
+                }
+            }
             (_, Task | Slow) => {
                 if from == Recover {
                     self.counters.resumes += 1;
@@ -393,6 +440,13 @@ impl Controller {
             ControlMode::Recover => {
                 let evading = s.perception_fresh && input.perception.is_some();
                 recover::step(&self.reference, q, qd, evading, gains, &mut self.accel)
+            }
+            ControlMode::Approach | ControlMode::Contact | ControlMode::Follow => {
+                match self.collab.as_mut() {
+                    Some(c) => Behaviour::Cartesian(c.reference(self.ee, dt, s.speed_scale)),
+                    // unreachable: no collaboration, no collaboration mode; hold
+                    None => protective_stop::step(&self.reference, q, qd, gains, &mut self.accel),
+                }
             }
             ControlMode::Reaction => {
                 let (b, path_time) = self.reaction.step(ReactionIo {
@@ -507,6 +561,11 @@ impl Controller {
         self.ee
     }
 
+    /// The collaboration layer (`None`: disabled).
+    pub fn collaboration(&self) -> Option<&Collaboration> {
+        self.collab.as_ref()
+    }
+
     pub fn counters(&self) -> &ControlCounters {
         &self.counters
     }
@@ -583,6 +642,7 @@ mod tests {
             q,
             residual: r,
             perception: None,
+            collab: Default::default(),
         }
     }
 

@@ -10,6 +10,7 @@ use phri_ipc::{
 };
 
 use crate::error::InputError;
+pub use crate::modes::collaborate::CollabInput;
 
 /// The newest residual, as the controller sees it.
 #[derive(Clone, Copy, Debug)]
@@ -69,6 +70,8 @@ pub struct ControlInput<'a> {
     pub residual: Option<ResidualView<'a>>,
     /// newest repulsion results; `None`: this controller runs without perception
     pub perception: Option<PerceptionView<'a>>,
+    /// the collaboration's inputs (requests, skeleton, refined hand); empty: none
+    pub collab: CollabInput<'a>,
 }
 
 impl<'a> ControlInput<'a> {
@@ -95,6 +98,7 @@ impl<'a> ControlInput<'a> {
             q: &state.q[..n],
             residual: residual.and_then(|r| ResidualView::from_message(r, n).ok()),
             perception: perception.map(RepulsionInputs::view),
+            collab: CollabInput::default(),
         })
     }
 }

@@ -24,6 +24,7 @@
 
 pub mod avoidance;
 pub mod clik;
+pub mod collab;
 pub mod controller;
 pub mod error;
 pub mod history;
@@ -40,7 +41,7 @@ pub mod terms;
 
 pub use controller::{ControlCounters, ControlOutput, Controller, ControllerParams};
 pub use error::{ControlError, InputError};
-pub use inputs::{ControlInput, PerceptionView, RepulsionInputs, ResidualView};
-pub use outputs::{write_messages, Stamps};
+pub use inputs::{CollabInput, ControlInput, PerceptionView, RepulsionInputs, ResidualView};
+pub use outputs::{write_collab_state, write_messages, Stamps};
 pub use phri_config::{AvoidanceParams, ControlConfig};
 pub use phri_ipc::{ControlMode, Reaction};

@@ -1,15 +1,24 @@
 //! `phri-control`: answers every `robot/state` with a `robot/command` (the only
-//! publisher that channel accepts) and a `control/status`. Only channel
-//! wiring: the conversions are `phri_control::inputs` and `outputs`.
+//! publisher that channel accepts), a `control/status` and a `collab/state`;
+//! reads the collaboration's `hri/request`, `perception/skeleton` and
+//! `perception/hand` besides. Only channel wiring: the conversions are
+//! `phri_control::inputs` and `outputs`.
 
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_control::{write_messages, ControlInput, Controller, RepulsionInputs, Stamps};
-use phri_ipc::{
-    ControlStatus, Queue, TorqueCommand, Zeroed, CONTROL_STATUS, DYNAMICS_RESIDUAL,
-    PERCEPTION_REPULSION, ROBOT_COMMAND, ROBOT_STATE,
+use phri_control::{
+    write_collab_state, write_messages, CollabInput, ControlInput, Controller, RepulsionInputs,
+    Stamps,
 };
+use phri_ipc::{
+    CollabState, ControlStatus, HriRequest, Queue, TorqueCommand, Zeroed, COLLAB_STATE,
+    CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, PERCEPTION_HAND, PERCEPTION_REPULSION,
+    PERCEPTION_SKELETON, ROBOT_COMMAND, ROBOT_STATE,
+};
+
+/// Requests handled per period at most (more wait for the next one).
+const MAX_REQUESTS: usize = 8;
 use phri_runtime::{now_ns, ServiceContext};
 
 fn main() -> ExitCode {
@@ -35,10 +44,17 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let commands = ROBOT_COMMAND.publisher(&node)?;
     let status_pub = CONTROL_STATUS.publisher(&node)?;
     let results = PERCEPTION_REPULSION.subscriber(&node, Queue::Drain)?;
+    let collaborating = cfg.collaboration.enabled;
+    let requests = HRI_REQUEST.subscriber(&node, Queue::Drain)?;
+    let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
+    let mut hands = PERCEPTION_HAND.latest_reader(&node)?;
+    let collab_pub = COLLAB_STATE.publisher(&node)?;
     ctx.start_deadman()?;
     ctx.go_realtime();
 
     let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
+    let mut collab_state = CollabState::zeroed();
+    let mut pending = [HriRequest::zeroed(); MAX_REQUESTS];
     let mut seq = 0u64;
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
@@ -54,13 +70,32 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
             let _ = repulsion.push(r);
         })?;
         let perception = avoidance.then_some(&repulsion);
-        let input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
+        let mut input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
             Ok(input) => input,
             Err(e) => {
                 eprintln!("phri-control: {e}");
                 continue;
             }
         };
+        if collaborating {
+            let mut k = 0;
+            while k < MAX_REQUESTS {
+                match requests.receive()? {
+                    Some(r) => {
+                        pending[k] = r;
+                        k += 1;
+                    }
+                    None => break,
+                }
+            }
+            skeletons.update()?;
+            hands.update()?;
+            input.collab = CollabInput {
+                requests: &pending[..k],
+                skeleton: skeletons.get(),
+                hand: hands.get(),
+            };
+        }
         controller.step(&input);
         seq += 1;
         let stamps = Stamps {
@@ -70,6 +105,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         write_messages(&controller, &state, seq, stamps, &mut cmd, &mut status);
         commands.publish(&cmd)?;
         status_pub.publish(&status)?;
+        write_collab_state(&controller, &state, seq, now_ns(), &mut collab_state);
+        collab_pub.publish(&collab_state)?;
     }
     Ok(())
 }

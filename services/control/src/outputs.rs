@@ -1,7 +1,8 @@
 //! The one conversion from a step's result to the cell's messages:
-//! `robot/command` and `control/status`, for `main.rs` and the lock-step cell.
+//! `robot/command`, `control/status` and `collab/state`, for `main.rs` and
+//! the lock-step cell.
 
-use phri_ipc::{ControlStatus, JointState, TorqueCommand};
+use phri_ipc::{CollabState, ControlStatus, JointState, TorqueCommand, Zeroed};
 
 use crate::controller::Controller;
 
@@ -58,4 +59,60 @@ pub fn write_messages(
     status.risk = ctl.risk();
     status.task_scale = ctl.task_scale();
     status.model_errors = ctl.model_errors();
+}
+
+/// Fill `collab/state` for the period that answered `state` (`seq` numbers
+/// it, `stamp_ns` [ns, CLOCK_MONOTONIC] is its publish time). Every field is
+/// written; without a collaboration layer the phase is `idle`.
+pub fn write_collab_state(
+    ctl: &Controller,
+    state: &JointState,
+    seq: u64,
+    stamp_ns: u64,
+    out: &mut CollabState,
+) {
+    *out = CollabState::zeroed();
+    out.seq = seq;
+    out.stamp_ns = stamp_ns;
+    out.state_stamp_ns = state.stamp_ns;
+    out.robot_frame = -1;
+    out.person = u32::MAX;
+    out.hand_age_ns = u64::MAX;
+    let Some(c) = ctl.collaboration() else {
+        return;
+    };
+    let m = c.machine();
+    out.phase = m.phase() as u32;
+    out.reason = m.reason() as u32;
+    out.person = m.person();
+    out.human_part = m.part() as u32;
+    if m.active() {
+        out.robot_frame = c.robot_frame() as i32;
+    }
+    if let Some(a) = c.last_answer() {
+        out.request_source = a.request.source;
+        out.request_kind = a.request.kind;
+        out.request_part = a.request.part;
+        out.request_accepted = a.answer.accepted as u32;
+        out.request_reason = a.answer.reason as u32;
+        out.request_seq = a.request.seq;
+        out.request_stamp_ns = a.request.stamp_ns;
+    }
+    if let Some(h) = c.hand() {
+        out.hand = [h.x, h.y, h.z];
+    }
+    if let Some(t) = c.hand_capture_ns() {
+        out.hand_age_ns = state.stamp_ns.saturating_sub(t);
+    }
+    if let Some(e) = c.estimate().filter(|_| m.active()) {
+        out.unexplained_norm = e.unexplained;
+        let n = e.n.min(out.forces.len());
+        out.n_forces = n as u32;
+        for (f, i) in out.forces.iter_mut().zip(0..n) {
+            f.point = [e.points[i].x, e.points[i].y, e.points[i].z];
+            f.force = [e.forces[i].x, e.forces[i].y, e.forces[i].z];
+            f.frame = c.robot_frame() as i32;
+            f.observable = e.observable[i] as u32;
+        }
+    }
 }

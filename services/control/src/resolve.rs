@@ -179,7 +179,8 @@ impl Resolver {
         if let Some(v) = perception {
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
-                let target = if p.active == 0 {
+                let behind_the_hand = k == 0 && c.collab_hand.is_some_and(|h| behind(&h, p));
+                let target = if p.active == 0 || behind_the_hand {
                     Vector3::zeros()
                 } else {
                     Vector3::from(p.v_call)
@@ -229,4 +230,22 @@ impl Resolver {
         }
         faults
     }
+}
+
+/// Margin by which an obstacle must lie beyond the collaborative hand to be
+/// "behind" it \[m\] (the hand's own surface and the mask's edge are nearer).
+const BEHIND_MARGIN_M: f64 = 0.05;
+
+/// The obstacle of `p` lies behind the collaborative hand `h` as seen from
+/// the control point: farther along the direction to the hand than the hand,
+/// less a margin (the person's body behind the hand the robot is asked to
+/// touch; a hand crossing in between is nearer and still repels).
+fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
+    let (o, x) = (Vector3::from(p.obstacle), Vector3::from(p.position));
+    let to_hand = h - x;
+    let d = to_hand.norm();
+    if d < 1e-6 || !o.iter().chain(x.iter()).all(|v| v.is_finite()) {
+        return false;
+    }
+    (o - x).dot(&to_hand) / d >= d - BEHIND_MARGIN_M
 }

@@ -147,6 +147,7 @@ mod tests {
             q: &[],
             residual,
             perception,
+            collab: Default::default(),
         }
     }
 

@@ -31,6 +31,7 @@ fn malformed_state_never_panics() {
         q: &[f64::NAN; 7],
         residual: None,
         perception: None,
+        collab: Default::default(),
     });
     assert!(out.tau.iter().all(|t| t.is_finite()));
     let out = c.step(&ControlInput {
@@ -38,6 +39,7 @@ fn malformed_state_never_panics() {
         q: &[0.0; 3],
         residual: None,
         perception: None,
+        collab: Default::default(),
     });
     assert_eq!(out.tau.len(), 7);
     let bad = ControlConfig {

@@ -9,11 +9,14 @@ use std::collections::BTreeSet;
 use nalgebra::Vector3;
 use phri_config::{Config, PerJoint, ResidualConfig};
 use phri_control::{
-    write_messages, ControlInput, ControlMode, Controller, Reaction, RepulsionInputs, ResidualView,
-    Stamps,
+    write_collab_state, write_messages, CollabInput, ControlInput, ControlMode, Controller,
+    Reaction, RepulsionInputs, ResidualView, Stamps,
 };
 use phri_estimation::ResidualObserver;
-use phri_ipc::{ControlStatus, JointState, PointRepulsion, RepulsionResult, TorqueCommand, Zeroed};
+use phri_ipc::{
+    CollabPart, CollabState, ControlStatus, HriRequest, JointState, PointRepulsion,
+    RepulsionResult, RequestKind, RequestSource, Skeleton, SkeletonJoint, TorqueCommand, Zeroed,
+};
 use phri_model::Data;
 
 struct Counting;
@@ -78,7 +81,20 @@ fn the_control_period_allocates_nothing_in_any_mode() {
         let link = model.frame_id("lwr_link_4").unwrap();
         let mut jac = Data::jacobian_buffer(&model);
         let (mut step_allocs, mut modes) = (0usize, BTreeSet::new());
-        for k in 1..=9000u64 {
+        // from 8.5 s a person holds the right hand out 0.25 m in front of the
+        // end effector and asks, every 100 ms until accepted, to collaborate
+        let mut collab = CollabState::zeroed();
+        let mut request = HriRequest::zeroed();
+        request.source = RequestSource::Cli as u32;
+        request.kind = RequestKind::Follow as u32;
+        request.part = CollabPart::RightHand as u32;
+        request.person = u32::MAX;
+        let mut skeleton = Skeleton::zeroed();
+        skeleton.n_people = 1;
+        skeleton.people[0].id = 1;
+        skeleton.people[0].tracked = 1;
+        skeleton.people[0].confidence = [0.9; 15];
+        for k in 1..=10_000u64 {
             let t_s = k as f64 * 1e-3;
             // the arm: 10 sub-steps of exact dynamics, pushed on the forearm at 3-3.3 s
             let push = (3.0..3.3).contains(&t_s);
@@ -136,13 +152,32 @@ fn the_control_period_allocates_nothing_in_any_mode() {
                     collision: flags.2,
                 }),
                 perception: Some(repulsion.view()),
+                collab: Default::default(),
             };
+            let mut input = input;
+            let asking = t_s >= 8.5 && k % 100 == 0 && collab.phase == 0;
+            if t_s >= 8.5 {
+                skeleton.capture_ns = stamp - 30_000_000;
+                let ee = status.ee;
+                skeleton.people[0].joints[SkeletonJoint::RightHand as usize] =
+                    [ee[0] + 0.25, ee[1], ee[2]];
+                input.collab = CollabInput {
+                    requests: if asking {
+                        std::slice::from_ref(&request)
+                    } else {
+                        &[]
+                    },
+                    skeleton: Some(&skeleton),
+                    hand: None,
+                };
+            }
             let mode = ctl.step(&input).mode;
             let stamps = Stamps {
                 woke_ns: stamp,
                 done_ns: stamp + 1,
             };
             write_messages(&ctl, &state, k, stamps, &mut cmd, &mut status);
+            write_collab_state(&ctl, &state, k, stamp + 1, &mut collab);
             step_allocs += allocations() - before;
 
             tau.copy_from_slice(&cmd.tau[..7]);
@@ -157,6 +192,7 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             "protective_stop",
             "recover",
             "slow",
+            "approach",
         ] {
             assert!(
                 visited.contains(&m),

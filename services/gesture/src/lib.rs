@@ -176,8 +176,12 @@ impl WaveDetector {
             // lateral: along the shoulder line, horizontal (left → right)
             let (lx, ly) = (rs[0] - ls[0], rs[1] - ls[1]);
             let norm = lx.hypot(ly);
-            let shoulders_ok =
-                lsc >= self.cfg.min_confidence && rsc >= self.cfg.min_confidence && norm > 0.1;
+            // the shoulder line gives only a direction: one shoulder seen is
+            // enough (seen from the side the other is hidden by the torso, and
+            // a tracker still places it)
+            let shoulders_ok = (lsc >= self.cfg.min_confidence || rsc >= self.cfg.min_confidence)
+                && norm > 0.1
+                && ls.iter().chain(rs.iter()).all(|x| x.is_finite());
             for (part, hand, elbow) in [
                 (
                     CollabPart::RightHand,

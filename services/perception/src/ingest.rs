@@ -8,6 +8,7 @@ use phri_ipc::{FrameHeader, JointState, MAX_DOF};
 use phri_model::{Data, Model, ModelError};
 
 use crate::camera::{header_camera, HeaderError, DEPTH_SCALE_M};
+use crate::mask::{self, HandMask, Masked};
 use crate::robot::robot_capsules;
 
 /// A frame sequence at or below this after a higher one means the camera restarted.
@@ -123,10 +124,12 @@ pub struct Ingest {
     last_seq: Option<u64>,
     max_state_gap_ns: u64,
     max_age_ns: u64,
+    /// the collaborative hand to remove (while a collaboration is on)
+    mask: Option<HandMask>,
 }
 
 /// What [`Ingest::step`] did.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IngestOutcome {
     /// the robot's own pixels removed
     pub removed: u32,
@@ -134,6 +137,8 @@ pub struct IngestOutcome {
     pub flying: u32,
     /// pixels with a reading left
     pub valid: u32,
+    /// the collaborative hand's pixels removed, and the hand refined from them
+    pub masked: Masked,
 }
 
 impl Ingest {
@@ -148,8 +153,15 @@ impl Ingest {
             last_seq: None,
             max_state_gap_ns: (cfg.max_state_gap_ms * 1e6) as u64,
             max_age_ns: (cfg.max_frame_age_ms * 1e6) as u64,
+            mask: None,
             model,
         })
+    }
+
+    /// From the next frame on, remove the collaborative hand of `mask` (the
+    /// paper's Fig. 5); `None`: remove nothing (no collaboration).
+    pub fn set_mask(&mut self, mask: Option<HandMask>) {
+        self.mask = mask;
     }
 
     /// Validate `header`/`input` (size, camera, millimetres, age, sequence),
@@ -255,17 +267,23 @@ impl Ingest {
                 .map_err(|source| FrameError::Filter { seq, source })?,
             None => 0,
         };
+        let masked = match self.mask.as_ref() {
+            Some(m) => mask::apply(&k, &pose, m, out),
+            None => Masked::default(),
+        };
+        let removed = removed + masked.pixels as usize;
         self.last_seq = Some(seq);
         header.q = [0.0; MAX_DOF];
         header.q[..n].copy_from_slice(&q[..n]);
         header.q_stamp_ns = stamp;
         header.dof = n as u32;
         header.removed_pixels = removed as u32;
-        header.valid_pixels = (valid_in - removed) as u32;
+        header.valid_pixels = valid_in.saturating_sub(removed) as u32;
         Ok(IngestOutcome {
-            removed: removed as u32,
+            removed: removed as u32 - masked.pixels,
             flying: flying as u32,
             valid: header.valid_pixels,
+            masked,
         })
     }
 }

@@ -11,6 +11,7 @@
 pub mod camera;
 pub mod fault;
 pub mod ingest;
+pub mod mask;
 pub mod repulsion;
 pub mod robot;
 pub mod skeleton;

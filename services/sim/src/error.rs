@@ -28,4 +28,12 @@ pub enum SimError {
         lower: f64,
         upper: f64,
     },
+    /// a scripted push names a link the robot model does not have, or one
+    /// without a collision capsule on its body (`index`: the keyframe)
+    #[error("keyframe[{index}].push.link: '{link}' {reason}")]
+    PushLink {
+        index: usize,
+        link: String,
+        reason: String,
+    },
 }

@@ -3,9 +3,18 @@
 //! The human is a standing adult of about 1.75 m. Its pose at time `t` comes
 //! from keyframes (linear interpolation, clamped before the first and after
 //! the last): where it stands and which way it faces, and optionally where
-//! each hand is. Arms are shoulder → elbow → hand chains solved with a
-//! two-link inverse kinematics; a hand without a target hangs down. Legs and
-//! trunk are rigid (no gait).
+//! each hand and each foot is. Arms are shoulder → elbow → hand chains and
+//! legs hip → knee → ankle chains, solved with a two-link inverse kinematics
+//! (elbows bend down and outwards, knees forwards); a hand without a target
+//! hangs down, a leg without one stands straight. The trunk is rigid (no gait).
+//!
+//! Actions of a keyframe, until the next keyframe:
+//! - a [`Wave`]: the hand is raised above its elbow and swings along the
+//!   person's left–right axis about a fixed elbow (the hand's target is
+//!   ignored meanwhile); it blends in and out over [`WAVE_BLEND_S`];
+//! - a [`phri_config::Push`]: the simulator knows where the link is and puts
+//!   the hand there through [`Human::pose_reaching`] ([`Human::push_at`]
+//!   tells which push acts and how far it has ramped up).
 //!
 //! Frames: everything is in the robot base frame (x forward, z up, SI units).
 //! The human's own frame has its origin on the floor between the feet, `x`
@@ -15,7 +24,7 @@
 //! body parts are numbered as on the wire ([`phri_ipc::BodyPart`]).
 
 use nalgebra::Vector3;
-use phri_config::{HumanScript, Keyframe};
+use phri_config::{Hand, HumanScript, Keyframe, Push, Wave};
 use phri_ipc::BodyPart;
 
 /// One body part as a capsule: the segment `a`–`b` \[m\] swept by a sphere of
@@ -28,8 +37,12 @@ pub struct HumanCapsule {
     pub radius: f64,
 }
 
+/// A wave blends in over this time \[s\] after its keyframe and out over this
+/// time before the next keyframe (shorter intervals: a partial wave).
+pub const WAVE_BLEND_S: f64 = 0.5;
+
 /// Body dimensions \[m\] of the standing adult (about 1.75 m tall), human frame.
-mod body {
+pub mod body {
     /// shoulder joint centres: height above the floor and half width
     pub const SHOULDER_Z: f64 = 1.45;
     pub const SHOULDER_Y: f64 = 0.19;
@@ -45,6 +58,13 @@ mod body {
     pub const R_HAND: f64 = 0.045;
     /// a hanging hand, relative to its shoulder: forward, outward, down
     pub const HANG: [f64; 3] = [0.03, 0.05, -0.55];
+    /// a waving arm: direction of the upper arm from the shoulder (forward,
+    /// outward, up; normalized where used): the elbow ends up about 0.1 m in
+    /// front, 0.24 m out and 0.15 m below the shoulder
+    pub const WAVE_UPPER_ARM: [f64; 3] = [0.3, 0.8, -0.5];
+    /// largest lateral swing of the hand about the elbow \[m\] (forearm tilted
+    /// by 45°); a larger amplitude swings the upper arm (the elbow) too
+    pub const WAVE_SWING_MAX: f64 = 0.2;
     /// head: vertical segment and radius (top of the head at 1.75 m)
     pub const HEAD: [f64; 2] = [1.56, 1.65];
     pub const R_HEAD: f64 = 0.10;
@@ -55,7 +75,8 @@ mod body {
     pub const PELVIS_Z: f64 = 0.95;
     pub const PELVIS_Y: f64 = 0.08;
     pub const R_PELVIS: f64 = 0.12;
-    /// legs: hip, knee and ankle heights, half stance width, radii
+    /// legs: hip, knee and ankle heights of the standing leg (thigh 0.38 m,
+    /// shin 0.40 m), half stance width, radii
     pub const HIP_Z: f64 = 0.88;
     pub const KNEE_Z: f64 = 0.50;
     pub const ANKLE_Z: f64 = 0.10;
@@ -88,19 +109,21 @@ impl Frame {
     }
 }
 
-/// Right (`side = -1`) or left (`side = +1`) arm: capsule endpoints of upper
-/// arm, forearm and hand for a hand target (`None`: hanging).
-fn arm(
-    frame: &Frame,
-    side: f64,
-    target: Option<Vector3<f64>>,
-) -> [(Vector3<f64>, Vector3<f64>); 3] {
-    use body::*;
-    let shoulder = frame.point(0.0, side * SHOULDER_Y, SHOULDER_Z);
-    let target = target.unwrap_or_else(|| hang_point(frame, side));
-    let reach_max = UPPER_ARM + FOREARM - 1e-6;
-    let reach_min = (UPPER_ARM - FOREARM).abs() + 0.05;
-    let to = target - shoulder;
+/// Two-link chain `root` → `mid` → `end` with segment lengths `l1`, `l2`
+/// \[m\] reaching for `target` (clamped to the reachable shell): the middle
+/// joint bends towards `hint`, or towards `fallback` when the chain points
+/// along `hint`. Returns `(mid, end)`.
+fn two_link(
+    root: Vector3<f64>,
+    target: Vector3<f64>,
+    l1: f64,
+    l2: f64,
+    hint: Vector3<f64>,
+    fallback: Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let reach_max = l1 + l2 - 1e-6;
+    let reach_min = (l1 - l2).abs() + 0.05;
+    let to = target - root;
     let d_raw = to.norm();
     let u = if d_raw > 1e-9 {
         to / d_raw
@@ -108,21 +131,66 @@ fn arm(
         -Vector3::z()
     };
     let d = d_raw.clamp(reach_min, reach_max);
-    let hand = shoulder + u * d;
-    // elbow in the plane of the arm and a hint pointing down and outwards
-    let outward = frame.left * side;
-    let mut hint = (outward * 0.5 - Vector3::z()).normalize();
+    let end = root + u * d;
     let mut perp = hint - u * hint.dot(&u);
     if perp.norm() < 0.2 {
-        // reaching along the hint: bend the elbow backwards instead
-        hint = -frame.fwd;
-        perp = hint - u * hint.dot(&u);
+        perp = fallback - u * fallback.dot(&u);
     }
     let perp = perp.normalize();
-    // law of cosines: distance along u from the shoulder to the elbow's foot
-    let along = (UPPER_ARM * UPPER_ARM - FOREARM * FOREARM + d * d) / (2.0 * d);
-    let height = (UPPER_ARM * UPPER_ARM - along * along).max(0.0).sqrt();
-    let elbow = shoulder + u * along + perp * height;
+    // law of cosines: distance along u from the root to the middle joint's foot
+    let along = (l1 * l1 - l2 * l2 + d * d) / (2.0 * d);
+    let height = (l1 * l1 - along * along).max(0.0).sqrt();
+    (root + u * along + perp * height, end)
+}
+
+/// Right (`side = -1`) or left (`side = +1`) arm: shoulder, elbow and hand
+/// centre for a hand target (`None`: hanging).
+fn arm_joints(
+    frame: &Frame,
+    side: f64,
+    target: Option<Vector3<f64>>,
+) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+    use body::*;
+    let shoulder = frame.point(0.0, side * SHOULDER_Y, SHOULDER_Z);
+    let target = target.unwrap_or_else(|| hang_point(frame, side));
+    // elbow in the plane of the arm and a hint pointing down and outwards;
+    // reaching along the hint, the elbow bends backwards instead
+    let hint = (frame.left * side * 0.5 - Vector3::z()).normalize();
+    let (elbow, hand) = two_link(shoulder, target, UPPER_ARM, FOREARM, hint, -frame.fwd);
+    (shoulder, elbow, hand)
+}
+
+/// The waving arm's elbow and hand centre at `tau` \[s\] into the wave.
+fn wave_joints(
+    frame: &Frame,
+    side: f64,
+    shoulder: Vector3<f64>,
+    wave: &Wave,
+    tau: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
+    use body::*;
+    let [f, o, u] = WAVE_UPPER_ARM;
+    let dir = (frame.fwd * f + frame.left * (side * o) + Vector3::z() * u).normalize();
+    let x = wave.amplitude_m * (std::f64::consts::TAU * wave.frequency_hz * tau).sin();
+    // the forearm swings up to WAVE_SWING_MAX about the elbow, the upper arm the rest
+    let swing = x.clamp(-WAVE_SWING_MAX, WAVE_SWING_MAX);
+    let excess = x - swing;
+    let elbow = if excess == 0.0 {
+        shoulder + dir * UPPER_ARM
+    } else {
+        shoulder + (dir * UPPER_ARM + frame.left * excess).normalize() * UPPER_ARM
+    };
+    let up = (FOREARM * FOREARM - swing * swing).max(0.0).sqrt();
+    (elbow, elbow + frame.left * swing + Vector3::z() * up)
+}
+
+/// Capsule segments of upper arm, forearm and hand for the joint centres.
+fn arm_segments(
+    shoulder: Vector3<f64>,
+    elbow: Vector3<f64>,
+    hand: Vector3<f64>,
+) -> [(Vector3<f64>, Vector3<f64>); 3] {
+    use body::*;
     let fore = (hand - elbow) / FOREARM;
     let wrist = hand - fore * WRIST_BEFORE_HAND;
     [
@@ -136,6 +204,49 @@ fn arm(
 fn hang_point(frame: &Frame, side: f64) -> Vector3<f64> {
     use body::*;
     frame.point(HANG[0], side * (SHOULDER_Y + HANG[1]), SHOULDER_Z + HANG[2])
+}
+
+/// Where the ankle of a straight standing leg is \[m\], base frame.
+fn stand_point(frame: &Frame, side: f64) -> Vector3<f64> {
+    use body::*;
+    frame.point(0.0, side * LEG_Y, ANKLE_Z)
+}
+
+/// `+1` for the left side, `−1` for the right (the human frame's y).
+fn side_of(hand: Hand) -> f64 {
+    match hand {
+        Hand::Right => -1.0,
+        Hand::Left => 1.0,
+    }
+}
+
+/// A hand placed at a point for a while, by the simulator: the hand centre
+/// moves from its scripted target to `point` \[m\] (base frame) as `weight`
+/// goes from 0 to 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    pub hand: Hand,
+    pub point: Vector3<f64>,
+    /// in \[0, 1\]
+    pub weight: f64,
+}
+
+/// The push acting at some instant ([`Human::push_at`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActivePush<'s> {
+    /// index of the keyframe that starts it
+    pub keyframe: usize,
+    pub push: &'s Push,
+    /// ramp factor in \[0, 1\]: 0 → 1 over [`Push::RAMP_S`] after the
+    /// keyframe, 1 → 0 over the same time before the interval's end
+    pub ramp: f64,
+}
+
+/// Interpolated pose inputs at one instant.
+struct Interpolated {
+    base: [f64; 3],
+    hands: [Option<Vector3<f64>>; 2],
+    feet: [Option<Vector3<f64>>; 2],
 }
 
 /// A runnable human: the script plus the capsule buffer [`Human::pose_at`]
@@ -171,19 +282,47 @@ impl Human {
         &self.capsules
     }
 
+    /// Floor position \[m\] and heading \[rad\] `[x, y, yaw]` at time `t` \[s\], base frame.
+    pub fn base_at(&self, t: f64) -> [f64; 3] {
+        self.interpolate(self.script.script_time(t)).base
+    }
+
+    /// The push acting at time `t` \[s\], if any, with its ramp factor.
+    pub fn push_at(&self, t: f64) -> Option<ActivePush<'_>> {
+        let ts = self.script.script_time(t);
+        let (i, start, end) = self.script.interval_at(ts)?;
+        let push = self.script.keyframes()[i].push.as_ref()?;
+        let ramp = ramp(ts, start, end, Push::RAMP_S);
+        (ramp > 0.0).then_some(ActivePush {
+            keyframe: i,
+            push,
+            ramp,
+        })
+    }
+
     /// Pose the body at time `t` \[s\] and return its capsules (base frame, in
     /// [`BodyPart::ALL`] order). Allocates nothing.
     pub fn pose_at(&mut self, t: f64) -> &[HumanCapsule] {
+        self.pose_reaching(t, None)
+    }
+
+    /// [`Human::pose_at`] with one hand placed by the caller (`reach`): the
+    /// simulator puts a pushing hand on the robot link. Allocates nothing.
+    pub fn pose_reaching(&mut self, t: f64, reach: Option<Reach>) -> &[HumanCapsule] {
         use body::*;
-        let t = match self.script.repeat_s() {
-            Some(period) if t > 0.0 => t.rem_euclid(period),
-            _ => t,
-        };
-        let (base, right, left) = self.interpolate(t);
-        let fl = Frame::new(base, self.script.floor_z());
+        let t = self.script.script_time(t);
+        let ip = self.interpolate(t);
+        let fl = Frame::new(ip.base, self.script.floor_z());
+        // the wave acting now, with its blend factor and time since it started
+        let wave = self.script.interval_at(t).and_then(|(i, start, end)| {
+            let w = self.script.keyframes()[i].wave?;
+            let blend = ramp(t, start, end, WAVE_BLEND_S);
+            (blend > 0.0).then_some((w, blend, t - start))
+        });
+        let capsules = &mut self.capsules;
         let mut set = |part: BodyPart, a: Vector3<f64>, b: Vector3<f64>, radius: f64| {
             // ALL lists the parts in declaration order, so the discriminant is the index
-            self.capsules[part as usize] = HumanCapsule { part, a, b, radius };
+            capsules[part as usize] = HumanCapsule { part, a, b, radius };
         };
         set(
             BodyPart::Head,
@@ -203,10 +342,10 @@ impl Human {
             fl.point(0.0, PELVIS_Y, PELVIS_Z),
             R_PELVIS,
         );
-        for (side, target, parts) in [
+        for (hand, target, parts) in [
             (
-                1.0,
-                left,
+                Hand::Left,
+                ip.hands[1],
                 [
                     BodyPart::UpperArmLeft,
                     BodyPart::ForearmLeft,
@@ -214,8 +353,8 @@ impl Human {
                 ],
             ),
             (
-                -1.0,
-                right,
+                Hand::Right,
+                ip.hands[0],
                 [
                     BodyPart::UpperArmRight,
                     BodyPart::ForearmRight,
@@ -223,43 +362,80 @@ impl Human {
                 ],
             ),
         ] {
-            let segs = arm(&fl, side, target);
-            for ((a, b), (part, r)) in
-                segs.into_iter()
-                    .zip(parts.into_iter().zip([R_UPPER_ARM, R_FOREARM, R_HAND]))
+            let side = side_of(hand);
+            let target = match reach {
+                Some(r) if r.hand == hand => {
+                    let from = target.unwrap_or_else(|| hang_point(&fl, side));
+                    let w = r.weight.clamp(0.0, 1.0);
+                    Some(from + (r.point - from) * w)
+                }
+                _ => target,
+            };
+            let (shoulder, mut elbow, mut centre) = arm_joints(&fl, side, target);
+            if let Some((w, blend, tau)) = wave.filter(|(w, _, _)| w.hand == hand) {
+                let (we, wh) = wave_joints(&fl, side, shoulder, &w, tau);
+                // rotate the upper arm and the forearm from the scripted pose
+                // to the wave's (lengths kept); the forearm turns up through
+                // the horizontal, forwards and outwards, as one raises a hand
+                let upper = slerp(
+                    (elbow - shoulder) / UPPER_ARM,
+                    (we - shoulder) / UPPER_ARM,
+                    blend,
+                );
+                let (fa, fb) = ((centre - elbow) / FOREARM, (wh - we) / FOREARM);
+                let mid = (fl.fwd * 0.3 + fl.left * side).normalize();
+                let fore = if blend < 0.5 {
+                    slerp(fa, mid, 2.0 * blend)
+                } else {
+                    slerp(mid, fb, 2.0 * blend - 1.0)
+                };
+                elbow = shoulder + upper * UPPER_ARM;
+                centre = elbow + fore * FOREARM;
+            }
+            for ((a, b), (part, r)) in arm_segments(shoulder, elbow, centre)
+                .into_iter()
+                .zip(parts.into_iter().zip([R_UPPER_ARM, R_FOREARM, R_HAND]))
             {
                 set(part, a, b, r);
             }
         }
-        for (side, thigh, shin) in [
-            (1.0, BodyPart::ThighLeft, BodyPart::ShinLeft),
-            (-1.0, BodyPart::ThighRight, BodyPart::ShinRight),
+        for (side, target, thigh, shin) in [
+            (1.0, ip.feet[1], BodyPart::ThighLeft, BodyPart::ShinLeft),
+            (-1.0, ip.feet[0], BodyPart::ThighRight, BodyPart::ShinRight),
         ] {
             let y = side * LEG_Y;
-            set(
-                thigh,
-                fl.point(0.0, y, HIP_Z),
-                fl.point(0.0, y, KNEE_Z),
-                R_THIGH,
-            );
-            set(
-                shin,
-                fl.point(0.0, y, KNEE_Z),
-                fl.point(0.0, y, ANKLE_Z),
-                R_SHIN,
-            );
+            let hip = fl.point(0.0, y, HIP_Z);
+            let (knee, ankle) = match target {
+                None => (fl.point(0.0, y, KNEE_Z), fl.point(0.0, y, ANKLE_Z)),
+                // the knee bends forwards (or, along the forward axis, up)
+                Some(target) => two_link(
+                    hip,
+                    target,
+                    HIP_Z - KNEE_Z,
+                    KNEE_Z - ANKLE_Z,
+                    fl.fwd,
+                    Vector3::z(),
+                ),
+            };
+            set(thigh, hip, knee, R_THIGH);
+            set(shin, knee, ankle, R_SHIN);
         }
         &self.capsules
     }
 
-    /// Interpolated `[x, y, yaw]` and hand targets at `t` (clamped to the script).
-    fn interpolate(&self, t: f64) -> ([f64; 3], Option<Vector3<f64>>, Option<Vector3<f64>>) {
+    /// Interpolated `[x, y, yaw]`, hand targets `[right, left]` and foot
+    /// targets `[right, left]` at script time `t` (clamped to the script).
+    fn interpolate(&self, t: f64) -> Interpolated {
         let ks = self.script.keyframes();
         let floor_z = self.script.floor_z();
         let v3 = |h: [f64; 3]| Vector3::new(h[0], h[1], h[2]);
         let first = &ks[0];
         let last = &ks[ks.len() - 1];
-        let single = |k: &Keyframe| (k.base, k.right_hand.map(v3), k.left_hand.map(v3));
+        let single = |k: &Keyframe| Interpolated {
+            base: k.base,
+            hands: [k.right_hand.map(v3), k.left_hand.map(v3)],
+            feet: [k.right_foot.map(v3), k.left_foot.map(v3)],
+        };
         if t.is_nan() || t <= first.t {
             return single(first);
         }
@@ -276,27 +452,65 @@ impl Human {
             lerp(k0.base[1], k1.base[1]),
             lerp(k0.base[2], k1.base[2]),
         ];
-        // a missing target stands for the hanging hand at that keyframe, so the
-        // blend is continuous; two missing targets hang from the blended body
-        let hand =
-            |h0: Option<[f64; 3]>, h1: Option<[f64; 3]>, side: f64| -> Option<Vector3<f64>> {
-                if h0.is_none() && h1.is_none() {
-                    return None;
-                }
-                let p0 = h0
-                    .map(v3)
-                    .unwrap_or_else(|| hang_point(&Frame::new(k0.base, floor_z), side));
-                let p1 = h1
-                    .map(v3)
-                    .unwrap_or_else(|| hang_point(&Frame::new(k1.base, floor_z), side));
-                Some(p0 + (p1 - p0) * s)
-            };
-        (
+        // a missing target stands for the rest position (hanging hand,
+        // standing foot) at that keyframe, so the blend is continuous; two
+        // missing targets rest on the blended body
+        let (f0, f1) = (Frame::new(k0.base, floor_z), Frame::new(k1.base, floor_z));
+        let blend = |h0: Option<[f64; 3]>,
+                     h1: Option<[f64; 3]>,
+                     rest: fn(&Frame, f64) -> Vector3<f64>,
+                     side: f64|
+         -> Option<Vector3<f64>> {
+            if h0.is_none() && h1.is_none() {
+                return None;
+            }
+            let p0 = h0.map(v3).unwrap_or_else(|| rest(&f0, side));
+            let p1 = h1.map(v3).unwrap_or_else(|| rest(&f1, side));
+            Some(p0 + (p1 - p0) * s)
+        };
+        Interpolated {
             base,
-            hand(k0.right_hand, k1.right_hand, -1.0),
-            hand(k0.left_hand, k1.left_hand, 1.0),
-        )
+            hands: [
+                blend(k0.right_hand, k1.right_hand, hang_point, -1.0),
+                blend(k0.left_hand, k1.left_hand, hang_point, 1.0),
+            ],
+            feet: [
+                blend(k0.right_foot, k1.right_foot, stand_point, -1.0),
+                blend(k0.left_foot, k1.left_foot, stand_point, 1.0),
+            ],
+        }
     }
+}
+
+/// Rotation of unit vector `a` towards unit vector `b` by the fraction `s`
+/// of the angle between them (about any perpendicular axis when they are
+/// opposite). A unit vector.
+fn slerp(a: Vector3<f64>, b: Vector3<f64>, s: f64) -> Vector3<f64> {
+    let angle = a.dot(&b).clamp(-1.0, 1.0).acos();
+    let sin = angle.sin();
+    if sin > 1e-6 {
+        return (a * ((1.0 - s) * angle).sin() + b * (s * angle).sin()) / sin;
+    }
+    if angle < 1.0 {
+        return (a + (b - a) * s).normalize();
+    }
+    // opposite: through a perpendicular
+    let p = a.cross(&Vector3::x());
+    let p = if p.norm() > 0.1 {
+        p
+    } else {
+        a.cross(&Vector3::y())
+    }
+    .normalize();
+    a * (s * angle).cos() + p * (s * angle).sin()
+}
+
+/// Trapezoid in time: 0 at `start`, 1 after `ramp_s`, back to 0 at `end`
+/// (linear ramps; a short interval peaks below 1). 0 outside `[start, end]`.
+fn ramp(t: f64, start: f64, end: f64, ramp_s: f64) -> f64 {
+    ((t - start) / ramp_s)
+        .min((end - t) / ramp_s)
+        .clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
@@ -324,7 +538,7 @@ mod tests {
             t: 0.0,
             base: [1.0, 0.0, std::f64::consts::PI],
             right_hand: Some([0.6, 0.1, 0.5]),
-            left_hand: None,
+            ..Keyframe::default()
         }]));
         let c = h.pose_at(0.0).to_vec();
         let ua = c[BodyPart::UpperArmRight as usize];
@@ -349,8 +563,7 @@ mod tests {
         let k = |t: f64, x: f64| Keyframe {
             t,
             base: [x, 0.0, 0.0],
-            right_hand: None,
-            left_hand: None,
+            ..Keyframe::default()
         };
         let script = HumanScript::new(-0.8, vec![k(0.0, 1.0), k(4.0, 2.0)])
             .unwrap()

@@ -39,10 +39,10 @@ pub use contact::{
 };
 pub use contact_log::ContactLog;
 pub use error::SimError;
-pub use human::{Human, HumanCapsule};
+pub use human::{ActivePush, Human, HumanCapsule, Reach, WAVE_BLEND_S};
 pub use link::{CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake};
 pub use messages::{fill_state, fill_truth, fill_world};
 pub use sim::{
-    ContactTruth, ExternalForce, Measurement, RobotCapsule, Simulator, Truth, MAX_CONTACTS,
-    MAX_JOINTS,
+    ContactTruth, ExternalForce, Measurement, RobotCapsule, ScriptedPush, Simulator, Truth,
+    MAX_CONTACTS, MAX_JOINTS,
 };

@@ -240,13 +240,13 @@ fn hand_pushing_the_forearm() {
                 t: 0.0,
                 base,
                 right_hand: Some([0.33, -0.25, 0.60]),
-                left_hand: None,
+                ..Keyframe::default()
             },
             Keyframe {
                 t: 0.3,
                 base,
                 right_hand: Some([0.33, -0.07, 0.60]),
-                left_hand: None,
+                ..Keyframe::default()
             },
         ],
     )
@@ -366,7 +366,7 @@ fn wrist_sensor_measures_contacts_beyond_the_wrist() {
             t: 0.0,
             base: [0.95, 0.0, std::f64::consts::PI],
             right_hand: Some([0.63, 0.0, 0.34]),
-            left_hand: None,
+            ..Keyframe::default()
         }],
     )
     .expect("script");

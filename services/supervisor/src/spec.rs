@@ -35,6 +35,7 @@ mod tests {
                 "sim",
                 "dynamics",
                 "perception",
+                "gesture",
                 "repulsion0",
                 "repulsion1",
                 "repulsion2",

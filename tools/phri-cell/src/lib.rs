@@ -6,7 +6,8 @@
 //! missing) and the simulated arm publish a [`JointState`]; the residual
 //! ([`phri_dynamics::DynamicsStep`]) answers it with a [`Residual`]; the camera,
 //! ingestion and the repulsion workers turn the world into
-//! [`RepulsionResult`]s; the controller reads them through
+//! [`RepulsionResult`]s (and the simulated tracker's skeletons the wave
+//! recogniser `phri-gesture` reads); the controller reads them through
 //! [`phri_control::inputs`] and answers with a [`TorqueCommand`], which the
 //! robot link takes at the next period. Time is the robot's: one
 //! [`Cell::tick`] is one control period. The camera samples the world every
@@ -22,24 +23,29 @@
 
 use std::collections::VecDeque;
 
+use phri_config::CollaborationConfig;
 use phri_config::Loaded;
+use phri_control::inputs::CollabInput;
 use phri_control::{write_messages, ControlInput, Controller, RepulsionInputs, Stamps};
 use phri_dynamics::DynamicsStep;
+use phri_gesture::WaveDetector;
 use phri_ipc::{
-    ControlMode, ControlStatus, FrameHeader, JointState, RepulsionResult, Residual, TorqueCommand,
-    WorldState, Zeroed,
+    ControlMode, ControlStatus, FrameHeader, HandObservation, HriRequest, JointState,
+    RepulsionResult, Residual, Skeleton, TorqueCommand, WorldState, Zeroed,
 };
 use phri_model::Model;
 use phri_perception::camera::CameraSim;
 use phri_perception::ingest::{Ingest, StateHistory};
+use phri_perception::mask::{hand_mask, hand_observation};
 use phri_perception::repulsion::Worker;
+use phri_perception::skeleton::SkeletonTracker;
 use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simulator};
 
 mod outage;
 mod summary;
 
 pub use outage::{Down, Outage, OutageError};
-pub use summary::{CellSummary, ContactEpisode};
+pub use summary::{CellSummary, ContactEpisode, GestureRequest};
 
 /// Why a cell could not be built or stepped: the service at fault and what it said.
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +97,10 @@ impl Default for CellOptions {
 struct InFlight {
     ready_ns: u64,
     results: Vec<RepulsionResult>,
+    /// the frame's skeleton, the request recognised on it, the refined hand
+    skeleton: Skeleton,
+    request: Option<HriRequest>,
+    hand: Option<HandObservation>,
 }
 
 /// The perception side: camera, ingestion and the repulsion workers.
@@ -106,6 +116,10 @@ struct Perception {
     next_capture_ns: u64,
     latency_ns: u64,
     in_flight: VecDeque<InFlight>,
+    /// the simulated body tracker and the wave recogniser on its skeletons
+    tracker: SkeletonTracker,
+    gesture: WaveDetector,
+    skeleton: Skeleton,
 }
 
 /// The cell. `sim`, `controller` and the messages are public for tests that look inside.
@@ -123,6 +137,13 @@ pub struct Cell {
     pub residual: Option<Residual>,
     /// the newest command the robot has received (kept while the controller is down)
     pub command: Option<TorqueCommand>,
+    /// the newest skeleton and refined hand the controller has received
+    pub skeleton: Option<Skeleton>,
+    pub hand: Option<HandObservation>,
+    /// requests that reached the controller since its last period
+    requests: Vec<HriRequest>,
+    /// the collaboration of `[collaboration]` (mask and hand refinement)
+    collab_cfg: CollaborationConfig,
     pub status: ControlStatus,
     link_out: LinkOutput,
     seq: u64,
@@ -163,7 +184,6 @@ impl Cell {
             let mut world = WorldState::zeroed();
             world.dof = n as u32;
             Some(Perception {
-                camera,
                 ingest: Ingest::new(model.clone(), &cfg.perception)
                     .map_err(|e| step_err("perception")(&e))?,
                 history: StateHistory::new(n, 200),
@@ -175,6 +195,10 @@ impl Cell {
                 next_capture_ns: 0,
                 latency_ns: (opts.perception_latency_ms * 1e6) as u64,
                 in_flight: VecDeque::new(),
+                tracker: SkeletonTracker::new(&cfg.skeleton, cfg.camera.intrinsics, camera.pose()),
+                gesture: WaveDetector::new(&cfg.gesture).map_err(|e| step_err("gesture")(&e))?,
+                skeleton: Skeleton::zeroed(),
+                camera,
             })
         } else {
             None
@@ -194,6 +218,10 @@ impl Cell {
             residual: None,
             command: None,
             status: ControlStatus::zeroed(),
+            skeleton: None,
+            hand: None,
+            requests: Vec::with_capacity(8),
+            collab_cfg: cfg.collaboration.clone(),
             seq: 0,
             t_ns: 0,
             outages: opts.outages.clone(),
@@ -245,6 +273,7 @@ impl Cell {
         if !self.down(Down::Control) {
             self.control()?;
         }
+        self.summary.mode(self.controller.mode(), self.t_ns);
         self.summary.account(
             &self.sim,
             self.controller.mode(),
@@ -292,9 +321,41 @@ impl Cell {
                 .step(&p.world, now, &mut p.frame, &mut header)
                 .map_err(|e| step_err("camera")(&e))?;
             let ready_ns = now + p.latency_ns;
-            p.ingest
+            p.tracker.step(
+                &p.world,
+                &header,
+                &p.frame,
+                p.period_ns as f64 * 1e-9,
+                &mut p.skeleton,
+            );
+            p.skeleton.published_ns = ready_ns;
+            let mut request = None;
+            if let Some(w) = p.gesture.step(&p.skeleton) {
+                self.summary.gesture(&w);
+                request = Some(phri_gesture::follow_request(&w, self.seq, ready_ns));
+            }
+            // ingestion masks the collaborative hand while a collaboration is on
+            let collab = self
+                .controller
+                .collaboration()
+                .filter(|c| c.machine().active());
+            let mask =
+                collab.and_then(|c| hand_mask(&p.skeleton, c.machine().part(), &self.collab_cfg));
+            p.ingest.set_mask(mask);
+            let outcome = p
+                .ingest
                 .step(&mut header, &p.frame, &p.history, ready_ns, &mut p.filtered)
                 .map_err(|e| step_err("perception")(&e))?;
+            let hand = match (collab, mask) {
+                (Some(c), Some(m)) => Some(hand_observation(
+                    &header,
+                    c.machine().part(),
+                    &m,
+                    &outcome.masked,
+                    ready_ns,
+                )),
+                _ => None,
+            };
             let mut results = Vec::with_capacity(p.workers.len());
             for w in p.workers.iter_mut() {
                 let msg = w
@@ -303,7 +364,13 @@ impl Cell {
                 msg.published_ns = ready_ns;
                 results.push(*msg);
             }
-            p.in_flight.push_back(InFlight { ready_ns, results });
+            p.in_flight.push_back(InFlight {
+                ready_ns,
+                results,
+                skeleton: p.skeleton,
+                request,
+                hand,
+            });
             self.summary.frame();
         }
         while p.in_flight.front().is_some_and(|x| x.ready_ns <= now) {
@@ -312,6 +379,13 @@ impl Cell {
                     self.repulsion
                         .push(r)
                         .map_err(|e| step_err("control")(&e))?;
+                }
+                self.skeleton = Some(done.skeleton);
+                if done.hand.is_some() {
+                    self.hand = done.hand;
+                }
+                if let Some(r) = done.request {
+                    self.requests.push(r);
                 }
             }
         }
@@ -322,9 +396,16 @@ impl Cell {
     fn control(&mut self) -> Result<(), CellError> {
         let n = self.sim.model().nv();
         let perception = self.avoidance.then_some(&self.repulsion);
-        let input = ControlInput::from_messages(&self.state, self.residual.as_ref(), perception, n)
-            .map_err(|e| step_err("control")(&e))?;
+        let mut input =
+            ControlInput::from_messages(&self.state, self.residual.as_ref(), perception, n)
+                .map_err(|e| step_err("control")(&e))?;
+        input.collab = CollabInput {
+            requests: &self.requests,
+            skeleton: self.skeleton.as_ref(),
+            hand: self.hand.as_ref(),
+        };
         self.controller.step(&input);
+        self.requests.clear();
         let stamps = Stamps {
             woke_ns: self.t_ns,
             done_ns: self.t_ns,
@@ -357,6 +438,12 @@ impl Cell {
     /// from scratch: warm-up, no memory of the momentum).
     pub fn restart_dynamics(&mut self, dynamics: DynamicsStep) {
         self.dynamics = dynamics;
+    }
+
+    /// A request reaches the controller at its next period (as `phri-hri` or
+    /// a voice recogniser would send it).
+    pub fn request(&mut self, r: HriRequest) {
+        self.requests.push(r);
     }
 
     /// The run so far.

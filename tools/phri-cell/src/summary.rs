@@ -39,6 +39,22 @@ pub struct CellSummary {
     pub braked_s: f64,
     /// the residual's collision flag rose while the person touched nothing
     pub false_detections: u64,
+    /// requests the wave recogniser made (`phri-gesture` on the simulated
+    /// tracker's skeletons)
+    pub gesture_requests: Vec<GestureRequest>,
+    /// every change of the controller's mode: (robot time \[s\], new mode)
+    pub modes: Vec<(f64, String)>,
+}
+
+/// One wave recognised in a run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GestureRequest {
+    /// capture time of the frame that completed the wave, robot time \[s\]
+    pub t_s: f64,
+    /// capture time of the wave's first counted reversal, robot time \[s\]
+    pub onset_s: f64,
+    /// the waving hand
+    pub part: String,
 }
 
 /// Running account of a run.
@@ -66,6 +82,22 @@ impl Accounting {
 
     pub(crate) fn frame(&mut self) {
         self.s.frames += 1;
+    }
+
+    pub(crate) fn mode(&mut self, mode: ControlMode, t_ns: u64) {
+        if self.s.modes.last().is_none_or(|(_, m)| m != mode.name()) {
+            self.s
+                .modes
+                .push((t_ns as f64 * 1e-9, mode.name().to_string()));
+        }
+    }
+
+    pub(crate) fn gesture(&mut self, w: &phri_gesture::Wave) {
+        self.s.gesture_requests.push(GestureRequest {
+            t_s: w.detected_ns as f64 * 1e-9,
+            onset_s: w.onset_ns as f64 * 1e-9,
+            part: w.part.name().to_string(),
+        });
     }
 
     pub(crate) fn account(

@@ -36,6 +36,30 @@ fn coexistence_is_contact_free_wherever_the_person_meets_the_cycle() {
             "the task went on: {} waypoints",
             s.waypoints
         );
+        // walking up, lingering and leaving is no wave
+        assert!(
+            s.gesture_requests.is_empty(),
+            "offset {offset}: false requests {:?}",
+            s.gesture_requests
+        );
+    }
+}
+
+#[test]
+fn reaching_into_the_robot_is_no_wave() {
+    // the person of `collision` walks in, reaches twice, steps back, leaves
+    for offset in [0.0, -2.0] {
+        let opts = CellOptions {
+            human_time_offset_s: offset,
+            ..CellOptions::default()
+        };
+        let s = run("collision", 16.0, &opts, &[]);
+        assert!(s.frames > 450, "the camera ran: {} frames", s.frames);
+        assert!(
+            s.gesture_requests.is_empty(),
+            "offset {offset}: false requests {:?}",
+            s.gesture_requests
+        );
     }
 }
 
@@ -110,4 +134,89 @@ fn malformed_outages_are_refused_with_the_format() {
         "control:0:1".parse::<Outage>().unwrap().service,
         Down::Control
     );
+}
+
+#[test]
+fn a_wave_of_the_simulated_person_is_recognised_on_the_simulated_tracker() {
+    // deploy/scenarios/wave.toml: the right hand waves from t = 3 s (raised
+    // over 0.5 s) at 2 Hz, 12 cm, until 6 s, then is held out and lowered;
+    // 4 reversals (`[gesture] reversals`) take 1.5 half periods after it is up
+    let s = run("wave", 12.0, &CellOptions::default(), &[]);
+    eprintln!("requests: {:?}", s.gesture_requests);
+    assert_eq!(s.gesture_requests.len(), 1, "{:?}", s.gesture_requests);
+    let w = &s.gesture_requests[0];
+    assert_eq!(w.part, "right_hand");
+    assert!(
+        w.t_s > 3.0 && w.t_s <= 4.8,
+        "recognised {:.2} s after the wave began at 3 s",
+        w.t_s - 3.0
+    );
+    // the left hand never waved, the held-out hand is no wave
+    assert!(w.onset_s >= 3.0, "{w:?}");
+}
+
+#[test]
+fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
+    // deploy/scenarios/collaboration.toml (paper Sect. VII-C, Figs. 8-9)
+    let mut c = common::cell("collaboration", &CellOptions::default(), &[]);
+    let mut ended_by = None;
+    for _ in 0..22_000 {
+        c.tick().unwrap();
+        let m = c
+            .controller
+            .collaboration()
+            .expect("collaboration enabled")
+            .machine();
+        if ended_by.is_none() && m.reason() != phri_ipc::CollabReason::None && !m.active() {
+            ended_by = Some((c.time_ns() as f64 * 1e-9, m.reason()));
+        }
+    }
+    let s = c.summary();
+    eprintln!("modes: {:?}", s.modes);
+    eprintln!("requests: {:?}, ended by {ended_by:?}", s.gesture_requests);
+    // the wave (from 3.0 s) is recognised and the approach starts within 2 s
+    assert_eq!(s.gesture_requests.len(), 1, "{:?}", s.gesture_requests);
+    let approach = s
+        .modes
+        .iter()
+        .find(|(_, m)| m == "approach")
+        .expect("an approach");
+    assert!(
+        approach.0 - 3.0 <= 2.0,
+        "approach {:.2} s after the wave",
+        approach.0 - 3.0
+    );
+    // approach → contact → follow → contact again, then recover and the task
+    let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
+    let first = |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
+    let a = first("approach", 0).unwrap();
+    let c1 = first("contact", a).expect("a first contact");
+    let f = first("follow", c1).expect("a follow");
+    let c2 = first("contact", f).expect("a contact after the follow");
+    let r = first("recover", c2).expect("the end");
+    assert!(first("task", r).is_some(), "the task resumes: {order:?}");
+    assert!(!order.contains(&"reaction"), "no reaction: {order:?}");
+    assert!(!order.contains(&"protective_stop"), "no stop: {order:?}");
+    // the wrist push (15.5-16.5 s) ends it
+    let (t_end, why) = ended_by.expect("the collaboration ended");
+    assert_eq!(why, phri_ipc::CollabReason::WristPush);
+    assert!((15.5..16.5).contains(&t_end), "ended at {t_end:.2} s");
+    // only intended contacts: the right hand on the end effector, the push
+    assert_eq!(s.unintended_contacts, 0, "{:?}", s.contacts);
+    let hand: Vec<_> = s
+        .contacts
+        .iter()
+        .filter(|c| c.part == "hand_right")
+        .collect();
+    assert!(
+        hand.iter().any(|c| c.t_start_s < 11.0),
+        "first contact: {hand:?}"
+    );
+    assert!(
+        hand.iter().any(|c| c.t_start_s > 12.0),
+        "second contact: {hand:?}"
+    );
+    assert!(hand.iter().all(|c| c.link == "lwr_link_7" && c.intended));
+    let peak = hand.iter().map(|c| c.peak_force_n).fold(0.0, f64::max);
+    assert!(peak <= 70.0, "peak intended force {peak:.1} N");
 }

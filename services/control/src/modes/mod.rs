@@ -8,11 +8,13 @@
 //! | [`reaction`] | the configured reaction to a detected collision (eqs. 9, 13, stop, float, retreat) |
 //! | [`protective_stop`] | hold while a safety input is stale |
 //! | [`recover`] | hold (evading under perception) until the residual stays quiet, then resume |
+//! | [`collaborate`] | `approach` the collaborative hand, `contact` (admittance on F̂), `follow` it (paper Sect. VI) |
 //!
 //! A behaviour writes the joint reference and either an acceleration for the
 //! torque law or a Cartesian reference of the end effector, which the
 //! avoidance stage resolves (SNS under perception, CLIK without).
 
+pub mod collaborate;
 pub mod protective_stop;
 pub mod reaction;
 pub mod recover;
@@ -20,7 +22,7 @@ pub mod sync;
 pub mod task;
 
 use nalgebra::Vector3;
-use phri_ipc::ControlMode;
+use phri_ipc::{CollabPhase, ControlMode};
 
 /// What the transition of one period looks at.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -39,6 +41,14 @@ pub struct Conditions {
     pub reaction_done: bool,
     /// recovering: the residual stayed quiet for `resume_quiet_s` and `resume` is on
     pub may_resume: bool,
+    /// the collaboration's phase (`None`: no collaboration)
+    pub collab: Option<CollabPhase>,
+    /// collaborating: the residual the intended contact does not explain is a collision
+    pub collab_collision: bool,
+    /// a collaboration just ended: the collision flag waits for the residual to decay
+    pub rearming: bool,
+    /// a `stop` request
+    pub stop_requested: bool,
 }
 
 /// The mode of this period, from the mode of the last one.
@@ -50,22 +60,40 @@ pub struct Conditions {
 /// - a collision during the task or while recovering starts the reaction;
 /// - the task runs as `task` with fresh perception and `slow` without;
 /// - a finished reaction without contact recovers;
-/// - recovering, a quiet residual resumes the task.
+/// - recovering, a quiet residual resumes the task;
+/// - an accepted request turns the task into the collaboration's phase
+///   (approach, contact, follow); collaborating, only what the intended
+///   contact does not explain is a collision; when the collaboration ends the
+///   arm recovers, with the collision flag waiting until the residual decays;
+/// - a `stop` request is a protective stop.
 pub fn next_mode(mode: ControlMode, c: &Conditions) -> ControlMode {
     use ControlMode::*;
     match mode {
         Sync if c.residual_fresh && c.perception_fresh => Task,
         Sync => Sync,
-        _ if !c.residual_fresh || c.perception_stop => ProtectiveStop,
+        _ if !c.residual_fresh || c.perception_stop || c.stop_requested => ProtectiveStop,
         ProtectiveStop => Recover,
         Task | Slow if c.collision => Reaction,
+        Task | Slow if c.collab.is_some() => collab_mode(c.collab),
         Task | Slow if c.perception_fresh => Task,
         Task | Slow => Slow,
+        Approach | Contact | Follow if c.collab_collision => Reaction,
+        Approach | Contact | Follow if c.collab.is_none() => Recover,
+        Approach | Contact | Follow => collab_mode(c.collab),
         Reaction if c.reaction_done && !c.contact => Recover,
         Reaction => Reaction,
-        Recover if c.collision => Reaction,
+        Recover if c.collision && !c.rearming => Reaction,
         Recover if c.may_resume && !c.contact => Task,
         Recover => Recover,
+    }
+}
+
+/// The mode of a collaboration phase.
+fn collab_mode(phase: Option<CollabPhase>) -> ControlMode {
+    match phase {
+        Some(CollabPhase::Contact) => ControlMode::Contact,
+        Some(CollabPhase::Follow) => ControlMode::Follow,
+        _ => ControlMode::Approach,
     }
 }
 
@@ -80,6 +108,10 @@ pub struct CartesianRef {
     pub speed_scale: f64,
     /// the task's path time \[s\], to record in the retreat's history (`None`: not the task)
     pub path_time: Option<f64>,
+    /// collaborating: the hand the end effector goes to \[m\], base frame;
+    /// obstacles behind it (seen from the end effector) do not repel the end
+    /// effector, everything nearer does, and every other control point avoids all
+    pub collab_hand: Option<Vector3<f64>>,
 }
 
 /// What a behaviour leaves for the rest of the period.
@@ -105,6 +137,10 @@ mod tests {
         perception_stop: false,
         reaction_done: false,
         may_resume: false,
+        collab: None,
+        collab_collision: false,
+        rearming: false,
+        stop_requested: false,
     };
 
     /// `fresh` with the named conditions changed.
@@ -125,6 +161,12 @@ mod tests {
                 }
                 "done" => c.reaction_done = true,
                 "quiet" => c.may_resume = true,
+                "approach" => c.collab = Some(CollabPhase::Approach),
+                "touch" => c.collab = Some(CollabPhase::Contact),
+                "follow" => c.collab = Some(CollabPhase::Follow),
+                "unexplained" => c.collab_collision = true,
+                "rearming" => c.rearming = true,
+                "stop" => c.stop_requested = true,
                 other => panic!("unknown condition {other}"),
             }
         }
@@ -177,6 +219,33 @@ mod tests {
             (Recover, &["contact"], Recover),
             (Recover, &["quiet"], Task),
             (Recover, &["quiet", "blind"], Task),
+            // collaboration: an accepted request turns the task into its phase
+            (Task, &["approach"], Approach),
+            (Slow, &["approach", "blind"], Approach),
+            (Task, &["approach", "collision"], Reaction),
+            (Approach, &["touch"], Contact),
+            (Contact, &["follow"], Follow),
+            (Follow, &["touch"], Contact),
+            // collaborating, the intended contact is no collision ...
+            (Contact, &["touch", "collision"], Contact),
+            // ... what it does not explain is
+            (Contact, &["touch", "unexplained"], Reaction),
+            (Approach, &["approach", "unexplained"], Reaction),
+            // stale inputs and stop requests stop it
+            (Contact, &["touch", "stale"], ProtectiveStop),
+            (Follow, &["follow", "blind-stop"], ProtectiveStop),
+            (Approach, &["approach", "stop"], ProtectiveStop),
+            (Task, &["stop"], ProtectiveStop),
+            // it ends into recover, where detection re-arms once the residual decayed
+            (Contact, &["collision"], Recover),
+            (Follow, &[], Recover),
+            (Recover, &["collision", "rearming"], Recover),
+            (Recover, &["collision", "rearming", "quiet"], Recover),
+            (Recover, &["quiet", "rearming"], Task),
+            // a request elsewhere changes nothing
+            (Reaction, &["approach"], Reaction),
+            (Recover, &["approach"], Recover),
+            (ProtectiveStop, &["approach"], Recover),
         ];
         for (from, conditions, to) in table {
             assert_eq!(

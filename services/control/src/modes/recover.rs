@@ -31,6 +31,7 @@ pub fn step(
             xd_d: Vector3::zeros(),
             speed_scale: 1.0,
             path_time: None,
+            collab_hand: None,
         });
     }
     reference.hold(q, qd, gains, accel);

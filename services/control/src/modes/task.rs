@@ -121,6 +121,7 @@ impl TaskState {
             xd_d,
             speed_scale,
             path_time: Some(self.s),
+            collab_hand: None,
         }
     }
 }

@@ -3,17 +3,23 @@
 //! them, removes the robot's own pixels at the joint state nearest the
 //! capture time ([`Ingest`]), and publishes `perception/depth` (a loaned
 //! `[u16]` slice with a header: sequence, capture time, intrinsics, camera
-//! pose, joint state used).
+//! pose, joint state used). While a collaboration is on (`collab/state`) it
+//! removes the collaborative hand of the newest `perception/skeleton` from
+//! the frame (the paper's Fig. 5) and publishes the hand refined from those
+//! pixels on `perception/hand`.
 
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_config::DepthSource;
+use phri_config::{CollaborationConfig, DepthSource};
 use phri_ipc::{
-    FrameHeader, FramePublisher, FrameSubscriber, IpcError, Queue, CAMERA_DEPTH, FRAME_PIXELS,
-    PERCEPTION_DEPTH, ROBOT_STATE,
+    CollabPart, CollabPhase, CollabState, FrameHeader, FramePublisher, FrameSubscriber,
+    HandObservation, IpcError, LatestReader, Publisher, Queue, Skeleton, CAMERA_DEPTH,
+    COLLAB_STATE, FRAME_PIXELS, PERCEPTION_DEPTH, PERCEPTION_HAND, PERCEPTION_SKELETON,
+    ROBOT_STATE,
 };
+use phri_perception::mask::{hand_mask, hand_observation};
 use phri_perception::{Ingest, PngReplay, RateLimited, StateHistory, Ticks};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
@@ -37,6 +43,15 @@ struct Out {
     history: StateHistory,
     frames: FramePublisher,
     refused: u64,
+    collab: Option<Collab>,
+}
+
+/// What masking the collaborative hand reads and publishes.
+struct Collab {
+    cfg: CollaborationConfig,
+    states: LatestReader<CollabState>,
+    skeletons: LatestReader<Skeleton>,
+    hands: Publisher<HandObservation>,
 }
 
 impl Out {
@@ -45,14 +60,34 @@ impl Out {
     fn handle(&mut self, header: &mut FrameHeader, input: &[u16]) -> Result<(), IpcError> {
         let mut sample = self.frames.loan(input.len())?;
         let now = self.history.newest_ns();
+        // the collaborative hand, while a collaboration is on
+        let mut masking = None;
+        if let Some(c) = self.collab.as_mut() {
+            c.states.update()?;
+            c.skeletons.update()?;
+            let part = c
+                .states
+                .get()
+                .filter(|s| s.phase != CollabPhase::Idle as u32)
+                .and_then(|s| CollabPart::try_from(s.human_part).ok());
+            masking = match (part, c.skeletons.get()) {
+                (Some(p), Some(sk)) => hand_mask(sk, p, &c.cfg).map(|m| (p, m)),
+                _ => None,
+            };
+        }
+        self.ingest.set_mask(masking.map(|(_, m)| m));
         match self
             .ingest
             .step(header, input, &self.history, now, sample.payload_mut())
         {
-            Ok(_) => {
+            Ok(outcome) => {
                 header.published_ns = now_ns();
                 *sample.user_header_mut() = *header;
                 self.frames.send(sample)?;
+                if let (Some(c), Some((part, mask))) = (self.collab.as_ref(), masking) {
+                    let h = hand_observation(header, part, &mask, &outcome.masked, now_ns());
+                    c.hands.publish(&h)?;
+                }
             }
             Err(e) => {
                 self.refused += 1;
@@ -89,6 +124,15 @@ fn body() -> Result<(), Box<dyn Error>> {
         history: StateHistory::new(n, 2000),
         frames: PERCEPTION_DEPTH.frame_publisher(&node, pixels_max)?,
         refused: 0,
+        collab: match ctx.config().collaboration.enabled {
+            true => Some(Collab {
+                cfg: ctx.config().collaboration.clone(),
+                states: COLLAB_STATE.latest_reader(&node)?,
+                skeletons: PERCEPTION_SKELETON.latest_reader(&node)?,
+                hands: PERCEPTION_HAND.publisher(&node)?,
+            }),
+            false => None,
+        },
     };
     let mut source = match cfg.source {
         DepthSource::Camera => {

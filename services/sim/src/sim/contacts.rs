@@ -3,6 +3,8 @@
 //! contact force ([`crate::contact`], with the body region's
 //! [`crate::stiffness_n_per_m`]) whose joint torque `J_cᵀ F` enters the
 //! dynamics (`truth.tau_ext`) and, beyond the wrist, the force/torque sensor.
+//! A scripted push ([`super::ScriptedPush`]) is one more contact, of the
+//! pushing hand on its link, with the scripted force.
 
 use nalgebra::Vector3;
 use phri_model::spatial::Force;
@@ -11,7 +13,7 @@ use phri_model::{forward_kinematics, frame_placement, CollisionObject, Data, Mod
 use super::truth::keep_deepest;
 use super::{ContactTruth, Simulator};
 use crate::contact::{capsule_distance, contact_force_magnitude, stiffness_n_per_m};
-use crate::human::HumanCapsule;
+use crate::human::{body, HumanCapsule, Reach};
 
 /// Human–robot capsule pairs whose bounding spheres are farther apart than
 /// this \[m\] are not measured in intermediate sub-steps: neither body moves
@@ -101,7 +103,56 @@ impl Simulator {
         let Some(human) = self.human.as_mut() else {
             return;
         };
-        let capsules: &[HumanCapsule] = human.pose_at(self.t + self.human_time_offset);
+        let t_human = self.t + self.human_time_offset;
+        // a scripted push: a contact of the hand on the link with the
+        // scripted force, the hand put there
+        let mut pushing = None;
+        let mut reach = None;
+        let active = human
+            .push_at(t_human)
+            .map(|a| (a.keyframe, a.ramp, a.push.hand));
+        if let Some((keyframe, ramp, hand)) = active {
+            if let Some(sp) = self.scripted_pushes.get(keyframe).and_then(Option::as_ref) {
+                let point = frame_placement(&self.model, &self.data, sp.frame).apply(&sp.point);
+                let base = human.base_at(t_human);
+                let horizontal = Vector3::new(point.x - base[0], point.y - base[1], 0.0);
+                let d = if horizontal.norm() > 1e-6 {
+                    horizontal.normalize()
+                } else {
+                    Vector3::new(base[2].cos(), base[2].sin(), 0.0)
+                };
+                let magnitude = sp.force_n * ramp;
+                let force = d * magnitude;
+                apply_force(
+                    &self.model,
+                    &self.data,
+                    &mut self.truth.tau_ext,
+                    &mut self.wrench,
+                    sp.body,
+                    point,
+                    force,
+                );
+                self.truth.contact_pairs += 1;
+                keep_deepest(
+                    &mut self.truth.contacts,
+                    ContactTruth {
+                        collision: sp.collision,
+                        part: sp.part,
+                        intended: sp.intended,
+                        force,
+                        point,
+                        depth: magnitude / stiffness_n_per_m(sp.part),
+                    },
+                );
+                pushing = Some(sp.part);
+                reach = self.robot.get(sp.collision).map(|rc| Reach {
+                    hand,
+                    point: hand_against(point, d, rc),
+                    weight: ramp,
+                });
+            }
+        }
+        let capsules: &[HumanCapsule] = human.pose_reaching(t_human, reach);
         let n_robot = self.robot.len();
         for (hi, hc) in capsules.iter().enumerate() {
             let k = stiffness_n_per_m(hc.part);
@@ -127,7 +178,8 @@ impl Simulator {
                 self.truth.min_distance = self.truth.min_distance.min(cd.distance);
                 let depth = -cd.distance;
                 let magnitude = contact_force_magnitude(depth, rate, k, self.cfg.contact_damping);
-                if depth <= 0.0 {
+                // the pushing hand's contacts are the scripted push's
+                if depth <= 0.0 || pushing == Some(hc.part) {
                     continue;
                 }
                 self.truth.contact_pairs += 1;
@@ -155,6 +207,33 @@ impl Simulator {
             }
         }
     }
+}
+
+/// Centre \[m\] of a hand pushing along `d` at `point` on robot capsule
+/// `rc`: on the line through the point, back along `−d` until the hand's
+/// sphere touches the capsule (at the point itself if that is already
+/// outside it).
+fn hand_against(point: Vector3<f64>, d: Vector3<f64>, rc: &RobotCapsule) -> Vector3<f64> {
+    let touch = rc.radius + body::R_HAND;
+    let axis = rc.b - rc.a;
+    let len2 = axis.norm_squared();
+    let mut back = 0.0;
+    // the distance to the axis grows at most as fast as `back`: steps of the
+    // shortfall approach the touching point from inside, never overshoot
+    for _ in 0..32 {
+        let c = point - d * back;
+        let s = if len2 > 0.0 {
+            ((c - rc.a).dot(&axis) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let short = touch - (c - (rc.a + axis * s)).norm();
+        if short <= 1e-7 {
+            break;
+        }
+        back += short;
+    }
+    point - d * back
 }
 
 /// Add a force `force` \[N\] (base frame) acting at `point` \[m\] (base frame)

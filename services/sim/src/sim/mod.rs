@@ -37,6 +37,8 @@ pub const MAX_CONTACTS: usize = phri_ipc::MAX_CONTACTS;
 /// A force on the arm that is not a contact with the scripted person's
 /// capsules: it adds to the external joint torque (and to the wrist sensor's
 /// reading beyond the last joint) but to no contact of the ground truth.
+/// (A push of the scenario's script, `push = {…}` in a keyframe, is a
+/// ground-truth contact instead: see [`ScriptedPush`].)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExternalForce {
     /// link frame it acts on (`Model::frame_id`)
@@ -45,6 +47,72 @@ pub struct ExternalForce {
     pub point: nalgebra::Vector3<f64>,
     /// force on the robot \[N\], base frame
     pub force: nalgebra::Vector3<f64>,
+}
+
+/// A keyframe's `push` ([`phri_config::Push`]) resolved against the robot
+/// model. While it acts ([`crate::Human::push_at`]), each contact evaluation
+/// applies `F = ramp · force_n · d` at the point, `d` the horizontal unit
+/// vector from the person's base position towards the point (the person's
+/// heading if the point is right above it), and reports it in
+/// [`Truth::contacts`] as a contact of the hand on the link: `collision` the
+/// link's collision capsule, `intended` as scripted, `depth = |F| / k` with
+/// `k` the hand's stiffness ([`crate::stiffness_n_per_m`]), the depth of a
+/// compliant contact of that force. The hand is put on the link (its surface
+/// on the capsule's, on the line through the point along `−d`), and its own
+/// capsule contacts give no force meanwhile (the push replaces them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScriptedPush {
+    /// link frame (`Model::frame_id`) and its body (`None`: the base)
+    pub frame: usize,
+    pub body: Option<usize>,
+    /// index into `model.collisions` of the capsule reported as touched: the
+    /// link's own, else the first on the same body
+    pub collision: usize,
+    /// point of application \[m\], link frame
+    pub point: nalgebra::Vector3<f64>,
+    /// \[N\] once ramped up
+    pub force_n: f64,
+    pub part: BodyPart,
+    pub intended: bool,
+}
+
+impl ScriptedPush {
+    /// Resolve keyframe `index`'s push against `model`.
+    fn resolve(
+        model: &Model,
+        index: usize,
+        push: &phri_config::Push,
+    ) -> Result<ScriptedPush, SimError> {
+        let err = |reason: String| SimError::PushLink {
+            index,
+            link: push.link.clone(),
+            reason,
+        };
+        let frame = model.frame_id(&push.link).map_err(|_| {
+            let names: Vec<&str> = model.frames.iter().map(|f| f.name.as_str()).collect();
+            err(format!(
+                "is not a link of robot '{}' (links: {})",
+                model.name,
+                names.join(", ")
+            ))
+        })?;
+        let body = model.frames[frame].body;
+        let collision = model
+            .collisions
+            .iter()
+            .position(|c| c.link == push.link)
+            .or_else(|| model.collisions.iter().position(|c| c.body == body))
+            .ok_or_else(|| err("has no collision capsule on its body".into()))?;
+        Ok(ScriptedPush {
+            frame,
+            body,
+            collision,
+            point: nalgebra::Vector3::from(push.point),
+            force_n: push.force_n,
+            part: push.hand.part(),
+            intended: push.intended,
+        })
+    }
 }
 
 /// The simulated cell: one arm and at most one scripted human. Cloning gives
@@ -91,6 +159,8 @@ pub struct Simulator {
     /// an external force on the arm besides the person's contacts (a test's
     /// wall, a push), held until changed
     push: Option<ExternalForce>,
+    /// the script's pushes, by keyframe (`None`: that keyframe pushes nothing)
+    scripted_pushes: Vec<Option<ScriptedPush>>,
     meas: Measurement,
     truth: Truth,
 }
@@ -100,6 +170,13 @@ impl Simulator {
     /// contacts with `collaborative_parts` are marked intended, and `seed`
     /// seeds the torque noise (`None`: `cfg.seed`). The arm starts at
     /// `cfg.q0` at rest, at time 0.
+    ///
+    /// `intended` of a capsule contact depends on the human part alone: a
+    /// contact of a collaborative part with any robot capsule is intended,
+    /// every other contact is not. A scripted push carries its own
+    /// `intended` (the scenario defaults it to the same rule). The links of
+    /// the script's pushes are checked against `model` here
+    /// ([`SimError::PushLink`]).
     pub fn new(
         model: Model,
         cfg: SimConfig,
@@ -123,6 +200,20 @@ impl Simulator {
             .enumerate()
             .map(|(collision, c)| RobotCapsule::new(collision, c))
             .collect::<Vec<_>>();
+        let scripted_pushes = match &human {
+            None => Vec::new(),
+            Some(script) => script
+                .keyframes()
+                .iter()
+                .enumerate()
+                .map(|(i, k)| {
+                    k.push
+                        .as_ref()
+                        .map(|p| ScriptedPush::resolve(&model, i, p))
+                        .transpose()
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+        };
         let mut collaborative = [false; BodyPart::ALL.len()];
         for p in collaborative_parts {
             collaborative[*p as usize] = true;
@@ -164,6 +255,7 @@ impl Simulator {
             prev_distance: vec![0.0; n_pairs],
             wrench: [0.0; 6],
             push: None,
+            scripted_pushes,
             meas: Measurement {
                 t_s: 0.0,
                 q: vec![0.0; n],

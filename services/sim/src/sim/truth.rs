@@ -25,7 +25,9 @@ pub struct Measurement {
     pub wrench: Option<[f64; 6]>,
 }
 
-/// One contact between the human and a robot capsule (ground truth).
+/// One contact between the human and a robot capsule (ground truth): a
+/// penetration of the capsules, or a scripted push of a hand on a link
+/// ([`super::ScriptedPush`]: `depth` is then the force over the hand's stiffness).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactTruth {
     /// index into `model.collisions` of the robot capsule (link name via
@@ -33,7 +35,10 @@ pub struct ContactTruth {
     pub collision: usize,
     /// the human body part
     pub part: BodyPart,
-    /// contact with a collaborative part (intended)
+    /// intended (collaboration) rather than a collision: a capsule contact
+    /// is intended when the human part is one of the scenario's
+    /// `collaborative_parts` (whatever robot capsule it touches); a scripted
+    /// push as its keyframe says
     pub intended: bool,
     /// force on the robot \[N\], base frame
     pub force: Vector3<f64>,
@@ -69,7 +74,8 @@ pub struct Truth {
     pub tau_friction: Vec<f64>,
     /// the deepest contacts at the current state (at most [`MAX_CONTACTS`])
     pub contacts: Vec<ContactTruth>,
-    /// number of penetrating human–robot capsule pairs (may exceed `contacts.len()`)
+    /// number of penetrating human–robot capsule pairs, plus one while a
+    /// scripted push acts (may exceed `contacts.len()`)
     pub contact_pairs: usize,
     /// smallest surface distance between any human and robot capsule \[m\],
     /// negative when penetrating; +∞ without a human

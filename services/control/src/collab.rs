@@ -1,0 +1,463 @@
+//! The collaboration's phases (paper Sect. VI) as a pure machine: requests
+//! in, the phase, the collaborative part and the reason of every change out.
+//! The controller feeds it what it measured in the period ([`Observation`])
+//! and runs the behaviour of the phase it returns; nothing here moves the arm.
+//!
+//! | from | to | when |
+//! | --- | --- | --- |
+//! | idle | approach | a `begin`/`follow` request for a well-tracked hand, the robot neither reacting nor stopped |
+//! | approach | contact | surface gap ≤ `contact_gap_m` or ‖F̂‖ ≥ `contact_force_n` |
+//! | contact | follow | the hand more than `follow_gap_m` away and no force |
+//! | follow | contact | as approach → contact |
+//! | any | idle | a wrist push, an `end`/`stop` request, the hand unseen for `hand_lost_s`, ‖F̂‖ above the force limit, a collision elsewhere, a stale safety input |
+
+use phri_config::CollaborationConfig;
+use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
+
+/// Least time in contact before the hand counts as moved away \[s\]: a
+/// contact is a touch, not one noisy sample.
+const MIN_CONTACT_S: f64 = 0.3;
+
+/// What the controller measured in this period.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Observation {
+    /// controller time \[s\]
+    pub t: f64,
+    /// the collaborative hand was seen in this period (a fresh observation)
+    pub hand_seen: bool,
+    /// surface gap between the robot part and the hand \[m\] (centre distance
+    /// less both radii; negative: they overlap)
+    pub gap_m: f64,
+    /// ‖F̂‖ at the collaborative contact \[N\]
+    pub force_n: f64,
+    /// the residual has the pattern of a push on the wrist, confirmed by a
+    /// human part seen near the wrist, for `wrist_hold_s`
+    pub wrist_push: bool,
+    /// the residual the intended contact does not explain crosses the
+    /// collision thresholds
+    pub collision: bool,
+    /// a safety input (residual, perception) is stale
+    pub stale: bool,
+}
+
+/// Where the rest of the robot stands when a request arrives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RobotState {
+    /// the task (or holding): a collaboration may start
+    Available,
+    /// reacting to a collision or recovering from it
+    Reacting,
+    /// a protective stop: a safety input is stale
+    Stopped,
+}
+
+/// The answer to one request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Answer {
+    pub accepted: bool,
+    pub reason: CollabReason,
+}
+
+/// The machine's state.
+#[derive(Clone, Debug)]
+pub struct CollabMachine {
+    cfg: CollaborationConfig,
+    phase: CollabPhase,
+    reason: CollabReason,
+    part: CollabPart,
+    /// the part of the last collaboration, for `begin` without a part
+    last_part: CollabPart,
+    person: u32,
+    /// last time the hand was seen \[s\]
+    hand_seen_t: f64,
+    /// the phase changed at \[s\]
+    since: f64,
+    /// a `stop` request asked for a protective stop
+    stop_requested: bool,
+}
+
+impl CollabMachine {
+    pub fn new(cfg: &CollaborationConfig) -> CollabMachine {
+        CollabMachine {
+            cfg: cfg.clone(),
+            phase: CollabPhase::Idle,
+            reason: CollabReason::None,
+            part: CollabPart::None,
+            last_part: CollabPart::None,
+            person: u32::MAX,
+            hand_seen_t: 0.0,
+            since: 0.0,
+            stop_requested: false,
+        }
+    }
+
+    pub fn phase(&self) -> CollabPhase {
+        self.phase
+    }
+
+    /// Why the phase last changed.
+    pub fn reason(&self) -> CollabReason {
+        self.reason
+    }
+
+    /// The collaborative human part (`None` while idle).
+    pub fn part(&self) -> CollabPart {
+        self.part
+    }
+
+    /// The tracker's id of the collaborating person (`u32::MAX`: whoever shows the part).
+    pub fn person(&self) -> u32 {
+        self.person
+    }
+
+    /// Collaborating: approach, contact or follow.
+    pub fn active(&self) -> bool {
+        self.phase != CollabPhase::Idle
+    }
+
+    /// Time in the current phase \[s\] at controller time `t`.
+    pub fn in_phase_s(&self, t: f64) -> f64 {
+        (t - self.since).max(0.0)
+    }
+
+    /// A `stop` request was accepted since the last call (the controller
+    /// enters its protective stop); reading clears it.
+    pub fn take_stop(&mut self) -> bool {
+        std::mem::take(&mut self.stop_requested)
+    }
+
+    /// The largest ‖F̂‖ allowed on the collaborative part \[N\]: the configured
+    /// fraction of its body region's ISO/TS 15066 quasi-static limit (a hand).
+    pub fn force_limit_n(&self) -> f64 {
+        self.cfg.force_limit_fraction * self.cfg.iso_hand_n
+    }
+
+    fn enter(&mut self, phase: CollabPhase, reason: CollabReason, t: f64) {
+        if phase == CollabPhase::Idle && self.part != CollabPart::None {
+            self.last_part = self.part;
+            self.part = CollabPart::None;
+            self.person = u32::MAX;
+        }
+        self.phase = phase;
+        self.reason = reason;
+        self.since = t;
+    }
+
+    /// Answer `req` at controller time `t`; `hand_confidence` is the
+    /// tracker's confidence of the hand the request names (or of the last
+    /// part for `begin` without one), 0 when not tracked.
+    pub fn request(
+        &mut self,
+        req: &HriRequest,
+        robot: RobotState,
+        hand_confidence: f64,
+        t: f64,
+    ) -> Answer {
+        let refuse = |reason| Answer {
+            accepted: false,
+            reason,
+        };
+        let Ok(kind) = RequestKind::try_from(req.kind) else {
+            return refuse(CollabReason::None);
+        };
+        let named = CollabPart::try_from(req.part).unwrap_or(CollabPart::None);
+        match kind {
+            RequestKind::Stop => {
+                if self.active() {
+                    self.enter(CollabPhase::Idle, CollabReason::StopRequest, t);
+                }
+                self.stop_requested = true;
+                Answer {
+                    accepted: true,
+                    reason: CollabReason::StopRequest,
+                }
+            }
+            RequestKind::End => {
+                if !self.active() {
+                    return refuse(CollabReason::NotCollaborating);
+                }
+                self.enter(CollabPhase::Idle, CollabReason::EndRequest, t);
+                Answer {
+                    accepted: true,
+                    reason: CollabReason::EndRequest,
+                }
+            }
+            RequestKind::Begin | RequestKind::Follow => {
+                let part = match named {
+                    CollabPart::None if self.active() => self.part,
+                    CollabPart::None => self.last_part,
+                    p => p,
+                };
+                if part == CollabPart::None {
+                    return refuse(CollabReason::NoPart);
+                }
+                match robot {
+                    RobotState::Reacting => return refuse(CollabReason::Reacting),
+                    RobotState::Stopped => return refuse(CollabReason::ProtectiveStop),
+                    RobotState::Available => {}
+                }
+                if !(hand_confidence >= self.cfg.min_hand_confidence) {
+                    return refuse(CollabReason::HandNotTracked);
+                }
+                self.part = part;
+                self.person = req.person;
+                self.hand_seen_t = t;
+                if !self.active() {
+                    self.enter(CollabPhase::Approach, CollabReason::Accepted, t);
+                }
+                Answer {
+                    accepted: true,
+                    reason: CollabReason::Accepted,
+                }
+            }
+        }
+    }
+
+    /// One period: the phase to run, after the changes `obs` calls for.
+    pub fn step(&mut self, obs: &Observation) -> CollabPhase {
+        if !self.active() {
+            return self.phase;
+        }
+        if obs.hand_seen {
+            self.hand_seen_t = obs.t;
+        }
+        // the ends, most severe first
+        let end = if obs.stale {
+            Some(CollabReason::Stale)
+        } else if obs.collision {
+            Some(CollabReason::Collision)
+        } else if obs.force_n > self.force_limit_n() {
+            Some(CollabReason::ForceLimit)
+        } else if obs.wrist_push {
+            Some(CollabReason::WristPush)
+        } else if obs.t - self.hand_seen_t > self.cfg.hand_lost_s {
+            Some(CollabReason::HandLost)
+        } else {
+            None
+        };
+        if let Some(reason) = end {
+            self.enter(CollabPhase::Idle, reason, obs.t);
+            return self.phase;
+        }
+        // a force alone is no contact far from the hand (the residual of a
+        // moving arm is never quite zero)
+        let touching = obs.gap_m <= self.cfg.contact_gap_m
+            || (obs.force_n >= self.cfg.contact_force_n && obs.gap_m <= self.cfg.follow_gap_m);
+        match self.phase {
+            CollabPhase::Approach | CollabPhase::Follow if touching => {
+                self.enter(CollabPhase::Contact, CollabReason::ContactMade, obs.t)
+            }
+            CollabPhase::Contact
+                if obs.gap_m > self.cfg.follow_gap_m
+                    && obs.force_n < self.cfg.contact_force_n
+                    && obs.t - self.since >= MIN_CONTACT_S =>
+            {
+                self.enter(CollabPhase::Follow, CollabReason::HandMovedAway, obs.t)
+            }
+            _ => {}
+        }
+        self.phase
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_config::Config;
+    use phri_ipc::{RequestSource, Zeroed};
+
+    fn req(kind: RequestKind, part: CollabPart) -> HriRequest {
+        let mut r = HriRequest::zeroed();
+        r.source = RequestSource::Cli as u32;
+        r.kind = kind as u32;
+        r.part = part as u32;
+        r.person = 1;
+        r
+    }
+
+    fn machine() -> CollabMachine {
+        CollabMachine::new(&Config::defaults().collaboration)
+    }
+
+    fn seen(t: f64, gap_m: f64, force_n: f64) -> Observation {
+        Observation {
+            t,
+            hand_seen: true,
+            gap_m,
+            force_n,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn requests_are_accepted_only_for_a_tracked_hand_of_an_available_robot() {
+        let mut m = machine();
+        let follow = req(RequestKind::Follow, CollabPart::RightHand);
+        for (robot, conf, reason) in [
+            (RobotState::Reacting, 1.0, CollabReason::Reacting),
+            (RobotState::Stopped, 1.0, CollabReason::ProtectiveStop),
+            (RobotState::Available, 0.2, CollabReason::HandNotTracked),
+            (
+                RobotState::Available,
+                f64::NAN,
+                CollabReason::HandNotTracked,
+            ),
+        ] {
+            let a = m.request(&follow, robot, conf, 0.0);
+            assert_eq!((a.accepted, a.reason), (false, reason));
+            assert_eq!(m.phase(), CollabPhase::Idle);
+        }
+        // nothing to end, no part to begin with
+        assert_eq!(
+            m.request(
+                &req(RequestKind::End, CollabPart::None),
+                RobotState::Available,
+                1.0,
+                0.0
+            )
+            .reason,
+            CollabReason::NotCollaborating
+        );
+        assert_eq!(
+            m.request(
+                &req(RequestKind::Begin, CollabPart::None),
+                RobotState::Available,
+                1.0,
+                0.0
+            )
+            .reason,
+            CollabReason::NoPart
+        );
+        // an unknown kind on the wire is refused, never guessed
+        let mut bad = follow;
+        bad.kind = 99;
+        assert!(!m.request(&bad, RobotState::Available, 1.0, 0.0).accepted);
+        let a = m.request(&follow, RobotState::Available, 0.9, 1.0);
+        assert!(a.accepted);
+        assert_eq!(
+            (m.phase(), m.part(), m.person()),
+            (CollabPhase::Approach, CollabPart::RightHand, 1)
+        );
+    }
+
+    #[test]
+    fn approach_contact_follow_contact_and_the_ends() {
+        let mut m = machine();
+        let gap = m.cfg.contact_gap_m;
+        m.request(
+            &req(RequestKind::Follow, CollabPart::RightHand),
+            RobotState::Available,
+            0.9,
+            0.0,
+        );
+        assert_eq!(m.step(&seen(0.1, 0.3, 0.0)), CollabPhase::Approach);
+        assert_eq!(m.step(&seen(0.2, gap * 0.5, 0.0)), CollabPhase::Contact);
+        assert_eq!(m.reason(), CollabReason::ContactMade);
+        // pushed around in contact: still contact
+        assert_eq!(m.step(&seen(0.3, 0.03, 20.0)), CollabPhase::Contact);
+        // the hand moves away (after a touch of at least MIN_CONTACT_S)
+        assert_eq!(m.step(&seen(0.4, 0.2, 0.0)), CollabPhase::Contact);
+        assert_eq!(
+            m.step(&seen(0.2 + MIN_CONTACT_S, 0.2, 0.0)),
+            CollabPhase::Follow
+        );
+        assert_eq!(m.reason(), CollabReason::HandMovedAway);
+        // a force is contact near the hand, not far from it
+        assert_eq!(m.step(&seen(0.45, 0.2, 10.0)), CollabPhase::Follow);
+        assert_eq!(m.step(&seen(0.5, 0.05, 10.0)), CollabPhase::Contact);
+        // the wrist push ends it; `begin` without a part resumes with the last one
+        let push = Observation {
+            wrist_push: true,
+            ..seen(0.6, 0.0, 5.0)
+        };
+        assert_eq!(m.step(&push), CollabPhase::Idle);
+        assert_eq!(
+            (m.reason(), m.part()),
+            (CollabReason::WristPush, CollabPart::None)
+        );
+        let a = m.request(
+            &req(RequestKind::Begin, CollabPart::None),
+            RobotState::Available,
+            0.9,
+            1.0,
+        );
+        assert!(a.accepted);
+        assert_eq!(m.part(), CollabPart::RightHand);
+    }
+
+    #[test]
+    fn every_end_has_its_reason_and_the_most_severe_wins() {
+        let limit = machine().force_limit_n();
+        let lost = machine().cfg.hand_lost_s;
+        for (obs, reason) in [
+            (
+                Observation {
+                    stale: true,
+                    collision: true,
+                    ..seen(1.0, 0.0, 0.0)
+                },
+                CollabReason::Stale,
+            ),
+            (
+                Observation {
+                    collision: true,
+                    wrist_push: true,
+                    ..seen(1.0, 0.0, 0.0)
+                },
+                CollabReason::Collision,
+            ),
+            (seen(1.0, 0.0, limit * 1.01), CollabReason::ForceLimit),
+            (
+                Observation {
+                    t: 0.5 + lost + 0.01,
+                    hand_seen: false,
+                    gap_m: 0.2,
+                    ..Default::default()
+                },
+                CollabReason::HandLost,
+            ),
+        ] {
+            let mut m = machine();
+            m.request(
+                &req(RequestKind::Follow, CollabPart::LeftHand),
+                RobotState::Available,
+                0.9,
+                0.5,
+            );
+            assert_eq!(m.step(&obs), CollabPhase::Idle, "{obs:?}");
+            assert_eq!(m.reason(), reason, "{obs:?}");
+        }
+        // the hand unseen for less than hand_lost_s: still approaching
+        let mut m = machine();
+        m.request(
+            &req(RequestKind::Follow, CollabPart::LeftHand),
+            RobotState::Available,
+            0.9,
+            0.5,
+        );
+        let unseen = Observation {
+            t: 0.5 + lost * 0.9,
+            gap_m: 0.2,
+            ..Default::default()
+        };
+        assert_eq!(m.step(&unseen), CollabPhase::Approach);
+        // end and stop requests
+        let a = m.request(
+            &req(RequestKind::End, CollabPart::None),
+            RobotState::Available,
+            0.0,
+            1.0,
+        );
+        assert!(
+            a.accepted && m.phase() == CollabPhase::Idle && m.reason() == CollabReason::EndRequest
+        );
+        assert!(!m.take_stop());
+        m.request(
+            &req(RequestKind::Stop, CollabPart::None),
+            RobotState::Available,
+            0.0,
+            1.1,
+        );
+        assert!(m.take_stop() && !m.take_stop());
+    }
+}

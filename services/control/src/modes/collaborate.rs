@@ -1,0 +1,453 @@
+//! Collaboration (paper Sect. VI): the modes `approach`, `contact` and
+//! `follow`. Each period [`Collaboration::observe`] answers the requests,
+//! finds the collaborative hand in the newest skeleton, estimates the
+//! contact force at the collaborative robot point from the residual
+//! (eqs. 21-22), checks what the intended contact does not explain against
+//! the collision thresholds, looks for a push on the wrist, and steps the
+//! phase machine ([`crate::collab`]). [`Collaboration::reference`] is the
+//! Cartesian reference of the end effector in the phase, which the
+//! avoidance stage resolves under SNS with every other obstacle.
+//!
+//! - approach / follow: the robot point moves toward the filtered hand until
+//!   the surfaces touch, at `approach_speed` far from it and `contact_speed`
+//!   within `slow_down_m`;
+//! - contact: admittance on the estimated force: the end effector yields
+//!   along F̂ at `admittance` [m/(N s)], so the person pushes it around.
+
+use nalgebra::Vector3;
+use phri_config::{CollaborationConfig, Config};
+use phri_estimation::{ContactPoint, ForceEstimate, ForceEstimator};
+use phri_ipc::{
+    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, MAX_DOF, MAX_PEOPLE,
+};
+use phri_model::Model;
+
+use crate::collab::{Answer, CollabMachine, Observation, RobotState};
+use crate::error::ControlError;
+use crate::modes::CartesianRef;
+
+/// A skeleton older than this is no sighting of the hand \[s\].
+const MAX_SKELETON_AGE_S: f64 = 0.2;
+/// Pseudoinverse damping of the force estimate \[m\].
+const FORCE_DAMPING: f64 = 1e-3;
+/// The desired end effector stays this close to the measured one \[m\]:
+/// blocked by avoidance or by the hand, the reference waits instead of winding up.
+const MAX_LEAD_M: f64 = 0.05;
+
+/// The collaboration's inputs of one period.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CollabInput<'a> {
+    /// requests that arrived since the last period (`hri/request`)
+    pub requests: &'a [HriRequest],
+    /// the newest skeleton (`perception/skeleton`)
+    pub skeleton: Option<&'a Skeleton>,
+    /// the newest refined hand (`perception/hand`), preferred when fresh
+    pub hand: Option<&'a HandObservation>,
+}
+
+/// The last request answered, for `collab/state`.
+#[derive(Clone, Copy, Debug)]
+pub struct Answered {
+    pub request: HriRequest,
+    pub answer: Answer,
+}
+
+/// The collaboration layer's state.
+pub struct Collaboration {
+    cfg: CollaborationConfig,
+    machine: CollabMachine,
+    forces: ForceEstimator,
+    contact: ContactPoint,
+    /// the frame whose origin is the wrist centre
+    wrist_frame: usize,
+    /// joint collision thresholds of the detector \[Nm\]
+    collision_threshold: [f64; MAX_DOF],
+    n: usize,
+    /// the hand the approach follows, low-passed \[m\], base frame
+    hand: Option<Vector3<f64>>,
+    /// the newest sighting: position \[m\], capture time \[ns, robot clock\]
+    sighting: Option<(Vector3<f64>, u64)>,
+    /// the hand was seen in this period
+    hand_seen: bool,
+    /// desired end-effector position \[m\], base frame
+    x_d: Vector3<f64>,
+    /// the robot point \[m\], base frame, at the measured joints
+    robot_point: Vector3<f64>,
+    estimate: Option<ForceEstimate>,
+    /// surface gap robot point ↔ hand \[m\]
+    gap: f64,
+    wrist_since: Option<f64>,
+    collision: bool,
+    /// after a collaboration: full detection re-arms once the residual was
+    /// quiet for `rearm_quiet_s` (None: armed)
+    rearm: Option<Option<f64>>,
+    last_answer: Option<Answered>,
+}
+
+impl Collaboration {
+    /// The layer of `[collaboration]`, with the detector's thresholds of `[dynamics]`.
+    pub fn new(model: &Model, cfg: &Config) -> Result<Collaboration, ControlError> {
+        let c = &cfg.collaboration;
+        let n = model.nv();
+        let frame = model
+            .frame_id(&c.robot_link)
+            .map_err(|_| ControlError::UnknownLink {
+                key: "collaboration.robot_link".into(),
+                link: c.robot_link.clone(),
+            })?;
+        let wrist_frame = model
+            .frame_id(&c.wrist_link)
+            .map_err(|_| ControlError::UnknownLink {
+                key: "collaboration.wrist_link".into(),
+                link: c.wrist_link.clone(),
+            })?;
+        let thresholds = cfg
+            .dynamics
+            .collision_threshold
+            .resolve(n, "dynamics.collision_threshold")?;
+        let mut collision_threshold = [f64::INFINITY; MAX_DOF];
+        for (t, v) in collision_threshold.iter_mut().zip(&thresholds) {
+            *t = *v;
+        }
+        Ok(Collaboration {
+            machine: CollabMachine::new(c),
+            forces: ForceEstimator::new(model.clone(), FORCE_DAMPING),
+            contact: ContactPoint {
+                frame,
+                point: Vector3::from(c.robot_point),
+            },
+            wrist_frame,
+            collision_threshold,
+            n,
+            hand: None,
+            sighting: None,
+            hand_seen: false,
+            x_d: Vector3::zeros(),
+            robot_point: Vector3::zeros(),
+            estimate: None,
+            gap: f64::INFINITY,
+            wrist_since: None,
+            collision: false,
+            rearm: None,
+            last_answer: None,
+            cfg: c.clone(),
+        })
+    }
+
+    pub fn phase(&self) -> CollabPhase {
+        self.machine.phase()
+    }
+
+    pub fn machine(&self) -> &CollabMachine {
+        &self.machine
+    }
+
+    /// The collaborative robot part's frame (`collaboration.robot_link`).
+    pub fn robot_frame(&self) -> usize {
+        self.contact.frame
+    }
+
+    /// The last force estimate (while collaborating).
+    pub fn estimate(&self) -> Option<&ForceEstimate> {
+        self.estimate.as_ref()
+    }
+
+    /// Surface gap between the robot part and the hand \[m\] (∞: no hand).
+    pub fn gap_m(&self) -> f64 {
+        self.gap
+    }
+
+    /// The collaborative robot point \[m\], base frame, at the measured joints.
+    pub fn robot_point(&self) -> Vector3<f64> {
+        self.robot_point
+    }
+
+    /// The desired end-effector position \[m\], base frame.
+    pub fn x_d(&self) -> Vector3<f64> {
+        self.x_d
+    }
+
+    /// The filtered hand \[m\], base frame.
+    pub fn hand(&self) -> Option<Vector3<f64>> {
+        self.hand
+    }
+
+    /// Capture time of the newest sighting of the hand [ns, robot clock].
+    pub fn hand_capture_ns(&self) -> Option<u64> {
+        self.sighting.map(|(_, t)| t)
+    }
+
+    pub fn last_answer(&self) -> Option<&Answered> {
+        self.last_answer.as_ref()
+    }
+
+    /// The residual the intended contact does not explain crosses a collision threshold.
+    pub fn collision(&self) -> bool {
+        self.collision
+    }
+
+    /// Full detection is not yet re-armed after a collaboration.
+    pub fn rearming(&self) -> bool {
+        self.rearm.is_some()
+    }
+
+    /// A `stop` request was accepted (reading clears it).
+    pub fn take_stop(&mut self) -> bool {
+        self.machine.take_stop()
+    }
+
+    /// The hand of `part` of `person` (`u32::MAX`: the first tracked person)
+    /// in `sk`: position and confidence.
+    fn find_hand(sk: &Skeleton, part: CollabPart, person: u32) -> Option<([f64; 3], f64, u32)> {
+        let joint = part.joint()? as usize;
+        let n = (sk.n_people as usize).min(MAX_PEOPLE);
+        sk.people[..n]
+            .iter()
+            .filter(|p| p.tracked != 0 && (person == u32::MAX || p.id == person))
+            .map(|p| (p.joints[joint], p.confidence[joint], p.id))
+            .find(|(x, c, _)| x.iter().all(|v| v.is_finite()) && c.is_finite())
+    }
+
+    /// One period's observation: requests, hand, force, wrist, phase.
+    #[allow(clippy::too_many_arguments)]
+    pub fn observe(
+        &mut self,
+        t: f64,
+        dt: f64,
+        stamp_ns: u64,
+        q: &[f64],
+        residual: Option<&[f64]>,
+        robot: RobotState,
+        stale: bool,
+        input: &CollabInput<'_>,
+    ) -> CollabPhase {
+        let fresh_skeleton = input.skeleton.filter(|sk| {
+            stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
+        });
+        // 1. requests: the named hand's confidence in the newest skeleton
+        for r in input.requests {
+            let part = CollabPart::try_from(r.part).unwrap_or(CollabPart::None);
+            let part = if part == CollabPart::None {
+                self.machine.part()
+            } else {
+                part
+            };
+            let conf = fresh_skeleton
+                .and_then(|sk| Self::find_hand(sk, part, r.person))
+                .map_or(0.0, |(_, c, _)| c);
+            let was_active = self.machine.active();
+            let answer = self.machine.request(r, robot, conf, t);
+            if answer.accepted && !was_active && self.machine.active() {
+                self.hand = None;
+                self.sighting = None;
+            }
+            self.last_answer = Some(Answered {
+                request: *r,
+                answer,
+            });
+        }
+        // 2. the collaborative hand
+        self.hand_seen = false;
+        if self.machine.active() {
+            let refined = input.hand.filter(|h| {
+                h.refined != 0
+                    && h.part == self.machine.part() as u32
+                    && stamp_ns.saturating_sub(h.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
+                    && h.position.iter().all(|v| v.is_finite())
+            });
+            let seen = match refined {
+                Some(h) => Some((h.position, h.confidence, h.capture_ns)),
+                None => fresh_skeleton.and_then(|sk| {
+                    Self::find_hand(sk, self.machine.part(), self.machine.person())
+                        .map(|(x, c, _)| (x, c, sk.capture_ns))
+                }),
+            };
+            if let Some((x, c, capture)) = seen {
+                let new = self.sighting.is_none_or(|(_, t0)| capture > t0);
+                if c >= self.cfg.min_hand_confidence && new {
+                    let x = Vector3::from(x);
+                    self.sighting = Some((x, capture));
+                    self.hand_seen = true;
+                }
+            }
+            if let Some((x, _)) = self.sighting {
+                let alpha = 1.0 - (-dt / self.cfg.hand_filter_s.max(1e-3)).exp();
+                self.hand = Some(match self.hand {
+                    Some(h) => h + (x - h) * alpha,
+                    None => x,
+                });
+            }
+        }
+        // 3. the force at the robot point, what it leaves unexplained, the robot point
+        let zero = [0.0; MAX_DOF];
+        let r = residual
+            .filter(|r| r.len() == self.n)
+            .unwrap_or(&zero[..self.n]);
+        self.estimate = self
+            .forces
+            .estimate(q, r, std::slice::from_ref(&self.contact))
+            .ok()
+            .copied();
+        let (force_n, f) = match &self.estimate {
+            Some(e) if self.machine.active() && residual.is_some() => {
+                (e.forces[0].norm(), e.forces[0])
+            }
+            _ => (0.0, Vector3::zeros()),
+        };
+        let _ = f;
+        if let Some(e) = &self.estimate {
+            self.robot_point = e.points[0];
+        }
+        self.collision = self.machine.active()
+            && residual.is_some()
+            && self.estimate.as_ref().is_some_and(|e| {
+                e.left[..self.n.min(e.left.len())]
+                    .iter()
+                    .zip(&self.collision_threshold)
+                    .any(|(u, th)| u.abs() > *th)
+            });
+        // 4. the wrist push: a force through the wrist centre, a person near the wrist
+        let wrist_push = self.machine.active() && self.wrist_push(t, residual, fresh_skeleton);
+        // 5. the gap and the phase
+        self.gap = match self.hand {
+            Some(h) => {
+                (h - self.robot_point).norm() - self.cfg.robot_radius_m - self.cfg.hand_radius_m
+            }
+            None => f64::INFINITY,
+        };
+        let was = self.machine.active();
+        let phase = self.machine.step(&Observation {
+            t,
+            hand_seen: self.hand_seen,
+            gap_m: self.gap,
+            force_n,
+            wrist_push,
+            collision: self.collision,
+            stale,
+        });
+        if was && !self.machine.active() {
+            self.rearm = Some(None);
+            self.hand = None;
+            self.sighting = None;
+        }
+        self.update_rearm(t, residual);
+        phase
+    }
+
+    fn update_rearm(&mut self, t: f64, residual: Option<&[f64]>) {
+        let Some(quiet_since) = self.rearm.as_mut() else {
+            return;
+        };
+        let quiet = residual.is_some_and(|r| {
+            r.iter()
+                .zip(&self.collision_threshold)
+                .all(|(x, th)| x.abs() < 0.5 * th)
+        });
+        match (quiet, *quiet_since) {
+            (false, _) => *quiet_since = None,
+            (true, None) => *quiet_since = Some(t),
+            (true, Some(t0)) if t - t0 >= self.cfg.rearm_quiet_s => self.rearm = None,
+            _ => {}
+        }
+    }
+
+    /// `‖r₅..₇‖ ≤ wrist_ratio ‖r₁..₄‖`, `‖r₁..₄‖ ≥ wrist_min_nm`, for
+    /// `wrist_hold_s`, with a human part seen within `wrist_confirm_m` of the
+    /// wrist and nearer to it than to the collaborative contact.
+    fn wrist_push(&mut self, t: f64, residual: Option<&[f64]>, sk: Option<&Skeleton>) -> bool {
+        let (Some(r), Some(e)) = (residual, self.estimate.as_ref()) else {
+            self.wrist_since = None;
+            return false;
+        };
+        if r.len() < 7 {
+            return false;
+        }
+        let proximal = r[..4].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let distal = r[4..].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let pattern =
+            proximal >= self.cfg.wrist_min_nm && distal <= self.cfg.wrist_ratio * proximal;
+        let _ = e;
+        let wrist = self.wrist_centre();
+        let confirmed = sk.is_some_and(|sk| {
+            let n = (sk.n_people as usize).min(MAX_PEOPLE);
+            sk.people[..n].iter().filter(|p| p.tracked != 0).any(|p| {
+                p.joints.iter().zip(&p.confidence).any(|(j, c)| {
+                    let x = Vector3::from(*j);
+                    *c >= self.cfg.min_hand_confidence
+                        && (x - wrist).norm() <= self.cfg.wrist_confirm_m
+                        && (x - wrist).norm() < (x - self.robot_point).norm()
+                })
+            })
+        });
+        if pattern && confirmed {
+            let since = *self.wrist_since.get_or_insert(t);
+            t - since >= self.cfg.wrist_hold_s
+        } else {
+            self.wrist_since = None;
+            false
+        }
+    }
+
+    /// Entering a collaboration mode from another mode: the reference starts
+    /// at the measured end effector `ee` \[m\].
+    pub fn enter(&mut self, ee: Vector3<f64>) {
+        self.x_d = ee;
+    }
+
+    /// The end effector's Cartesian reference in the phase (`ee`: the
+    /// measured end effector \[m\], `dt` \[s\], `speed_scale` of the safety judgement).
+    pub fn reference(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> CartesianRef {
+        let c = &self.cfg;
+        // the end effector's point relative to the collaborative robot point
+        let offset = ee - self.robot_point;
+        let mut velocity = Vector3::zeros();
+        match self.machine.phase() {
+            CollabPhase::Approach | CollabPhase::Follow => {
+                if let Some(h) = self.hand {
+                    let to = h - self.robot_point;
+                    if to.norm() > 1e-6 {
+                        let target =
+                            h - to.normalize() * (c.robot_radius_m + c.hand_radius_m) + offset;
+                        let near = (self.gap.max(0.0) / c.slow_down_m).min(1.0);
+                        let speed = (c.contact_speed + (c.approach_speed - c.contact_speed) * near)
+                            * speed_scale.clamp(0.0, 1.0);
+                        let delta = target - self.x_d;
+                        let d = delta.norm();
+                        if d > 1e-9 {
+                            velocity = delta / d * speed;
+                            self.x_d += delta / d * (speed * dt).min(d);
+                        }
+                    }
+                }
+            }
+            CollabPhase::Contact => {
+                // admittance: yield along the force the person applies
+                if let Some(e) = self.estimate.as_ref().filter(|e| e.observable[0]) {
+                    velocity = e.forces[0] * c.admittance;
+                    let v = velocity.norm();
+                    if v > c.approach_speed {
+                        velocity *= c.approach_speed / v;
+                    }
+                    self.x_d += velocity * dt;
+                }
+            }
+            CollabPhase::Idle => self.x_d = ee,
+        }
+        let lead = self.x_d - ee;
+        if lead.norm() > MAX_LEAD_M {
+            self.x_d = ee + lead * (MAX_LEAD_M / lead.norm());
+        }
+        CartesianRef {
+            x_d: self.x_d,
+            xd_d: velocity,
+            speed_scale,
+            path_time: None,
+            collab_hand: self.hand,
+        }
+    }
+
+    /// The wrist centre \[m\], base frame: the origin of `wrist_link`.
+    fn wrist_centre(&self) -> Vector3<f64> {
+        self.forces.frame_origin(self.wrist_frame)
+    }
+}

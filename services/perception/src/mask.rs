@@ -1,0 +1,238 @@
+//! Masking the collaborative part (paper Fig. 5): while a collaboration is
+//! on, the depth pixels whose 3-D point lies within a sphere around the
+//! collaborative hand, or a short capsule from it toward the elbow, are
+//! removed from the frame the repulsion workers see, so that the hand the
+//! robot is asked to touch is no obstacle. Every other pixel, the other hand
+//! included, stays.
+//!
+//! The same pixels refine the hand: the tracker's hand is noisy (a few
+//! centimetres), the depth pixels around it are not. The refined hand is the
+//! centre of the 3-D points within `refine_radius_m` of the tracked hand,
+//! pushed back along the mean viewing ray by two thirds of the hand's radius
+//! (the camera sees only the near side of the hand).
+//!
+//! Only the image window the region projects into is visited.
+
+use nalgebra::{Point3, Vector3};
+use phri_config::CollaborationConfig;
+use phri_depth::{CameraPose, Intrinsics};
+use phri_ipc::{CollabPart, FrameHeader, HandObservation, Skeleton, SkeletonJoint, Zeroed};
+
+/// The region to remove, base frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HandMask {
+    /// the tracked hand \[m\]
+    pub hand: [f64; 3],
+    /// the tracked elbow of the same arm \[m\] (`None`: the sphere alone)
+    pub elbow: Option<[f64; 3]>,
+    /// radius of the sphere and the capsule \[m\]
+    pub radius_m: f64,
+    /// length of the capsule from the hand toward the elbow \[m\]
+    pub forearm_m: f64,
+    /// the hand is refined from the points within this of the tracked hand \[m\]
+    pub refine_radius_m: f64,
+    /// radius of the hand \[m\]
+    pub hand_radius_m: f64,
+}
+
+/// What [`apply`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Masked {
+    /// pixels removed
+    pub pixels: u32,
+    /// the hand refined from the depth points around it \[m\], base frame
+    /// (`None`: too few points)
+    pub refined: Option<[f64; 3]>,
+}
+
+/// Fewest points that refine the hand.
+const MIN_REFINE_POINTS: usize = 10;
+
+/// Distance from `p` to the segment `a`–`b`.
+fn to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    let s = if len2 > 0.0 {
+        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * s)).norm()
+}
+
+/// Remove the region of `mask` from `depth` (millimetres, row-major, the
+/// camera `k` at `pose`), and refine the hand from what was there.
+pub fn apply(k: &Intrinsics, pose: &CameraPose, mask: &HandMask, depth: &mut [u16]) -> Masked {
+    let (w, h) = (k.width as usize, k.height as usize);
+    let hand = Vector3::from(mask.hand);
+    if depth.len() < w * h || !hand.iter().all(|x| x.is_finite()) || !(mask.radius_m > 0.0) {
+        return Masked::default();
+    }
+    let tip = match mask.elbow {
+        Some(e) if e.iter().all(|x| x.is_finite()) => {
+            let to = Vector3::from(e) - hand;
+            if to.norm() > 1e-6 {
+                hand + to * (mask.forearm_m.max(0.0) / to.norm()).min(1.0)
+            } else {
+                hand
+            }
+        }
+        _ => hand,
+    };
+    // the window: both ends projected, grown by the radius in pixels at their depth
+    let mut window = (
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in [hand, tip] {
+        let Some(px) = pose.project(k, &Point3::from(p)) else {
+            continue;
+        };
+        let grow =
+            k.fx * (mask.radius_m.max(mask.refine_radius_m)) / (px.depth - mask.radius_m).max(0.1);
+        window.0 = window.0.min(px.px - grow);
+        window.1 = window.1.min(px.py - grow);
+        window.2 = window.2.max(px.px + grow);
+        window.3 = window.3.max(px.py + grow);
+    }
+    if !window.0.is_finite() {
+        return Masked::default();
+    }
+    let u0 = window.0.floor().max(0.0) as usize;
+    let v0 = window.1.floor().max(0.0) as usize;
+    let u1 = (window.2.ceil().max(0.0) as usize).min(w.saturating_sub(1));
+    let v1 = (window.3.ceil().max(0.0) as usize).min(h.saturating_sub(1));
+    let camera = pose.position().coords;
+    let (mut removed, mut count) = (0u32, 0usize);
+    let (mut sum, mut rays) = (Vector3::zeros(), Vector3::zeros());
+    for v in v0..=v1 {
+        for u in u0..=u1 {
+            let d = &mut depth[v * w + u];
+            if *d == 0 {
+                continue;
+            }
+            let p = pose
+                .back_project(k, u as f64, v as f64, *d as f64 * 1e-3)
+                .coords;
+            if (p - hand).norm() <= mask.refine_radius_m {
+                sum += p;
+                rays += (p - camera).normalize();
+                count += 1;
+            }
+            if to_segment(&p, &hand, &tip) <= mask.radius_m {
+                *d = 0;
+                removed += 1;
+            }
+        }
+    }
+    let refined = (count >= MIN_REFINE_POINTS).then(|| {
+        let centre = sum / count as f64;
+        let back = rays.normalize() * (mask.hand_radius_m * 2.0 / 3.0);
+        let r = centre + back;
+        [r.x, r.y, r.z]
+    });
+    Masked {
+        pixels: removed,
+        refined,
+    }
+}
+
+/// The region ingestion removes around the collaborative `part` of the
+/// first tracked person in `sk` (`None`: the part is not tracked).
+pub fn hand_mask(sk: &Skeleton, part: CollabPart, cfg: &CollaborationConfig) -> Option<HandMask> {
+    let (hand, elbow) = match part {
+        CollabPart::RightHand => (SkeletonJoint::RightHand, SkeletonJoint::RightElbow),
+        CollabPart::LeftHand => (SkeletonJoint::LeftHand, SkeletonJoint::LeftElbow),
+        CollabPart::None => return None,
+    };
+    let n = (sk.n_people as usize).min(sk.people.len());
+    let p = sk.people[..n].iter().find(|p| p.tracked != 0)?;
+    let h = p.joints[hand as usize];
+    if !h.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let e = p.joints[elbow as usize];
+    Some(HandMask {
+        hand: h,
+        elbow: e.iter().all(|x| x.is_finite()).then_some(e),
+        radius_m: cfg.mask_radius_m,
+        forearm_m: cfg.mask_forearm_m,
+        refine_radius_m: cfg.refine_radius_m,
+        hand_radius_m: cfg.hand_radius_m,
+    })
+}
+
+/// The `perception/hand` message of a masked frame.
+pub fn hand_observation(
+    header: &FrameHeader,
+    part: CollabPart,
+    mask: &HandMask,
+    masked: &Masked,
+    published_ns: u64,
+) -> HandObservation {
+    let mut h = HandObservation::zeroed();
+    h.seq = header.seq;
+    h.capture_ns = header.capture_ns;
+    h.published_ns = published_ns;
+    h.part = part as u32;
+    h.person = u32::MAX;
+    h.refined = masked.refined.is_some() as u32;
+    h.masked_pixels = masked.pixels;
+    h.tracked = mask.hand;
+    h.position = masked.refined.unwrap_or(mask.hand);
+    // refined from depth: certain; otherwise the controller uses the skeleton
+    h.confidence = if masked.refined.is_some() { 1.0 } else { 0.0 };
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_depth::{Capsule, RenderOptions, Renderer};
+
+    fn scene(capsules: &[Capsule]) -> (Intrinsics, CameraPose, Vec<u16>) {
+        let k = Intrinsics::KINECT;
+        let pose = CameraPose::paper_default();
+        let opts = RenderOptions {
+            noise: false,
+            edge_dropout: 0.0,
+            ..RenderOptions::default()
+        };
+        let mut r = Renderer::new(k, pose, opts).unwrap();
+        let mut out = vec![0; k.pixel_count()];
+        r.render(capsules, &[], None, &mut out).unwrap();
+        (k, pose, out)
+    }
+
+    #[test]
+    fn the_hand_goes_the_other_hand_stays_and_the_hand_is_refined() {
+        let right = [0.6, 0.3, 0.3];
+        let left = [0.6, -0.3, 0.3];
+        let ball = |c: [f64; 3]| Capsule::new(Point3::from(c), Point3::from(c), 0.045);
+        let (k, pose, mut depth) = scene(&[ball(right), ball(left)]);
+        let before = depth.iter().filter(|&&d| d > 0).count();
+        // the tracker is 3 cm off
+        let mask = HandMask {
+            hand: [0.62, 0.32, 0.31],
+            elbow: None,
+            radius_m: 0.12,
+            forearm_m: 0.0,
+            refine_radius_m: 0.12,
+            hand_radius_m: 0.045,
+        };
+        let m = apply(&k, &pose, &mask, &mut depth);
+        let after = depth.iter().filter(|&&d| d > 0).count();
+        assert!(m.pixels > 50, "{m:?}");
+        assert_eq!(before - after, m.pixels as usize);
+        // only the left hand is left, every pixel of it
+        let (_, _, only_left) = scene(&[ball(left)]);
+        assert_eq!(depth, only_left);
+        let r = Vector3::from(m.refined.expect("refined"));
+        assert!(
+            (r - Vector3::from(right)).norm() < 0.015,
+            "refined {r} vs {right:?}"
+        );
+    }
+}
