@@ -24,8 +24,8 @@ use std::time::{Duration, Instant};
 
 use phri_ipc::{
     node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
-    CAMERA_DEPTH, CONTROL_STATUS, DYNAMICS_RESIDUAL, PERCEPTION_DEPTH, PERCEPTION_REPULSION,
-    ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
+    CAMERA_DEPTH, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, PERCEPTION_DEPTH,
+    PERCEPTION_REPULSION, ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Args, Shutdown};
@@ -63,6 +63,7 @@ struct Ports {
     frames: FrameSubscriber,
     filtered: FrameSubscriber,
     repulsion: Subscriber<phri_ipc::RepulsionResult>,
+    collab: Subscriber<phri_ipc::CollabState>,
 }
 
 impl Ports {
@@ -77,6 +78,7 @@ impl Ports {
             frames: CAMERA_DEPTH.frame_subscriber(node, Queue::Latest)?,
             filtered: PERCEPTION_DEPTH.frame_subscriber(node, Queue::Latest)?,
             repulsion: PERCEPTION_REPULSION.subscriber(node, Queue::Drain)?,
+            collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
         })
     }
 }
@@ -470,6 +472,7 @@ fn body() -> Result<(), SupervisorError> {
     let cell_start_ns = SupervisorState::cell_start_ns(previous.as_ref(), t0);
     launch.cell_start_ns = cell_start_ns;
     let mut eval = plan.evaluator(cell_start_ns);
+    let mut collab_eval = plan.collab_evaluator(cell_start_ns);
     let reaction = plan.reaction().name();
     let mut cell = Cell {
         roster: Roster::new(plan.loaded.config.supervisor.clone(), plan.services.clone()),
@@ -575,7 +578,12 @@ fn body() -> Result<(), SupervisorError> {
             roster.heard(ROBOT_STATS.name, now);
         }
         ports.contacts.drain(|m| eval.on_contact_event(m))?;
-        if ports.truth.drain(|m| eval.on_truth(m))? > 0 {
+        ports.collab.drain(|m| collab_eval.on_state(m))?;
+        if ports.truth.drain(|m| {
+            eval.on_truth(m);
+            collab_eval.on_truth(m);
+        })? > 0
+        {
             roster.heard(SIM_TRUTH.name, now);
         }
         if ports.residual.drain(|m| eval.on_residual(m))? > 0 {
@@ -818,14 +826,20 @@ fn body() -> Result<(), SupervisorError> {
     let services_report = cell.roster.reports();
     // drain what arrived in the last period before stopping anything
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
-    let _ = ports.truth.drain(|m| eval.on_truth(m));
+    let _ = ports.collab.drain(|m| collab_eval.on_state(m));
+    let _ = ports.truth.drain(|m| {
+        eval.on_truth(m);
+        collab_eval.on_truth(m);
+    });
     let _ = ports.residual.drain(|m| eval.on_residual(m));
     let _ = ports.status.drain(|m| eval.on_status(m, reaction));
     let _ = ports.stats.drain(|m| eval.on_stats(m));
     cell.stop();
     // what the services said last (the simulator's contacts as it braked)
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
-    let report = eval.report(end, plan.scenario_name(), services_report);
+    let mut report = eval.report(end, plan.scenario_name(), services_report);
+    report.collaboration =
+        collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
     close_ipc(node, Some(ports), &prefix);
     cell.remove_state();
     if let Some(file) = report_file.as_mut() {

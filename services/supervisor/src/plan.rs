@@ -84,6 +84,25 @@ impl Plan {
     }
 
     /// An evaluator of this run, started at `t0_ns`.
+    /// The `collaboration` section's evaluation, with the scenario's wave onsets.
+    pub fn collab_evaluator(&self, t0_ns: u64) -> crate::collab_report::CollabEvaluator {
+        let waves = self
+            .loaded
+            .scenario
+            .human
+            .as_ref()
+            .map(|h| {
+                h.keyframes()
+                    .iter()
+                    .filter(|k| k.wave.is_some())
+                    .map(|k| k.t)
+                    .collect()
+            })
+            .unwrap_or_default();
+        let period_ns = (self.loaded.config.sim.dt_s * 1e9).round() as u64;
+        crate::collab_report::CollabEvaluator::new(t0_ns, waves, period_ns)
+    }
+
     pub fn evaluator(&self, t0_ns: u64) -> Evaluator {
         Evaluator::new(t0_ns, self.detector.clone(), self.link_names.clone())
     }

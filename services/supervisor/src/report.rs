@@ -132,6 +132,8 @@ pub struct Report {
     pub sim_restarts: Vec<SimRestart>,
     /// null when the cell ran without perception
     pub perception: Option<PerceptionReport>,
+    /// the collaboration layer (empty lists when nothing happened)
+    pub collaboration: crate::collab_report::CollabReport,
 }
 
 /// `evaluation` in the report: samples that never reached the evaluator.
@@ -771,6 +773,7 @@ impl Evaluator {
             resyncs: self.resyncs.iter().map(|(r, _)| r.clone()).collect(),
             sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
+            collaboration: Default::default(),
         }
     }
 }

@@ -155,13 +155,26 @@ fn a_wave_of_the_simulated_person_is_recognised_on_the_simulated_tracker() {
     assert!(w.onset_s >= 3.0, "{w:?}");
 }
 
-#[test]
-fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
-    // deploy/scenarios/collaboration.toml (paper Sect. VII-C, Figs. 8-9)
-    let mut c = common::cell("collaboration", &CellOptions::default(), &[]);
+/// Run a collaboration scenario in lock-step: the summary and when and why
+/// the (first) collaboration ended.
+fn collaborate(
+    scenario: &str,
+    seconds: f64,
+) -> (
+    phri_cell::CellSummary,
+    Option<(f64, phri_ipc::CollabReason)>,
+    f64,
+) {
+    let mut c = common::cell(scenario, &CellOptions::default(), &[]);
     let mut ended_by = None;
-    for _ in 0..22_000 {
+    // the smallest distance perception saw (the masked hand excluded) at 8-9.6 s
+    let mut seen = f64::INFINITY;
+    for _ in 0..(seconds * 1000.0) as usize {
         c.tick().unwrap();
+        let t = c.time_ns() as f64 * 1e-9;
+        if (8.0..9.6).contains(&t) && c.status.min_distance > 0.0 {
+            seen = seen.min(c.status.min_distance);
+        }
         let m = c
             .controller
             .collaboration()
@@ -171,7 +184,13 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
             ended_by = Some((c.time_ns() as f64 * 1e-9, m.reason()));
         }
     }
-    let s = c.summary();
+    (c.summary(), ended_by, seen)
+}
+
+#[test]
+fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
+    // deploy/scenarios/collaboration.toml (paper Sect. VII-C, Figs. 8-9)
+    let (s, ended_by, _) = collaborate("collaboration", 22.0);
     eprintln!("modes: {:?}", s.modes);
     eprintln!("requests: {:?}, ended by {ended_by:?}", s.gesture_requests);
     // the wave (from 3.0 s) is recognised and the approach starts within 2 s
@@ -219,4 +238,39 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
     assert!(hand.iter().all(|c| c.link == "lwr_link_7" && c.intended));
     let peak = hand.iter().map(|c| c.peak_force_n).fold(0.0, f64::max);
     assert!(peak <= 70.0, "peak intended force {peak:.1} N");
+}
+
+#[test]
+fn safe_collaboration_avoids_the_crossing_hand_and_still_reaches_the_other() {
+    // deploy/scenarios/safe-collaboration.toml (paper Sect. VII-D, Figs. 10-11):
+    // the left hand crosses the approach at 7.3-8.8 s
+    let (s, ended_by, seen) = collaborate("safe-collaboration", 22.0);
+    eprintln!(
+        "modes: {:?}, ended by {ended_by:?}, closest seen {seen:.3} m",
+        s.modes
+    );
+    // the crossing hand came close: avoidance had work to do
+    assert!(seen < 0.15, "the crossing hand stayed {seen:.3} m away");
+    assert_eq!(s.unintended_contacts, 0, "{:?}", s.contacts);
+    assert!(
+        !s.contacts
+            .iter()
+            .any(|c| c.part == "hand_left" && c.t_start_s < 15.0),
+        "the crossing hand was touched: {:?}",
+        s.contacts
+    );
+    let reached: Vec<_> = s
+        .contacts
+        .iter()
+        .filter(|c| c.part == "hand_right" && c.link == "lwr_link_7")
+        .collect();
+    assert!(
+        !reached.is_empty(),
+        "the collaborative hand was not reached"
+    );
+    assert!(s.modes.iter().any(|(_, m)| m == "contact"));
+    assert_eq!(
+        ended_by.map(|e| e.1),
+        Some(phri_ipc::CollabReason::WristPush)
+    );
 }

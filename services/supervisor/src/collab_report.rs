@@ -1,0 +1,349 @@
+//! The report's `collaboration` section: what the controller's
+//! `collab/state` said (requests and their answers, phases, how each
+//! collaboration ended, how closely the robot followed the hand) set
+//! against the simulator's ground truth (`sim/truth`: the true contact
+//! force of the collaborative hand, to grade the estimate F̂ of eqs. 21-22)
+//! and the scenario's script (when the person began to wave).
+
+use std::collections::BTreeMap;
+
+use phri_ipc::{CollabPart, CollabPhase, CollabReason, CollabState, RequestSource, Truth};
+use serde::Serialize;
+
+/// True forces below this are not graded \[N\] (issue 11: ≥ 5 N).
+const MIN_GRADED_FORCE_N: f64 = 5.0;
+/// Unmatched samples older than this are dropped \[ns\].
+const MATCH_WINDOW_NS: u64 = 2_000_000_000;
+
+/// `collaboration.requests[]`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct RequestReport {
+    /// when the controller answered [s], the report's time base
+    pub t_s: f64,
+    pub source: String,
+    pub kind: String,
+    pub part: String,
+    pub accepted: bool,
+    pub reason: String,
+}
+
+/// `collaboration.phases[]`: each change of phase.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PhaseReport {
+    pub t_s: f64,
+    pub phase: String,
+    pub reason: String,
+}
+
+/// Relative error percentiles.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct ErrorPercentiles {
+    pub p50: Option<f64>,
+    pub p95: Option<f64>,
+    /// samples graded
+    pub samples: usize,
+}
+
+/// `collaboration` in the report (empty lists and nulls when nothing happened).
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct CollabReport {
+    pub requests: Vec<RequestReport>,
+    pub phases: Vec<PhaseReport>,
+    /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
+    pub wave_to_start_ms: Option<f64>,
+    /// intended contact episodes (ground truth)
+    pub contacts_intended: usize,
+    /// `‖F̂ − F_true‖ / ‖F_true‖` over the samples with `‖F_true‖ ≥ 5 N` of
+    /// the collaborative hand
+    pub force_error: ErrorPercentiles,
+    /// largest force of an intended contact [N] (ground truth)
+    pub peak_intended_force_n: Option<f64>,
+    /// how the last collaboration ended: `wrist_push`, `request`,
+    /// `hand_lost`, `force_limit`, `collision`, `stale` (null: none ended)
+    pub ended_by: Option<String>,
+    /// hand ↔ robot point distance while following [m]
+    pub follow_distance_m: Option<FollowDistance>,
+}
+
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct FollowDistance {
+    pub p50: f64,
+}
+
+/// The section's running evaluation.
+#[derive(Clone, Debug)]
+pub struct CollabEvaluator {
+    t0_ns: u64,
+    /// the script's wave onsets [s, scenario time = robot clock]
+    wave_onsets: Vec<f64>,
+    last_phase: u32,
+    last_request: Option<(u32, u64)>,
+    /// the first approach's state stamp [ns, robot clock]
+    first_approach_ns: Option<u64>,
+    /// the robot clock at scenario time 0 [ns] (from the first truth sample:
+    /// the simulator steps once per period from its epoch)
+    epoch_ns: Option<u64>,
+    period_ns: u64,
+    report: CollabReport,
+    /// F̂ by the state stamp it answered [ns, robot clock], and the true
+    /// force of the collaborative hand by truth stamp, until matched
+    estimates: BTreeMap<u64, [f64; 3]>,
+    truths: BTreeMap<u64, [f64; 3]>,
+    errors: Vec<f64>,
+    follow: Vec<f64>,
+    part: CollabPart,
+}
+
+fn norm(v: &[f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+fn percentile(sorted: &[f64], p: f64) -> Option<f64> {
+    if sorted.is_empty() {
+        return None;
+    }
+    let i = ((sorted.len() - 1) as f64 * p).round() as usize;
+    sorted.get(i).copied()
+}
+
+impl CollabEvaluator {
+    /// `t0_ns` [ns, CLOCK_MONOTONIC]: the report's time origin; `wave_onsets`:
+    /// the scenario's wave keyframes [s].
+    pub fn new(t0_ns: u64, wave_onsets: Vec<f64>, period_ns: u64) -> CollabEvaluator {
+        CollabEvaluator {
+            t0_ns,
+            wave_onsets,
+            last_phase: CollabPhase::Idle as u32,
+            last_request: None,
+            first_approach_ns: None,
+            epoch_ns: None,
+            period_ns,
+            report: CollabReport::default(),
+            estimates: BTreeMap::new(),
+            truths: BTreeMap::new(),
+            errors: Vec::new(),
+            follow: Vec::new(),
+            part: CollabPart::None,
+        }
+    }
+
+    fn t(&self, stamp_ns: u64) -> f64 {
+        stamp_ns.saturating_sub(self.t0_ns) as f64 * 1e-9
+    }
+
+    pub fn on_state(&mut self, s: &CollabState) {
+        let t = self.t(s.stamp_ns);
+        if s.request_source != 0 && self.last_request != Some((s.request_source, s.request_seq)) {
+            self.last_request = Some((s.request_source, s.request_seq));
+            self.report.requests.push(RequestReport {
+                t_s: t,
+                source: RequestSource::name_of(s.request_source).into(),
+                kind: phri_ipc::RequestKind::name_of(s.request_kind).into(),
+                part: CollabPart::name_of(s.request_part).into(),
+                accepted: s.request_accepted != 0,
+                reason: CollabReason::name_of(s.request_reason).into(),
+            });
+        }
+        if s.phase != self.last_phase {
+            let phase = CollabPhase::try_from(s.phase).unwrap_or(CollabPhase::Idle);
+            self.report.phases.push(PhaseReport {
+                t_s: t,
+                phase: phase.name().into(),
+                reason: CollabReason::name_of(s.reason).into(),
+            });
+            if phase == CollabPhase::Approach && self.first_approach_ns.is_none() {
+                self.first_approach_ns = Some(s.state_stamp_ns);
+            }
+            if phase == CollabPhase::Idle && self.last_phase != CollabPhase::Idle as u32 {
+                let ended = match CollabReason::try_from(s.reason) {
+                    Ok(CollabReason::EndRequest | CollabReason::StopRequest) => "request",
+                    Ok(r) => r.name(),
+                    Err(_) => "unknown",
+                };
+                self.report.ended_by = Some(ended.into());
+            }
+            self.last_phase = s.phase;
+        }
+        if let Ok(p) = CollabPart::try_from(s.human_part) {
+            if p != CollabPart::None {
+                self.part = p;
+            }
+        }
+        let phase = CollabPhase::try_from(s.phase).unwrap_or(CollabPhase::Idle);
+        if s.n_forces > 0 && phase != CollabPhase::Idle {
+            let f = s.forces[0];
+            if phase == CollabPhase::Follow {
+                let d = [
+                    s.hand[0] - f.point[0],
+                    s.hand[1] - f.point[1],
+                    s.hand[2] - f.point[2],
+                ];
+                self.follow.push(norm(&d));
+            }
+            if phase == CollabPhase::Contact && f.observable != 0 {
+                self.estimates.insert(s.state_stamp_ns, f.force);
+                self.match_up(s.state_stamp_ns);
+            }
+        }
+    }
+
+    pub fn on_truth(&mut self, m: &Truth) {
+        if self.epoch_ns.is_none() && m.seq > 0 {
+            self.epoch_ns = Some(m.stamp_ns.saturating_sub((m.seq - 1) * self.period_ns));
+        }
+        let Some(hand) = self.part.body_part() else {
+            return;
+        };
+        let n = (m.n_contacts as usize).min(m.contacts.len());
+        let mut f = [0.0; 3];
+        let mut any = false;
+        for c in &m.contacts[..n] {
+            if c.human_part == hand as i32 && c.intended != 0 {
+                for (a, b) in f.iter_mut().zip(&c.force) {
+                    *a += b;
+                }
+                any = true;
+            }
+        }
+        if any {
+            self.truths.insert(m.stamp_ns, f);
+            self.match_up(m.stamp_ns);
+        }
+    }
+
+    fn match_up(&mut self, stamp: u64) {
+        if let (Some(e), Some(t)) = (self.estimates.get(&stamp), self.truths.get(&stamp)) {
+            let truth = norm(t);
+            if truth >= MIN_GRADED_FORCE_N {
+                let d = [e[0] - t[0], e[1] - t[1], e[2] - t[2]];
+                self.errors.push(norm(&d) / truth);
+            }
+            self.estimates.remove(&stamp);
+            self.truths.remove(&stamp);
+        }
+        let keep_from = stamp.saturating_sub(MATCH_WINDOW_NS);
+        self.estimates = self.estimates.split_off(&keep_from);
+        self.truths = self.truths.split_off(&keep_from);
+    }
+
+    /// The section, with the run's ground-truth contact episodes
+    /// (`(intended, peak force [N])` each).
+    pub fn report(&self, contacts: impl Iterator<Item = (bool, f64)>) -> CollabReport {
+        let mut r = self.report.clone();
+        let mut intended = 0;
+        let mut peak: Option<f64> = None;
+        for (i, f) in contacts {
+            if i {
+                intended += 1;
+                peak = Some(peak.map_or(f, |p| p.max(f)));
+            }
+        }
+        r.contacts_intended = intended;
+        r.peak_intended_force_n = peak;
+        let mut e = self.errors.clone();
+        e.sort_by(f64::total_cmp);
+        r.force_error = ErrorPercentiles {
+            p50: percentile(&e, 0.5),
+            p95: percentile(&e, 0.95),
+            samples: e.len(),
+        };
+        let mut f = self.follow.clone();
+        f.sort_by(f64::total_cmp);
+        r.follow_distance_m = percentile(&f, 0.5).map(|p50| FollowDistance { p50 });
+        r.wave_to_start_ms = match (
+            self.wave_onsets.first(),
+            self.first_approach_ns,
+            self.epoch_ns,
+        ) {
+            (Some(w), Some(a), Some(e)) => {
+                let a = a.saturating_sub(e) as f64 * 1e-9;
+                (a >= *w).then_some((a - w) * 1e3)
+            }
+            _ => None,
+        };
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::{BodyPart, ContactTruth, Zeroed};
+
+    fn state(t_ms: u64, phase: CollabPhase, reason: CollabReason) -> CollabState {
+        let mut s = CollabState::zeroed();
+        s.stamp_ns = 1_000_000_000 + t_ms * 1_000_000;
+        s.state_stamp_ns = t_ms * 1_000_000;
+        s.phase = phase as u32;
+        s.reason = reason as u32;
+        s.human_part = CollabPart::RightHand as u32;
+        s
+    }
+
+    #[test]
+    fn phases_requests_wave_latency_force_error_and_the_end() {
+        let mut e = CollabEvaluator::new(1_000_000_000, vec![3.0], 1_000_000);
+        let mut s = state(4500, CollabPhase::Approach, CollabReason::Accepted);
+        s.request_source = RequestSource::Gesture as u32;
+        s.request_seq = 7;
+        s.request_accepted = 1;
+        s.request_kind = phri_ipc::RequestKind::Follow as u32;
+        s.request_part = CollabPart::RightHand as u32;
+        s.request_reason = CollabReason::Accepted as u32;
+        e.on_state(&s);
+        e.on_state(&s); // the same request is reported once
+                        // contact: F̂ = (10, 0, 0) against a true (8, 0, 6) → error ‖(2, 0, −6)‖/10
+        let mut c = state(9000, CollabPhase::Contact, CollabReason::ContactMade);
+        c.n_forces = 1;
+        c.forces[0].force = [10.0, 0.0, 0.0];
+        c.forces[0].observable = 1;
+        e.on_state(&c);
+        let mut t = Truth::zeroed();
+        t.stamp_ns = 9000 * 1_000_000;
+        t.seq = 9001; // the simulator's epoch: robot clock 0
+        t.n_contacts = 2;
+        t.contacts[0] = ContactTruth {
+            human_part: BodyPart::HandRight as i32,
+            intended: 1,
+            force: [8.0, 0.0, 2.0],
+            ..Default::default()
+        };
+        t.contacts[1] = ContactTruth {
+            human_part: BodyPart::HandRight as i32,
+            intended: 1,
+            force: [0.0, 0.0, 4.0],
+            ..Default::default()
+        };
+        e.on_truth(&t);
+        // a small true force is not graded
+        let mut c2 = c;
+        c2.state_stamp_ns += 1_000_000;
+        e.on_state(&c2);
+        let mut t2 = t;
+        t2.stamp_ns += 1_000_000;
+        t2.n_contacts = 1;
+        t2.contacts[0].force = [1.0, 0.0, 0.0];
+        e.on_truth(&t2);
+        e.on_state(&state(16300, CollabPhase::Idle, CollabReason::WristPush));
+        let r = e.report([(true, 40.0), (false, 90.0), (true, 12.0)].into_iter());
+        assert_eq!(r.requests.len(), 1);
+        assert!(r.requests[0].accepted && r.requests[0].source == "gesture");
+        let phases: Vec<&str> = r.phases.iter().map(|p| p.phase.as_str()).collect();
+        assert_eq!(phases, ["approach", "contact", "idle"]);
+        assert!((r.phases[0].t_s - 4.5).abs() < 1e-9);
+        assert!((r.wave_to_start_ms.unwrap() - 1500.0).abs() < 1e-6);
+        assert_eq!(r.force_error.samples, 1);
+        let want = (4.0f64 + 36.0).sqrt() / 10.0;
+        assert!((r.force_error.p50.unwrap() - want).abs() < 1e-12);
+        assert_eq!(r.ended_by.as_deref(), Some("wrist_push"));
+        assert_eq!(r.contacts_intended, 2);
+        assert_eq!(r.peak_intended_force_n, Some(40.0));
+    }
+
+    #[test]
+    fn nothing_happened_is_empty() {
+        let e = CollabEvaluator::new(0, vec![], 1_000_000);
+        let r = e.report(std::iter::empty());
+        assert_eq!(r, CollabReport::default());
+    }
+}
