@@ -679,3 +679,41 @@ fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else()
         r["events"]
     );
 }
+
+#[test]
+fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // the robot approaches the waving hand from ~4.5 s; ingestion dies at ~6.5 s:
+    // the robot must not keep approaching a hand it no longer sees
+    let cell = Cell::start("collabkill", "collaboration", Some(14.0), &[]);
+    cell.pid_of("perception");
+    wait(6.5);
+    cell.kill("perception", libc::SIGKILL);
+    let r = cell.finish();
+    let c = &r["collaboration"];
+    eprintln!("collaboration: {c}");
+    let phases = c["phases"].as_array().unwrap();
+    let approach = phases
+        .iter()
+        .find(|p| p["phase"] == "approach")
+        .expect("the approach had begun");
+    let end = phases
+        .iter()
+        .find(|p| p["phase"] == "idle")
+        .expect("the collaboration ended");
+    assert_eq!(end["reason"], "stale", "{c}");
+    assert!(end["t_s"].as_f64() > approach["t_s"].as_f64());
+    assert!(
+        !events(&r, "protective_stop", "control").is_empty(),
+        "{}",
+        r["events"]
+    );
+    assert_eq!(r["services"]["perception"]["restarts"], 1);
+    let unintended: Vec<&Value> = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["intended"] == false)
+        .collect();
+    assert!(unintended.is_empty(), "{unintended:?}");
+}

@@ -372,10 +372,11 @@ fn push(h: &mut VecDeque<f64>, x: f64) {
 fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
     let mut probes = probe::open_all(node)?;
     let idx = |name: &str| probes.iter().position(|p| p.name() == name).unwrap();
-    let (i_status, i_res, i_health) = (
+    let (i_status, i_res, i_health, i_collab) = (
         idx(CONTROL_STATUS.name),
         idx(DYNAMICS_RESIDUAL.name),
         idx(SUPERVISOR_HEALTH.name),
+        idx(COLLAB_STATE.name),
     );
     let (mut dist_h, mut norm_h) = (VecDeque::new(), VecDeque::new());
     let refresh = Duration::from_millis(250);
@@ -394,6 +395,12 @@ fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
         let status: Option<ControlStatus> = last(probes[i_status].as_ref());
         let residual: Option<Residual> = last(probes[i_res].as_ref());
         let health: Option<Health> = last(probes[i_health].as_ref());
+        let collab: Option<CollabState> = last(probes[i_collab].as_ref());
+        let phase = collab.map(|c| CollabPhase::name_of(c.phase));
+        // F̂ of the collaborative contact [N], base frame
+        let force = collab
+            .filter(|c| c.n_forces > 0 && c.phase != CollabPhase::Idle as u32)
+            .map(|c| c.forces[0].force);
         if let Some(s) = &status {
             push(&mut dist_h, s.min_distance);
         }
@@ -420,6 +427,7 @@ fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
                 "{}",
                 json!({"prefix": o.prefix, "t_s": t_start.elapsed().as_secs_f64(),
                        "mode": mode, "min_distance": min_d, "residual_norm": norm,
+                       "collab_phase": phase, "contact_force_n": force,
                        "services": services, "channels": channels})
             );
         } else {
@@ -434,6 +442,14 @@ fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
                 mode.unwrap_or("-"),
                 min_d.map_or("-".into(), |d| format!("{d:.3} m")),
                 norm.map_or("-".into(), |n| format!("{n:.2} Nm"))
+            );
+            s += &format!(
+                "collaboration {}   F̂ {}\n",
+                phase.unwrap_or("-"),
+                force.map_or("-".into(), |f| {
+                    let n = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+                    format!("{n:.1} N [{:.1}, {:.1}, {:.1}]", f[0], f[1], f[2])
+                })
             );
             s += &format!("  distance {}\n", sparkline(&dist_h));
             s += &format!("  residual {}\n\n", sparkline(&norm_h));

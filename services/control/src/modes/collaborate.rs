@@ -368,15 +368,23 @@ impl Collaboration {
             proximal >= self.cfg.wrist_min_nm && distal <= self.cfg.wrist_ratio * proximal;
         let _ = e;
         let wrist = self.wrist_centre();
+        // the collaborative hand confirms only when it is nearer to the wrist
+        // than to the end effector it holds; any other part when it is near
+        let collaborative = self.machine.part().joint().map(|j| j as usize);
         let confirmed = sk.is_some_and(|sk| {
             let n = (sk.n_people as usize).min(MAX_PEOPLE);
             sk.people[..n].iter().filter(|p| p.tracked != 0).any(|p| {
-                p.joints.iter().zip(&p.confidence).any(|(j, c)| {
-                    let x = Vector3::from(*j);
-                    *c >= self.cfg.min_hand_confidence
-                        && (x - wrist).norm() <= self.cfg.wrist_confirm_m
-                        && (x - wrist).norm() < (x - self.robot_point).norm()
-                })
+                p.joints
+                    .iter()
+                    .zip(&p.confidence)
+                    .enumerate()
+                    .any(|(i, (j, c))| {
+                        let x = Vector3::from(*j);
+                        *c >= self.cfg.min_hand_confidence
+                            && (x - wrist).norm() <= self.cfg.wrist_confirm_m
+                            && (Some(i) != collaborative
+                                || (x - wrist).norm() < (x - self.robot_point).norm())
+                    })
             })
         });
         if pattern && confirmed {
@@ -447,7 +455,7 @@ impl Collaboration {
     }
 
     /// The wrist centre \[m\], base frame: the origin of `wrist_link`.
-    fn wrist_centre(&self) -> Vector3<f64> {
+    pub fn wrist_centre(&self) -> Vector3<f64> {
         self.forces.frame_origin(self.wrist_frame)
     }
 }
