@@ -12,13 +12,21 @@
 //!   collision norm threshold from the recording's metadata (dashed red) when
 //!   present; an orange vertical line where `flags & COLLISION` rises
 //! - `min_distance.png`: `control/status` `min_distance` over time (non-finite skipped)
+//! - with a collaboration in the recording (`collab/state` not idle):
+//!   `collaboration.png` (the paper's Figs. 8 and 11): end-effector x, y, z
+//!   (`control/status` `ee`) and the collaborative hand's (`collab/state`
+//!   `hand`, while collaborating) against time, a grey line at each change of
+//!   phase; `contact_force.png`: ‖F̂‖ (`collab/state`) and the true force of
+//!   the collaborative hand (`sim/truth`, intended contacts of a hand)
 
 use std::error::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use phri_ipc::{residual_flags, CONTROL_STATUS, DYNAMICS_RESIDUAL, SIM_TRUTH};
+use phri_ipc::{
+    residual_flags, BodyPart, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, SIM_TRUTH,
+};
 use phri_record::plot::*;
 use phri_record::{read_file, ReadError, METADATA_NAME};
 use phri_runtime::Args;
@@ -27,6 +35,9 @@ use serde_json::Value;
 const USAGE: &str = "usage: phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]";
 /// someone nearer than this to a control point counts as present \[m\] (ρ of eq. 16)
 const NEAR_M: f64 = 0.4;
+const GREEN: Rgb = [44, 160, 44];
+const PURPLE: Rgb = [148, 103, 189];
+const BROWN: Rgb = [140, 86, 75];
 const W: usize = 900;
 const H: usize = 600;
 
@@ -70,6 +81,13 @@ fn body() -> Result<(), Box<dyn Error>> {
 
     let (mut ee, mut dist, mut norm) = (Vec::new(), Vec::new(), Vec::new());
     let mut rises = Vec::new();
+    // collaboration: end effector and hand x, y, z over time, phase changes,
+    // estimated and true contact force
+    let mut ee_t: [Vec<(f64, f64)>; 3] = Default::default();
+    let mut hand_t: [Vec<(f64, f64)>; 3] = Default::default();
+    let mut phase_changes: Vec<(f64, String)> = Vec::new();
+    let (mut f_est, mut f_true) = (Vec::new(), Vec::new());
+    let mut collaborated = false;
     let mut prev_collision = false;
     // true distance person ↔ arm, newest (infinite: no person)
     let mut person_m = f64::INFINITY;
@@ -89,6 +107,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         if topic != CONTROL_STATUS.name
             && topic != DYNAMICS_RESIDUAL.name
             && topic != SIM_TRUTH.name
+            && topic != COLLAB_STATE.name
         {
             continue;
         }
@@ -100,9 +119,62 @@ fn body() -> Result<(), Box<dyn Error>> {
         })?;
         let t0 = *t0.get_or_insert(m.log_time);
         let t = (m.log_time as f64 - t0 as f64) * 1e-9;
+        if topic == COLLAB_STATE.name {
+            let phase = v.get("phase").and_then(Value::as_str).unwrap_or("idle");
+            if phase_changes.last().is_none_or(|(_, p)| p != phase) {
+                phase_changes.push((t, phase.to_string()));
+            }
+            if phase != "idle" {
+                collaborated = true;
+                if let Some(h) = v.get("hand").and_then(Value::as_array) {
+                    for (i, series) in hand_t.iter_mut().enumerate() {
+                        if let Some(x) = h.get(i).and_then(Value::as_f64) {
+                            series.push((t, x));
+                        }
+                    }
+                }
+                let f = v["forces"][0]["force"].as_array().map(|f| {
+                    f.iter()
+                        .filter_map(Value::as_f64)
+                        .map(|x| x * x)
+                        .sum::<f64>()
+                        .sqrt()
+                });
+                if let Some(f) = f {
+                    f_est.push((t, f));
+                }
+            }
+            continue;
+        }
         if topic == SIM_TRUTH.name {
             person_m = num(&v, "min_distance");
+            if collaborated {
+                let hands = [BodyPart::HandRight as i64, BodyPart::HandLeft as i64];
+                let mut sum = [0.0; 3];
+                for c in v["contacts"].as_array().into_iter().flatten() {
+                    let intended = c["intended"].as_bool().unwrap_or(false);
+                    let hand = c["human_part"].as_i64().is_some_and(|p| hands.contains(&p));
+                    if intended && hand {
+                        for (k, x) in c["force"].as_array().into_iter().flatten().enumerate() {
+                            if k < 3 {
+                                sum[k] += x.as_f64().unwrap_or(0.0);
+                            }
+                        }
+                    }
+                }
+                f_true.push((
+                    t,
+                    (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt(),
+                ));
+            }
         } else if topic == CONTROL_STATUS.name {
+            if let Some(p) = v.get("ee").and_then(Value::as_array) {
+                for (i, series) in ee_t.iter_mut().enumerate() {
+                    if let Some(x) = p.get(i).and_then(Value::as_f64) {
+                        series.push((t, x));
+                    }
+                }
+            }
             let d = num(&v, "min_distance");
             if let Some(p) = v.get("ee").and_then(Value::as_array) {
                 let c = |i: usize| p.get(i).and_then(Value::as_f64).unwrap_or(f64::NAN);
@@ -225,6 +297,72 @@ fn body() -> Result<(), Box<dyn Error>> {
         a.polyline(&mut c, &dist, BLUE);
     }
     save(&c, &out, "min_distance.png")?;
+
+    if collaborated {
+        // (d) Figs. 8/11: end effector (solid colours) and hand (darker) x, y, z
+        let mut c = Canvas::new(W, H);
+        let all = || ee_t.iter().chain(hand_t.iter()).flatten();
+        if let (Some(xr), Some(yr)) = (range(all().map(|p| p.0)), range(all().map(|p| p.1))) {
+            let a = Axes::new(&c, xr, yr);
+            a.draw(&mut c);
+            a.label(
+                &mut c,
+                "end effector and collaborative hand",
+                "t [s]",
+                "position [m]",
+            );
+            a.legend(
+                &mut c,
+                &[
+                    (BLUE, "end effector x"),
+                    (RED, "end effector y"),
+                    (ORANGE, "end effector z"),
+                    (GREEN, "hand x"),
+                    (PURPLE, "hand y"),
+                    (BROWN, "hand z"),
+                    (GREY, "change of phase"),
+                ],
+            );
+            for (t, _) in &phase_changes[1.min(phase_changes.len())..] {
+                a.vline(&mut c, *t, GREY);
+            }
+            for (series, col) in ee_t.iter().zip([BLUE, RED, ORANGE]) {
+                a.polyline(&mut c, series, col);
+            }
+            // the hand only while collaborating: one line per stretch
+            for (series, col) in hand_t.iter().zip([GREEN, PURPLE, BROWN]) {
+                for run in series.chunk_by(|p, q| q.0 - p.0 < 0.2) {
+                    a.polyline(&mut c, run, col);
+                }
+            }
+        }
+        save(&c, &out, "collaboration.png")?;
+        // (e) estimated against true contact force
+        let mut c = Canvas::new(W, H);
+        let all = || f_est.iter().chain(f_true.iter());
+        if let (Some(xr), Some(yr)) = (
+            range(all().map(|p| p.0)),
+            range(all().map(|p| p.1).chain([0.0])),
+        ) {
+            let a = Axes::new(&c, xr, yr);
+            a.draw(&mut c);
+            a.label(
+                &mut c,
+                "contact force of the collaborative hand",
+                "t [s]",
+                "force [N]",
+            );
+            a.legend(
+                &mut c,
+                &[(RED, "true (simulator)"), (BLUE, "estimated (eqs. 21-22)")],
+            );
+            a.polyline(&mut c, &f_true, RED);
+            for run in f_est.chunk_by(|p, q| q.0 - p.0 < 0.2) {
+                a.polyline(&mut c, run, BLUE);
+            }
+        }
+        save(&c, &out, "contact_force.png")?;
+    }
     eprintln!(
         "phri-plot: {n} messages; {} ee points, {} residuals ({} collision onsets, threshold {}), {} distances -> {}",
         ee.len(),
