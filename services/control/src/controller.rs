@@ -324,7 +324,9 @@ impl Controller {
             q,
             input.residual.filter(|r| r.valid).map(|r| r.r),
             robot,
-            !s.residual_fresh || s.perception_stop,
+            // a collaboration needs to see: any stale safety input ends it
+            // (the task may go on slowly blind; an approach may not)
+            !s.residual_fresh || !s.perception_fresh || s.perception_stop,
             &input.collab,
         );
     }
