@@ -328,6 +328,7 @@ impl Controller {
             // (the task may go on slowly blind; an approach may not)
             !s.residual_fresh || !s.perception_fresh || s.perception_stop,
             &input.collab,
+            input.perception.as_ref().filter(|_| s.perception_fresh),
         );
     }
 

@@ -24,12 +24,16 @@ use phri_model::Model;
 
 use crate::collab::{Answer, CollabMachine, Observation, RobotState};
 use crate::error::ControlError;
+use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
 
 /// A skeleton older than this is no sighting of the hand \[s\].
 const MAX_SKELETON_AGE_S: f64 = 0.2;
 /// Pseudoinverse damping of the force estimate \[m\].
 const FORCE_DAMPING: f64 = 1e-3;
+/// A person seen in depth this near the wrist's control point confirms a
+/// wrist push \[m\] (the collaborative hand is masked: only another part can be).
+const WRIST_SEEN_M: f64 = 0.08;
 /// The desired end effector stays this close to the measured one \[m\]:
 /// blocked by avoidance or by the hand, the reference waits instead of winding up.
 const MAX_LEAD_M: f64 = 0.05;
@@ -60,6 +64,8 @@ pub struct Collaboration {
     contact: ContactPoint,
     /// the frame whose origin is the wrist centre
     wrist_frame: usize,
+    /// the repulsion control point on the wrist link (`[[repulsion.points]]`), if any
+    wrist_point: Option<usize>,
     /// joint collision thresholds of the detector \[Nm\]
     collision_threshold: [f64; MAX_DOF],
     n: usize,
@@ -117,6 +123,11 @@ impl Collaboration {
                 point: Vector3::from(c.robot_point),
             },
             wrist_frame,
+            wrist_point: cfg
+                .repulsion
+                .points
+                .iter()
+                .position(|p| p.link == c.wrist_link),
             collision_threshold,
             n,
             hand: None,
@@ -220,6 +231,7 @@ impl Collaboration {
         robot: RobotState,
         stale: bool,
         input: &CollabInput<'_>,
+        perception: Option<&PerceptionView<'_>>,
     ) -> CollabPhase {
         let fresh_skeleton = input.skeleton.filter(|sk| {
             stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
@@ -307,7 +319,13 @@ impl Collaboration {
                     .any(|(u, th)| u.abs() > *th)
             });
         // 4. the wrist push: a force through the wrist centre, a person near the wrist
-        let wrist_push = self.machine.active() && self.wrist_push(t, residual, fresh_skeleton);
+        // a person seen in depth at the wrist's control point
+        let wrist_seen = self
+            .wrist_point
+            .and_then(|i| perception?.points.get(i))
+            .is_some_and(|p| p.active != 0 && p.min_distance <= WRIST_SEEN_M);
+        let wrist_push =
+            self.machine.active() && self.wrist_push(t, residual, fresh_skeleton, wrist_seen);
         // 5. the gap and the phase
         self.gap = match self.hand {
             Some(h) => {
@@ -354,7 +372,13 @@ impl Collaboration {
     /// `‖r₅..₇‖ ≤ wrist_ratio ‖r₁..₄‖`, `‖r₁..₄‖ ≥ wrist_min_nm`, for
     /// `wrist_hold_s`, with a human part seen within `wrist_confirm_m` of the
     /// wrist and nearer to it than to the collaborative contact.
-    fn wrist_push(&mut self, t: f64, residual: Option<&[f64]>, sk: Option<&Skeleton>) -> bool {
+    fn wrist_push(
+        &mut self,
+        t: f64,
+        residual: Option<&[f64]>,
+        sk: Option<&Skeleton>,
+        seen_in_depth: bool,
+    ) -> bool {
         let (Some(r), Some(e)) = (residual, self.estimate.as_ref()) else {
             self.wrist_since = None;
             return false;
@@ -371,22 +395,23 @@ impl Collaboration {
         // the collaborative hand confirms only when it is nearer to the wrist
         // than to the end effector it holds; any other part when it is near
         let collaborative = self.machine.part().joint().map(|j| j as usize);
-        let confirmed = sk.is_some_and(|sk| {
-            let n = (sk.n_people as usize).min(MAX_PEOPLE);
-            sk.people[..n].iter().filter(|p| p.tracked != 0).any(|p| {
-                p.joints
-                    .iter()
-                    .zip(&p.confidence)
-                    .enumerate()
-                    .any(|(i, (j, c))| {
-                        let x = Vector3::from(*j);
-                        *c >= self.cfg.min_hand_confidence
-                            && (x - wrist).norm() <= self.cfg.wrist_confirm_m
-                            && (Some(i) != collaborative
-                                || (x - wrist).norm() < (x - self.robot_point).norm())
-                    })
-            })
-        });
+        let confirmed = seen_in_depth
+            || sk.is_some_and(|sk| {
+                let n = (sk.n_people as usize).min(MAX_PEOPLE);
+                sk.people[..n].iter().filter(|p| p.tracked != 0).any(|p| {
+                    p.joints
+                        .iter()
+                        .zip(&p.confidence)
+                        .enumerate()
+                        .any(|(i, (j, c))| {
+                            let x = Vector3::from(*j);
+                            *c >= self.cfg.min_hand_confidence
+                                && (x - wrist).norm() <= self.cfg.wrist_confirm_m
+                                && (Some(i) != collaborative
+                                    || (x - wrist).norm() < (x - self.robot_point).norm())
+                        })
+                })
+            });
         if pattern && confirmed {
             let since = *self.wrist_since.get_or_insert(t);
             t - since >= self.cfg.wrist_hold_s
