@@ -126,24 +126,7 @@ fn processes_of(prefix: &str) -> Vec<String> {
 
 /// Files of `prefix` in iceoryx2's directories and /dev/shm.
 fn shm_files_of(prefix: &str) -> Vec<PathBuf> {
-    let mut found = Vec::new();
-    for dir in ["/tmp/iceoryx2", "/dev/shm"] {
-        let mut stack = vec![PathBuf::from(dir)];
-        while let Some(d) = stack.pop() {
-            let Ok(rd) = std::fs::read_dir(&d) else {
-                continue;
-            };
-            for e in rd.flatten() {
-                let p = e.path();
-                if p.is_dir() {
-                    stack.push(p);
-                } else if e.file_name().to_string_lossy().starts_with(prefix) {
-                    found.push(p);
-                }
-            }
-        }
-    }
-    found
+    phri_ipc::files_of(prefix)
 }
 
 /// No process of the cell and no shared-memory file of its prefix remain.

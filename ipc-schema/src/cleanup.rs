@@ -25,15 +25,10 @@ pub fn live_nodes(prefix: &str) -> usize {
     alive
 }
 
-/// Remove every iceoryx2 file of `prefix` once no node of it is alive (iceoryx2
-/// keeps a management segment after its last node ends). `Err(n)`: `n` nodes
-/// are still attached and nothing was removed. Call after dropping your own node.
-pub fn remove_leftovers(prefix: &str) -> Result<usize, usize> {
-    let alive = live_nodes(prefix);
-    if alive > 0 {
-        return Err(alive);
-    }
-    let mut removed = 0;
+/// Every iceoryx2 file of `prefix`: node, service and event files under
+/// iceoryx2's root path, shared-memory objects in `/dev/shm`.
+pub fn files_of(prefix: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
     let root = Config::default().global.root_path().to_string();
     for dir in [
         PathBuf::from(root.trim_end_matches('/')),
@@ -44,18 +39,32 @@ pub fn remove_leftovers(prefix: &str) -> Result<usize, usize> {
         };
         let mut stack: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
         while let Some(p) = stack.pop() {
-            let name = p
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
             if p.is_dir() {
                 if let Ok(rd) = std::fs::read_dir(&p) {
                     stack.extend(rd.filter_map(|e| e.ok().map(|e| e.path())));
                 }
-            } else if name.starts_with(prefix) && std::fs::remove_file(&p).is_ok() {
-                removed += 1;
+            } else if p
+                .file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with(prefix))
+            {
+                found.push(p);
             }
         }
     }
-    Ok(removed)
+    found
+}
+
+/// Remove every iceoryx2 file of `prefix` ([`files_of`]) once no node of it
+/// is alive (iceoryx2 keeps a management segment after its last node ends).
+/// `Err(n)`: `n` nodes are still attached and nothing was removed. Call after
+/// dropping your own node.
+pub fn remove_leftovers(prefix: &str) -> Result<usize, usize> {
+    let alive = live_nodes(prefix);
+    if alive > 0 {
+        return Err(alive);
+    }
+    Ok(files_of(prefix)
+        .iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count())
 }

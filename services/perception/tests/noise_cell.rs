@@ -119,26 +119,8 @@ fn assert_nothing_left(prefix: &str) {
         "processes left: {}",
         String::from_utf8_lossy(&out.stdout)
     );
-    for dir in ["/tmp/iceoryx2", "/dev/shm"] {
-        let mut stack = vec![PathBuf::from(dir)];
-        while let Some(d) = stack.pop() {
-            let Ok(rd) = std::fs::read_dir(&d) else {
-                continue;
-            };
-            for e in rd.flatten() {
-                let p = e.path();
-                if p.is_dir() {
-                    stack.push(p);
-                } else {
-                    assert!(
-                        !e.file_name().to_string_lossy().starts_with(prefix),
-                        "left behind: {}",
-                        p.display()
-                    );
-                }
-            }
-        }
-    }
+    let files = phri_ipc::files_of(prefix);
+    assert!(files.is_empty(), "left behind: {files:?}");
 }
 
 #[test]

@@ -69,23 +69,6 @@ fn no_cell_is_one_line_naming_the_channel() {
         first_line(&o)
     );
     // nothing of the prefix is left behind
-    for dir in ["/dev/shm", "/tmp/iceoryx2"] {
-        let mut stack = vec![std::path::PathBuf::from(dir)];
-        while let Some(d) = stack.pop() {
-            let Ok(rd) = std::fs::read_dir(&d) else {
-                continue;
-            };
-            for e in rd.flatten() {
-                if e.path().is_dir() {
-                    stack.push(e.path());
-                } else {
-                    assert!(
-                        !e.file_name().to_string_lossy().starts_with(&prefix),
-                        "left behind: {}",
-                        e.path().display()
-                    );
-                }
-            }
-        }
-    }
+    let files = phri_ipc::files_of(&prefix);
+    assert!(files.is_empty(), "left behind: {files:?}");
 }

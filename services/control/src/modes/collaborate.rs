@@ -290,23 +290,24 @@ impl Collaboration {
                 });
             }
         }
-        // 3. the force at the robot point, what it leaves unexplained, the robot point
+        // 3. the force at the robot point, what it leaves unexplained, the
+        // robot point: only while collaborating (idle, nothing reads them)
         let zero = [0.0; MAX_DOF];
         let r = residual
             .filter(|r| r.len() == self.n)
             .unwrap_or(&zero[..self.n]);
-        self.estimate = self
-            .forces
-            .estimate(q, r, std::slice::from_ref(&self.contact))
-            .ok()
-            .copied();
-        let (force_n, f) = match &self.estimate {
-            Some(e) if self.machine.active() && residual.is_some() => {
-                (e.forces[0].norm(), e.forces[0])
-            }
-            _ => (0.0, Vector3::zeros()),
+        self.estimate = match self.machine.active() {
+            true => self
+                .forces
+                .estimate(q, r, std::slice::from_ref(&self.contact))
+                .ok()
+                .copied(),
+            false => None,
         };
-        let _ = f;
+        let force_n = match &self.estimate {
+            Some(e) if residual.is_some() => e.forces[0].norm(),
+            _ => 0.0,
+        };
         if let Some(e) = &self.estimate {
             self.robot_point = e.points[0];
         }
@@ -379,7 +380,7 @@ impl Collaboration {
         sk: Option<&Skeleton>,
         seen_in_depth: bool,
     ) -> bool {
-        let (Some(r), Some(e)) = (residual, self.estimate.as_ref()) else {
+        let (Some(r), Some(_)) = (residual, self.estimate.as_ref()) else {
             self.wrist_since = None;
             return false;
         };
@@ -390,7 +391,6 @@ impl Collaboration {
         let distal = r[4..].iter().map(|x| x * x).sum::<f64>().sqrt();
         let pattern =
             proximal >= self.cfg.wrist_min_nm && distal <= self.cfg.wrist_ratio * proximal;
-        let _ = e;
         let wrist = self.wrist_centre();
         // the collaborative hand confirms only when it is nearer to the wrist
         // than to the end effector it holds; any other part when it is near

@@ -3,6 +3,8 @@
 //! energies.
 #![allow(dead_code)]
 
+pub mod counting;
+
 use nalgebra::{DMatrix, DVector, Vector3};
 use phri_config::{Config, SimConfig};
 use phri_model::{
