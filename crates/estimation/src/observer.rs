@@ -69,6 +69,8 @@ pub struct ResidualObserver {
     p0: Vec<f64>,
     integral: Vec<f64>,
     last_integrand: Vec<f64>,
+    /// the integrand through the velocity estimate's low-pass
+    forcing: Vec<f64>,
     r: Vec<f64>,
     integrand: Vec<f64>,
 }
@@ -122,6 +124,7 @@ impl ResidualObserver {
             p0: vec![0.0; n],
             integral: vec![0.0; n],
             last_integrand: vec![0.0; n],
+            forcing: vec![0.0; n],
             r: vec![0.0; n],
             integrand: vec![0.0; n],
             gain,
@@ -201,15 +204,24 @@ impl ResidualObserver {
         }
         self.samples = self.samples.saturating_add(1);
         // the velocity filter needs a few samples before p(0) is meaningful
+        // the applied torque is held over the period; the state-dependent
+        // terms are averaged; all through the low-pass that made q̇ (and so
+        // p), so that the momentum and its integrated rate lag alike
+        let alpha = self.velocity.smoothing(dt);
+        for i in 0..n {
+            let x = tau[i] + 0.5 * (self.integrand[i] + self.last_integrand[i]);
+            self.forcing[i] = match self.samples <= self.warmup {
+                true => x,
+                false => alpha * self.forcing[i] + (1.0 - alpha) * x,
+            };
+        }
         if self.samples <= self.warmup {
             self.p0.copy_from_slice(self.data.p.as_slice());
             self.integral.fill(0.0);
             self.r.fill(0.0);
         } else {
             for i in 0..n {
-                // the applied torque is held over the period; the state-dependent terms are averaged
-                self.integral[i] +=
-                    dt * (tau[i] + 0.5 * (self.integrand[i] + self.last_integrand[i]) + self.r[i]);
+                self.integral[i] += dt * (self.forcing[i] + self.r[i]);
                 self.r[i] = self.gain[i] * (self.data.p[i] - self.p0[i] - self.integral[i]);
             }
         }

@@ -33,13 +33,19 @@ impl VelocityEstimator {
             self.primed = true;
             return &self.qd;
         }
-        let alpha = (-2.0 * std::f64::consts::PI * self.cutoff_hz * dt).exp();
+        let alpha = self.smoothing(dt);
         for i in 0..q.len() {
             let raw = (q[i] - self.last_q[i]) / dt;
             self.qd[i] = alpha * self.qd[i] + (1.0 - alpha) * raw;
             self.last_q[i] = q[i];
         }
         &self.qd
+    }
+
+    /// The low-pass's weight of the old estimate for a step of `dt` \[s\]:
+    /// `v ← α v + (1 − α) raw`.
+    pub fn smoothing(&self, dt: f64) -> f64 {
+        (-2.0 * std::f64::consts::PI * self.cutoff_hz * dt.max(0.0)).exp()
     }
 
     pub fn velocity(&self) -> &[f64] {

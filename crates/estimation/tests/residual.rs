@@ -1,7 +1,8 @@
 //! The momentum residual (paper eqs. 5, 8) against the exact torques of an
 //! analytic trajectory (see `common`): it stays near zero in free motion,
-//! follows a step of τ_ext as the first-order low-pass
-//! `r = τ_ext (1 − e^{−K_I t})`, detects within the first-order bound,
+//! follows a step of τ_ext as the low-pass `K_I/(s + K_I)` behind the
+//! velocity estimate's own low-pass (`common::step_response`), detects
+//! within the bound that response gives,
 //! isolates the link, removes a force the wrist F/T sensor measures, and
 //! refuses bad inputs.
 
@@ -38,7 +39,7 @@ fn free_motion_keeps_the_residual_near_zero() {
 }
 
 #[test]
-fn each_component_follows_a_torque_step_as_a_first_order_low_pass_of_its_own_gain() {
+fn each_component_follows_a_torque_step_as_a_low_pass_of_its_own_gain() {
     // a different K_I on every joint: component i must follow its own
     let gains = vec![40.0, 60.0, 80.0, 100.0, 120.0, 150.0, 200.0];
     let cfg = ResidualConfig {
@@ -51,6 +52,7 @@ fn each_component_follows_a_torque_step_as_a_first_order_low_pass_of_its_own_gai
     let step = [3.0, -5.0, 2.0, 4.0, 1.0, -1.0, 0.5];
     let onset = 1000; // samples: t_on = 1 s
     let t_on = onset as f64 * DT;
+    let (mut forcing, mut euler) = ([0.0; 7], [0.0; 7]);
     for k in 0..1400 {
         let (t, q) = sample(k);
         let tau = arm.held_torque(t, |_, tm| if tm > t_on { step } else { [0.0; 7] });
@@ -61,21 +63,26 @@ fn each_component_follows_a_torque_step_as_a_first_order_low_pass_of_its_own_gai
         let since = t - t_on;
         for i in 0..7 {
             let k_i = gains[i];
-            // the continuous law; the explicit step of the observer is the
-            // Euler step of it, (1 − K_I Δt)^m, within K_I Δt/e of it
-            let law = step[i] * (1.0 - (-k_i * since).exp());
-            let euler = step[i] * (1.0 - (1.0 - k_i * DT).powi((k - onset) as i32));
+            let law = step[i] * step_response(&cfg, k_i, since);
+            // the discrete recursion: the forcing through the velocity
+            // estimate's low-pass (weight α), then the observer's Euler step
+            let alpha = (-2.0 * std::f64::consts::PI * cfg.velocity_cutoff_hz * DT).exp();
+            if k > onset {
+                forcing[i] = alpha * forcing[i] + (1.0 - alpha) * step[i];
+                euler[i] += k_i * DT * (forcing[i] - euler[i]);
+            }
             assert!(
                 (out.r[i] - law).abs() < 0.08 * step[i].abs() + 0.02,
-                "joint {i} at {:.0} ms: r {} vs τ_ext (1 − e^(−K t)) {law}",
+                "joint {i} at {:.0} ms: r {} vs τ_ext × step response {law}",
                 since * 1e3,
                 out.r[i]
             );
             assert!(
-                (out.r[i] - euler).abs() < 0.02,
-                "joint {i} at {:.0} ms: r {} vs the discrete law {euler}",
+                (out.r[i] - euler[i]).abs() < 0.02,
+                "joint {i} at {:.0} ms: r {} vs the discrete law {}",
                 since * 1e3,
-                out.r[i]
+                out.r[i],
+                euler[i]
             );
         }
     }
@@ -127,10 +134,10 @@ fn follows_a_contact_force_detects_within_the_bound_and_isolates_the_link() {
             );
         }
         if k == onset + 10 {
-            // after 10 ms: r ≈ τ_ext (1 − e^{−K t}) (the old closed-loop test
-            // allowed 15 % + 0.2 Nm on joints 1-4; every joint now, tighter)
+            // after 10 ms: r ≈ τ_ext × the step response (the old closed-loop
+            // test allowed 15 % + 0.2 Nm on joints 1-4; every joint now, tighter)
             for i in 0..7 {
-                let expect = te[i] * (1.0 - (-k_i * 0.010).exp());
+                let expect = te[i] * step_response(&cfg, k_i, 0.010);
                 assert!(
                     (out.r[i] - expect).abs() < 0.05 * te[i].abs() + 0.05,
                     "joint {i}: {} vs {expect}",
@@ -161,14 +168,16 @@ fn follows_a_contact_force_detects_within_the_bound_and_isolates_the_link() {
             }
         }
     }
-    // first-order bound: −ln(1 − θ/F)/K_I + one period, for the joint with the largest F/θ
+    // the bound: when the step response reaches θ/F, plus one period, for
+    // the joint with the largest F/θ
     let (samples, te) = detected.expect("collision not detected");
     let (i, ratio) = (0..7)
         .map(|i| (i, te[i].abs() / theta[i]))
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap();
     assert!(ratio > 1.5, "test force too small: joint {i} F/θ = {ratio}");
-    let bound_ms = -(1.0 - 1.0 / ratio).ln() / k_i * 1000.0 + DT * 1000.0;
+    let reach = cfg.time_to_reach(k_i, 1.0 / ratio).expect("θ/F in (0, 1)");
+    let bound_ms = (reach + DT) * 1000.0;
     let got_ms = samples as f64 * DT * 1000.0;
     assert!(
         got_ms <= bound_ms,

@@ -152,6 +152,8 @@ pub struct DetectorInfo {
     pub collision_threshold: Vec<f64>,
     /// observer gain [1/s] (the smallest, for the bound)
     pub gain: f64,
+    /// `[dynamics]`, whose step response gives the bound
+    pub dynamics: ResidualConfig,
 }
 
 impl DetectorInfo {
@@ -170,6 +172,7 @@ impl DetectorInfo {
         Ok(DetectorInfo {
             collision_threshold,
             gain,
+            dynamics: dynamics.clone(),
         })
     }
 }
@@ -687,7 +690,15 @@ impl Evaluator {
             .zip(&self.hist_last)
             .map(|(a, b)| a + b)
             .collect();
-        let bound_ms = -(0.5f64).ln() / self.det.gain * 1000.0 + 2.0;
+        // a force of twice the threshold: the residual's step response
+        // reaches one half (first order alone: ln 2 / K_I), plus 2 ms
+        let bound_ms = self
+            .det
+            .dynamics
+            .time_to_reach(self.det.gain, 0.5)
+            .unwrap_or(f64::INFINITY)
+            * 1000.0
+            + 2.0;
         let contacts: Vec<ContactReport> = self
             .episodes
             .iter()
@@ -789,6 +800,7 @@ mod tests {
             DetectorInfo {
                 collision_threshold: vec![5.0; 7],
                 gain: 100.0,
+                dynamics: phri_config::Config::defaults().dynamics,
             },
             vec!["link_a".into()],
         )
@@ -842,7 +854,8 @@ mod tests {
         assert_eq!(c.detected_after_ms, Some(15.0));
         assert_eq!(c.reached_twice_threshold_after_ms, Some(10.0));
         assert_eq!(c.detected_after_twice_threshold_ms, Some(5.0));
-        assert!((c.bound_ms - 8.93).abs() < 0.01);
+        // ln 2/K_I = 6.93 ms alone; behind the 60 Hz velocity filter 9.84 ms; + 2 ms
+        assert!((c.bound_ms - 11.84).abs() < 0.01, "{}", c.bound_ms);
         assert_eq!(r.false_detections, 1);
         assert_eq!(r.min_distance_m, Some(-0.01));
         assert_eq!(r.events.iter().filter(|e| e.kind == "detection").count(), 2);
