@@ -699,3 +699,116 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
         .collect();
     assert!(unintended.is_empty(), "{unintended:?}");
 }
+
+/// The collaboration phase of the cell as `phri-hri watch --once` prints it
+/// ("approach", "contact", …), None while the controller is not up.
+fn collab_phase(cell: &Cell) -> Option<String> {
+    let out = Command::new(bin("phri-hri"))
+        .args(["--prefix", &cell.prefix, "watch", "--once"])
+        .output()
+        .ok()?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let rest = text.lines().last()?.strip_prefix("phase ")?;
+    Some(rest.split_whitespace().next()?.to_string())
+}
+
+#[test]
+fn killing_gesture_mid_collaboration_is_fail_safe() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // the person waves 3-6 s, the robot approaches the hand from ~4.5 s;
+    // phri-gesture dies 1.5 s into the approach (~6 s, the wave's end). The
+    // collaboration runs on the tracked hand, not on the recogniser: the
+    // supervisor restarts it, nothing unsafe happens, and the restarted
+    // recogniser (which sees at most the wave's tail) asks nothing again
+    let cell = Cell::start("gestkill", "collaboration", Some(15.0), &[]);
+    cell.pid_of("gesture");
+    let deadline = Instant::now() + Duration::from_secs(12);
+    loop {
+        if collab_phase(&cell).as_deref() == Some("approach") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no approach within 12 s");
+        wait(0.1);
+    }
+    wait(1.5);
+    cell.kill("gesture", libc::SIGKILL);
+    let r = cell.finish();
+    let c = &r["collaboration"];
+    eprintln!("collaboration: {c}");
+    eprintln!("gesture: {}", r["services"]["gesture"]);
+    assert_eq!(r["services"]["gesture"]["restarts"], 1, "{}", r["events"]);
+    assert_eq!(r["services"]["gesture"]["alive_at_end"], true);
+    let kill_t = events(&r, "exit", "gesture")
+        .first()
+        .unwrap_or_else(|| panic!("no exit of gesture: {}", r["events"]))["t_s"]
+        .as_f64()
+        .unwrap();
+    let phases = c["phases"].as_array().unwrap();
+    let approach_t = phases
+        .iter()
+        .find(|p| p["phase"] == "approach")
+        .expect("the approach had begun")["t_s"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        kill_t > approach_t,
+        "killed at {kill_t} s, before the approach ({approach_t} s): the test tests nothing"
+    );
+    // nothing unsafe: no unintended contact, no collision reaction, no brake
+    let contacts = r["contacts"].as_array().unwrap();
+    let unintended: Vec<&Value> = contacts.iter().filter(|c| c["intended"] == false).collect();
+    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
+    assert!(
+        events(&r, "reaction", "control").is_empty(),
+        "{}",
+        r["events"]
+    );
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+    // the robot still reaches the hand, or the collaboration ends cleanly
+    let reached = contacts.iter().any(|c| {
+        c["part"] == "hand_right"
+            && c["link"] == "lwr_link_7"
+            && c["intended"] == true
+            && c["t_start_s"].as_f64() > Some(approach_t)
+    });
+    // orderly ends (a collision or a force limit would have shown above)
+    let clean = [
+        "wrist_push",
+        "end_request",
+        "stop_request",
+        "hand_lost",
+        "stale",
+    ];
+    let ended = phases.iter().find(|p| {
+        p["phase"] == "idle"
+            && p["t_s"].as_f64() > Some(approach_t)
+            && clean.iter().any(|r| p["reason"] == *r)
+    });
+    assert!(
+        reached || ended.is_some(),
+        "neither reached the hand nor ended: {contacts:?}, {c}"
+    );
+    eprintln!(
+        "killed {:.2} s after the approach began; hand reached: {reached}; ended: {}",
+        kill_t - approach_t,
+        ended.map_or("no".to_string(), |p| p.to_string())
+    );
+    for h in contacts.iter().filter(|c| c["part"] == "hand_right") {
+        assert!(h["peak_force_n"].as_f64().unwrap() <= 70.0, "{h}");
+    }
+    // one request, the wave's, accepted before the kill; none accepted after
+    let gesture: Vec<&Value> = c["requests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|q| q["source"] == "gesture")
+        .collect();
+    let accepted: Vec<&&Value> = gesture.iter().filter(|q| q["accepted"] == true).collect();
+    assert_eq!(accepted.len(), 1, "gesture requests: {gesture:?}");
+    assert!(
+        accepted[0]["t_s"].as_f64() < Some(kill_t) && accepted[0]["part"] == "right_hand",
+        "{gesture:?}"
+    );
+    let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
+    assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+}

@@ -114,6 +114,8 @@ wire_enum! {
         Contact = 7 => "contact",
         /// collaboration: the hand moved away, the end effector follows it
         Follow = 8 => "follow",
+        /// collaboration: a force limit was passed; the end effector backs off
+        BackOff = 9 => "back_off",
     }
 }
 
@@ -217,6 +219,8 @@ wire_enum! {
         Contact = 2 => "contact",
         /// the hand moved away: the end effector follows it
         Follow = 3 => "follow",
+        /// a force limit was passed: the end effector backs off, then idle
+        BackOff = 4 => "back_off",
     }
 }
 

@@ -126,6 +126,9 @@ pub struct CollaborationConfig {
     pub robot_point: [f64; 3],
     /// radius of the robot part around that point [m]
     pub robot_radius_m: f64,
+    /// the robot part is a capsule: the segment `robot_point ± this` along
+    /// the link frame's z axis, swept by `robot_radius_m` [m]
+    pub robot_half_length_m: f64,
     /// radius of the hand around the tracked hand joint [m]
     pub hand_radius_m: f64,
     /// the link whose frame origin is the wrist centre (a wrist push acts there)
@@ -138,12 +141,20 @@ pub struct CollaborationConfig {
     pub slow_down_m: f64,
     /// low-pass of the hand position the approach follows [s]
     pub hand_filter_s: f64,
-    /// a surface gap to the hand below this, or an estimated force above
-    /// `contact_force_n`, is contact [m]
+    /// the approach aims this far into the modelled hand [m]: the hand seen
+    /// in depth is off by centimetres, so the robot part goes on (at
+    /// `contact_speed`) until it touches, as the estimated force tells
+    pub reach_into_m: f64,
+    /// a surface gap to the hand below this (negative: the modelled surfaces
+    /// overlap), or an estimated force above `contact_force_n` near the hand,
+    /// is contact [m]; at least `−reach_into_m`
     pub contact_gap_m: f64,
     pub contact_force_n: f64,
     /// contact: admittance on the estimated force, end-effector velocity per newton [m/(N s)]
     pub admittance: f64,
+    /// contact: the end effector keeps pressing the hand with this force [N]
+    /// (the admittance's reference: it yields to more, closes in on less)
+    pub contact_hold_n: f64,
     /// contact → follow once the hand is this far from the end effector's surface [m]
     pub follow_gap_m: f64,
     /// the collaboration ends when the hand has not been seen for this long [s]
@@ -158,6 +169,11 @@ pub struct CollaborationConfig {
     pub back_off_m: f64,
     /// wrist push: the residual of joints 5-7 at most this fraction of joints 1-4's
     pub wrist_ratio: f64,
+    /// wrist push: a force at the wrist centre must explain the residual but
+    /// this fraction of its norm (a push on links 1-4 off the line from the
+    /// shoulder to the wrist turns the elbow about it, which no force at the
+    /// wrist does)
+    pub wrist_fit: f64,
     /// wrist push: joints 1-4's residual at least this [Nm] ...
     pub wrist_min_nm: f64,
     /// ... for this long [s]
@@ -188,8 +204,10 @@ impl CollaborationConfig {
         crate::check::finite(S, "robot_point", &self.robot_point)?;
         for (name, v) in [
             ("robot_radius_m", self.robot_radius_m),
+            ("robot_half_length_m", self.robot_half_length_m),
             ("hand_radius_m", self.hand_radius_m),
-            ("contact_gap_m", self.contact_gap_m),
+            ("reach_into_m", self.reach_into_m),
+            ("contact_hold_n", self.contact_hold_n),
             ("back_off_m", self.back_off_m),
             ("mask_forearm_m", self.mask_forearm_m),
             ("rearm_quiet_s", self.rearm_quiet_s),
@@ -215,6 +233,13 @@ impl CollaborationConfig {
         ] {
             positive(S, name, v)?;
         }
+        crate::check::finite(S, "contact_gap_m", &[self.contact_gap_m])?;
+        if self.contact_gap_m < -self.reach_into_m {
+            return Err(Invalid::new(
+                "collaboration.contact_gap_m",
+                "must be at least −reach_into_m (the approach stops there)",
+            ));
+        }
         if self.contact_speed > self.approach_speed {
             return Err(Invalid::new(
                 "collaboration.contact_speed",
@@ -229,6 +254,7 @@ impl CollaborationConfig {
             1.0,
         )?;
         within(S, "wrist_ratio", self.wrist_ratio, 0.0, 1.0)?;
+        within(S, "wrist_fit", self.wrist_fit, 0.0, 1.0)?;
         Ok(())
     }
 }

@@ -18,7 +18,7 @@
 //! Allocation-free after construction.
 
 use nalgebra::{DMatrixViewMut, Matrix3, Matrix6xX, Vector3};
-use phri_model::{check_len, cholesky_factor, cholesky_solve, Data, LengthError, Model};
+use phri_model::{check_len, cholesky_factor, cholesky_solve, Data, LengthError, Model, Placement};
 
 /// Contacts estimated at once (eq. 23 with two).
 pub const MAX_FORCE_CONTACTS: usize = 2;
@@ -37,6 +37,8 @@ pub enum ForceError {
     TooMany(usize),
     #[error("{0}: not a finite number")]
     NotFinite(&'static str),
+    #[error("no frame {0} in the model")]
+    UnknownFrame(usize),
 }
 
 /// A contact point: a point fixed on a link frame.
@@ -224,6 +226,19 @@ impl ForceEstimator {
         out.unexplained = unexplained.sqrt();
         self.last = out;
         Ok(&self.last)
+    }
+
+    /// The placement of `frame` in the base frame at joints `q` \[rad\].
+    pub fn placement(&mut self, q: &[f64], frame: usize) -> Result<Placement, ForceError> {
+        check_len("q", self.model.nv(), q.len())?;
+        if q.iter().any(|x| !x.is_finite()) {
+            return Err(ForceError::NotFinite("q"));
+        }
+        phri_model::forward_kinematics(&self.model, &mut self.data, q)?;
+        if frame >= self.model.frames.len() {
+            return Err(ForceError::UnknownFrame(frame));
+        }
+        Ok(phri_model::frame_placement(&self.model, &self.data, frame))
     }
 
     /// The origin of `frame` \[m\], base frame, at the joints of the last

@@ -6,10 +6,12 @@
 //! | from | to | when |
 //! | --- | --- | --- |
 //! | idle | approach | a `begin`/`follow` request for a well-tracked hand, the robot neither reacting nor stopped |
-//! | approach | contact | surface gap ≤ `contact_gap_m` or ‖F̂‖ ≥ `contact_force_n` |
-//! | contact | follow | the hand more than `follow_gap_m` away and no force |
+//! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within `slow_down_m` |
+//! | contact | follow | the hand more than `follow_gap_m` away and ‖F̂‖ below half `contact_force_n` |
 //! | follow | contact | as approach → contact |
-//! | any | idle | a wrist push, an `end`/`stop` request, the hand unseen for `hand_lost_s`, ‖F̂‖ above the force limit, a collision elsewhere, a stale safety input |
+//! | approach, contact, follow | back off | ‖F̂‖ above the force limit |
+//! | back off | idle | backed off `back_off_m` (or given up after [`BACK_OFF_MAX_S`]) |
+//! | any | idle | a wrist push, an `end`/`stop` request, the hand unseen for `hand_lost_s` (not backing off), a collision elsewhere, a stale safety input |
 
 use phri_config::CollaborationConfig;
 use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
@@ -17,6 +19,10 @@ use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
 /// Least time in contact before the hand counts as moved away \[s\]: a
 /// contact is a touch, not one noisy sample.
 const MIN_CONTACT_S: f64 = 0.3;
+
+/// Backing off ends after this long even when the arm could not get as far
+/// as `back_off_m` (blocked by avoidance or a joint limit) \[s\].
+pub const BACK_OFF_MAX_S: f64 = 2.0;
 
 /// What the controller measured in this period.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -38,6 +44,8 @@ pub struct Observation {
     pub collision: bool,
     /// a safety input (residual, perception) is stale
     pub stale: bool,
+    /// backing off: the end effector got `back_off_m` away
+    pub backed_off: bool,
 }
 
 /// Where the rest of the robot stands when a request arrives.
@@ -110,7 +118,7 @@ impl CollabMachine {
         self.person
     }
 
-    /// Collaborating: approach, contact or follow.
+    /// Collaborating: approach, contact, follow or backing off.
     pub fn active(&self) -> bool {
         self.phase != CollabPhase::Idle
     }
@@ -222,12 +230,18 @@ impl CollabMachine {
             self.hand_seen_t = obs.t;
         }
         // the ends, most severe first
+        let backing_off = self.phase == CollabPhase::BackOff;
         let end = if obs.stale {
             Some(CollabReason::Stale)
         } else if obs.collision {
             Some(CollabReason::Collision)
+        } else if backing_off {
+            (obs.backed_off || self.in_phase_s(obs.t) >= BACK_OFF_MAX_S)
+                .then_some(CollabReason::ForceLimit)
         } else if obs.force_n > self.force_limit_n() {
-            Some(CollabReason::ForceLimit)
+            // stop, and back off before the collaboration ends
+            self.enter(CollabPhase::BackOff, CollabReason::ForceLimit, obs.t);
+            return self.phase;
         } else if obs.wrist_push {
             Some(CollabReason::WristPush)
         } else if obs.t - self.hand_seen_t > self.cfg.hand_lost_s {
@@ -242,14 +256,14 @@ impl CollabMachine {
         // a force alone is no contact far from the hand (the residual of a
         // moving arm is never quite zero)
         let touching = obs.gap_m <= self.cfg.contact_gap_m
-            || (obs.force_n >= self.cfg.contact_force_n && obs.gap_m <= self.cfg.follow_gap_m);
+            || (obs.force_n >= self.cfg.contact_force_n && obs.gap_m <= self.cfg.slow_down_m);
         match self.phase {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
                 self.enter(CollabPhase::Contact, CollabReason::ContactMade, obs.t)
             }
             CollabPhase::Contact
                 if obs.gap_m > self.cfg.follow_gap_m
-                    && obs.force_n < self.cfg.contact_force_n
+                    && obs.force_n < 0.5 * self.cfg.contact_force_n
                     && obs.t - self.since >= MIN_CONTACT_S =>
             {
                 self.enter(CollabPhase::Follow, CollabReason::HandMovedAway, obs.t)
@@ -351,7 +365,7 @@ mod tests {
             0.0,
         );
         assert_eq!(m.step(&seen(0.1, 0.3, 0.0)), CollabPhase::Approach);
-        assert_eq!(m.step(&seen(0.2, gap * 0.5, 0.0)), CollabPhase::Contact);
+        assert_eq!(m.step(&seen(0.2, gap - 0.005, 0.0)), CollabPhase::Contact);
         assert_eq!(m.reason(), CollabReason::ContactMade);
         // pushed around in contact: still contact
         assert_eq!(m.step(&seen(0.3, 0.03, 20.0)), CollabPhase::Contact);
@@ -363,7 +377,7 @@ mod tests {
         );
         assert_eq!(m.reason(), CollabReason::HandMovedAway);
         // a force is contact near the hand, not far from it
-        assert_eq!(m.step(&seen(0.45, 0.2, 10.0)), CollabPhase::Follow);
+        assert_eq!(m.step(&seen(0.45, 0.4, 10.0)), CollabPhase::Follow);
         assert_eq!(m.step(&seen(0.5, 0.05, 10.0)), CollabPhase::Contact);
         // the wrist push ends it; `begin` without a part resumes with the last one
         let push = Observation {
@@ -406,7 +420,6 @@ mod tests {
                 },
                 CollabReason::Collision,
             ),
-            (seen(1.0, 0.0, limit * 1.01), CollabReason::ForceLimit),
             (
                 Observation {
                     t: 0.5 + lost + 0.01,
@@ -426,6 +439,57 @@ mod tests {
             );
             assert_eq!(m.step(&obs), CollabPhase::Idle, "{obs:?}");
             assert_eq!(m.reason(), reason, "{obs:?}");
+        }
+        // a force above the limit: back off first, then idle; the hand
+        // lost meanwhile changes nothing, a collision still ends it
+        for (then, after, reason) in [
+            (
+                Observation {
+                    backed_off: true,
+                    ..seen(1.2, 0.05, 0.0)
+                },
+                CollabPhase::Idle,
+                CollabReason::ForceLimit,
+            ),
+            (
+                seen(1.2, 0.05, 0.0),
+                CollabPhase::BackOff,
+                CollabReason::ForceLimit,
+            ),
+            (
+                Observation {
+                    t: 1.0 + lost + 0.5,
+                    gap_m: 0.1,
+                    ..Default::default()
+                },
+                CollabPhase::BackOff,
+                CollabReason::ForceLimit,
+            ),
+            (
+                seen(1.0 + BACK_OFF_MAX_S, 0.1, 0.0),
+                CollabPhase::Idle,
+                CollabReason::ForceLimit,
+            ),
+            (
+                Observation {
+                    collision: true,
+                    ..seen(1.1, 0.05, 0.0)
+                },
+                CollabPhase::Idle,
+                CollabReason::Collision,
+            ),
+        ] {
+            let mut m = machine();
+            m.request(
+                &req(RequestKind::Follow, CollabPart::LeftHand),
+                RobotState::Available,
+                0.9,
+                0.5,
+            );
+            assert_eq!(m.step(&seen(1.0, 0.0, limit * 1.01)), CollabPhase::BackOff);
+            assert_eq!(m.reason(), CollabReason::ForceLimit);
+            assert_eq!(m.step(&then), after, "{then:?}");
+            assert_eq!(m.reason(), reason, "{then:?}");
         }
         // the hand unseen for less than hand_lost_s: still approaching
         let mut m = machine();

@@ -99,6 +99,9 @@ pub struct Controller {
     t: f64,
     /// recovering: since when the residual is quiet \[s\]
     quiet_since: Option<f64>,
+    /// `on_request = "complete"`: the task's segments ended when the request
+    /// was accepted (the approach waits for the next to end)
+    collab_from_waypoint: Option<u64>,
     /// end-effector position at the measured joints \[m\], base frame
     ee: Vector3<f64>,
     accel: Vec<f64>,
@@ -174,6 +177,7 @@ impl Controller {
             last_stamp: None,
             t: 0.0,
             quiet_since: None,
+            collab_from_waypoint: None,
             ee: Vector3::zeros(),
             accel: vec![0.0; n],
             tau: vec![0.0; n],
@@ -314,7 +318,7 @@ impl Controller {
         use ControlMode::*;
         let robot = match self.mode {
             Task | Slow | Approach | Contact | Follow => RobotState::Available,
-            Reaction | Recover => RobotState::Reacting,
+            Reaction | Recover | BackOff => RobotState::Reacting,
             Sync | ProtectiveStop => RobotState::Stopped,
         };
         collab.observe(
@@ -343,6 +347,26 @@ impl Controller {
         let quiet = self
             .quiet_since
             .is_some_and(|since| self.t - since >= self.cfg.resume_quiet_s);
+        let collab = self
+            .collab
+            .as_ref()
+            .map(Collaboration::phase)
+            .filter(|p| *p != CollabPhase::Idle);
+        // `on_request = "complete"`: the task's segment in progress ends first
+        let completes = self
+            .collab
+            .as_ref()
+            .is_some_and(Collaboration::completes_segment);
+        let reached = self.task.segments_ended();
+        let segment_done = match (collab, self.mode) {
+            (Some(_), ControlMode::Task | ControlMode::Slow) if completes => {
+                reached > *self.collab_from_waypoint.get_or_insert(reached)
+            }
+            _ => true,
+        };
+        if collab.is_none() {
+            self.collab_from_waypoint = None;
+        }
         Conditions {
             residual_fresh: s.residual_fresh,
             collision: s.collision,
@@ -351,11 +375,8 @@ impl Controller {
             perception_stop: s.perception_stop,
             reaction_done: self.reaction.done(self.t),
             may_resume: self.cfg.resume && quiet,
-            collab: self
-                .collab
-                .as_ref()
-                .map(Collaboration::phase)
-                .filter(|p| *p != CollabPhase::Idle),
+            collab,
+            segment_done,
             collab_collision: self.collab.as_ref().is_some_and(Collaboration::collision),
             rearming: self.collab.as_ref().is_some_and(Collaboration::rearming),
             stop_requested: self.collab.as_mut().is_some_and(Collaboration::take_stop),
@@ -369,8 +390,8 @@ impl Controller {
         match (from, next) {
             _ if next == from => {}
             (Task | Slow, Task | Slow) => {}
-            (Approach | Contact | Follow, Approach | Contact | Follow) => {}
-            (_, Approach | Contact | Follow) => {
+            (Approach | Contact | Follow | BackOff, Approach | Contact | Follow | BackOff) => {}
+            (_, Approach | Contact | Follow | BackOff) => {
                 let ee = self.ee;
                 if let Some(c) = self.collab.as_mut() {
                     c.enter(ee);
@@ -444,7 +465,10 @@ impl Controller {
                 let evading = s.perception_fresh && input.perception.is_some();
                 recover::step(&self.reference, q, qd, evading, gains, &mut self.accel)
             }
-            ControlMode::Approach | ControlMode::Contact | ControlMode::Follow => {
+            ControlMode::Approach
+            | ControlMode::Contact
+            | ControlMode::Follow
+            | ControlMode::BackOff => {
                 match self.collab.as_mut() {
                     Some(c) => Behaviour::Cartesian(c.reference(self.ee, dt, s.speed_scale)),
                     // unreachable: no collaboration, no collaboration mode; hold
@@ -562,6 +586,12 @@ impl Controller {
     /// End-effector position at the measured joints \[m\], base frame.
     pub fn ee(&self) -> Vector3<f64> {
         self.ee
+    }
+
+    /// The task's segments ended since the start (path segments, reached or
+    /// not, and rejoining approaches).
+    pub fn task_segments_ended(&self) -> u64 {
+        self.task.segments_ended()
     }
 
     /// The collaboration layer (`None`: disabled).

@@ -179,7 +179,12 @@ impl Resolver {
         if let Some(v) = perception {
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
-                let behind_the_hand = k == 0 && c.collab_hand.is_some_and(|h| behind(&h, p));
+                let margin = match c.collab_touching {
+                    true => BEHIND_MARGIN_CONTACT_M,
+                    false => BEHIND_MARGIN_M,
+                };
+                let behind_the_hand =
+                    k == 0 && c.collab_hand.is_some_and(|h| behind(&h, p, margin));
                 let target = if p.active == 0 || behind_the_hand {
                     Vector3::zeros()
                 } else {
@@ -232,20 +237,26 @@ impl Resolver {
     }
 }
 
-/// Margin by which an obstacle must lie beyond the collaborative hand to be
-/// "behind" it \[m\] (the hand's own surface and the mask's edge are nearer).
-const BEHIND_MARGIN_M: f64 = 0.05;
+/// Margin by which an obstacle must lie beyond the collaborative hand's
+/// centre to be "behind" it \[m\]: less than the hand's radius, so that the
+/// hand's own near surface, were it not masked, still repels the end effector.
+const BEHIND_MARGIN_M: f64 = 0.02;
+/// The margin while the end effector touches the hand \[m\]: more than the
+/// hand's radius; what lies about as deep as the hand then is the hand
+/// itself (where the tracker misplaced the mask) and the mask's edge, and
+/// its repulsion would only shake the contact.
+const BEHIND_MARGIN_CONTACT_M: f64 = 0.05;
 
 /// The obstacle of `p` lies behind the collaborative hand `h` as seen from
 /// the control point: farther along the direction to the hand than the hand,
 /// less a margin (the person's body behind the hand the robot is asked to
 /// touch; a hand crossing in between is nearer and still repels).
-fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
+fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
     let (o, x) = (Vector3::from(p.obstacle), Vector3::from(p.position));
     let to_hand = h - x;
     let d = to_hand.norm();
     if d < 1e-6 || !o.iter().chain(x.iter()).all(|v| v.is_finite()) {
         return false;
     }
-    (o - x).dot(&to_hand) / d >= d - BEHIND_MARGIN_M
+    (o - x).dot(&to_hand) / d >= d - margin
 }

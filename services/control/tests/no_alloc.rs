@@ -94,18 +94,32 @@ fn the_control_period_allocates_nothing_in_any_mode() {
         skeleton.people[0].id = 1;
         skeleton.people[0].tracked = 1;
         skeleton.people[0].confidence = [0.9; 15];
-        for k in 1..=10_000u64 {
+        let hand_link = model.frame_id("lwr_link_7").unwrap();
+        let mut hand: Option<[f64; 3]> = None;
+        for k in 1..=11_500u64 {
             let t_s = k as f64 * 1e-3;
-            // the arm: 10 sub-steps of exact dynamics, pushed on the forearm at 3-3.3 s
+            // the arm: 10 sub-steps of exact dynamics, pushed on the forearm at
+            // 3-3.3 s, and on the end effector by the collaborating hand with
+            // 120 N at 10.8-11.1 s (above the force limit: back off)
             let push = (3.0..3.3).contains(&t_s);
+            let hand_push = (10.8..11.1).contains(&t_s);
             for _ in 0..10 {
                 let mut total = tau.clone();
-                if push {
+                if push || hand_push {
+                    // the hand's push acts along the line from the hand through
+                    // the top of link 7's capsule, where F̂ is estimated
+                    let (at, point, f) = match push {
+                        true => (link, Vector3::zeros(), Vector3::new(0.0, 60.0, 0.0)),
+                        false => (
+                            hand_link,
+                            Vector3::new(0.0, 0.0, 0.07),
+                            Vector3::new(-120.0, 0.0, 0.0),
+                        ),
+                    };
                     phri_model::forward_kinematics(&model, &mut data, &q).unwrap();
-                    phri_model::point_jacobian(&model, &data, link, &Vector3::zeros(), &mut jac)
-                        .unwrap();
+                    phri_model::point_jacobian(&model, &data, at, &point, &mut jac).unwrap();
                     for (i, t) in total.iter_mut().enumerate() {
-                        *t += 60.0 * jac[(1, i)];
+                        *t += (0..3).map(|a| f[a] * jac[(a, i)]).sum::<f64>();
                     }
                 }
                 let qdd = phri_model::forward_dynamics(&model, &mut data, &q, &qd, &total)
@@ -159,8 +173,8 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             if t_s >= 8.5 {
                 skeleton.capture_ns = stamp - 30_000_000;
                 let ee = status.ee;
-                skeleton.people[0].joints[SkeletonJoint::RightHand as usize] =
-                    [ee[0] + 0.25, ee[1], ee[2]];
+                let h = *hand.get_or_insert([ee[0] + 0.25, ee[1], ee[2]]);
+                skeleton.people[0].joints[SkeletonJoint::RightHand as usize] = h;
                 input.collab = CollabInput {
                     requests: if asking {
                         std::slice::from_ref(&request)
@@ -193,6 +207,7 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             "recover",
             "slow",
             "approach",
+            "back_off",
         ] {
             assert!(
                 visited.contains(&m),

@@ -164,6 +164,45 @@ pub fn hand_mask(sk: &Skeleton, part: CollabPart, cfg: &CollaborationConfig) -> 
     })
 }
 
+/// A tracker that loses the person for a frame (a dropout) must not unmask
+/// the collaborative hand for that frame, or the hand the robot holds would
+/// repel it: the last mask is kept this long \[ns\].
+pub const MASK_HOLD_NS: u64 = 300_000_000;
+
+/// The mask of each frame while collaborating: the tracked hand's, or
+/// through a dropout the last one for up to [`MASK_HOLD_NS`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MaskHold {
+    last: Option<(HandMask, u64)>,
+}
+
+impl MaskHold {
+    /// The mask for the frame captured at `capture_ns` \[ns\]: `part`
+    /// (`None`: no collaboration, which forgets the last mask) in `sk`.
+    pub fn mask(
+        &mut self,
+        sk: Option<&Skeleton>,
+        part: Option<CollabPart>,
+        cfg: &CollaborationConfig,
+        capture_ns: u64,
+    ) -> Option<HandMask> {
+        let Some(part) = part else {
+            self.last = None;
+            return None;
+        };
+        match sk.and_then(|sk| hand_mask(sk, part, cfg)) {
+            Some(m) => {
+                self.last = Some((m, capture_ns));
+                Some(m)
+            }
+            None => self
+                .last
+                .filter(|(_, t)| capture_ns.saturating_sub(*t) <= MASK_HOLD_NS)
+                .map(|(m, _)| m),
+        }
+    }
+}
+
 /// The `perception/hand` message of a masked frame.
 pub fn hand_observation(
     header: &FrameHeader,
@@ -234,5 +273,38 @@ mod tests {
             (r - Vector3::from(right)).norm() < 0.015,
             "refined {r} vs {right:?}"
         );
+    }
+
+    #[test]
+    fn a_tracker_dropout_keeps_the_last_mask_for_a_while() {
+        let cfg = phri_config::Config::defaults().collaboration;
+        let mut sk = Skeleton::zeroed();
+        sk.n_people = 1;
+        sk.people[0].tracked = 1;
+        sk.people[0].joints[SkeletonJoint::RightHand as usize] = [0.5, 0.1, 0.3];
+        sk.people[0].joints[SkeletonJoint::RightElbow as usize] = [0.7, 0.1, 0.2];
+        let mut lost = sk;
+        lost.people[0].tracked = 0;
+        let right = Some(CollabPart::RightHand);
+        let mut hold = MaskHold::default();
+        let ms = 1_000_000u64;
+        let m = hold
+            .mask(Some(&sk), right, &cfg, 1000 * ms)
+            .expect("tracked");
+        assert_eq!(m.hand, [0.5, 0.1, 0.3]);
+        // a dropout: the last mask, until MASK_HOLD_NS has passed
+        assert_eq!(hold.mask(Some(&lost), right, &cfg, 1033 * ms), Some(m));
+        assert_eq!(
+            hold.mask(None, right, &cfg, 1000 * ms + MASK_HOLD_NS),
+            Some(m)
+        );
+        assert_eq!(
+            hold.mask(Some(&lost), right, &cfg, 1001 * ms + MASK_HOLD_NS),
+            None
+        );
+        // no collaboration: nothing masked, and nothing held for the next
+        assert!(hold.mask(Some(&sk), right, &cfg, 2000 * ms).is_some());
+        assert_eq!(hold.mask(Some(&sk), None, &cfg, 2033 * ms), None);
+        assert_eq!(hold.mask(Some(&lost), right, &cfg, 2066 * ms), None);
     }
 }

@@ -36,7 +36,7 @@ use phri_ipc::{
 use phri_model::Model;
 use phri_perception::camera::CameraSim;
 use phri_perception::ingest::{Ingest, StateHistory};
-use phri_perception::mask::{hand_mask, hand_observation};
+use phri_perception::mask::{hand_observation, MaskHold};
 use phri_perception::repulsion::Worker;
 use phri_perception::skeleton::SkeletonTracker;
 use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simulator};
@@ -120,6 +120,8 @@ struct Perception {
     tracker: SkeletonTracker,
     gesture: WaveDetector,
     skeleton: Skeleton,
+    /// ingestion's mask of the collaborative hand, held through tracker dropouts
+    mask_hold: MaskHold,
 }
 
 /// The cell. `sim`, `controller` and the messages are public for tests that look inside.
@@ -198,6 +200,7 @@ impl Cell {
                 tracker: SkeletonTracker::new(&cfg.skeleton, cfg.camera.intrinsics, camera.pose()),
                 gesture: WaveDetector::new(&cfg.gesture).map_err(|e| step_err("gesture")(&e))?,
                 skeleton: Skeleton::zeroed(),
+                mask_hold: MaskHold::default(),
                 camera,
             })
         } else {
@@ -339,8 +342,12 @@ impl Cell {
                 .controller
                 .collaboration()
                 .filter(|c| c.machine().active());
-            let mask =
-                collab.and_then(|c| hand_mask(&p.skeleton, c.machine().part(), &self.collab_cfg));
+            let mask = p.mask_hold.mask(
+                Some(&p.skeleton),
+                collab.map(|c| c.machine().part()),
+                &self.collab_cfg,
+                header.capture_ns,
+            );
             p.ingest.set_mask(mask);
             let outcome = p
                 .ingest

@@ -9,13 +9,17 @@
 //! avoidance stage resolves under SNS with every other obstacle.
 //!
 //! - approach / follow: the robot point moves toward the filtered hand until
-//!   the surfaces touch, at `approach_speed` far from it and `contact_speed`
-//!   within `slow_down_m`;
+//!   the surfaces touch (aiming `reach_into_m` into the modelled hand, which
+//!   depth places only to centimetres), at `approach_speed` far from it and
+//!   `contact_speed` within `slow_down_m`;
 //! - contact: admittance on the estimated force: the end effector yields
-//!   along F̂ at `admittance` [m/(N s)], so the person pushes it around.
+//!   along F̂ at `admittance` [m/(N s)], so the person pushes it around,
+//!   and keeps pressing the hand with `contact_hold_n`;
+//! - back off: after F̂ passed the force limit, the end effector moves
+//!   `back_off_m` along the force the person applied, at `approach_speed`.
 
 use nalgebra::Vector3;
-use phri_config::{CollaborationConfig, Config};
+use phri_config::{CollaborationConfig, Config, OnRequest};
 use phri_estimation::{ContactPoint, ForceEstimate, ForceEstimator};
 use phri_ipc::{
     CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, MAX_DOF, MAX_PEOPLE,
@@ -77,7 +81,8 @@ pub struct Collaboration {
     hand_seen: bool,
     /// desired end-effector position \[m\], base frame
     x_d: Vector3<f64>,
-    /// the robot point \[m\], base frame, at the measured joints
+    /// the robot part's axis point nearest the hand \[m\], base frame, at
+    /// the measured joints (the capsule's centre while no hand is known)
     robot_point: Vector3<f64>,
     estimate: Option<ForceEstimate>,
     /// surface gap robot point ↔ hand \[m\]
@@ -88,6 +93,19 @@ pub struct Collaboration {
     /// quiet for `rearm_quiet_s` (None: armed)
     rearm: Option<Option<f64>>,
     last_answer: Option<Answered>,
+    /// backing off after a force limit
+    back_off: Option<BackOff>,
+}
+
+/// Backing off after a force limit: along the force the person applied.
+#[derive(Clone, Copy, Debug)]
+struct BackOff {
+    /// unit direction \[-\], base frame
+    dir: Vector3<f64>,
+    /// the robot part's link origin when it began \[m\], base frame
+    from: Vector3<f64>,
+    /// the end effector when it began \[m\], base frame (set by the first reference)
+    ee: Option<Vector3<f64>>,
 }
 
 impl Collaboration {
@@ -141,12 +159,19 @@ impl Collaboration {
             collision: false,
             rearm: None,
             last_answer: None,
+            back_off: None,
             cfg: c.clone(),
         })
     }
 
     pub fn phase(&self) -> CollabPhase {
         self.machine.phase()
+    }
+
+    /// A request lets the task's segment in progress end before the
+    /// approach (`on_request = "complete"`).
+    pub fn completes_segment(&self) -> bool {
+        self.cfg.on_request == OnRequest::Complete
     }
 
     pub fn machine(&self) -> &CollabMachine {
@@ -168,7 +193,8 @@ impl Collaboration {
         self.gap
     }
 
-    /// The collaborative robot point \[m\], base frame, at the measured joints.
+    /// The collaborative robot part's axis point nearest the hand \[m\],
+    /// base frame, at the measured joints.
     pub fn robot_point(&self) -> Vector3<f64> {
         self.robot_point
     }
@@ -297,20 +323,19 @@ impl Collaboration {
             .filter(|r| r.len() == self.n)
             .unwrap_or(&zero[..self.n]);
         self.estimate = match self.machine.active() {
-            true => self
-                .forces
-                .estimate(q, r, std::slice::from_ref(&self.contact))
-                .ok()
-                .copied(),
+            true => {
+                let contact = self.contact_point(q);
+                self.forces
+                    .estimate(q, r, std::slice::from_ref(&contact))
+                    .ok()
+                    .copied()
+            }
             false => None,
         };
         let force_n = match &self.estimate {
             Some(e) if residual.is_some() => e.forces[0].norm(),
             _ => 0.0,
         };
-        if let Some(e) = &self.estimate {
-            self.robot_point = e.points[0];
-        }
         self.collision = self.machine.active()
             && residual.is_some()
             && self.estimate.as_ref().is_some_and(|e| {
@@ -326,7 +351,7 @@ impl Collaboration {
             .and_then(|i| perception?.points.get(i))
             .is_some_and(|p| p.active != 0 && p.min_distance <= WRIST_SEEN_M);
         let wrist_push =
-            self.machine.active() && self.wrist_push(t, residual, fresh_skeleton, wrist_seen);
+            self.machine.active() && self.wrist_push(t, q, residual, fresh_skeleton, wrist_seen);
         // 5. the gap and the phase
         self.gap = match self.hand {
             Some(h) => {
@@ -334,6 +359,10 @@ impl Collaboration {
             }
             None => f64::INFINITY,
         };
+        let origin = self.forces.frame_origin(self.contact.frame);
+        let backed_off = self
+            .back_off
+            .is_some_and(|b| (origin - b.from).dot(&b.dir) >= 0.9 * self.cfg.back_off_m);
         let was = self.machine.active();
         let phase = self.machine.step(&Observation {
             t,
@@ -343,7 +372,25 @@ impl Collaboration {
             wrist_push,
             collision: self.collision,
             stale,
+            backed_off,
         });
+        self.back_off = match phase {
+            CollabPhase::BackOff => Some(self.back_off.unwrap_or_else(|| {
+                // the force the person applies points away from them
+                let f = self.estimate.map_or(Vector3::zeros(), |e| e.forces[0]);
+                let away = match (f.norm() > 1e-3, self.hand) {
+                    (true, _) => f,
+                    (false, Some(h)) => self.robot_point - h,
+                    (false, None) => Vector3::zeros(),
+                };
+                BackOff {
+                    dir: away.try_normalize(1e-9).unwrap_or_else(Vector3::zeros),
+                    from: origin,
+                    ee: None,
+                }
+            })),
+            _ => None,
+        };
         if was && !self.machine.active() {
             self.rearm = Some(None);
             self.hand = None;
@@ -351,6 +398,41 @@ impl Collaboration {
         }
         self.update_rearm(t, residual);
         phase
+    }
+
+    /// Where the hand meets the robot part at joints `q`: on the capsule
+    /// `robot_point ± robot_half_length_m ẑ` (link frame), the surface point
+    /// toward the hand seen in depth (the capsule's tip along ẑ while no hand
+    /// is known). Sets [`Collaboration::robot_point`] to the axis point
+    /// nearest the hand.
+    fn contact_point(&mut self, q: &[f64]) -> ContactPoint {
+        let Ok(pose) = self.forces.placement(q, self.contact.frame) else {
+            return self.contact;
+        };
+        let (centre, half, radius) = (
+            self.contact.point,
+            self.cfg.robot_half_length_m,
+            self.cfg.robot_radius_m,
+        );
+        let z = Vector3::z();
+        let (axis, normal) = match self.hand {
+            Some(h) => {
+                let local = pose.r.transpose() * (h - pose.p);
+                let axis = centre + z * (local - centre).dot(&z).clamp(-half, half);
+                let d = local - axis;
+                let normal = match d.norm() > 1e-9 {
+                    true => d / d.norm(),
+                    false => z,
+                };
+                (axis, normal)
+            }
+            None => (centre + z * half, z),
+        };
+        self.robot_point = pose.apply(&axis);
+        ContactPoint {
+            frame: self.contact.frame,
+            point: axis + normal * radius,
+        }
     }
 
     fn update_rearm(&mut self, t: f64, residual: Option<&[f64]>) {
@@ -370,12 +452,14 @@ impl Collaboration {
         }
     }
 
-    /// `‖r₅..₇‖ ≤ wrist_ratio ‖r₁..₄‖`, `‖r₁..₄‖ ≥ wrist_min_nm`, for
+    /// `‖r₅..₇‖ ≤ wrist_ratio ‖r₁..₄‖`, `‖r₁..₄‖ ≥ wrist_min_nm`, a force
+    /// at the wrist centre leaving at most `wrist_fit ‖r‖` unexplained, for
     /// `wrist_hold_s`, with a human part seen within `wrist_confirm_m` of the
     /// wrist and nearer to it than to the collaborative contact.
     fn wrist_push(
         &mut self,
         t: f64,
+        q: &[f64],
         residual: Option<&[f64]>,
         sk: Option<&Skeleton>,
         seen_in_depth: bool,
@@ -389,8 +473,22 @@ impl Collaboration {
         }
         let proximal = r[..4].iter().map(|x| x * x).sum::<f64>().sqrt();
         let distal = r[4..].iter().map(|x| x * x).sum::<f64>().sqrt();
-        let pattern =
+        let mut pattern =
             proximal >= self.cfg.wrist_min_nm && distal <= self.cfg.wrist_ratio * proximal;
+        if pattern {
+            // a force at the wrist centre explains it (a push on the elbow
+            // side of the arm leaves the elbow's turn about the shoulder-wrist
+            // line unexplained)
+            let wrist = ContactPoint {
+                frame: self.wrist_frame,
+                point: Vector3::zeros(),
+            };
+            let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            pattern = self
+                .forces
+                .estimate(q, r, std::slice::from_ref(&wrist))
+                .is_ok_and(|e| e.unexplained <= self.cfg.wrist_fit * norm);
+        }
         let wrist = self.wrist_centre();
         // the collaborative hand confirms only when it is nearer to the wrist
         // than to the end effector it holds; any other part when it is near
@@ -439,8 +537,8 @@ impl Collaboration {
                 if let Some(h) = self.hand {
                     let to = h - self.robot_point;
                     if to.norm() > 1e-6 {
-                        let target =
-                            h - to.normalize() * (c.robot_radius_m + c.hand_radius_m) + offset;
+                        let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
+                        let target = h - to.normalize() * reach + offset;
                         let near = (self.gap.max(0.0) / c.slow_down_m).min(1.0);
                         let speed = (c.contact_speed + (c.approach_speed - c.contact_speed) * near)
                             * speed_scale.clamp(0.0, 1.0);
@@ -454,14 +552,40 @@ impl Collaboration {
                 }
             }
             CollabPhase::Contact => {
-                // admittance: yield along the force the person applies
+                // admittance: yield along the force the person applies,
+                // keep pressing the hand with `contact_hold_n`
                 if let Some(e) = self.estimate.as_ref().filter(|e| e.observable[0]) {
-                    velocity = e.forces[0] * c.admittance;
+                    // against the force where it is felt (its direction is the
+                    // contact's normal), toward the hand seen in depth before
+                    let f = e.forces[0];
+                    let to = match f.norm() >= 0.5 * c.contact_force_n {
+                        true => -f,
+                        false => self.hand.map_or(Vector3::zeros(), |h| h - self.robot_point),
+                    };
+                    let hold = match to.norm() > 1e-6 {
+                        true => to / to.norm() * c.contact_hold_n,
+                        false => Vector3::zeros(),
+                    };
+                    velocity = (e.forces[0] + hold) * c.admittance;
                     let v = velocity.norm();
                     if v > c.approach_speed {
                         velocity *= c.approach_speed / v;
                     }
                     self.x_d += velocity * dt;
+                }
+            }
+            CollabPhase::BackOff => {
+                // away along the force, `back_off_m`, at the approach speed
+                if let Some(b) = self.back_off.as_mut() {
+                    let from = *b.ee.get_or_insert(ee);
+                    let target = from + b.dir * c.back_off_m;
+                    let delta = target - self.x_d;
+                    let d = delta.norm();
+                    let speed = c.approach_speed * speed_scale.clamp(0.0, 1.0);
+                    if d > 1e-9 {
+                        velocity = delta / d * speed;
+                        self.x_d += delta / d * (speed * dt).min(d);
+                    }
                 }
             }
             CollabPhase::Idle => self.x_d = ee,
@@ -475,7 +599,9 @@ impl Collaboration {
             xd_d: velocity,
             speed_scale,
             path_time: None,
-            collab_hand: self.hand,
+            // backing off, the hand is an obstacle like any other
+            collab_hand: self.hand.filter(|_| self.back_off.is_none()),
+            collab_touching: self.machine.phase() == CollabPhase::Contact,
         }
     }
 

@@ -8,7 +8,7 @@
 //! | [`reaction`] | the configured reaction to a detected collision (eqs. 9, 13, stop, float, retreat) |
 //! | [`protective_stop`] | hold while a safety input is stale |
 //! | [`recover`] | hold (evading under perception) until the residual stays quiet, then resume |
-//! | [`collaborate`] | `approach` the collaborative hand, `contact` (admittance on F̂), `follow` it (paper Sect. VI) |
+//! | [`collaborate`] | `approach` the collaborative hand, `contact` (admittance on F̂), `follow` it (paper Sect. VI), `back_off` after a force limit |
 //!
 //! A behaviour writes the joint reference and either an acceleration for the
 //! torque law or a Cartesian reference of the end effector, which the
@@ -43,6 +43,8 @@ pub struct Conditions {
     pub may_resume: bool,
     /// the collaboration's phase (`None`: no collaboration)
     pub collab: Option<CollabPhase>,
+    /// the task's segment in progress is done, or need not be (`on_request = "abort"`)
+    pub segment_done: bool,
     /// collaborating: the residual the intended contact does not explain is a collision
     pub collab_collision: bool,
     /// a collaboration just ended: the collision flag waits for the residual to decay
@@ -62,7 +64,8 @@ pub struct Conditions {
 /// - a finished reaction without contact recovers;
 /// - recovering, a quiet residual resumes the task;
 /// - an accepted request turns the task into the collaboration's phase
-///   (approach, contact, follow); collaborating, only what the intended
+///   (approach, contact, follow, back off), at once or once the segment in
+///   progress is done (`on_request`); collaborating, only what the intended
 ///   contact does not explain is a collision; when the collaboration ends the
 ///   arm recovers, with the collision flag waiting until the residual decays;
 /// - a `stop` request is a protective stop.
@@ -74,12 +77,12 @@ pub fn next_mode(mode: ControlMode, c: &Conditions) -> ControlMode {
         _ if !c.residual_fresh || c.perception_stop || c.stop_requested => ProtectiveStop,
         ProtectiveStop => Recover,
         Task | Slow if c.collision => Reaction,
-        Task | Slow if c.collab.is_some() => collab_mode(c.collab),
+        Task | Slow if c.collab.is_some() && c.segment_done => collab_mode(c.collab),
         Task | Slow if c.perception_fresh => Task,
         Task | Slow => Slow,
-        Approach | Contact | Follow if c.collab_collision => Reaction,
-        Approach | Contact | Follow if c.collab.is_none() => Recover,
-        Approach | Contact | Follow => collab_mode(c.collab),
+        Approach | Contact | Follow | BackOff if c.collab_collision => Reaction,
+        Approach | Contact | Follow | BackOff if c.collab.is_none() => Recover,
+        Approach | Contact | Follow | BackOff => collab_mode(c.collab),
         Reaction if c.reaction_done && !c.contact => Recover,
         Reaction => Reaction,
         Recover if c.collision && !c.rearming => Reaction,
@@ -93,6 +96,7 @@ fn collab_mode(phase: Option<CollabPhase>) -> ControlMode {
     match phase {
         Some(CollabPhase::Contact) => ControlMode::Contact,
         Some(CollabPhase::Follow) => ControlMode::Follow,
+        Some(CollabPhase::BackOff) => ControlMode::BackOff,
         _ => ControlMode::Approach,
     }
 }
@@ -112,6 +116,9 @@ pub struct CartesianRef {
     /// obstacles behind it (seen from the end effector) do not repel the end
     /// effector, everything nearer does, and every other control point avoids all
     pub collab_hand: Option<Vector3<f64>>,
+    /// collaborating in contact with that hand: what lies about as deep as
+    /// the hand is the hand (and its mask's edge), not an obstacle
+    pub collab_touching: bool,
 }
 
 /// What a behaviour leaves for the rest of the period.
@@ -138,6 +145,7 @@ mod tests {
         reaction_done: false,
         may_resume: false,
         collab: None,
+        segment_done: true,
         collab_collision: false,
         rearming: false,
         stop_requested: false,
@@ -164,6 +172,8 @@ mod tests {
                 "approach" => c.collab = Some(CollabPhase::Approach),
                 "touch" => c.collab = Some(CollabPhase::Contact),
                 "follow" => c.collab = Some(CollabPhase::Follow),
+                "back-off" => c.collab = Some(CollabPhase::BackOff),
+                "mid-segment" => c.segment_done = false,
                 "unexplained" => c.collab_collision = true,
                 "rearming" => c.rearming = true,
                 "stop" => c.stop_requested = true,
@@ -222,10 +232,21 @@ mod tests {
             // collaboration: an accepted request turns the task into its phase
             (Task, &["approach"], Approach),
             (Slow, &["approach", "blind"], Approach),
+            // on_request = "complete": the segment in progress ends first
+            (Task, &["approach", "mid-segment"], Task),
+            (Slow, &["approach", "mid-segment", "blind"], Slow),
+            (Task, &["approach", "mid-segment", "collision"], Reaction),
             (Task, &["approach", "collision"], Reaction),
             (Approach, &["touch"], Contact),
             (Contact, &["follow"], Follow),
             (Follow, &["touch"], Contact),
+            // a force limit: back off, then recover; a collision still reacts
+            (Contact, &["back-off"], BackOff),
+            (Approach, &["back-off"], BackOff),
+            (BackOff, &["back-off"], BackOff),
+            (BackOff, &[], Recover),
+            (BackOff, &["back-off", "unexplained"], Reaction),
+            (BackOff, &["back-off", "stale"], ProtectiveStop),
             // collaborating, the intended contact is no collision ...
             (Contact, &["touch", "collision"], Contact),
             // ... what it does not explain is

@@ -32,6 +32,7 @@ pub fn step(
             speed_scale: 1.0,
             path_time: None,
             collab_hand: None,
+            collab_touching: false,
         });
     }
     reference.hold(q, qd, gains, accel);

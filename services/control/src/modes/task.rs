@@ -30,6 +30,8 @@ pub struct TaskState {
     waypoint_tolerance: f64,
     /// waypoints reached since the start
     waypoints_reached: u64,
+    /// segments ended (the path's, reached or not, and each rejoining approach)
+    segments_ended: u64,
 }
 
 impl TaskState {
@@ -48,6 +50,7 @@ impl TaskState {
             approach_speed: cfg.approach_speed,
             waypoint_tolerance: cfg.waypoint_tolerance,
             waypoints_reached: 0,
+            segments_ended: 0,
         }
     }
 
@@ -74,6 +77,12 @@ impl TaskState {
         self.waypoints_reached
     }
 
+    /// Segments ended since the start: of the path (its waypoint reached or
+    /// not) and rejoining approaches.
+    pub fn segments_ended(&self) -> u64 {
+        self.segments_ended
+    }
+
     /// One period of `dt` \[s\]: the end effector's reference. `speed_scale`
     /// (1, or slower while perception is stale) scales the joint velocity
     /// bounds and the time law; `ee_risk` ∈ [0, 1] slows the time law further;
@@ -91,6 +100,7 @@ impl TaskState {
                 let out = a.step(dt * time_scale);
                 if a.done() {
                     self.approach = None;
+                    self.segments_ended += 1;
                 }
                 out
             }
@@ -111,6 +121,7 @@ impl TaskState {
                     {
                         self.waypoints_reached += 1;
                     }
+                    self.segments_ended += 1;
                     self.last_target = target;
                 }
                 (x, dx)
@@ -122,6 +133,7 @@ impl TaskState {
             speed_scale,
             path_time: Some(self.s),
             collab_hand: None,
+            collab_touching: false,
         }
     }
 }

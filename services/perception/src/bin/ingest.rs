@@ -19,7 +19,7 @@ use phri_ipc::{
     COLLAB_STATE, FRAME_PIXELS, PERCEPTION_DEPTH, PERCEPTION_HAND, PERCEPTION_SKELETON,
     ROBOT_STATE,
 };
-use phri_perception::mask::{hand_mask, hand_observation};
+use phri_perception::mask::{hand_observation, MaskHold};
 use phri_perception::{Ingest, PngReplay, RateLimited, StateHistory, Ticks};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
@@ -52,6 +52,7 @@ struct Collab {
     states: LatestReader<CollabState>,
     skeletons: LatestReader<Skeleton>,
     hands: Publisher<HandObservation>,
+    hold: MaskHold,
 }
 
 impl Out {
@@ -70,10 +71,11 @@ impl Out {
                 .get()
                 .filter(|s| s.phase != CollabPhase::Idle as u32)
                 .and_then(|s| CollabPart::try_from(s.human_part).ok());
-            masking = match (part, c.skeletons.get()) {
-                (Some(p), Some(sk)) => hand_mask(sk, p, &c.cfg).map(|m| (p, m)),
-                _ => None,
-            };
+            masking = c
+                .hold
+                .mask(c.skeletons.get(), part, &c.cfg, header.capture_ns)
+                .zip(part)
+                .map(|(m, p)| (p, m));
         }
         self.ingest.set_mask(masking.map(|(_, m)| m));
         match self
@@ -130,6 +132,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 states: COLLAB_STATE.latest_reader(&node)?,
                 skeletons: PERCEPTION_SKELETON.latest_reader(&node)?,
                 hands: PERCEPTION_HAND.publisher(&node)?,
+                hold: MaskHold::default(),
             }),
             false => None,
         },

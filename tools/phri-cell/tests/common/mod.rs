@@ -20,9 +20,14 @@ pub fn loaded(scenario: &str, sets: &[&str]) -> Loaded {
 }
 
 pub fn cell(scenario: &str, opts: &CellOptions, sets: &[&str]) -> Cell {
-    let l = loaded(scenario, sets);
+    cell_of(&loaded(scenario, sets), opts)
+}
+
+/// A cell of a loaded configuration (one a test changed: its scenario's
+/// script, its control points).
+pub fn cell_of(l: &Loaded, opts: &CellOptions) -> Cell {
     let model = l.model().unwrap();
-    Cell::new(&l, model, opts).unwrap()
+    Cell::new(l, model, opts).unwrap()
 }
 
 /// Run `scenario` for `seconds` and summarise.
@@ -32,4 +37,27 @@ pub fn run(scenario: &str, seconds: f64, opts: &CellOptions, sets: &[&str]) -> C
         c.tick().unwrap();
     }
     c.summary()
+}
+
+/// Smallest true surface distance \[m\] between the person's `parts` (body
+/// part names, `hand_left`, ...) and the robot's `links` (`lwr_link_4`, ...)
+/// in the cell's simulator now, from the capsules.
+pub fn parts_to_links(c: &Cell, parts: &[&str], links: &[&str]) -> f64 {
+    let mut d = f64::INFINITY;
+    for r in c.sim.robot_capsule_poses() {
+        if !c
+            .sim
+            .collision_link(r.collision)
+            .is_some_and(|l| links.contains(&l))
+        {
+            continue;
+        }
+        for h in c.sim.human_capsules() {
+            if parts.contains(&h.part.name()) {
+                let x = phri_sim::capsule_distance(&r.a, &r.b, r.radius, &h.a, &h.b, h.radius);
+                d = d.min(x.distance);
+            }
+        }
+    }
+    d
 }
