@@ -157,10 +157,13 @@ impl ServiceContext {
                     last = now;
                 }
                 if now.saturating_sub(last) > limit_ns {
-                    eprintln!(
-                        "{name}: no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)",
+                    // one write: the services share the supervisor's stderr,
+                    // and `eprintln!` writes each formatted piece apart
+                    let line = format!(
+                        "{name}: no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)\n",
                         now.saturating_sub(last) as f64 * 1e-9
                     );
+                    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
                     shutdown.request();
                 }
             }
