@@ -134,6 +134,17 @@ fn events<'a>(r: &'a Value, kind: &str, service: &str) -> Vec<&'a Value> {
 }
 
 /// No contact at all and no false detection in the run's report.
+/// The report's contacts: none unintended.
+fn assert_no_unintended_contact(r: &Value) {
+    let unintended: Vec<&Value> = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["intended"] == false)
+        .collect();
+    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
+}
+
 fn assert_untouched(r: &Value) {
     assert!(
         r["contacts"].as_array().unwrap().is_empty(),
@@ -340,13 +351,7 @@ fn sigint_stops_everything_and_leaves_nothing_behind() {
 fn coexistence_avoids_the_person_without_deadline_misses() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let r = Cell::start("coex", "coexistence", Some(24.0), &[]).finish();
-    let unintended: Vec<&Value> = r["contacts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["intended"] == false)
-        .collect();
-    assert!(unintended.is_empty(), "contacts: {unintended:?}");
+    assert_no_unintended_contact(&r);
     assert!(r["min_distance_m"].as_f64().unwrap() > 0.0);
     let p = &r["perception"];
     assert!(
@@ -603,9 +608,8 @@ fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else()
     // camera's skeleton, phri-gesture's request, ingestion's mask and hand,
     // the controller's phases
     let r = Cell::start("collab", "collaboration", None, &[]).finish();
+    assert_no_unintended_contact(&r);
     let contacts = r["contacts"].as_array().unwrap();
-    let unintended: Vec<&Value> = contacts.iter().filter(|c| c["intended"] == false).collect();
-    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
     let hand: Vec<&Value> = contacts
         .iter()
         .filter(|c| c["part"] == "hand_right" && c["link"] == "lwr_link_7")
@@ -691,13 +695,7 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
         r["events"]
     );
     assert_eq!(r["services"]["perception"]["restarts"], 1);
-    let unintended: Vec<&Value> = r["contacts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["intended"] == false)
-        .collect();
-    assert!(unintended.is_empty(), "{unintended:?}");
+    assert_no_unintended_contact(&r);
 }
 
 /// The collaboration phase of the cell as `phri-hri watch --once` prints it
@@ -755,9 +753,8 @@ fn killing_gesture_mid_collaboration_is_fail_safe() {
         "killed at {kill_t} s, before the approach ({approach_t} s): the test tests nothing"
     );
     // nothing unsafe: no unintended contact, no collision reaction, no brake
+    assert_no_unintended_contact(&r);
     let contacts = r["contacts"].as_array().unwrap();
-    let unintended: Vec<&Value> = contacts.iter().filter(|c| c["intended"] == false).collect();
-    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
     assert!(
         events(&r, "reaction", "control").is_empty(),
         "{}",

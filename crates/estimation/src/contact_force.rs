@@ -81,6 +81,9 @@ pub struct ForceEstimator {
     /// damping λ [m]
     damping: f64,
     last: ForceEstimate,
+    /// the joints `data` holds the kinematics of, when `kinematics_valid`
+    kinematics_of: Vec<f64>,
+    kinematics_valid: bool,
 }
 
 impl ForceEstimator {
@@ -102,8 +105,24 @@ impl ForceEstimator {
                 unexplained: 0.0,
                 left: [0.0; MAX_JOINTS],
             },
+            kinematics_of: vec![0.0; model.nv()],
+            kinematics_valid: false,
             model,
         }
+    }
+
+    /// Forward kinematics at `q` (checked for length), unless `data` holds
+    /// them already: several estimates and placements at the same joints in
+    /// one period cost one.
+    fn kinematics(&mut self, q: &[f64]) -> Result<(), ForceError> {
+        if self.kinematics_valid && self.kinematics_of == q {
+            return Ok(());
+        }
+        self.kinematics_valid = false;
+        phri_model::forward_kinematics(&self.model, &mut self.data, q)?;
+        self.kinematics_of.copy_from_slice(q);
+        self.kinematics_valid = true;
+        Ok(())
     }
 
     pub fn model(&self) -> &Model {
@@ -126,7 +145,7 @@ impl ForceEstimator {
         if q.iter().chain(r).any(|x| !x.is_finite()) {
             return Err(ForceError::NotFinite("q or r"));
         }
-        phri_model::forward_kinematics(&self.model, &mut self.data, q)?;
+        self.kinematics(q)?;
         let k = contacts.len();
         let mut out = ForceEstimate {
             n: k,
@@ -234,7 +253,7 @@ impl ForceEstimator {
         if q.iter().any(|x| !x.is_finite()) {
             return Err(ForceError::NotFinite("q"));
         }
-        phri_model::forward_kinematics(&self.model, &mut self.data, q)?;
+        self.kinematics(q)?;
         if frame >= self.model.frames.len() {
             return Err(ForceError::UnknownFrame(frame));
         }
@@ -242,7 +261,8 @@ impl ForceEstimator {
     }
 
     /// The origin of `frame` \[m\], base frame, at the joints of the last
-    /// [`ForceEstimator::estimate`] (the origin before the first).
+    /// [`ForceEstimator::estimate`] or [`ForceEstimator::placement`] (the
+    /// origin before the first).
     pub fn frame_origin(&self, frame: usize) -> Vector3<f64> {
         if frame >= self.model.frames.len() {
             return Vector3::zeros();
@@ -337,6 +357,13 @@ mod tests {
         );
         let e = *est.estimate(&q, &r, &[c]).unwrap();
         assert!(e.unexplained > 0.5, "an elbow hit shows: {}", e.unexplained);
+        // the kinematics follow the joints: elsewhere and back, the same estimate
+        let q2 = [0.3, -0.2, 0.1, 1.2, 0.2, -0.5, 0.0];
+        let before = est.estimate(&q, &r, &[c]).unwrap().forces[0];
+        let there = est.placement(&q2, c.frame).unwrap().p;
+        assert!((there - est.placement(&q, c.frame).unwrap().p).norm() > 1e-3);
+        est.estimate(&q2, &r, &[c]).unwrap();
+        assert_eq!(est.estimate(&q, &r, &[c]).unwrap().forces[0], before);
         // bad inputs are errors
         assert!(est.estimate(&q[..3], &r, &[c]).is_err());
         assert!(est.estimate(&q, &[f64::NAN; 7], &[c]).is_err());

@@ -1,7 +1,7 @@
 //! The momentum residual (paper eqs. 5, 8) against the exact torques of an
 //! analytic trajectory (see `common`): it stays near zero in free motion,
 //! follows a step of τ_ext as the low-pass `K_I/(s + K_I)` behind the
-//! velocity estimate's own low-pass (`common::step_response`), detects
+//! velocity estimate's own low-pass (`ResidualConfig::step_response`), detects
 //! within the bound that response gives,
 //! isolates the link, removes a force the wrist F/T sensor measures, and
 //! refuses bad inputs.
@@ -63,7 +63,7 @@ fn each_component_follows_a_torque_step_as_a_low_pass_of_its_own_gain() {
         let since = t - t_on;
         for i in 0..7 {
             let k_i = gains[i];
-            let law = step[i] * step_response(&cfg, k_i, since);
+            let law = step[i] * cfg.step_response(k_i, since);
             // the discrete recursion: the forcing through the velocity
             // estimate's low-pass (weight α), then the observer's Euler step
             let alpha = (-2.0 * std::f64::consts::PI * cfg.velocity_cutoff_hz * DT).exp();
@@ -137,7 +137,7 @@ fn follows_a_contact_force_detects_within_the_bound_and_isolates_the_link() {
             // after 10 ms: r ≈ τ_ext × the step response (the old closed-loop
             // test allowed 15 % + 0.2 Nm on joints 1-4; every joint now, tighter)
             for i in 0..7 {
-                let expect = te[i] * step_response(&cfg, k_i, 0.010);
+                let expect = te[i] * cfg.step_response(k_i, 0.010);
                 assert!(
                     (out.r[i] - expect).abs() < 0.05 * te[i].abs() + 0.05,
                     "joint {i}: {} vs {expect}",

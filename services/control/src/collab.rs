@@ -293,6 +293,19 @@ mod tests {
         CollabMachine::new(&Config::defaults().collaboration)
     }
 
+    /// A machine that accepted `follow left_hand` at 0.5 s: approaching.
+    fn approaching_left_hand() -> CollabMachine {
+        let mut m = machine();
+        let a = m.request(
+            &req(RequestKind::Follow, CollabPart::LeftHand),
+            RobotState::Available,
+            0.9,
+            0.5,
+        );
+        assert!(a.accepted && m.phase() == CollabPhase::Approach);
+        m
+    }
+
     fn seen(t: f64, gap_m: f64, force_n: f64) -> Observation {
         Observation {
             t,
@@ -430,13 +443,7 @@ mod tests {
                 CollabReason::HandLost,
             ),
         ] {
-            let mut m = machine();
-            m.request(
-                &req(RequestKind::Follow, CollabPart::LeftHand),
-                RobotState::Available,
-                0.9,
-                0.5,
-            );
+            let mut m = approaching_left_hand();
             assert_eq!(m.step(&obs), CollabPhase::Idle, "{obs:?}");
             assert_eq!(m.reason(), reason, "{obs:?}");
         }
@@ -479,26 +486,14 @@ mod tests {
                 CollabReason::Collision,
             ),
         ] {
-            let mut m = machine();
-            m.request(
-                &req(RequestKind::Follow, CollabPart::LeftHand),
-                RobotState::Available,
-                0.9,
-                0.5,
-            );
+            let mut m = approaching_left_hand();
             assert_eq!(m.step(&seen(1.0, 0.0, limit * 1.01)), CollabPhase::BackOff);
             assert_eq!(m.reason(), CollabReason::ForceLimit);
             assert_eq!(m.step(&then), after, "{then:?}");
             assert_eq!(m.reason(), reason, "{then:?}");
         }
         // the hand unseen for less than hand_lost_s: still approaching
-        let mut m = machine();
-        m.request(
-            &req(RequestKind::Follow, CollabPart::LeftHand),
-            RobotState::Available,
-            0.9,
-            0.5,
-        );
+        let mut m = approaching_left_hand();
         let unseen = Observation {
             t: 0.5 + lost * 0.9,
             gap_m: 0.2,

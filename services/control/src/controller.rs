@@ -101,7 +101,7 @@ pub struct Controller {
     quiet_since: Option<f64>,
     /// `on_request = "complete"`: the task's segments ended when the request
     /// was accepted (the approach waits for the next to end)
-    collab_from_waypoint: Option<u64>,
+    collab_from_segment: Option<u64>,
     /// end-effector position at the measured joints \[m\], base frame
     ee: Vector3<f64>,
     accel: Vec<f64>,
@@ -177,7 +177,7 @@ impl Controller {
             last_stamp: None,
             t: 0.0,
             quiet_since: None,
-            collab_from_waypoint: None,
+            collab_from_segment: None,
             ee: Vector3::zeros(),
             accel: vec![0.0; n],
             tau: vec![0.0; n],
@@ -360,12 +360,12 @@ impl Controller {
         let reached = self.task.segments_ended();
         let segment_done = match (collab, self.mode) {
             (Some(_), ControlMode::Task | ControlMode::Slow) if completes => {
-                reached > *self.collab_from_waypoint.get_or_insert(reached)
+                reached > *self.collab_from_segment.get_or_insert(reached)
             }
             _ => true,
         };
         if collab.is_none() {
-            self.collab_from_waypoint = None;
+            self.collab_from_segment = None;
         }
         Conditions {
             residual_fresh: s.residual_fresh,

@@ -9,51 +9,28 @@ mod common;
 use phri_cell::CellOptions;
 use phri_ipc::{CollabPhase, CollabReason};
 
-/// `collaboration.toml` up to the first contact, then the right hand pushes
-/// the end effector with `force_n` from 10.0 s until `until` (ramped up and
-/// down over 0.2 s each), and the person steps back from 12 s.
-fn scenario(force_n: f64, until: f64) -> std::path::PathBuf {
-    let text = format!(
-        r#"name = "collaboration-force-limit"
-description = "test: wave, approach, contact, a push of {force_n} N by the collaborative hand"
-duration_s = 16.0
-[human]
-floor_z = -0.8
-collaborative_parts = ["hand_right"]
-[[human.keyframe]]
-t = 0.0
-base = [2.2, 0.0, 3.141592653589793]
-[[human.keyframe]]
-t = 2.0
-base = [1.2, 0.0, 3.141592653589793]
-[[human.keyframe]]
-t = 3.0
-base = [1.2, 0.0, 3.141592653589793]
-wave = {{ hand = "right", frequency_hz = 2.0, amplitude_m = 0.12 }}
-[[human.keyframe]]
-t = 6.0
-base = [1.2, 0.0, 3.141592653589793]
-[[human.keyframe]]
-t = 7.0
-base = [0.95, 0.0, 3.141592653589793]
-right_hand = [0.55, 0.1, 0.35]
-[[human.keyframe]]
-t = 10.0
-base = [0.95, 0.0, 3.141592653589793]
-push = {{ link = "lwr_link_7", point = [0.0, 0.0, 0.04], force_n = {force_n}, part = "right_hand", intended = true }}
-[[human.keyframe]]
-t = {until}
-base = [0.95, 0.0, 3.141592653589793]
-[[human.keyframe]]
-t = 12.0
-base = [1.4, 0.0, 3.141592653589793]
-"#
-    );
-    let dir = std::env::temp_dir().join(format!("phri-force-limit-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("push-{force_n}-{until}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
+/// `collaboration` until the hand is held out (7 s), then the right hand
+/// pushes the end effector with `force_n` from 10.0 s until `until` (ramped
+/// up and down over 0.2 s each), and the person steps back from 12 s.
+fn scenario(force_n: f64, until: f64) -> phri_config::Loaded {
+    let base = [0.95, 0.0, std::f64::consts::PI];
+    common::rescript("collaboration", &[], |keyframes| {
+        keyframes.retain(|k| k.t <= 7.0);
+        keyframes.extend([
+            phri_config::Keyframe {
+                push: Some(phri_config::Push {
+                    link: "lwr_link_7".into(),
+                    point: [0.0, 0.0, 0.04],
+                    force_n,
+                    hand: phri_config::Hand::Right,
+                    intended: true,
+                }),
+                ..common::keyframe(10.0, base)
+            },
+            common::keyframe(until, base),
+            common::keyframe(12.0, [1.4, 0.0, std::f64::consts::PI]),
+        ]);
+    })
 }
 
 /// Phases the collaboration went through: (time [s], phase, reason), and the
@@ -66,8 +43,7 @@ struct Run {
 }
 
 fn run(force_n: f64, until: f64) -> Run {
-    let path = scenario(force_n, until);
-    let mut c = common::cell(path.to_str().unwrap(), &CellOptions::default(), &[]);
+    let mut c = common::cell_of(&scenario(force_n, until), &CellOptions::default());
     let mut phases = Vec::new();
     let mut from: Option<nalgebra::Vector3<f64>> = None;
     let mut backed_m = 0.0f64;

@@ -23,29 +23,24 @@ const NO_DETECTION: [&str; 2] = [
 
 /// A person who stands back and, from 8.0 s to 9.5 s, pushes link 4 with
 /// the left hand (30 N).
-fn pushing_person() -> std::path::PathBuf {
-    let text = r#"name = "push-link-4"
-description = "test: a person pushes link 4 with 30 N at 8.0-9.5 s"
-duration_s = 10.0
-[human]
-floor_z = -0.8
-collaborative_parts = []
-[[human.keyframe]]
-t = 0.0
-base = [1.3, 0.0, 3.141592653589793]
-[[human.keyframe]]
-t = 8.0
-base = [1.3, 0.0, 3.141592653589793]
-push = { link = "lwr_link_4", point = [0.0, -0.1, 0.0], force_n = 30.0, part = "left_hand", intended = false }
-[[human.keyframe]]
-t = 9.5
-base = [1.3, 0.0, 3.141592653589793]
-"#;
-    let dir = std::env::temp_dir().join(format!("phri-force-est-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("push-link-4.toml");
-    std::fs::write(&path, text).unwrap();
-    path
+fn pushing_person(sets: &[&str]) -> phri_config::Loaded {
+    let base = [1.3, 0.0, std::f64::consts::PI];
+    common::rescript("collaboration", sets, |keyframes| {
+        *keyframes = vec![
+            common::keyframe(0.0, base),
+            phri_config::Keyframe {
+                push: Some(phri_config::Push {
+                    link: "lwr_link_4".into(),
+                    point: [0.0, -0.1, 0.0],
+                    force_n: 30.0,
+                    hand: phri_config::Hand::Left,
+                    intended: false,
+                }),
+                ..common::keyframe(8.0, base)
+            },
+            common::keyframe(9.5, base),
+        ];
+    })
 }
 
 /// Relative errors ‖F̂ − F‖/‖F‖ of each contact, sorted.
@@ -156,7 +151,7 @@ fn two_forces_at_once_on_an_arm_held_still() {
     // the person's, with levers of centimetres
     let q0 = [0.1, -0.4, 0.2, 1.6, -0.3, -0.7, 0.4];
     let set = format!("sim.q0={q0:?}");
-    let l = common::loaded(pushing_person().to_str().unwrap(), &[set.as_str()]);
+    let l = pushing_person(&[set.as_str()]);
     let model = l.model().unwrap();
     let cfg = &l.config;
     let mut sim =

@@ -654,39 +654,32 @@ struct ElbowPush {
 /// pushing arm, which the simulator draws at the reach limit of the person
 /// 0.95 m away, also grazes the wrist: another collision.)
 fn push_the_elbow(force_n: f64) -> ElbowPush {
-    let mut l = common::loaded("collaboration", &[]);
-    let script = l.scenario.human.as_ref().expect("a person");
     let base = [0.95, 0.0, std::f64::consts::PI];
     let held = Some([0.55, 0.1, 0.35]);
-    let mut keyframes = script.keyframes().to_vec();
-    for k in [
-        phri_config::Keyframe {
-            t: 10.0,
-            base,
-            right_hand: held,
-            push: Some(phri_config::Push {
-                link: "lwr_link_4".into(),
-                point: [0.0, -0.08, 0.0],
-                force_n,
-                hand: phri_config::Hand::Left,
-                intended: false,
-            }),
-            ..Default::default()
-        },
-        phri_config::Keyframe {
-            t: 10.6,
-            base,
-            right_hand: held,
-            ..Default::default()
-        },
-    ] {
-        // between the held-out hand's keyframes at 7 and 11 s
-        let at = keyframes.partition_point(|x| x.t < k.t);
-        assert!(keyframes[at - 1].right_hand == held && keyframes[at].right_hand == held);
-        keyframes.insert(at, k);
-    }
-    let script = phri_config::HumanScript::new(script.floor_z(), keyframes).unwrap();
-    l.scenario.human = Some(script);
+    let l = common::rescript("collaboration", &[], |keyframes| {
+        for k in [
+            phri_config::Keyframe {
+                right_hand: held,
+                push: Some(phri_config::Push {
+                    link: "lwr_link_4".into(),
+                    point: [0.0, -0.08, 0.0],
+                    force_n,
+                    hand: phri_config::Hand::Left,
+                    intended: false,
+                }),
+                ..common::keyframe(10.0, base)
+            },
+            phri_config::Keyframe {
+                right_hand: held,
+                ..common::keyframe(10.6, base)
+            },
+        ] {
+            // between the held-out hand's keyframes at 7 and 11 s
+            let at = keyframes.partition_point(|x| x.t < k.t);
+            assert!(keyframes[at - 1].right_hand == held && keyframes[at].right_hand == held);
+            keyframes.insert(at, k);
+        }
+    });
     let mut c = common::cell_of(&l, &CellOptions::default());
     let (mut at_push, mut reacted) = (None, None);
     let (s, ended_by) = run_collab(&mut c, 12.0, |c| {

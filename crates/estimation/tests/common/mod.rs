@@ -39,12 +39,6 @@ pub fn gain(cfg: &ResidualConfig, i: usize) -> f64 {
     cfg.gain.resolve(7, "dynamics.gain").unwrap()[i]
 }
 
-/// The residual's response to a unit step of τ_ext `t` \[s\] after it
-/// ([`ResidualConfig::step_response`]).
-pub fn step_response(cfg: &ResidualConfig, k_i: f64, t: f64) -> f64 {
-    cfg.step_response(k_i, t)
-}
-
 /// `q_i(t) = q0_i + a (sin(ω t + i) − sin i)` with its first two derivatives
 /// [rad, rad/s, rad/s²]: every joint moves (0.3 rad at 1.5 rad/s, as the old
 /// closed-loop reference did), from `Q0` at `t = 0`.

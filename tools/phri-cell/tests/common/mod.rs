@@ -5,13 +5,35 @@
 use std::path::PathBuf;
 
 use phri_cell::{Cell, CellOptions, CellSummary};
-use phri_config::Loaded;
+use phri_config::{HumanScript, Keyframe, Loaded};
 
 pub fn deploy() -> PathBuf {
     PathBuf::from(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../deploy/phri.toml"
     ))
+}
+
+/// `scenario` (which must have a person) with its person's keyframes as
+/// `edit` leaves them: a variant built in memory, its floor and its
+/// collaborative parts kept.
+pub fn rescript(scenario: &str, sets: &[&str], edit: impl FnOnce(&mut Vec<Keyframe>)) -> Loaded {
+    let mut l = loaded(scenario, sets);
+    let script = l.scenario.human.as_ref().expect("a scenario with a person");
+    let mut keyframes = script.keyframes().to_vec();
+    edit(&mut keyframes);
+    l.scenario.human = Some(HumanScript::new(script.floor_z(), keyframes).unwrap());
+    l
+}
+
+/// A keyframe at `t` \[s\] with the person's base at `base` (x, y \[m\],
+/// heading \[rad\]), every limb at rest.
+pub fn keyframe(t: f64, base: [f64; 3]) -> Keyframe {
+    Keyframe {
+        t,
+        base,
+        ..Default::default()
+    }
 }
 
 /// `deploy/phri.toml` with `scenario` and `sets` (`section.key=value`).
