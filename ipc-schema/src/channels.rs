@@ -49,6 +49,12 @@ pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::WO
 /// [`CollabState`] from the controller, 1 kHz.
 pub const COLLAB_STATE: Channel<CollabState> =
     Channel::new("collab/state", Qos::ONE_PUBLISHER, false);
+/// [`AudioChunk`]s from the microphone (a capture driver, a recording, or
+/// the simulated cell's scripted speech), 50 Hz, deeply queued: the
+/// recogniser loses no audio while it decodes. Wakes: new chunk.
+pub const AUDIO_MIC: Channel<AudioChunk> = Channel::new("audio/mic", Qos::AUDIO, true);
+/// [`Utterance`]s from `phri-voice`: every utterance heard, and its verdict.
+pub const VOICE_UTTERANCE: Channel<Utterance> = Channel::new("voice/utterance", Qos::EVENTS, false);
 /// [`DepthFault`] from `phri-fault` to the simulated camera: frames to corrupt or delay (testing only).
 pub const FAULT_DEPTH: Channel<DepthFault> = Channel::new("fault/depth", Qos::INJECTION, false);
 
@@ -61,6 +67,7 @@ const _: () = {
     assert!(CAMERA_DEPTH.qos.history == 0 && PERCEPTION_DEPTH.qos.history == 0);
     assert!(ROBOT_STATE.wakes && ROBOT_COMMAND.wakes && DYNAMICS_RESIDUAL.wakes);
     assert!(CAMERA_DEPTH.wakes && PERCEPTION_DEPTH.wakes && !SIM_TRUTH.wakes);
+    assert!(AUDIO_MIC.qos.max_publishers == 1 && AUDIO_MIC.wakes);
 };
 
 /// Every publish-subscribe channel of the cell, by name, for tools that list or record them.
@@ -82,6 +89,8 @@ pub const ALL: &[&str] = &[
     HRI_REQUEST.name,
     PERCEPTION_HAND.name,
     COLLAB_STATE.name,
+    AUDIO_MIC.name,
+    VOICE_UTTERANCE.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -92,6 +101,7 @@ pub const ON_DEMAND: &[&str] = &[
     SIM_CONTACTS.name,
     HRI_REQUEST.name,
     PERCEPTION_HAND.name,
+    VOICE_UTTERANCE.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -120,6 +130,8 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(HRI_REQUEST);
     v.message(PERCEPTION_HAND);
     v.message(COLLAB_STATE);
+    v.message(AUDIO_MIC);
+    v.message(VOICE_UTTERANCE);
 }
 
 /// Visit the channel called `name`; `false` when the cell has none of that name.

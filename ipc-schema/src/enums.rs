@@ -225,6 +225,42 @@ wire_enum! {
 }
 
 wire_enum! {
+    /// A voice command ([`crate::Utterance::intent`]): the grammar's commands.
+    VoiceIntent, "voice intent" {
+        /// no command recognised
+        None = 0 => "none",
+        /// "follow [the] right hand"
+        FollowRightHand = 1 => "follow_right_hand",
+        /// "follow [the] left hand"
+        FollowLeftHand = 2 => "follow_left_hand",
+        /// "begin collaboration"
+        Begin = 3 => "begin",
+        /// "end collaboration"
+        End = 4 => "end",
+        /// "stop": a protective stop
+        Stop = 5 => "stop",
+    }
+}
+
+wire_enum! {
+    /// What became of an utterance ([`crate::Utterance::verdict`]).
+    VoiceVerdict, "voice verdict" {
+        /// a request was published
+        Accepted = 1 => "accepted",
+        /// refused: the decoder matched no command
+        NoMatch = 2 => "no_match",
+        /// refused: a command matched, but its score is below `[voice] min_score`
+        LowScore = 3 => "low_score",
+        /// refused: speech shorter than `[voice] min_utterance_s`
+        TooShort = 4 => "too_short",
+        /// refused: speech longer than `[voice] max_utterance_s`
+        TooLong = 5 => "too_long",
+        /// refused: `follow` for a hand the body tracker does not see
+        HandNotTracked = 6 => "hand_not_tracked",
+    }
+}
+
+wire_enum! {
     /// Why the collaboration last changed, or why a request was refused
     /// ([`crate::CollabState::reason`], [`crate::CollabState::request_reason`]).
     CollabReason, "collaboration reason" {

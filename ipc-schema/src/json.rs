@@ -175,6 +175,57 @@ by_name!(
     ContactPhase
 );
 
+by_name!(
+    /// [`crate::VoiceIntent`] as its name (`"follow_left_hand"`).
+    voice_intent,
+    VoiceIntent
+);
+by_name!(
+    /// [`crate::VoiceVerdict`] as its name (`"low_score"`).
+    voice_verdict,
+    VoiceVerdict
+);
+
+/// An `[i16; N]` (audio samples) as an array of numbers.
+pub mod i16_array {
+    use super::*;
+
+    pub fn serialize<S: Serializer, const N: usize>(a: &[i16; N], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(a.iter())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
+        d: D,
+    ) -> Result<[i16; N], D::Error> {
+        struct V<const N: usize>;
+        impl<'de, const N: usize> Visitor<'de> for V<N> {
+            type Value = [i16; N];
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "an array of at most {N} 16-bit samples")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[i16; N], A::Error> {
+                let mut out = [0; N];
+                let mut n = 0;
+                while let Some(x) = seq.next_element::<i16>()? {
+                    if n == N {
+                        return Err(de::Error::invalid_length(n + 1, &self));
+                    }
+                    out[n] = x;
+                    n += 1;
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_seq(V::<N>)
+    }
+}
+
+/// The text of a zero-padded UTF-8 field (`"?"` when not UTF-8).
+pub fn c_str<const N: usize>(b: &[u8; N]) -> String {
+    let end = b.iter().position(|&c| c == 0).unwrap_or(N);
+    std::str::from_utf8(&b[..end]).unwrap_or("?").to_string()
+}
+
 /// A zero-padded UTF-8 name (`[u8; N]`) as a string (`"?"` when not UTF-8).
 pub mod c_string {
     use super::*;

@@ -17,6 +17,10 @@ pub const MAX_PEOPLE: usize = 4;
 pub const SKELETON_JOINTS: usize = 15;
 /// Estimated contact forces in a [`CollabState`].
 pub const MAX_COLLAB_FORCES: usize = 2;
+/// Samples in one [`AudioChunk`]: 20 ms at [`AUDIO_RATE_HZ`].
+pub const AUDIO_CHUNK_SAMPLES: usize = 320;
+/// Sample rate of `audio/mic` [Hz] (mono, 16 bit).
+pub const AUDIO_RATE_HZ: u32 = 16_000;
 /// Bytes of the text of an [`HriRequest`] (UTF-8, zero padded).
 pub const REQUEST_TEXT: usize = 64;
 /// Human capsules in [`WorldState`].
@@ -586,6 +590,65 @@ pub struct HriRequest {
 
 impl Zeroed for HriRequest {}
 
+/// A chunk of microphone audio (`audio/mic`), as a capture driver publishes
+/// it: mono 16-bit PCM at [`AUDIO_RATE_HZ`], [`AUDIO_CHUNK_SAMPLES`] samples
+/// (20 ms) with the capture time of the first one. Chunks follow each other
+/// without gaps; a gap in `seq` is audio lost.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::AudioChunk")]
+pub struct AudioChunk {
+    pub seq: u64,
+    /// capture time of the first sample [ns, CLOCK_MONOTONIC]
+    pub capture_ns: u64,
+    /// when this was published [ns, CLOCK_MONOTONIC]
+    pub published_ns: u64,
+    /// sample rate [Hz]
+    pub rate_hz: u32,
+    /// valid samples in `pcm` (≤ [`AUDIO_CHUNK_SAMPLES`])
+    pub samples: u32,
+    /// mono 16-bit PCM [full scale ±32768]
+    #[serde(with = "crate::json::i16_array")]
+    pub pcm: [i16; AUDIO_CHUNK_SAMPLES],
+}
+
+impl Zeroed for AudioChunk {}
+
+/// One utterance the voice recogniser heard (`voice/utterance`), whatever
+/// became of it: the words, the score, and the verdict (a request published,
+/// or why not).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::Utterance")]
+pub struct Utterance {
+    pub seq: u64,
+    /// speech began / ended [ns, CLOCK_MONOTONIC: `audio/mic`'s capture clock]
+    pub start_ns: u64,
+    pub end_ns: u64,
+    /// when the verdict was reached [ns, CLOCK_MONOTONIC]
+    pub decoded_ns: u64,
+    /// decoding time [ms]
+    #[serde(with = "crate::json::finite")]
+    pub decode_ms: f64,
+    /// the recogniser's score: acoustic log-likelihood per 10 ms frame of the
+    /// command against a free phone loop (higher: surer; 0 when nothing decoded)
+    #[serde(with = "crate::json::finite")]
+    pub score: f64,
+    /// [`crate::VoiceIntent`] recognised (`none`: no command)
+    #[serde(with = "crate::json::voice_intent")]
+    pub intent: u32,
+    /// [`crate::VoiceVerdict`]
+    #[serde(with = "crate::json::voice_verdict")]
+    pub verdict: u32,
+    /// `seq` of the `hri/request` published for it (0: none)
+    pub request_seq: u64,
+    /// the words recognised (empty: none), UTF-8, zero padded
+    #[serde(with = "crate::json::c_string")]
+    pub text: [u8; REQUEST_TEXT],
+}
+
+impl Zeroed for Utterance {}
+
 /// The collaborative hand as depth ingestion sees it (`perception/hand`),
 /// per frame while a collaboration is on: the tracker's hand refined from
 /// the depth pixels around it; those pixels were removed from the frame the
@@ -748,4 +811,6 @@ message!(ContactEvent, published: |_m| None);
 message!(Skeleton, published: |m| Some(m.published_ns), counted: [n_people => people]);
 message!(HriRequest, published: |m| Some(m.stamp_ns), stream: |m| m.source as u64);
 message!(HandObservation, published: |m| Some(m.published_ns));
+message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => pcm]);
+message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);

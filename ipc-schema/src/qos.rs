@@ -52,6 +52,15 @@ impl Qos {
         subscriber_max_buffer: 1024,
         history: 0,
     };
+    /// Audio chunks (50 Hz): one capture source, 4 s of queue per reader
+    /// (a decode takes tens of ms; nothing is lost), no history (a restarted
+    /// recogniser hears from now on).
+    pub const AUDIO: Qos = Qos {
+        max_publishers: 1,
+        max_subscribers: 8,
+        subscriber_max_buffer: 200,
+        history: 0,
+    };
     /// Fault injection: one injector at a time; a restarted camera must not
     /// replay an old fault, so no history.
     pub const INJECTION: Qos = Qos {

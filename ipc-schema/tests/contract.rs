@@ -33,4 +33,6 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<HriRequest>("phri::HriRequest", 120);
     check::<HandObservation>("phri::HandObservation", 96);
     check::<CollabState>("phri::CollabState", 240);
+    check::<AudioChunk>("phri::AudioChunk", 672);
+    check::<Utterance>("phri::Utterance", 128);
 }

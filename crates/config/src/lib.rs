@@ -23,6 +23,7 @@ pub mod record;
 pub mod scenario;
 pub mod sim;
 pub mod supervisor;
+pub mod voice;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -39,9 +40,11 @@ pub use merge::{apply_set, merge};
 pub use per_joint::PerJoint;
 pub use perception::{CameraConfig, DepthSource, IngestConfig, PointConfig, RepulsionConfig};
 pub use record::{Compression, RecordConfig};
+pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
 pub use supervisor::{ServiceSpec, SupervisorConfig};
+pub use voice::{AudioConfig, AudioSource, VoiceConfig};
 
 /// The default configuration: `deploy/phri.toml` as built.
 pub const DEFAULTS: &str = include_str!("../../../deploy/phri.toml");
@@ -85,6 +88,8 @@ pub struct Config {
     pub skeleton: SkeletonConfig,
     pub gesture: GestureConfig,
     pub collaboration: CollaborationConfig,
+    pub voice: VoiceConfig,
+    pub audio: AudioConfig,
     #[serde(default)]
     pub scenario: ScenarioSection,
 }
@@ -181,6 +186,8 @@ impl Config {
             "skeleton",
             "gesture",
             "collaboration",
+            "voice",
+            "audio",
             "scenario",
         ];
         if let Some(k) = table.keys().find(|k| !KNOWN.contains(&k.as_str())) {
@@ -234,6 +241,8 @@ impl Config {
         self.skeleton.validate()?;
         self.gesture.validate()?;
         self.collaboration.validate()?;
+        self.voice.validate()?;
+        self.audio.validate()?;
         Ok(())
     }
 

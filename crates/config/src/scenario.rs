@@ -57,8 +57,32 @@ pub struct Scenario {
     pub human: Option<HumanScript>,
     /// human parts whose contacts are intended (collaboration); empty without a human
     pub collaborative_parts: Vec<BodyPart>,
+    /// what the person says, in time order (the simulated microphone plays it)
+    pub voice: Vec<VoiceLine>,
     /// configuration overrides, uninterpreted here
     pub config: toml::Table,
+}
+
+/// `[[voice]]`: a recording the simulated microphone plays at scenario time `t`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoiceLine {
+    /// when the recording starts [s, scenario time]
+    pub t: f64,
+    /// WAV file (16 kHz mono 16 bit), relative to `deploy/audio/` (the
+    /// `audio` directory beside the scenario's directory) unless absolute
+    pub wav: String,
+}
+
+impl VoiceLine {
+    /// The file `wav` names, for a scenario read from `scenario_file`.
+    pub fn path(&self, scenario_file: &Path) -> PathBuf {
+        let p = Path::new(&self.wav);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        let dir = scenario_file.parent().unwrap_or(Path::new("."));
+        dir.join("..").join("audio").join(p)
+    }
 }
 
 /// Why a scenario could not be loaded. `origin` is the file path (or
@@ -97,7 +121,16 @@ struct RawScenario {
     duration_s: f64,
     human: Option<RawHuman>,
     #[serde(default)]
+    voice: Vec<RawVoice>,
+    #[serde(default)]
     config: toml::Table,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawVoice {
+    t: f64,
+    wav: String,
 }
 
 #[derive(Deserialize)]
@@ -182,6 +215,7 @@ impl Scenario {
             duration_s: Self::DEFAULT_DURATION_S,
             human: None,
             collaborative_parts: Vec::new(),
+            voice: Vec::new(),
             config: toml::Table::new(),
         }
     }
@@ -306,7 +340,29 @@ impl Scenario {
                 (Some(script), parts)
             }
         };
+        let mut voice = Vec::with_capacity(raw.voice.len());
+        for (i, v) in raw.voice.into_iter().enumerate() {
+            if !(v.t.is_finite() && v.t >= 0.0) {
+                return Err(invalid(
+                    format!("voice[{i}].t"),
+                    format!("{} is not a time ≥ 0 s", v.t),
+                ));
+            }
+            if let Some(prev) = voice.last().map(|p: &VoiceLine| p.t) {
+                if v.t < prev {
+                    return Err(invalid(
+                        format!("voice[{i}].t"),
+                        format!("{} s is before the previous line's {prev} s (lines must be in time order)", v.t),
+                    ));
+                }
+            }
+            if v.wav.trim().is_empty() {
+                return Err(invalid(format!("voice[{i}].wav"), "no file named".into()));
+            }
+            voice.push(VoiceLine { t: v.t, wav: v.wav });
+        }
         Ok(Scenario {
+            voice,
             name: raw.name,
             description: raw.description,
             duration_s: raw.duration_s,

@@ -7,8 +7,24 @@
 
 use std::collections::BTreeMap;
 
-use phri_ipc::{CollabPart, CollabPhase, CollabReason, CollabState, RequestSource, Truth};
+use phri_ipc::{
+    CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, RequestSource, Truth,
+    Utterance, VoiceIntent, VoiceVerdict,
+};
 use serde::Serialize;
+
+/// The request a voice intent makes (as `phri-voice` maps it).
+fn phri_voice_request(i: VoiceIntent) -> Option<(phri_ipc::RequestKind, CollabPart)> {
+    use phri_ipc::RequestKind as K;
+    match i {
+        VoiceIntent::None => None,
+        VoiceIntent::FollowRightHand => Some((K::Follow, CollabPart::RightHand)),
+        VoiceIntent::FollowLeftHand => Some((K::Follow, CollabPart::LeftHand)),
+        VoiceIntent::Begin => Some((K::Begin, CollabPart::None)),
+        VoiceIntent::End => Some((K::End, CollabPart::None)),
+        VoiceIntent::Stop => Some((K::Stop, CollabPart::None)),
+    }
+}
 
 /// True forces below this are not graded \[N\] (issue 11: ≥ 5 N).
 const MIN_GRADED_FORCE_N: f64 = 5.0;
@@ -25,6 +41,34 @@ pub struct RequestReport {
     pub part: String,
     pub accepted: bool,
     pub reason: String,
+    /// the request's number (per source)
+    pub seq: u64,
+    /// voice: the words recognised
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub text: Option<String>,
+    /// voice: the recogniser's score
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub score: Option<f64>,
+    /// voice: the utterance's end → the request published [ms]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub utterance_end_to_request_ms: Option<f64>,
+    /// who refused it: `control` (the collaboration's state machine) or
+    /// `voice` (the recogniser: the words, the score or the hand gate)
+    pub refused_by: Option<String>,
+}
+
+/// `collaboration.utterances[]`: everything `phri-voice` heard.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct UtteranceReport {
+    /// when the verdict was reached [s], the report's time base
+    pub t_s: f64,
+    pub text: String,
+    pub intent: String,
+    pub score: f64,
+    pub verdict: String,
+    /// speech duration [s]
+    pub duration_s: f64,
+    pub decode_ms: f64,
 }
 
 /// `collaboration.phases[]`: each change of phase.
@@ -47,7 +91,10 @@ pub struct ErrorPercentiles {
 /// `collaboration` in the report (empty lists and nulls when nothing happened).
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct CollabReport {
+    /// requests in time order: the controller's answers, and the voice
+    /// requests the recogniser refused itself
     pub requests: Vec<RequestReport>,
+    pub utterances: Vec<UtteranceReport>,
     pub phases: Vec<PhaseReport>,
     /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
     pub wave_to_start_ms: Option<f64>,
@@ -92,6 +139,8 @@ pub struct CollabEvaluator {
     errors: Vec<f64>,
     follow: Vec<f64>,
     part: CollabPart,
+    /// voice requests by seq: (text, score, utterance end → request [ms])
+    voice: BTreeMap<u64, (String, f64, f64)>,
 }
 
 fn norm(v: &[f64; 3]) -> f64 {
@@ -124,6 +173,7 @@ impl CollabEvaluator {
             errors: Vec::new(),
             follow: Vec::new(),
             part: CollabPart::None,
+            voice: BTreeMap::new(),
         }
     }
 
@@ -142,6 +192,11 @@ impl CollabEvaluator {
                 part: CollabPart::name_of(s.request_part).into(),
                 accepted: s.request_accepted != 0,
                 reason: CollabReason::name_of(s.request_reason).into(),
+                seq: s.request_seq,
+                text: None,
+                score: None,
+                utterance_end_to_request_ms: None,
+                refused_by: (s.request_accepted == 0).then(|| "control".into()),
             });
         }
         if s.phase != self.last_phase {
@@ -184,6 +239,50 @@ impl CollabEvaluator {
                 self.estimates.insert(s.state_stamp_ns, f.force);
                 self.match_up(s.state_stamp_ns);
             }
+        }
+    }
+
+    /// A request on `hri/request`: voice requests' words and timing.
+    pub fn on_request(&mut self, r: &HriRequest) {
+        if r.source == RequestSource::Voice as u32 {
+            let latency = r.stamp_ns.saturating_sub(r.utterance_end_ns) as f64 * 1e-6;
+            self.voice
+                .insert(r.seq, (phri_ipc::json::c_str(&r.text), r.score, latency));
+        }
+    }
+
+    /// An utterance `phri-voice` heard; one it refused is a refused request.
+    pub fn on_utterance(&mut self, u: &Utterance) {
+        let t = self.t(u.decoded_ns);
+        let text = phri_ipc::json::c_str(&u.text);
+        let intent = VoiceIntent::try_from(u.intent).unwrap_or(VoiceIntent::None);
+        self.report.utterances.push(UtteranceReport {
+            t_s: t,
+            text: text.clone(),
+            intent: intent.name().into(),
+            score: u.score,
+            verdict: VoiceVerdict::name_of(u.verdict).into(),
+            duration_s: u.end_ns.saturating_sub(u.start_ns) as f64 * 1e-9,
+            decode_ms: u.decode_ms,
+        });
+        if u.verdict != VoiceVerdict::Accepted as u32 {
+            let (kind, part) = match phri_voice_request(intent) {
+                Some((k, p)) => (k.name(), p.name()),
+                None => ("none", "none"),
+            };
+            self.report.requests.push(RequestReport {
+                t_s: t,
+                source: RequestSource::Voice.name().into(),
+                kind: kind.into(),
+                part: part.into(),
+                accepted: false,
+                reason: VoiceVerdict::name_of(u.verdict).into(),
+                seq: 0,
+                text: Some(text),
+                score: Some(u.score),
+                utterance_end_to_request_ms: None,
+                refused_by: Some("voice".into()),
+            });
         }
     }
 
@@ -230,6 +329,18 @@ impl CollabEvaluator {
     /// (`(intended, peak force [N])` each).
     pub fn report(&self, contacts: impl Iterator<Item = (bool, f64)>) -> CollabReport {
         let mut r = self.report.clone();
+        for q in r
+            .requests
+            .iter_mut()
+            .filter(|q| q.source == "voice" && q.seq != 0)
+        {
+            if let Some((text, score, latency)) = self.voice.get(&q.seq) {
+                q.text = Some(text.clone());
+                q.score = Some(*score);
+                q.utterance_end_to_request_ms = Some(*latency);
+            }
+        }
+        r.requests.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
         let mut intended = 0;
         let mut peak: Option<f64> = None;
         for (i, f) in contacts {

@@ -64,6 +64,9 @@ struct Ports {
     filtered: FrameSubscriber,
     repulsion: Subscriber<phri_ipc::RepulsionResult>,
     collab: Subscriber<phri_ipc::CollabState>,
+    requests: Subscriber<phri_ipc::HriRequest>,
+    utterances: Subscriber<phri_ipc::Utterance>,
+    audio: Subscriber<phri_ipc::AudioChunk>,
 }
 
 impl Ports {
@@ -79,6 +82,9 @@ impl Ports {
             filtered: PERCEPTION_DEPTH.frame_subscriber(node, Queue::Latest)?,
             repulsion: PERCEPTION_REPULSION.subscriber(node, Queue::Drain)?,
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
+            requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
+            utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
+            audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
         })
     }
 }
@@ -579,6 +585,8 @@ fn body() -> Result<(), SupervisorError> {
         }
         ports.contacts.drain(|m| eval.on_contact_event(m))?;
         ports.collab.drain(|m| collab_eval.on_state(m))?;
+        ports.requests.drain(|m| collab_eval.on_request(m))?;
+        ports.utterances.drain(|m| collab_eval.on_utterance(m))?;
         if ports.truth.drain(|m| {
             eval.on_truth(m);
             collab_eval.on_truth(m);
@@ -609,6 +617,9 @@ fn body() -> Result<(), SupervisorError> {
         }
         if ports.repulsion.drain(|m| eval.on_repulsion(m))? > 0 {
             roster.heard(PERCEPTION_REPULSION.name, now);
+        }
+        if ports.audio.drain(|_| {})? > 0 {
+            roster.heard(phri_ipc::AUDIO_MIC.name, now);
         }
         if stalled_ns > STALL_NS {
             // this process did not run (a stopped supervisor, a starved CPU):
@@ -827,6 +838,8 @@ fn body() -> Result<(), SupervisorError> {
     // drain what arrived in the last period before stopping anything
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     let _ = ports.collab.drain(|m| collab_eval.on_state(m));
+    let _ = ports.requests.drain(|m| collab_eval.on_request(m));
+    let _ = ports.utterances.drain(|m| collab_eval.on_utterance(m));
     let _ = ports.truth.drain(|m| {
         eval.on_truth(m);
         collab_eval.on_truth(m);

@@ -40,7 +40,9 @@ mod tests {
                 "repulsion1",
                 "repulsion2",
                 "repulsion3",
-                "control"
+                "control",
+                "mic",
+                "voice"
             ]
         );
     }

@@ -1,0 +1,123 @@
+//! `phri-mic`: the microphone stand-in on `audio/mic` (16 kHz mono 16-bit,
+//! 20 ms chunks with capture times), where a capture driver would publish.
+//! `[audio] source = "sim"`: the simulated room, background noise and the
+//! scenario's `[[voice]]` recordings at their scenario times, paced by the
+//! simulator's clock (`sim/world`); `"wav_dir"`: the recordings of a
+//! directory in name order, paced by the wall clock.
+
+use std::error::Error;
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use phri_config::AudioSource;
+use phri_ipc::{AudioChunk, Zeroed, AUDIO_CHUNK_SAMPLES, AUDIO_MIC, AUDIO_RATE_HZ, SIM_WORLD};
+use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
+use phri_voice::mic::{Clip, Playback};
+use phri_voice::wav;
+
+/// Duration of a chunk [ns].
+const CHUNK_NS: u64 = AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / AUDIO_RATE_HZ as u64;
+/// Further behind than this, the mic skips ahead (a reader's queue holds 4 s) [chunks].
+const MAX_BURST: u64 = 100;
+
+fn main() -> ExitCode {
+    if std::env::args().any(|a| a == "--help" || a == "-h") {
+        println!(
+            "phri-mic: the microphone stand-in on audio/mic\n\nUSAGE:\n    phri-mic [--config FILE] [--prefix P] [--set section.key=value]... [--check]\n\n[audio] source = \"sim\" plays the scenario's [[voice]] lines (files under deploy/audio/)\nover background noise, on the simulator's clock; \"wav_dir\" replays [audio] wav_dir."
+        );
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run("phri-mic", body)
+}
+
+fn body() -> Result<(), Box<dyn Error>> {
+    let ctx = ServiceContext::from_args("mic", &[])?;
+    let cfg = ctx.config().audio.clone();
+    let playback = match cfg.source {
+        AudioSource::Sim => {
+            let file = Path::new(&ctx.config().scenario.file);
+            let mut clips = Vec::new();
+            for line in &ctx.scenario().voice {
+                let path = line.path(file);
+                clips.push(Clip {
+                    start: (line.t * AUDIO_RATE_HZ as f64).round() as u64,
+                    samples: wav::read(&path)?,
+                });
+            }
+            Playback::new(clips, cfg.noise_dbfs, cfg.seed)
+        }
+        AudioSource::WavDir => {
+            let files = wav::list(Path::new(&cfg.wav_dir))?;
+            let mut recordings = Vec::with_capacity(files.len());
+            for f in &files {
+                recordings.push(wav::read(f)?);
+            }
+            Playback::sequence(
+                recordings,
+                cfg.wav_gap_s,
+                cfg.wav_loop,
+                cfg.noise_dbfs,
+                cfg.seed,
+            )
+        }
+    };
+    if ctx.checking() {
+        return Ok(());
+    }
+    ctx.start_deadman()?;
+    let node = ctx.node()?;
+    let publisher = AUDIO_MIC.publisher(&node)?;
+    let mut chunk = AudioChunk::zeroed();
+    chunk.rate_hz = AUDIO_RATE_HZ;
+    chunk.samples = AUDIO_CHUNK_SAMPLES as u32;
+    let mut publish = |k: u64, capture_ns: u64| -> Result<(), phri_ipc::IpcError> {
+        chunk.seq += 1;
+        chunk.capture_ns = capture_ns;
+        playback.fill(k * AUDIO_CHUNK_SAMPLES as u64, &mut chunk.pcm);
+        chunk.published_ns = now_ns();
+        publisher.publish(&chunk)
+    };
+    match cfg.source {
+        AudioSource::Sim => {
+            let dt_ns = (ctx.config().sim.dt_s * 1e9) as u64;
+            let mut worlds = SIM_WORLD.latest_reader(&node)?;
+            let mut next: Option<u64> = None;
+            while !ctx.shutdown.requested() {
+                std::thread::sleep(Duration::from_millis(5));
+                worlds.update()?;
+                let Some(w) = worlds.get() else { continue };
+                // scenario time: the simulator steps once per period from its epoch
+                let sim_ns = w.seq.saturating_sub(1) * dt_ns;
+                let now = now_ns();
+                let due = sim_ns / CHUNK_NS; // chunks wholly in the past
+                let mut k = match next {
+                    Some(k) if due.saturating_sub(k) <= MAX_BURST => k,
+                    _ => due,
+                };
+                while k < due {
+                    // the chunk's first sample, on the wall clock
+                    let ago = sim_ns - k * CHUNK_NS;
+                    publish(k, now.saturating_sub(ago))?;
+                    k += 1;
+                }
+                next = Some(k);
+            }
+        }
+        AudioSource::WavDir => {
+            let start = now_ns();
+            let mut k = 0u64;
+            while !ctx.shutdown.requested() {
+                let due_ns = start + (k + 1) * CHUNK_NS;
+                sleep_until_ns(due_ns);
+                if now_ns() > due_ns + MAX_BURST * CHUNK_NS {
+                    k = (now_ns() - start) / CHUNK_NS; // fell far behind: skip
+                    continue;
+                }
+                publish(k, start + k * CHUNK_NS)?;
+                k += 1;
+            }
+        }
+    }
+    Ok(())
+}

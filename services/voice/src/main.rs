@@ -1,0 +1,230 @@
+//! `phri-voice`: voice commands. As a service: `audio/mic` → utterances →
+//! `hri/request` (source `voice`) and `voice/utterance` (every utterance and
+//! its verdict), gating `follow` on `perception/skeleton`. With
+//! `--wav FILE...`: decode recordings and print one JSON line per utterance.
+
+use std::error::Error;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use phri_ipc::{
+    AudioChunk, CollabPart, Utterance, VoiceIntent, VoiceVerdict, Zeroed, AUDIO_CHUNK_SAMPLES,
+    AUDIO_MIC, AUDIO_RATE_HZ, HRI_REQUEST, PERCEPTION_SKELETON, VOICE_UTTERANCE,
+};
+use phri_runtime::{now_ns, ServiceContext};
+use phri_voice::{wav, Hands, Listener};
+
+const HELP: &str = "\
+phri-voice: voice commands for the phri cell (pocketsphinx, offline)
+
+USAGE:
+    phri-voice [--config FILE] [--prefix P] [--set section.key=value]...
+        the service: audio/mic → hri/request and voice/utterance
+    phri-voice --wav FILE... [--config FILE] [--set section.key=value]...
+        decode recordings (16 kHz mono 16-bit WAV) and print one JSON line per
+        utterance: file, text (empty when refused), intent, score, start_s,
+        end_s, verdict, decode_ms; then a summary on stderr (decoding cost
+        against real time). The hand gate is off: no scene to look at.
+
+The grammar: follow [the] (right | left) hand | begin collaboration |
+end collaboration | stop. Settings: [voice] in deploy/phri.toml.
+Needs Debian's libpocketsphinx-dev and pocketsphinx-en-us.";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--help" || a == "-h") {
+        println!("{HELP}");
+        return ExitCode::SUCCESS;
+    }
+    if args.iter().any(|a| a == "--version" || a == "-V") {
+        println!("phri-voice {}", env!("CARGO_PKG_VERSION"));
+        return ExitCode::SUCCESS;
+    }
+    if args.iter().any(|a| a == "--wav") {
+        return match wav_mode(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("phri-voice: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
+    phri_runtime::service::run("phri-voice", body)
+}
+
+/// `--wav FILE... [--config FILE] [--set k=v]...`
+fn wav_mode(args: &[String]) -> Result<(), Box<dyn Error>> {
+    let mut files = Vec::new();
+    let mut config = PathBuf::from("deploy/phri.toml");
+    let mut sets = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--wav" => {}
+            "--config" => config = it.next().ok_or("--config needs a value")?.into(),
+            "--set" => sets.push(it.next().ok_or("--set needs a value")?.as_str()),
+            f if f.starts_with("--") => {
+                return Err(format!("unknown argument '{f}' (see --help)").into())
+            }
+            f => files.push(PathBuf::from(f)),
+        }
+    }
+    if files.is_empty() {
+        return Err("--wav needs at least one file".into());
+    }
+    let loaded = if config.exists() {
+        phri_config::Loaded::load(&config, None, &sets)?
+    } else {
+        phri_config::Loaded::load_text("", &config, None, &sets)?
+    };
+    let cfg = &loaded.config.voice;
+    let mut listener = Listener::new(cfg)?;
+    let mut latencies = Vec::new();
+    let mut utterances = 0usize;
+    for file in &files {
+        let audio = wav::read(file)?;
+        let mut chunk = AudioChunk::zeroed();
+        chunk.rate_hz = AUDIO_RATE_HZ;
+        let mut emit = |h: phri_voice::Heard| {
+            utterances += 1;
+            latencies.push(h.utterance.decode_ms);
+            println!("{}", line(file, &h.utterance));
+        };
+        for (k, samples) in audio.chunks(AUDIO_CHUNK_SAMPLES).enumerate() {
+            chunk.seq = k as u64 + 1;
+            chunk.capture_ns =
+                (k * AUDIO_CHUNK_SAMPLES) as u64 * 1_000_000_000 / AUDIO_RATE_HZ as u64;
+            chunk.samples = samples.len() as u32;
+            chunk.pcm[..samples.len()].copy_from_slice(samples);
+            if let Some(h) = listener.step(&chunk, &Hands::ANYONE, now_ns)? {
+                emit(h);
+            }
+        }
+        if let Some(h) = listener.finish(&Hands::ANYONE, now_ns)? {
+            emit(h);
+        }
+    }
+    latencies.sort_by(f64::total_cmp);
+    let pct = |p: f64| {
+        latencies
+            .get(((latencies.len().max(1) - 1) as f64 * p).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    eprintln!(
+        "phri-voice: {} file(s), {utterances} utterance(s): decoded {:.1} s of audio in {:.3} s = {:.3}× real time; decode p50 {:.0} ms, max {:.0} ms",
+        files.len(),
+        listener.audio_s,
+        listener.decode_s,
+        listener.decode_s / listener.audio_s.max(1e-9),
+        pct(0.5),
+        pct(1.0),
+    );
+    Ok(())
+}
+
+fn line(file: &std::path::Path, u: &Utterance) -> String {
+    let verdict = VoiceVerdict::try_from(u.verdict).unwrap_or(VoiceVerdict::NoMatch);
+    let text = if verdict == VoiceVerdict::Accepted || verdict == VoiceVerdict::HandNotTracked {
+        phri_ipc::json::c_str(&u.text)
+    } else {
+        String::new()
+    };
+    serde_json::json!({
+        "file": file.display().to_string(),
+        "text": text,
+        "intent": VoiceIntent::name_of(u.intent),
+        "heard": phri_ipc::json::c_str(&u.text),
+        "score": (u.score * 100.0).round() / 100.0,
+        "start_s": (u.start_ns as f64 * 1e-6).round() / 1e3,
+        "end_s": (u.end_ns as f64 * 1e-6).round() / 1e3,
+        "verdict": verdict.name(),
+        "decode_ms": (u.decode_ms * 10.0).round() / 10.0,
+    })
+    .to_string()
+}
+
+fn body() -> Result<(), Box<dyn Error>> {
+    let ctx = ServiceContext::from_args("voice", &[])?;
+    let cfg = ctx.config().voice.clone();
+    let mut listener = Listener::new(&cfg)?;
+    if ctx.checking() {
+        return Ok(());
+    }
+    ctx.start_deadman()?;
+    let node = ctx.node()?;
+    let audio = AUDIO_MIC.waking_subscriber(&node, phri_ipc::Queue::Drain)?;
+    let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
+    let requests = HRI_REQUEST.publisher(&node)?;
+    let utterances = VOICE_UTTERANCE.publisher(&node)?;
+    let max_age_ns = (cfg.skeleton_max_age_ms * 1e6) as u64;
+    let mut last_seq = 0u64;
+    let mut lost = 0u64;
+    let mut latencies: Vec<f64> = Vec::new();
+    while !ctx.shutdown.requested() {
+        // a wait ended early (a signal, a failed wake-up) is one more poll
+        let _ = audio.wait(Duration::from_millis(100));
+        let mut heard = Vec::new();
+        let mut failure = None;
+        skeletons.update()?;
+        let hands = Hands::of(skeletons.get(), now_ns(), max_age_ns);
+        audio.drain(|chunk| {
+            if last_seq != 0 && chunk.seq > last_seq + 1 {
+                lost += chunk.seq - last_seq - 1;
+            }
+            last_seq = chunk.seq;
+            if chunk.rate_hz != AUDIO_RATE_HZ {
+                return; // not ours to decode: counted below
+            }
+            match listener.step(chunk, &hands, now_ns) {
+                Ok(Some(h)) => heard.push(h),
+                Ok(None) => {}
+                Err(e) => failure = Some(e),
+            }
+        })?;
+        if let Some(e) = failure {
+            return Err(e.into());
+        }
+        for h in heard {
+            if let Some(r) = h.request {
+                requests.publish(&r)?;
+                latencies.push(r.stamp_ns.saturating_sub(r.utterance_end_ns) as f64 * 1e-6);
+            }
+            utterances.publish(&h.utterance)?;
+            eprintln!("phri-voice: {}", describe(&h.utterance));
+        }
+    }
+    latencies.sort_by(f64::total_cmp);
+    eprintln!(
+        "phri-voice: decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost",
+        listener.decode_s / listener.audio_s.max(1e-9),
+        listener.audio_s,
+        listener.decode_s,
+        latencies.get(latencies.len() / 2).copied().unwrap_or(0.0),
+        latencies.last().copied().unwrap_or(0.0),
+        latencies.len(),
+    );
+    Ok(())
+}
+
+fn describe(u: &Utterance) -> String {
+    let verdict = VoiceVerdict::name_of(u.verdict);
+    let text = phri_ipc::json::c_str(&u.text);
+    let what = match VoiceIntent::try_from(u.intent)
+        .ok()
+        .and_then(phri_voice::request_of)
+    {
+        Some((kind, part)) if part != CollabPart::None => {
+            format!("{} {}", kind.name(), part.name())
+        }
+        Some((kind, _)) => kind.name().to_string(),
+        None => "nothing".into(),
+    };
+    format!(
+        "heard '{text}' ({:.2} s, score {:.1}, decoded in {:.0} ms): {what}: {verdict}",
+        u.end_ns.saturating_sub(u.start_ns) as f64 * 1e-9,
+        u.score,
+        u.decode_ms
+    )
+}
