@@ -809,3 +809,129 @@ fn killing_gesture_mid_collaboration_is_fail_safe() {
     let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
     assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
 }
+
+/// The voice requests of a report's collaboration section.
+fn voice_requests(c: &Value) -> Vec<&Value> {
+    c["requests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|q| q["source"] == "voice")
+        .collect()
+}
+
+#[test]
+fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // deploy/scenarios/voice-collaboration.toml through the real services:
+    // phri-mic plays the person's recorded speech into audio/mic on the
+    // simulator's clock, phri-voice decodes it (pocketsphinx) and gates it
+    // on the camera's skeleton, the controller answers
+    let r = Cell::start("voice", "voice-collaboration", None, &[]).finish();
+    assert_no_unintended_contact(&r);
+    assert_eq!(r["torque_loop"]["missed_deadlines"], 0, "{}", r["torque_loop"]);
+    let c = &r["collaboration"];
+    eprintln!("collaboration: {c}");
+    let voice = voice_requests(c);
+    let find = |kind: &str, part: &str| {
+        voice
+            .iter()
+            .find(|q| q["kind"] == kind && q["part"] == part)
+            .unwrap_or_else(|| panic!("no voice {kind} {part}: {c}"))
+    };
+    // said out of the camera's view (0.5 s): refused by the gate
+    let untracked = find("follow", "right_hand");
+    assert_eq!(untracked["accepted"], false, "{c}");
+    assert_eq!(untracked["reason"], "hand_not_tracked", "{c}");
+    assert_eq!(untracked["text"], "follow the right hand", "{c}");
+    // "hand me the wrench" (5 s): not a command
+    let not_command = find("none", "none");
+    assert_eq!(not_command["accepted"], false);
+    assert!(
+        ["no_match", "low_score"].contains(&not_command["reason"].as_str().unwrap()),
+        "{c}"
+    );
+    // "follow the left hand" (7.5 s) and "end collaboration" (14.5 s): accepted,
+    // with the words, the score and the latency
+    let follow = find("follow", "left_hand");
+    let end = find("end", "none");
+    for q in [follow, end] {
+        assert_eq!(q["accepted"], true, "{c}");
+        assert!(q["score"].as_f64().is_some(), "{q}");
+        let ms = q["utterance_end_to_request_ms"].as_f64().expect("latency");
+        assert!(ms > 0.0 && ms <= 1000.0, "{q}");
+    }
+    assert_eq!(follow["text"], "follow the left hand");
+    assert_eq!(end["text"], "end collaboration");
+    // the collaboration: started by voice, reached the left hand, ended by voice
+    let phases = c["phases"].as_array().unwrap();
+    let t = |p: &str, reason: &str| {
+        phases
+            .iter()
+            .find(|x| x["phase"] == p && x["reason"] == reason)
+            .unwrap_or_else(|| panic!("no {p} ({reason}): {c}"))["t_s"]
+            .as_f64()
+            .unwrap()
+    };
+    let approach = t("approach", "accepted");
+    let contact = t("contact", "contact_made");
+    let ended = t("idle", "end_request");
+    assert!(approach < contact && contact < ended, "{c}");
+    assert_eq!(c["ended_by"], "request", "{c}");
+    let hand: Vec<&Value> = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|x| x["part"] == "hand_left" && x["link"] == "lwr_link_7")
+        .collect();
+    assert!(!hand.is_empty(), "the robot never reached the left hand");
+    assert!(
+        hand.iter().all(|h| h["t_start_s"].as_f64().unwrap() > approach),
+        "the hand was touched before the request: {hand:?}"
+    );
+    for h in &hand {
+        assert!(h["peak_force_n"].as_f64().unwrap() <= 70.0, "{h}");
+    }
+    // the task resumes after "end collaboration"
+    assert!(
+        events(&r, "resume", "control")
+            .iter()
+            .any(|e| e["t_s"].as_f64().unwrap() > ended),
+        "{}",
+        r["events"]
+    );
+    // every utterance is listed with its verdict
+    assert_eq!(c["utterances"].as_array().unwrap().len(), 4, "{c}");
+}
+
+#[test]
+fn killing_the_voice_recogniser_mid_collaboration_costs_the_torque_loop_nothing() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // phri-voice dies at ~12 s, in contact with the left hand; the supervisor
+    // restarts it, the torque loop misses nothing, the collaboration goes on
+    // on the tracked hand, and the restarted recogniser hears "end
+    // collaboration" at 14.5 s
+    let cell = Cell::start("voicekill", "voice-collaboration", None, &[]);
+    cell.pid_of("voice");
+    wait(12.0);
+    cell.kill("voice", libc::SIGKILL);
+    let r = cell.finish();
+    let c = &r["collaboration"];
+    eprintln!("collaboration: {c}");
+    assert_eq!(r["services"]["voice"]["restarts"], 1, "{}", r["events"]);
+    assert_eq!(r["torque_loop"]["missed_deadlines"], 0, "{}", r["torque_loop"]);
+    assert_no_unintended_contact(&r);
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+    let kill_t = events(&r, "exit", "voice")
+        .first()
+        .unwrap_or_else(|| panic!("no exit of voice: {}", r["events"]))["t_s"]
+        .as_f64()
+        .unwrap();
+    let end = voice_requests(c)
+        .into_iter()
+        .find(|q| q["kind"] == "end")
+        .unwrap_or_else(|| panic!("'end collaboration' not heard after the restart: {c}"));
+    assert_eq!(end["accepted"], true, "{c}");
+    assert!(end["t_s"].as_f64().unwrap() > kill_t, "{c}");
+    assert_eq!(c["ended_by"], "request", "{c}");
+}

@@ -26,7 +26,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     let requests = HRI_REQUEST.publisher(&node)?;
     ctx.go_realtime();
     let max_age_ns = (cfg.max_age_ms * 1e6) as u64;
-    let mut seq = 0u64;
+    // numbers that grow across restarts (readers tell requests apart by
+    // source and number): microseconds of CLOCK_MONOTONIC
+    let mut seq = now_ns() / 1_000;
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
         let _ = skeletons.wait(Duration::from_millis(100));

@@ -163,6 +163,14 @@ impl Listener {
         })
     }
 
+    /// Number the next utterance and request after `seq` (a restarted
+    /// recogniser starts after its predecessor's numbers: readers tell
+    /// requests apart by source and number).
+    pub fn number_after(&mut self, seq: u64) {
+        self.utterances = seq;
+        self.requests = seq;
+    }
+
     /// Feed one chunk; `hands` is the scene when it arrives, `clock` the
     /// CLOCK_MONOTONIC time [ns] (read after decoding: the verdict's time).
     pub fn step(

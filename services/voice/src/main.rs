@@ -149,6 +149,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let ctx = ServiceContext::from_args("voice", &[])?;
     let cfg = ctx.config().voice.clone();
     let mut listener = Listener::new(&cfg)?;
+    // numbers that grow across restarts: microseconds of CLOCK_MONOTONIC
+    listener.number_after(now_ns() / 1_000);
     if ctx.checking() {
         return Ok(());
     }
