@@ -829,7 +829,11 @@ fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
     // on the camera's skeleton, the controller answers
     let r = Cell::start("voice", "voice-collaboration", None, &[]).finish();
     assert_no_unintended_contact(&r);
-    assert_eq!(r["torque_loop"]["missed_deadlines"], 0, "{}", r["torque_loop"]);
+    assert_eq!(
+        r["torque_loop"]["missed_deadlines"], 0,
+        "{}",
+        r["torque_loop"]
+    );
     let c = &r["collaboration"];
     eprintln!("collaboration: {c}");
     let voice = voice_requests(c);
@@ -886,7 +890,8 @@ fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
         .collect();
     assert!(!hand.is_empty(), "the robot never reached the left hand");
     assert!(
-        hand.iter().all(|h| h["t_start_s"].as_f64().unwrap() > approach),
+        hand.iter()
+            .all(|h| h["t_start_s"].as_f64().unwrap() > approach),
         "the hand was touched before the request: {hand:?}"
     );
     for h in &hand {
@@ -919,7 +924,11 @@ fn killing_the_voice_recogniser_mid_collaboration_costs_the_torque_loop_nothing(
     let c = &r["collaboration"];
     eprintln!("collaboration: {c}");
     assert_eq!(r["services"]["voice"]["restarts"], 1, "{}", r["events"]);
-    assert_eq!(r["torque_loop"]["missed_deadlines"], 0, "{}", r["torque_loop"]);
+    assert_eq!(
+        r["torque_loop"]["missed_deadlines"], 0,
+        "{}",
+        r["torque_loop"]
+    );
     assert_no_unintended_contact(&r);
     assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
     let kill_t = events(&r, "exit", "voice")

@@ -3,8 +3,10 @@
 //! their capture time in, finished utterances out). Its buffer is allocated
 //! once, for the longest utterance.
 //!
-//! - the noise floor follows quiet frames down at once and up slowly
-//!   ([`FLOOR_RISE_DB_PER_S`]), and not at all during speech;
+//! - the noise floor starts at the first frame's energy, follows quiet
+//!   frames down at once and up slowly ([`FLOOR_RISE_DB_PER_S`]), not at
+//!   all during speech, and ten times as fast after a too-long utterance
+//!   (the noise itself may have risen: a machine started);
 //! - a frame [`VoiceConfig::speech_db`] above the floor is speech; speech
 //!   begins after [`VoiceConfig::onset_frames`] such frames in a row and ends
 //!   after [`VoiceConfig::hangover_s`] without one (the gaps between words);
@@ -161,6 +163,7 @@ impl Segmenter {
         self.state = State::Quiet;
         self.buf.clear();
         self.frame_len = 0;
+        self.floor_db = None; // the next stream has its own noise
         seg
     }
 
@@ -174,12 +177,18 @@ impl Segmenter {
         let db = (10.0 * (energy / (32768.0 * 32768.0)).log10()).max(MIN_DB);
         let floor = *self.floor_db.get_or_insert(db);
         let speech = db >= floor + self.speech_db;
-        if !speech && !matches!(self.state, State::Speech { .. }) {
-            self.floor_db = Some(if db < floor {
-                db
-            } else {
-                (floor + self.rise_per_frame).min(db)
-            });
+        let rise = match self.state {
+            // after a too-long utterance, the noise itself may have risen:
+            // the floor follows whatever it hears, ten times as fast
+            State::Discard { .. } => 10.0 * self.rise_per_frame,
+            State::Speech { .. } => 0.0,
+            _ if speech => 0.0,
+            _ => self.rise_per_frame,
+        };
+        if db < floor && !speech {
+            self.floor_db = Some(db);
+        } else if rise > 0.0 {
+            self.floor_db = Some((floor + rise).min(db));
         }
         // the buffer always holds at least one padding of history
         if self.buf.len() + FRAME > self.buf.capacity() {
@@ -420,5 +429,20 @@ mod tests {
         audio.extend(tone(2.0, 300.0));
         let out = run(&mut Segmenter::new(&cfg()), &audio);
         assert_eq!(out.len(), 1, "{out:?}");
+    }
+
+    #[test]
+    fn a_lasting_rise_of_the_noise_is_one_too_long_utterance_then_the_floor() {
+        let c = cfg();
+        // a quiet room, then a machine 30 dB louder that keeps running, then a word over it
+        let mut audio = tone(1.0, 30.0);
+        audio.extend(tone(c.max_utterance_s + 8.0, 1000.0));
+        audio.extend(tone(1.0, 30_000.0));
+        audio.extend(tone(1.0, 1000.0));
+        let kinds: Vec<SegmentKind> = run(&mut Segmenter::new(&c), &audio)
+            .iter()
+            .map(|(s, _)| s.kind)
+            .collect();
+        assert_eq!(kinds, [SegmentKind::TooLong, SegmentKind::Speech]);
     }
 }
