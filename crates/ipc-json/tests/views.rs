@@ -275,6 +275,26 @@ fn every_message_survives_its_view() {
         f.kind = *k as u32;
         round_trip(f);
     }
+    // audio: the samples as numbers, cut to their count
+    let mut a = AudioChunk::zeroed();
+    a.seq = 3;
+    a.capture_ns = 1_000_000;
+    a.rate_hz = AUDIO_RATE_HZ;
+    a.samples = 5;
+    a.pcm[..5].copy_from_slice(&[-32768, -1, 0, 1, 32767]);
+    round_trip(a);
+    assert_eq!(to_json(&a)["pcm"], serde_json::json!([-32768, -1, 0, 1, 32767]));
+    for v in VoiceVerdict::ALL {
+        for i in VoiceIntent::ALL {
+            let mut u = Utterance::zeroed();
+            u.seq = 2;
+            u.verdict = *v as u32;
+            u.intent = *i as u32;
+            u.score = -1.5;
+            u.text[..4].copy_from_slice(b"stop");
+            round_trip(u);
+        }
+    }
 }
 
 /// Every name a message lists in `COUNTED` is a count and arrays of its view.
