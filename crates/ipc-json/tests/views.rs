@@ -283,7 +283,10 @@ fn every_message_survives_its_view() {
     a.samples = 5;
     a.pcm[..5].copy_from_slice(&[-32768, -1, 0, 1, 32767]);
     round_trip(a);
-    assert_eq!(to_json(&a)["pcm"], serde_json::json!([-32768, -1, 0, 1, 32767]));
+    assert_eq!(
+        to_json(&a)["pcm"],
+        serde_json::json!([-32768, -1, 0, 1, 32767])
+    );
     for v in VoiceVerdict::ALL {
         for i in VoiceIntent::ALL {
             let mut u = Utterance::zeroed();

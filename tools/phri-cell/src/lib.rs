@@ -124,6 +124,21 @@ struct Perception {
     mask_hold: MaskHold,
 }
 
+/// The person's voice: the simulated room's audio (a scenario's `[[voice]]`
+/// lines) in 20 ms chunks on robot time, and the recogniser on them.
+struct Voice {
+    listener: phri_voice::Listener,
+    playback: phri_voice::mic::Playback,
+    chunk: phri_ipc::AudioChunk,
+    /// the next chunk to play
+    next: u64,
+    skeleton_max_age_ns: u64,
+}
+
+/// Duration of an audio chunk \[ns\].
+const CHUNK_NS: u64 =
+    phri_ipc::AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / phri_ipc::AUDIO_RATE_HZ as u64;
+
 /// The cell. `sim`, `controller` and the messages are public for tests that look inside.
 pub struct Cell {
     pub sim: Simulator,
@@ -133,6 +148,8 @@ pub struct Cell {
     repulsion: RepulsionInputs,
     avoidance: bool,
     perception: Option<Perception>,
+    /// the recogniser, when the scenario speaks
+    voice: Option<Voice>,
     /// the robot's newest state, as published
     pub state: JointState,
     /// the newest residual the controller has received (kept while dynamics is down)
@@ -206,9 +223,38 @@ impl Cell {
         } else {
             None
         };
+        let voice = if loaded.scenario.voice.is_empty() {
+            None
+        } else {
+            let file = std::path::Path::new(&cfg.scenario.file);
+            let mut clips = Vec::with_capacity(loaded.scenario.voice.len());
+            for line in &loaded.scenario.voice {
+                clips.push(phri_voice::mic::Clip {
+                    start: (line.t * phri_ipc::AUDIO_RATE_HZ as f64).round() as u64,
+                    samples: phri_voice::wav::read(&line.path(file))
+                        .map_err(|e| step_err("mic")(&e))?,
+                });
+            }
+            let mut chunk = phri_ipc::AudioChunk::zeroed();
+            chunk.rate_hz = phri_ipc::AUDIO_RATE_HZ;
+            chunk.samples = phri_ipc::AUDIO_CHUNK_SAMPLES as u32;
+            Some(Voice {
+                listener: phri_voice::Listener::new(&cfg.voice)
+                    .map_err(|e| step_err("voice")(&e))?,
+                playback: phri_voice::mic::Playback::new(
+                    clips,
+                    cfg.audio.noise_dbfs,
+                    cfg.audio.seed,
+                ),
+                chunk,
+                next: 0,
+                skeleton_max_age_ns: (cfg.voice.skeleton_max_age_ms * 1e6) as u64,
+            })
+        };
         let mut state = JointState::zeroed();
         state.dof = n as u32;
         Ok(Cell {
+            voice,
             link_out: *link.output(),
             sim,
             link,
@@ -267,6 +313,7 @@ impl Cell {
             p.in_flight.clear();
             p.history.push_state(&self.state);
         }
+        self.listen()?;
         if !self.down(Down::Dynamics) {
             self.dynamics
                 .step(&self.state)
@@ -392,6 +439,37 @@ impl Cell {
                     self.hand = done.hand;
                 }
                 if let Some(r) = done.request {
+                    self.requests.push(r);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The microphone's chunks that have been captured by now, through the
+    /// recogniser (decoding takes no robot time here); a command it accepts
+    /// reaches the controller this period.
+    fn listen(&mut self) -> Result<(), CellError> {
+        let Some(v) = self.voice.as_mut() else {
+            return Ok(());
+        };
+        let now = self.t_ns;
+        let hands = phri_voice::Hands::of(self.skeleton.as_ref(), now, v.skeleton_max_age_ns);
+        while (v.next + 1) * CHUNK_NS <= now {
+            let k = v.next;
+            v.next += 1;
+            v.chunk.seq = k + 1;
+            v.chunk.capture_ns = k * CHUNK_NS;
+            v.chunk.published_ns = now;
+            v.playback
+                .fill(k * phri_ipc::AUDIO_CHUNK_SAMPLES as u64, &mut v.chunk.pcm);
+            let heard = v
+                .listener
+                .step(&v.chunk, &hands, || now)
+                .map_err(|e| step_err("voice")(&e))?;
+            if let Some(h) = heard {
+                self.summary.voice(&h.utterance);
+                if let Some(r) = h.request {
                     self.requests.push(r);
                 }
             }

@@ -42,6 +42,8 @@ pub struct CellSummary {
     /// requests the wave recogniser made (`phri-gesture` on the simulated
     /// tracker's skeletons)
     pub gesture_requests: Vec<GestureRequest>,
+    /// what the voice recogniser heard (`phri-voice` on the scenario's speech)
+    pub voice: Vec<VoiceHeard>,
     /// every change of the controller's mode: (robot time \[s\], new mode)
     pub modes: Vec<(f64, String)>,
 }
@@ -55,6 +57,18 @@ pub struct GestureRequest {
     pub onset_s: f64,
     /// the waving hand
     pub part: String,
+}
+
+/// One utterance the voice recogniser heard.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VoiceHeard {
+    /// when the speech ended, robot time \[s\]
+    pub t_s: f64,
+    pub text: String,
+    pub intent: String,
+    pub score: f64,
+    /// `accepted`, or why not (`hand_not_tracked`, `no_match`, `low_score`, ...)
+    pub verdict: String,
 }
 
 /// Running account of a run.
@@ -97,6 +111,16 @@ impl Accounting {
             t_s: w.detected_ns as f64 * 1e-9,
             onset_s: w.onset_ns as f64 * 1e-9,
             part: w.part.name().to_string(),
+        });
+    }
+
+    pub(crate) fn voice(&mut self, u: &phri_ipc::Utterance) {
+        self.s.voice.push(VoiceHeard {
+            t_s: u.end_ns as f64 * 1e-9,
+            text: phri_ipc::json::c_str(&u.text),
+            intent: phri_ipc::VoiceIntent::name_of(u.intent).to_string(),
+            score: u.score,
+            verdict: phri_ipc::VoiceVerdict::name_of(u.verdict).to_string(),
         });
     }
 
