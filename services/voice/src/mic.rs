@@ -5,6 +5,22 @@
 
 use phri_ipc::AUDIO_RATE_HZ;
 
+/// Duration of one `audio/mic` chunk [ns].
+pub const CHUNK_NS: u64 =
+    phri_ipc::AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / AUDIO_RATE_HZ as u64;
+
+/// The chunks to publish at `now_ns` (time since the stream's sample 0
+/// [ns]): every chunk wholly captured by then from `next` on, or, for a
+/// source that has published nothing yet (`None`) or fell more than
+/// `max_burst` chunks behind, none (it starts over from the present).
+pub fn due(next: Option<u64>, now_ns: u64, max_burst: u64) -> std::ops::Range<u64> {
+    let captured = now_ns / CHUNK_NS;
+    match next {
+        Some(k) if captured.saturating_sub(k) <= max_burst => k..captured.max(k),
+        _ => captured..captured,
+    }
+}
+
 /// A recording and the sample it starts at.
 #[derive(Clone, Debug)]
 pub struct Clip {
@@ -126,6 +142,15 @@ mod tests {
         let mut a = vec![0i16; 320];
         p.fill(1200, &mut a);
         assert_eq!(&a[..], &out[1200..1520]);
+    }
+
+    #[test]
+    fn chunks_are_due_once_captured_and_a_long_stall_starts_over() {
+        assert_eq!(due(None, 95_000_000, 100), 4..4);
+        assert_eq!(due(Some(4), 95_000_000, 100), 4..4);
+        assert_eq!(due(Some(4), 100_000_000, 100), 4..5);
+        assert_eq!(due(Some(4), 10 * 1_000_000_000, 100), 500..500);
+        assert_eq!(due(Some(9), 100_000_000, 100), 9..9);
     }
 
     #[test]

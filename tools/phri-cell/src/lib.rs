@@ -135,10 +135,6 @@ struct Voice {
     skeleton_max_age_ns: u64,
 }
 
-/// Duration of an audio chunk \[ns\].
-const CHUNK_NS: u64 =
-    phri_ipc::AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / phri_ipc::AUDIO_RATE_HZ as u64;
-
 /// The cell. `sim`, `controller` and the messages are public for tests that look inside.
 pub struct Cell {
     pub sim: Simulator,
@@ -455,11 +451,11 @@ impl Cell {
         };
         let now = self.t_ns;
         let hands = phri_voice::Hands::of(self.skeleton.as_ref(), now, v.skeleton_max_age_ns);
-        while (v.next + 1) * CHUNK_NS <= now {
-            let k = v.next;
-            v.next += 1;
+        let chunks = phri_voice::mic::due(Some(v.next), now, u64::MAX);
+        v.next = chunks.end;
+        for k in chunks {
             v.chunk.seq = k + 1;
-            v.chunk.capture_ns = k * CHUNK_NS;
+            v.chunk.capture_ns = k * phri_voice::mic::CHUNK_NS;
             v.chunk.published_ns = now;
             v.playback
                 .fill(k * phri_ipc::AUDIO_CHUNK_SAMPLES as u64, &mut v.chunk.pcm);

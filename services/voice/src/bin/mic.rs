@@ -13,11 +13,9 @@ use std::time::Duration;
 use phri_config::AudioSource;
 use phri_ipc::{AudioChunk, Zeroed, AUDIO_CHUNK_SAMPLES, AUDIO_MIC, AUDIO_RATE_HZ, SIM_WORLD};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
-use phri_voice::mic::{Clip, Playback};
+use phri_voice::mic::{due, Clip, Playback, CHUNK_NS};
 use phri_voice::wav;
 
-/// Duration of a chunk [ns].
-const CHUNK_NS: u64 = AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / AUDIO_RATE_HZ as u64;
 /// Further behind than this, the mic skips ahead (a reader's queue holds 4 s) [chunks].
 const MAX_BURST: u64 = 100;
 
@@ -90,18 +88,13 @@ fn body() -> Result<(), Box<dyn Error>> {
                 // scenario time: the simulator steps once per period from its epoch
                 let sim_ns = w.seq.saturating_sub(1) * dt_ns;
                 let now = now_ns();
-                let due = sim_ns / CHUNK_NS; // chunks wholly in the past
-                let mut k = match next {
-                    Some(k) if due.saturating_sub(k) <= MAX_BURST => k,
-                    _ => due,
-                };
-                while k < due {
+                let chunks = due(next, sim_ns, MAX_BURST);
+                next = Some(chunks.end);
+                for k in chunks {
                     // the chunk's first sample, on the wall clock
                     let ago = sim_ns - k * CHUNK_NS;
                     publish(k, now.saturating_sub(ago))?;
-                    k += 1;
                 }
-                next = Some(k);
             }
         }
         AudioSource::WavDir => {
