@@ -163,6 +163,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let max_age_ns = (cfg.skeleton_max_age_ms * 1e6) as u64;
     let mut last_seq = 0u64;
     let mut lost = 0u64;
+    let mut refused = 0u64;
     let mut latencies: Vec<f64> = Vec::new();
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
@@ -176,8 +177,16 @@ fn body() -> Result<(), Box<dyn Error>> {
                 lost += chunk.seq - last_seq - 1;
             }
             last_seq = chunk.seq;
-            if chunk.rate_hz != AUDIO_RATE_HZ {
-                return; // not ours to decode: counted below
+            if chunk.rate_hz != AUDIO_RATE_HZ || chunk.samples as usize > AUDIO_CHUNK_SAMPLES {
+                // another rate, or more samples than a chunk holds: refused whole
+                if refused == 0 {
+                    eprintln!(
+                        "phri-voice: {}: refusing chunk {} ({} Hz, {} samples): phri needs {AUDIO_RATE_HZ} Hz, at most {AUDIO_CHUNK_SAMPLES} samples",
+                        AUDIO_MIC.name, chunk.seq, chunk.rate_hz, chunk.samples
+                    );
+                }
+                refused += 1;
+                return;
             }
             match listener.step(chunk, &hands, now_ns) {
                 Ok(Some(h)) => heard.push(h),
@@ -199,7 +208,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     latencies.sort_by(f64::total_cmp);
     eprintln!(
-        "phri-voice: decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost",
+        "phri-voice: decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost, {refused} refused",
         listener.decode_s / listener.audio_s.max(1e-9),
         listener.audio_s,
         listener.decode_s,
