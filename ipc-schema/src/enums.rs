@@ -242,6 +242,20 @@ wire_enum! {
     }
 }
 
+impl VoiceIntent {
+    /// The request the command makes: what and which part (none for `None`).
+    pub fn request(self) -> Option<(RequestKind, CollabPart)> {
+        match self {
+            VoiceIntent::None => None,
+            VoiceIntent::FollowRightHand => Some((RequestKind::Follow, CollabPart::RightHand)),
+            VoiceIntent::FollowLeftHand => Some((RequestKind::Follow, CollabPart::LeftHand)),
+            VoiceIntent::Begin => Some((RequestKind::Begin, CollabPart::None)),
+            VoiceIntent::End => Some((RequestKind::End, CollabPart::None)),
+            VoiceIntent::Stop => Some((RequestKind::Stop, CollabPart::None)),
+        }
+    }
+}
+
 wire_enum! {
     /// What became of an utterance ([`crate::Utterance::verdict`]).
     VoiceVerdict, "voice verdict" {

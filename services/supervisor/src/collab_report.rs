@@ -13,19 +13,6 @@ use phri_ipc::{
 };
 use serde::Serialize;
 
-/// The request a voice intent makes (as `phri-voice` maps it).
-fn phri_voice_request(i: VoiceIntent) -> Option<(phri_ipc::RequestKind, CollabPart)> {
-    use phri_ipc::RequestKind as K;
-    match i {
-        VoiceIntent::None => None,
-        VoiceIntent::FollowRightHand => Some((K::Follow, CollabPart::RightHand)),
-        VoiceIntent::FollowLeftHand => Some((K::Follow, CollabPart::LeftHand)),
-        VoiceIntent::Begin => Some((K::Begin, CollabPart::None)),
-        VoiceIntent::End => Some((K::End, CollabPart::None)),
-        VoiceIntent::Stop => Some((K::Stop, CollabPart::None)),
-    }
-}
-
 /// True forces below this are not graded \[N\] (issue 11: ≥ 5 N).
 const MIN_GRADED_FORCE_N: f64 = 5.0;
 /// Unmatched samples older than this are dropped \[ns\].
@@ -266,7 +253,7 @@ impl CollabEvaluator {
             decode_ms: u.decode_ms,
         });
         if u.verdict != VoiceVerdict::Accepted as u32 {
-            let (kind, part) = match phri_voice_request(intent) {
+            let (kind, part) = match intent.request() {
                 Some((k, p)) => (k.name(), p.name()),
                 None => ("none", "none"),
             };
@@ -456,5 +443,52 @@ mod tests {
         let e = CollabEvaluator::new(0, vec![], 1_000_000);
         let r = e.report(std::iter::empty());
         assert_eq!(r, CollabReport::default());
+    }
+
+    #[test]
+    fn voice_requests_carry_words_score_and_latency_and_its_refusals_are_listed() {
+        let mut e = CollabEvaluator::new(1_000_000_000, vec![], 1_000_000);
+        // refused by the recogniser at 3 s: a follow for an untracked hand
+        let mut u = phri_ipc::Utterance::zeroed();
+        u.start_ns = 2_000_000_000;
+        u.end_ns = 3_300_000_000;
+        u.decoded_ns = 4_000_000_000;
+        u.intent = VoiceIntent::FollowRightHand as u32;
+        u.verdict = VoiceVerdict::HandNotTracked as u32;
+        u.score = 7.5;
+        u.text[..21].copy_from_slice(b"follow the right hand");
+        e.on_utterance(&u);
+        // accepted at 9 s: the request, then the controller's answer
+        let mut r = HriRequest::zeroed();
+        r.seq = 77;
+        r.source = RequestSource::Voice as u32;
+        r.stamp_ns = 9_600_000_000;
+        r.utterance_end_ns = 9_000_000_000;
+        r.score = 9.25;
+        r.text[..20].copy_from_slice(b"follow the left hand");
+        e.on_request(&r);
+        let mut s = state(8700, CollabPhase::Approach, CollabReason::Accepted);
+        s.request_source = RequestSource::Voice as u32;
+        s.request_seq = 77;
+        s.request_accepted = 1;
+        s.request_kind = phri_ipc::RequestKind::Follow as u32;
+        s.request_part = CollabPart::LeftHand as u32;
+        e.on_state(&s);
+        let rep = e.report(std::iter::empty());
+        assert_eq!(rep.requests.len(), 2);
+        let (refused, accepted) = (&rep.requests[0], &rep.requests[1]);
+        assert!(!refused.accepted && refused.reason == "hand_not_tracked");
+        assert_eq!(refused.refused_by.as_deref(), Some("voice"));
+        assert_eq!(
+            (refused.kind.as_str(), refused.part.as_str()),
+            ("follow", "right_hand")
+        );
+        assert_eq!(refused.text.as_deref(), Some("follow the right hand"));
+        assert!(accepted.accepted && accepted.refused_by.is_none());
+        assert_eq!(accepted.text.as_deref(), Some("follow the left hand"));
+        assert_eq!(accepted.score, Some(9.25));
+        assert!((accepted.utterance_end_to_request_ms.unwrap() - 600.0).abs() < 1e-6);
+        assert_eq!(rep.utterances.len(), 1);
+        assert!((rep.utterances[0].duration_s - 1.3).abs() < 1e-9);
     }
 }

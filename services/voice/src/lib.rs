@@ -76,16 +76,9 @@ impl Hands {
     }
 }
 
-/// The request an intent makes.
+/// The request an intent makes ([`VoiceIntent::request`]).
 pub fn request_of(intent: VoiceIntent) -> Option<(RequestKind, CollabPart)> {
-    match intent {
-        VoiceIntent::None => None,
-        VoiceIntent::FollowRightHand => Some((RequestKind::Follow, CollabPart::RightHand)),
-        VoiceIntent::FollowLeftHand => Some((RequestKind::Follow, CollabPart::LeftHand)),
-        VoiceIntent::Begin => Some((RequestKind::Begin, CollabPart::None)),
-        VoiceIntent::End => Some((RequestKind::End, CollabPart::None)),
-        VoiceIntent::Stop => Some((RequestKind::Stop, CollabPart::None)),
-    }
+    intent.request()
 }
 
 /// The verdict on a decoded utterance, and the person a `follow` names.
