@@ -11,5 +11,7 @@ pub mod shutdown;
 
 pub use args::{Args, ArgsError};
 pub use clock::{now_ns, sleep_until_ns};
-pub use service::{ServiceContext, ServiceError};
+pub use service::{
+    attach_hint, prefix_or_default, ServiceContext, ServiceError, DEFAULT_PREFIX, PREFIX_ENV,
+};
 pub use shutdown::Shutdown;

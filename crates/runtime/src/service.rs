@@ -59,6 +59,25 @@ pub const PREFIX_ENV: &str = "PHRI_PREFIX";
 /// The prefix used when neither `--prefix` nor [`PREFIX_ENV`] gives one.
 pub const DEFAULT_PREFIX: &str = "phri_";
 
+/// The cell's prefix: `given` (a `--prefix`), else [`PREFIX_ENV`] when set
+/// and not empty, else [`DEFAULT_PREFIX`]: a second terminal needs no flag.
+pub fn prefix_or_default(given: Option<&str>) -> String {
+    given
+        .map(str::to_string)
+        .or_else(|| std::env::var(PREFIX_ENV).ok().filter(|p| !p.is_empty()))
+        .unwrap_or_else(|| DEFAULT_PREFIX.to_string())
+}
+
+/// How a user attaches a tool to the cell of `prefix` (`phri-monitor top`,
+/// with `PHRI_PREFIX=…` in front unless it is the default).
+pub fn attach_hint(prefix: &str) -> String {
+    if prefix == DEFAULT_PREFIX {
+        "phri-monitor top".to_string()
+    } else {
+        format!("PHRI_PREFIX={prefix} phri-monitor top")
+    }
+}
+
 /// The run directory from [`RUN_DIR_ENV`], if set and not empty.
 pub fn run_dir() -> Option<PathBuf> {
     std::env::var_os(RUN_DIR_ENV)
@@ -95,11 +114,7 @@ impl ServiceContext {
         // settings that another user could write are never read
         crate::rundir::check_trusted_file(&config_path)?;
         let loaded = Loaded::load(&config_path, None, &args.all("--set"))?;
-        let prefix = args
-            .get("--prefix")
-            .map(str::to_string)
-            .or_else(|| std::env::var(PREFIX_ENV).ok())
-            .unwrap_or_else(|| DEFAULT_PREFIX.to_string());
+        let prefix = prefix_or_default(args.get("--prefix"));
         let rt_priority = args.parse_value::<i32>("--rt-priority")?.unwrap_or(0);
         let shutdown = Shutdown::install().map_err(ServiceError::Signals)?;
         let name = args.get("--name").unwrap_or(default_name).to_string();

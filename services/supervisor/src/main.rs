@@ -393,10 +393,9 @@ fn body() -> Result<(), SupervisorError> {
         .map(Path::to_path_buf)
         .unwrap_or_default();
     plan.check_binaries(&bin_dir)?;
-    let prefix = args
-        .get("--prefix")
-        .map(str::to_string)
-        .unwrap_or_else(|| format!("phri{me}_"));
+    // one namespace by default (PHRI_PREFIX, else phri_): tools in another
+    // terminal find the cell without flags; a second cell there is refused
+    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
 
     // the run directory is this user's alone
     let run_dir = match args.get("--run-dir") {
@@ -469,8 +468,9 @@ fn body() -> Result<(), SupervisorError> {
         return Err(e.into());
     }
     eprintln!(
-        "phri-supervisor: cell {prefix}, run directory {}",
-        run_dir.display()
+        "phri-supervisor: cell {prefix}, run directory {}; attach from another terminal: {}",
+        run_dir.display(),
+        phri_runtime::attach_hint(&prefix)
     );
 
     let t0 = now_ns();

@@ -22,7 +22,7 @@ use phri_ipc::{DepthFault, DepthFaultKind, IpcNode, Publisher, Zeroed, FAULT_DEP
 use phri_supervisor::process::process_matches;
 use phri_supervisor::StateJson;
 
-const USAGE: &str = "usage: phri-fault (--run-dir DIR | --prefix P) SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
+const USAGE: &str = "usage: phri-fault [--run-dir DIR | --prefix P] SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
   SERVICE  a service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
   ACTION   kill            SIGKILL
            term            SIGTERM
@@ -36,7 +36,7 @@ const USAGE: &str = "usage: phri-fault (--run-dir DIR | --prefix P) SERVICE ACTI
            delay MS --for SECONDS
                            (SERVICE camera) publish every frame MS late for SECONDS
   --run-dir DIR     the cell's run directory (default: the supervisor's default for --prefix)
-  --prefix P        the cell's iceoryx2 prefix
+  --prefix P        the cell's iceoryx2 prefix (default: $PHRI_PREFIX, else phri_)
   --times N         injections (default 1; 0 = until --until, state.json disappears or Ctrl-C)
   --every SECONDS   wait this long before each injection
   --random MIN,MAX  wait a uniformly random time in [MIN, MAX] s before each injection
@@ -288,11 +288,13 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
     if times == 0 && until.is_none() && every.is_none() && random.is_none() {
         return Err(Fail::Usage("--times 0 needs --every or --random".into()));
     }
-    let run_dir = match (run_dir, prefix) {
-        (Some(d), _) => d,
-        (None, Some(p)) => phri_runtime::rundir::default_run_dir(&p)
-            .map_err(|e| Fail::Cell(format!("--prefix {p}: {e}")))?,
-        (None, None) => return Err(Fail::Usage("--run-dir or --prefix is required".into())),
+    let run_dir = match run_dir {
+        Some(d) => d,
+        None => {
+            let p = phri_runtime::prefix_or_default(prefix.as_deref());
+            phri_runtime::rundir::default_run_dir(&p)
+                .map_err(|e| Fail::Cell(format!("--prefix {p}: {e}")))?
+        }
     };
     let seed = seed.unwrap_or_else(|| {
         let t = std::time::SystemTime::now()

@@ -73,10 +73,19 @@ fn no_cell_means_exit_2_naming_the_state_file() {
 }
 
 #[test]
-fn a_run_dir_or_a_prefix_is_required() {
-    let (code, err) = fault(&["camera", "kill"]);
-    assert_eq!(code, 1, "{err}");
-    assert!(err.contains("--run-dir or --prefix"), "{err}");
+fn the_run_dir_comes_from_the_prefix_or_the_default_namespace() {
+    // no flag: PHRI_PREFIX's (here a namespace with no cell: no state.json)
+    let out = Command::new(env!("CARGO_BIN_EXE_phri-fault"))
+        .args(["camera", "kill"])
+        .env("PHRI_PREFIX", "phri_fault_cli_env_")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("run-phri_fault_cli_env_") && err.contains("state.json"),
+        "{err}"
+    );
     // the prefix finds the supervisor's default run directory (no cell: no state.json)
     let (code, err) = fault(&["--prefix", "phri_fault_cli_nocell_", "camera", "kill"]);
     assert_eq!(code, 2, "{err}");

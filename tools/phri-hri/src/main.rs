@@ -19,8 +19,8 @@ use phri_ipc::{
 };
 use phri_runtime::now_ns;
 
-const USAGE: &str = "usage: phri-hri --prefix P request KIND [PART] [--person ID] [--text T] [--wait SECONDS] [--json]
-       phri-hri --prefix P watch [--once] [--seconds S] [--json]
+const USAGE: &str = "usage: phri-hri [--prefix P] request KIND [PART] [--person ID] [--text T] [--wait SECONDS] [--json]
+       phri-hri [--prefix P] watch [--once] [--seconds S] [--json]
   request KIND [PART]  ask the robot: begin|follow right_hand|left_hand, end, stop
                        (begin/follow without PART: the part last used)
     --person ID        the tracker's id of the person asking (default: whoever shows the part)
@@ -29,7 +29,7 @@ const USAGE: &str = "usage: phri-hri --prefix P request KIND [PART] [--person ID
   watch                print the collaboration state when it changes (Ctrl-C ends)
     --once             print the current state once and exit
     --seconds S        end after S seconds
-  --prefix P           the cell's iceoryx2 prefix (as given to phri-supervisor)
+  --prefix P           the cell's iceoryx2 prefix (default: $PHRI_PREFIX, else phri_)
   --json               JSON instead of text lines
 exit status: 0 done (accepted), 1 usage, 2 no cell or no answer, 3 refused";
 
@@ -102,7 +102,7 @@ fn parse(argv: &[String]) -> Result<Args, Usage> {
             s => positional.push(s.to_string()),
         }
     }
-    let prefix = prefix.ok_or_else(|| Usage("--prefix: the cell's prefix is required".into()))?;
+    let prefix = phri_runtime::prefix_or_default(prefix.as_deref());
     let command = match positional.first().map(String::as_str) {
         Some("request") => {
             let kind = positional.get(1).ok_or_else(|| {

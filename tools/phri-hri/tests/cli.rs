@@ -24,7 +24,6 @@ fn help_and_usage_errors() {
     assert_eq!(o.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&o.stdout).contains("request KIND"));
     for (args, says) in [
-        (&["request", "follow", "right_hand"][..], "--prefix"),
         (&["--prefix", "x_", "request"][..], "KIND"),
         (&["--prefix", "x_", "request", "dance"][..], "dance"),
         (&["--prefix", "x_", "request", "follow", "nose"][..], "nose"),

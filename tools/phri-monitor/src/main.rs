@@ -24,7 +24,7 @@ use probe::{last, Probe};
 
 type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
 
-const USAGE: &str = "usage: phri-monitor echo CHANNEL | hz CHANNEL | list | top  --prefix PREFIX [--seconds S] [--json] [--once] [--count N] [--every N]";
+const USAGE: &str = "usage: phri-monitor echo CHANNEL | hz CHANNEL | list | top  [--prefix PREFIX (default: $PHRI_PREFIX, else phri_)] [--seconds S] [--json] [--once] [--count N] [--every N]";
 
 /// Pause between polls: the monitor never competes with the torque loop.
 const POLL: Duration = Duration::from_millis(2);
@@ -88,10 +88,7 @@ fn parse(argv: impl Iterator<Item = String>) -> Result<Opts> {
         &["--json", "--once"],
     )
     .map_err(|e| format!("{e}; {USAGE}"))?;
-    let prefix = args
-        .get("--prefix")
-        .ok_or("--prefix is required (the cell's iceoryx2 prefix, see deploy/up --prefix)")?
-        .to_string();
+    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
     let seconds = args.parse_value::<f64>("--seconds")?;
     if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
         return Err("--seconds must be positive".into());

@@ -51,7 +51,6 @@ fn errors_are_one_line_and_exit_2() {
             vec!["hz", "no/such", "--prefix", prefix.as_str()],
             "robot/state",
         ),
-        (vec!["list"], "--prefix is required"),
     ] {
         let out = monitor(&args);
         let err = String::from_utf8_lossy(&out.stderr);
@@ -59,6 +58,15 @@ fn errors_are_one_line_and_exit_2() {
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: {err}");
     }
+    // no --prefix: PHRI_PREFIX, else the default namespace
+    let out = Command::new(env!("CARGO_BIN_EXE_phri-monitor"))
+        .arg("list")
+        .env("PHRI_PREFIX", &prefix)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("'{prefix}'")), "{err}");
 }
 
 #[test]

@@ -25,7 +25,7 @@ use phri_record::{foxglove, ENCODING, METADATA_NAME};
 use phri_runtime::{now_ns, Args, Shutdown};
 use serde_json::{json, Value};
 
-const USAGE: &str = "usage: phri-record --prefix P --out FILE.mcap [--seconds S] [--frame-every N] [--frame-downsample K] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
+const USAGE: &str = "usage: phri-record [--prefix P (default: $PHRI_PREFIX, else phri_)] --out FILE.mcap [--seconds S] [--frame-every N] [--frame-downsample K] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
 const POLL: Duration = Duration::from_millis(5);
 
 fn main() -> ExitCode {
@@ -228,10 +228,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         &[],
     )
     .map_err(|e| format!("{e}; {USAGE}"))?;
-    let prefix = args
-        .get("--prefix")
-        .ok_or_else(|| format!("--prefix is required; {USAGE}"))?
-        .to_string();
+    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
     let out_path = args
         .get("--out")
         .ok_or_else(|| format!("--out is required; {USAGE}"))?
