@@ -225,7 +225,10 @@ impl Running {
                 .ok()
                 .and_then(|t| serde_json::from_str(&t).ok())
                 .unwrap_or(Value::Null);
-            v["services"]["control"]["pid"].is_i64()
+            // every service started (the voice services start last)
+            v["services"]
+                .as_object()
+                .is_some_and(|s| !s.is_empty() && s.values().all(|x| x["pid"].is_i64()))
         });
         v
     }

@@ -468,8 +468,11 @@ fn body() -> Result<(), SupervisorError> {
         return Err(e.into());
     }
     eprintln!(
-        "phri-supervisor: cell {prefix}, run directory {}; attach from another terminal: {}",
-        run_dir.display(),
+        "phri-supervisor: cell {prefix}, run directory {}",
+        run_dir.display()
+    );
+    eprintln!(
+        "phri-supervisor: attach from another terminal: {}",
         phri_runtime::attach_hint(&prefix)
     );
 
