@@ -143,12 +143,20 @@ pub fn check_prefix(prefix: &str) -> Result<(), IpcError> {
     prefix_name(prefix, &Config::default()).map(|_| ())
 }
 
+/// The iceoryx2 configuration of the cell of `prefix`: iceoryx2's defaults
+/// with that prefix (what `config/iceoryx2.toml` holds for the default
+/// prefix, so that `iox2` and the Python binding see the cell).
+pub fn node_config(prefix: &str) -> Result<Config, IpcError> {
+    let mut config = Config::default();
+    config.global.prefix = prefix_name(prefix, &config)?;
+    Ok(config)
+}
+
 /// Create a node whose shared-memory resources carry `prefix` (one per run, so
 /// that parallel runs never collide). Signals are left to the process (signal-hook).
 /// A prefix iceoryx2 cannot use ([`check_prefix`]) is an [`IpcError::Prefix`].
 pub fn node(name: &str, prefix: &str) -> Result<Node<ipc::Service>, IpcError> {
-    let mut config = Config::default();
-    config.global.prefix = prefix_name(prefix, &config)?;
+    let config = node_config(prefix)?;
     let node_err = |e: &dyn std::fmt::Debug| IpcError::Node {
         node: name.to_string(),
         detail: format!("{e:?}"),
