@@ -222,8 +222,24 @@ pub mod i16_array {
 
 /// The text of a zero-padded UTF-8 field (`"?"` when not UTF-8).
 pub fn c_str<const N: usize>(b: &[u8; N]) -> String {
+    c_str_ref(b).to_string()
+}
+
+fn c_str_ref<const N: usize>(b: &[u8; N]) -> &str {
     let end = b.iter().position(|&c| c == 0).unwrap_or(N);
-    std::str::from_utf8(&b[..end]).unwrap_or("?").to_string()
+    std::str::from_utf8(&b[..end]).unwrap_or("?")
+}
+
+/// `text` as a zero-padded UTF-8 field: cut on a character boundary so that
+/// at least one NUL ends it (the inverse of [`c_str`]).
+pub fn to_c_str<const N: usize>(text: &str) -> [u8; N] {
+    let mut out = [0u8; N];
+    let mut n = text.len().min(N.saturating_sub(1));
+    while !text.is_char_boundary(n) {
+        n -= 1;
+    }
+    out[..n].copy_from_slice(&text.as_bytes()[..n]);
+    out
 }
 
 /// A zero-padded UTF-8 name (`[u8; N]`) as a string (`"?"` when not UTF-8).
@@ -231,8 +247,7 @@ pub mod c_string {
     use super::*;
 
     pub fn serialize<S: Serializer, const N: usize>(b: &[u8; N], s: S) -> Result<S::Ok, S::Error> {
-        let end = b.iter().position(|&c| c == 0).unwrap_or(N);
-        s.serialize_str(std::str::from_utf8(&b[..end]).unwrap_or("?"))
+        s.serialize_str(super::c_str_ref(b))
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
@@ -308,5 +323,21 @@ pub mod latency_hist {
             )));
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_fields_are_cut_on_a_character_boundary_and_end_in_a_nul() {
+        let t: [u8; 64] = to_c_str(&"é".repeat(40));
+        assert_eq!(c_str(&t), "é".repeat(31));
+        assert_eq!(t[62..], [0, 0]);
+        let t: [u8; 8] = to_c_str("stop");
+        assert_eq!(c_str(&t), "stop");
+        let t: [u8; 4] = to_c_str("abcdef");
+        assert_eq!(c_str(&t), "abc");
     }
 }

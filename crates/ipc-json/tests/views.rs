@@ -294,7 +294,7 @@ fn every_message_survives_its_view() {
             u.verdict = *v as u32;
             u.intent = *i as u32;
             u.score = -1.5;
-            u.text[..4].copy_from_slice(b"stop");
+            u.text = json::to_c_str("stop");
             round_trip(u);
         }
     }

@@ -23,8 +23,7 @@
 
 use phri_config::{GestureConfig, Invalid};
 use phri_ipc::{
-    CollabPart, HriRequest, RequestKind, RequestSource, Skeleton, SkeletonJoint, Zeroed,
-    MAX_PEOPLE, REQUEST_TEXT,
+    CollabPart, HriRequest, RequestKind, RequestSource, Skeleton, SkeletonJoint, Zeroed, MAX_PEOPLE,
 };
 
 /// Largest number of reversals a track remembers (≥ the configured count).
@@ -302,9 +301,6 @@ pub fn follow_request(wave: &Wave, seq: u64, stamp_ns: u64) -> HriRequest {
     r.part = wave.part as u32;
     r.person = wave.person;
     r.confidence = wave.confidence;
-    let text = format!("wave {}", wave.part.name());
-    let b = text.as_bytes();
-    let len = b.len().min(REQUEST_TEXT - 1);
-    r.text[..len].copy_from_slice(&b[..len]);
+    r.text = phri_ipc::json::to_c_str(&format!("wave {}", wave.part.name()));
     r
 }

@@ -456,7 +456,7 @@ mod tests {
         u.intent = VoiceIntent::FollowRightHand as u32;
         u.verdict = VoiceVerdict::HandNotTracked as u32;
         u.score = 7.5;
-        u.text[..21].copy_from_slice(b"follow the right hand");
+        u.text = phri_ipc::json::to_c_str("follow the right hand");
         e.on_utterance(&u);
         // accepted at 9 s: the request, then the controller's answer
         let mut r = HriRequest::zeroed();
@@ -465,7 +465,7 @@ mod tests {
         r.stamp_ns = 9_600_000_000;
         r.utterance_end_ns = 9_000_000_000;
         r.score = 9.25;
-        r.text[..20].copy_from_slice(b"follow the left hand");
+        r.text = phri_ipc::json::to_c_str("follow the left hand");
         e.on_request(&r);
         let mut s = state(8700, CollabPhase::Approach, CollabReason::Accepted);
         s.request_source = RequestSource::Voice as u32;

@@ -303,10 +303,7 @@ impl Roster {
         health.stamp_ns = now_ns;
         health.count = self.services.len() as u32;
         for (h, s) in health.services.iter_mut().zip(&self.services) {
-            h.name = [0; 32];
-            let b = s.name.as_bytes();
-            let n = b.len().min(h.name.len() - 1);
-            h.name[..n].copy_from_slice(&b[..n]);
+            h.name = phri_ipc::json::to_c_str(&s.name);
             h.pid = s.pid.map_or(0, |p| p as i32);
             h.alive = s.pid.is_some() as u32;
             h.restarts = s.policy.restarts;

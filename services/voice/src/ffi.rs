@@ -36,7 +36,6 @@ pub struct Api {
     pub ps_seg_word: unsafe extern "C" fn(Ptr) -> *const c_char,
     pub ps_seg_frames: unsafe extern "C" fn(Ptr, *mut i32, *mut i32),
     pub ps_seg_prob: unsafe extern "C" fn(Ptr, *mut i32, *mut i32, *mut i32) -> i32,
-    pub ps_seg_free: unsafe extern "C" fn(Ptr),
     _sphinxbase: Library,
     _pocketsphinx: Library,
 }
@@ -87,7 +86,6 @@ impl Api {
             ps_seg_word: resolve!(ps, ps_seg_word),
             ps_seg_frames: resolve!(ps, ps_seg_frames),
             ps_seg_prob: resolve!(ps, ps_seg_prob),
-            ps_seg_free: resolve!(ps, ps_seg_free),
             _sphinxbase: sb,
             _pocketsphinx: ps,
         })

@@ -22,7 +22,7 @@ pub mod wav;
 use phri_config::VoiceConfig;
 use phri_ipc::{
     AudioChunk, CollabPart, HriRequest, RequestKind, RequestSource, Skeleton, Utterance,
-    VoiceIntent, VoiceVerdict, Zeroed, REQUEST_TEXT,
+    VoiceVerdict, Zeroed,
 };
 
 pub use error::VoiceError;
@@ -76,14 +76,9 @@ impl Hands {
     }
 }
 
-/// The request an intent makes ([`VoiceIntent::request`]).
-pub fn request_of(intent: VoiceIntent) -> Option<(RequestKind, CollabPart)> {
-    intent.request()
-}
-
 /// The verdict on a decoded utterance, and the person a `follow` names.
 pub fn judge(d: &Decoded, hands: &Hands, cfg: &VoiceConfig) -> (VoiceVerdict, u32) {
-    let Some((kind, part)) = request_of(d.intent) else {
+    let Some((kind, part)) = d.intent.request() else {
         return (VoiceVerdict::NoMatch, u32::MAX);
     };
     if kind == RequestKind::Stop {
@@ -111,16 +106,6 @@ pub fn judge(d: &Decoded, hands: &Hands, cfg: &VoiceConfig) -> (VoiceVerdict, u3
 /// logistic of width 2 score units.
 pub fn confidence(score: f64, min_score: f64) -> f64 {
     1.0 / (1.0 + (-(score - min_score) / 2.0).exp())
-}
-
-fn text_bytes(text: &str) -> [u8; REQUEST_TEXT] {
-    let mut out = [0u8; REQUEST_TEXT];
-    let mut n = text.len().min(REQUEST_TEXT - 1);
-    while !text.is_char_boundary(n) {
-        n -= 1;
-    }
-    out[..n].copy_from_slice(&text.as_bytes()[..n]);
-    out
 }
 
 /// What one utterance came to.
@@ -221,10 +206,10 @@ impl Listener {
                 u.decode_ms = took * 1e3;
                 u.score = d.score;
                 u.intent = d.intent as u32;
-                u.text = text_bytes(&d.text);
+                u.text = phri_ipc::json::to_c_str(&d.text);
                 let (v, person) = judge(&d, hands, &self.cfg);
                 if v == VoiceVerdict::Accepted {
-                    if let Some((kind, part)) = request_of(d.intent) {
+                    if let Some((kind, part)) = d.intent.request() {
                         self.requests += 1;
                         let mut r = HriRequest::zeroed();
                         r.seq = self.requests;
@@ -258,6 +243,7 @@ impl Listener {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use phri_ipc::VoiceIntent;
 
     fn decoded(intent: VoiceIntent, score: f64) -> Decoded {
         Decoded {
@@ -300,11 +286,5 @@ mod tests {
             1
         );
         assert!((confidence(cfg.min_score, cfg.min_score) - 0.5).abs() < 1e-12);
-    }
-
-    #[test]
-    fn text_is_cut_on_a_character_boundary() {
-        let t = text_bytes(&"é".repeat(40));
-        assert!(std::str::from_utf8(&t[..t.iter().position(|&b| b == 0).unwrap()]).is_ok());
     }
 }

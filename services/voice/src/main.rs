@@ -224,7 +224,7 @@ fn describe(u: &Utterance) -> String {
     let text = phri_ipc::json::c_str(&u.text);
     let what = match VoiceIntent::try_from(u.intent)
         .ok()
-        .and_then(phri_voice::request_of)
+        .and_then(VoiceIntent::request)
     {
         Some((kind, part)) if part != CollabPart::None => {
             format!("{} {}", kind.name(), part.name())

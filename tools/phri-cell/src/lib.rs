@@ -450,9 +450,12 @@ impl Cell {
             return Ok(());
         };
         let now = self.t_ns;
-        let hands = phri_voice::Hands::of(self.skeleton.as_ref(), now, v.skeleton_max_age_ns);
         let chunks = phri_voice::mic::due(Some(v.next), now, u64::MAX);
+        if chunks.is_empty() {
+            return Ok(()); // 49 periods of 50: no chunk captured yet
+        }
         v.next = chunks.end;
+        let hands = phri_voice::Hands::of(self.skeleton.as_ref(), now, v.skeleton_max_age_ns);
         for k in chunks {
             v.chunk.seq = k + 1;
             v.chunk.capture_ns = k * phri_voice::mic::CHUNK_NS;

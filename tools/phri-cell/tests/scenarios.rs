@@ -166,25 +166,14 @@ fn collaborate(
     f64,
 ) {
     let mut c = common::cell(scenario, &CellOptions::default(), &[]);
-    let mut ended_by = None;
     // the smallest distance perception saw (the masked hand excluded) at 8-9.6 s
     let mut seen = f64::INFINITY;
-    for _ in 0..(seconds * 1000.0) as usize {
-        c.tick().unwrap();
-        let t = c.time_ns() as f64 * 1e-9;
-        if (8.0..9.6).contains(&t) && c.status.min_distance > 0.0 {
+    let (s, ended_by) = run_collab(&mut c, seconds, |c| {
+        if (8.0..9.6).contains(&now(c)) && c.status.min_distance > 0.0 {
             seen = seen.min(c.status.min_distance);
         }
-        let m = c
-            .controller
-            .collaboration()
-            .expect("collaboration enabled")
-            .machine();
-        if ended_by.is_none() && m.reason() != phri_ipc::CollabReason::None && !m.active() {
-            ended_by = Some((c.time_ns() as f64 * 1e-9, m.reason()));
-        }
-    }
-    (c.summary(), ended_by, seen)
+    });
+    (s, ended_by, seen)
 }
 
 #[test]

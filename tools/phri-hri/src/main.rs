@@ -161,8 +161,7 @@ fn request(kind: RequestKind, part: CollabPart, person: u32, text: &str) -> HriR
     r.part = part as u32;
     r.person = person;
     r.confidence = 1.0;
-    let b = text.as_bytes();
-    r.text[..b.len()].copy_from_slice(b);
+    r.text = phri_ipc::json::to_c_str(text);
     r
 }
 
