@@ -96,7 +96,7 @@ impl ResidualObserver {
             norm: cfg.collision_norm_threshold,
         };
         let ft_link = if cfg.ft_link.is_empty() {
-            model.joints[n - 1].child_link.clone()
+            model.actuated()[n - 1].child_link.clone()
         } else {
             cfg.ft_link.clone()
         };

@@ -6,12 +6,16 @@ use crate::model::{Model, Placement};
 use crate::spatial::{Force, Inertia, Motion};
 
 /// Workspace for one [`Model`]: every buffer an algorithm needs, allocated
-/// once. Quantities are in the base frame; per-body arrays are indexed by joint.
+/// once. Quantities are in the base frame; per-body arrays are indexed by joint
+/// (all of [`Model::joints`], mimic ones included), joint-space arrays have
+/// [`Model::nv`] entries.
 #[derive(Clone, Debug)]
 pub struct Data {
     /// body frames in the base frame (after forward kinematics)
     pub body: Vec<Placement>,
-    /// motion subspace `S_i` of each joint, base frame
+    /// motion subspace `S_i` of each joint, base frame: body `i`'s spatial
+    /// velocity per unit velocity of its column `idx_v` (for a mimic joint,
+    /// multiplier × its own axis)
     pub s: Vec<Motion>,
     /// `Ṡ_i = v_i × S_i`, base frame
     pub s_dot: Vec<Motion>,
@@ -54,17 +58,18 @@ impl Data {
     /// Allocate the workspace for `model`.
     pub fn new(model: &Model) -> Data {
         let n = model.nv();
+        let bodies = model.joints.len();
         Data {
-            body: vec![Placement::IDENTITY; n],
-            s: vec![Motion::ZERO; n],
-            s_dot: vec![Motion::ZERO; n],
-            v: vec![Motion::ZERO; n],
-            a: vec![Motion::ZERO; n],
-            f: vec![Force::ZERO; n],
-            inertia: vec![Inertia::ZERO; n],
-            composite: vec![Inertia::ZERO; n],
-            ic6: vec![Matrix6::zeros(); n],
-            bc6: vec![Matrix6::zeros(); n],
+            body: vec![Placement::IDENTITY; bodies],
+            s: vec![Motion::ZERO; bodies],
+            s_dot: vec![Motion::ZERO; bodies],
+            v: vec![Motion::ZERO; bodies],
+            a: vec![Motion::ZERO; bodies],
+            f: vec![Force::ZERO; bodies],
+            inertia: vec![Inertia::ZERO; bodies],
+            composite: vec![Inertia::ZERO; bodies],
+            ic6: vec![Matrix6::zeros(); bodies],
+            bc6: vec![Matrix6::zeros(); bodies],
             m: DMatrix::zeros(n, n),
             c: DMatrix::zeros(n, n),
             g: DVector::zeros(n),

@@ -1,4 +1,9 @@
 //! Rigid-body dynamics `M(q) q̈ + C(q,q̇) q̇ + g(q) = τ`, base-frame recursions.
+//!
+//! Every term is per actuated joint (`nv` of them). A mimic joint's body
+//! moves with `S_i` scaled by its multiplier ([`crate::Data::s`]) and
+//! projects onto its leader's column `idx_v`, so the terms are those of the
+//! reduced model `Gᵀ (·) G`, as in Pinocchio.
 
 use nalgebra::{DVector, Vector3};
 
@@ -33,31 +38,41 @@ pub fn rnea<'a>(
     fk_pass(model, data, q);
     inertia_pass(model, data);
     rnea_pass(model, data, qd, Some(qdd), base_acceleration(model));
-    let n = model.nv();
-    for i in 0..n {
-        data.tau[i] = data.s[i].dot(&data.f[i]);
-    }
+    project(model, data, |d| &mut d.tau);
     Ok(&data.tau)
+}
+
+/// `out_k = Σ_{i: idx_v(i) = k} S_iᵀ f_i` over every body (after [`rnea_pass`]):
+/// joint-space torques from the subtree forces in `data.f`.
+#[inline]
+fn project(model: &Model, data: &mut Data, out: fn(&mut Data) -> &mut DVector<f64>) {
+    out(data).fill(0.0);
+    for (i, j) in model.joints.iter().enumerate() {
+        let t = data.s[i].dot(&data.f[i]);
+        out(data)[j.idx_v] += t;
+    }
 }
 
 /// RNEA passes after FK and inertias (`qdd = None`: q̈ = 0, nothing allocated;
 /// `a0`: the base's acceleration, `(0, −g)` for gravity); leaves subtree
 /// forces in `data.f`, so that `τ_i = S_iᵀ f_i`.
 fn rnea_pass(model: &Model, data: &mut Data, qd: &[f64], qdd: Option<&[f64]>, a0: Motion) {
-    for (i, j) in model.joints.iter().enumerate() {
+    for &i in model.order() {
+        let j = &model.joints[i];
         let (vp, ap) = match j.parent {
             Some(p) => (data.v[p], data.a[p]),
             None => (Motion::ZERO, a0),
         };
         let s = data.s[i];
-        let v = vp + s.scale(qd[i]);
-        let a = ap + s.scale(qdd.map_or(0.0, |x| x[i])) + v.cross_motion(&s.scale(qd[i]));
+        let k = j.idx_v;
+        let v = vp + s.scale(qd[k]);
+        let a = ap + s.scale(qdd.map_or(0.0, |x| x[k])) + v.cross_motion(&s.scale(qd[k]));
         let inertia = &data.inertia[i];
         data.v[i] = v;
         data.a[i] = a;
         data.f[i] = inertia.apply(&a) + v.cross_force(&inertia.apply(&v));
     }
-    for i in (0..model.nv()).rev() {
+    for &i in model.order().iter().rev() {
         if let Some(p) = model.joints[i].parent {
             let fi = data.f[i];
             data.f[p] += fi;
@@ -77,9 +92,7 @@ pub fn coriolis_times_qd<'a>(
     inertia_pass(model, data);
     // q̈ = 0 and no gravity
     rnea_pass(model, data, qd, None, Motion::ZERO);
-    for i in 0..model.nv() {
-        data.c_qd[i] = data.s[i].dot(&data.f[i]);
-    }
+    project(model, data, |d| &mut d.c_qd);
     Ok(&data.c_qd)
 }
 
@@ -103,12 +116,13 @@ pub fn gravity<'a>(
 }
 
 /// Accumulate subtree mass moments (in `data.composite[i].{m,h}`, per body on
-/// entry) and evaluate `g_i = S_iᵀ (h × a0, m a0)`.
+/// entry) and evaluate `g_k = Σ_{i: idx_v(i) = k} S_iᵀ (h_i × a0, m_i a0)`.
 #[inline]
 fn gravity_from_composite_mass(model: &Model, data: &mut Data, a0: &Vector3<f64>) {
-    for i in (0..model.nv()).rev() {
+    data.g.fill(0.0);
+    for &i in model.order().iter().rev() {
         let ci = data.composite[i];
-        data.g[i] = data.s[i].dot(&Force {
+        data.g[model.joints[i].idx_v] += data.s[i].dot(&Force {
             n: ci.h.cross(a0),
             f: a0 * ci.m,
         });
@@ -132,32 +146,29 @@ pub fn crba<'a>(
     Ok(&data.m)
 }
 
+/// `M = Σ` over body pairs `j ⪯ i` (j an ancestor of or equal to i) of
+/// `S_jᵀ I^C_i S_i`, into row and column `idx_v` of each: entries of joints on
+/// different branches stay zero, a mimic joint adds to its leader's.
 fn crba_pass(model: &Model, data: &mut Data) {
-    let n = model.nv();
     data.composite.copy_from_slice(&data.inertia);
-    for i in (0..n).rev() {
+    for &i in model.order().iter().rev() {
         if let Some(p) = model.joints[i].parent {
             let ci = data.composite[i];
             data.composite[p] += ci;
         }
     }
-    for i in 0..n {
+    data.m.fill(0.0);
+    for (i, ji) in model.joints.iter().enumerate() {
         let f = data.composite[i].apply(&data.s[i]);
-        let mut k = Some(i);
+        let ci = ji.idx_v;
+        data.m[(ci, ci)] += data.s[i].dot(&f);
+        let mut k = ji.parent;
         while let Some(j) = k {
             let mij = data.s[j].dot(&f);
-            data.m[(i, j)] = mij;
-            data.m[(j, i)] = mij;
+            let cj = model.joints[j].idx_v;
+            data.m[(ci, cj)] += mij;
+            data.m[(cj, ci)] += mij;
             k = model.joints[j].parent;
-        }
-    }
-    // entries of joints on different branches are zero
-    for i in 0..n {
-        for j in 0..i {
-            if !model.supports(j, i) {
-                data.m[(i, j)] = 0.0;
-                data.m[(j, i)] = 0.0;
-            }
         }
     }
 }
@@ -175,38 +186,41 @@ pub fn coriolis_matrix<'a>(
     fk_pass(model, data, q);
     inertia_pass(model, data);
     velocity_pass(model, data, qd);
-    let n = model.nv();
-    for i in 0..n {
+    for i in 0..model.joints.len() {
         let ii = data.inertia[i].to_matrix();
         let v = data.v[i];
         let iv = data.inertia[i].apply(&v);
         data.ic6[i] = ii;
         data.bc6[i] = (crf(&v) * ii + icrf(&iv) - ii * crm(&v)) * 0.5;
     }
-    for i in (0..n).rev() {
+    for &i in model.order().iter().rev() {
         if let Some(p) = model.joints[i].parent {
             let (ic, bc) = (data.ic6[i], data.bc6[i]);
             data.ic6[p] += ic;
             data.bc6[p] += bc;
         }
     }
+    // body pairs j ⪯ i, into rows and columns idx_v (a mimic joint adds to its leader's)
     data.c.fill(0.0);
-    for i in 0..n {
+    for (i, ji) in model.joints.iter().enumerate() {
         let si = data.s[i].to_vector();
         let sdi = data.s_dot[i].to_vector();
         let ic = &data.ic6[i];
         let bc = &data.bc6[i];
-        // column i, rows j ⪯ i:  C_ji = S_jᵀ (I^C_i Ṡ_i + B^C_i S_i)
+        // column i, rows j ≺ i:  C_ji = S_jᵀ (I^C_i Ṡ_i + B^C_i S_i)
         let col = ic * sdi + bc * si;
         // row i, columns j ⪯ i:  C_ij = (I^C_i S_i)ᵀ Ṡ_j + (B^C_iᵀ S_i)ᵀ S_j
         let u1 = ic * si;
         let u2 = bc.transpose() * si;
-        let mut k = Some(i);
+        let ci = ji.idx_v;
+        data.c[(ci, ci)] += u1.dot(&sdi) + u2.dot(&si);
+        let mut k = ji.parent;
         while let Some(j) = k {
             let sj = data.s[j].to_vector();
             let sdj = data.s_dot[j].to_vector();
-            data.c[(j, i)] = sj.dot(&col);
-            data.c[(i, j)] = u1.dot(&sdj) + u2.dot(&sj);
+            let cj = model.joints[j].idx_v;
+            data.c[(cj, ci)] += sj.dot(&col);
+            data.c[(ci, cj)] += u1.dot(&sdj) + u2.dot(&sj);
             k = model.joints[j].parent;
         }
     }
@@ -249,13 +263,13 @@ pub fn residual_terms(
 ) -> Result<(), ModelError> {
     check_q_qd(model, q, qd)?;
     fk_pass(model, data, q);
-    let n = model.nv();
-    for (i, j) in model.joints.iter().enumerate() {
+    for &i in model.order() {
+        let j = &model.joints[i];
         let vp = match j.parent {
             Some(p) => data.v[p],
             None => Motion::ZERO,
         };
-        let v = vp + data.s[i].scale(qd[i]);
+        let v = vp + data.s[i].scale(qd[j.idx_v]);
         data.v[i] = v;
         // momentum of body i about the base origin without forming its inertia:
         // linear m v_c, angular R I_c Rᵀ ω + c × m v_c
@@ -268,22 +282,28 @@ pub fn residual_terms(
         data.composite[i].h = c * j.mass;
     }
     let a0 = -model.gravity;
-    for i in (0..n).rev() {
+    data.p.fill(0.0);
+    data.ct_qd.fill(0.0);
+    data.g.fill(0.0);
+    for &i in model.order().iter().rev() {
         let h = data.f[i];
         let s = &data.s[i];
-        data.p[i] = s.dot(&h);
-        data.ct_qd[i] = -s.dot(&data.v[i].cross_force(&h));
+        let k = model.joints[i].idx_v;
+        data.p[k] += s.dot(&h);
+        data.ct_qd[k] -= s.dot(&data.v[i].cross_force(&h));
         let ci = data.composite[i];
-        data.g[i] = s.dot(&Force {
+        data.g[k] += s.dot(&Force {
             n: ci.h.cross(&a0),
             f: a0 * ci.m,
         });
-        data.residual_bias[i] = data.ct_qd[i] - data.g[i];
         if let Some(p) = model.joints[i].parent {
             data.f[p] += h;
             data.composite[p].m += ci.m;
             data.composite[p].h += ci.h;
         }
+    }
+    for k in 0..model.nv() {
+        data.residual_bias[k] = data.ct_qd[k] - data.g[k];
     }
     Ok(())
 }
@@ -299,14 +319,14 @@ pub fn forward_dynamics<'a>(
 ) -> Result<&'a DVector<f64>, ModelError> {
     check_q_qd(model, q, qd)?;
     check_len("tau", model.nv(), tau.len())?;
-    let n = model.nv();
     fk_pass(model, data, q);
     inertia_pass(model, data);
     crba_pass(model, data);
     // bias = RNEA(q, q̇, 0) with gravity
     rnea_pass(model, data, qd, None, base_acceleration(model));
-    for i in 0..n {
-        data.qdd[i] = tau[i] - data.s[i].dot(&data.f[i]);
+    data.qdd.copy_from_slice(tau);
+    for (i, j) in model.joints.iter().enumerate() {
+        data.qdd[j.idx_v] -= data.s[i].dot(&data.f[i]);
     }
     cholesky_solve_in_place(data)?;
     Ok(&data.qdd)
@@ -347,7 +367,7 @@ pub fn potential_energy(model: &Model, data: &mut Data, q: &[f64]) -> Result<f64
 pub fn total_inertia(model: &Model, data: &mut Data) -> Inertia {
     inertia_pass(model, data);
     let mut sum = Inertia::ZERO;
-    for i in 0..model.nv() {
+    for i in 0..model.joints.len() {
         sum += data.inertia[i];
     }
     sum

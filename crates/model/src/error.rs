@@ -14,8 +14,12 @@ pub enum ModelError {
     Parse { origin: String, message: String },
     #[error("joint '{joint}': {kind} joints are not supported (only revolute, continuous, prismatic and fixed)")]
     UnsupportedJoint { joint: String, kind: String },
-    #[error("joint '{joint}': mimic joints are not supported")]
-    Mimic { joint: String },
+    #[error("joint '{joint}' mimics '{leader}', which the URDF does not define")]
+    MimicUnknownLeader { joint: String, leader: String },
+    #[error("joint '{joint}' mimics '{leader}', a fixed joint (a leader must move)")]
+    MimicLeaderFixed { joint: String, leader: String },
+    #[error("joint '{joint}' mimics '{leader}', which is a mimic joint itself (a leader must have its own degree of freedom)")]
+    MimicChain { joint: String, leader: String },
     #[error("joint '{joint}': axis has zero length")]
     ZeroAxis { joint: String },
     #[error("joint '{joint}' names link '{link}', which the URDF does not define")]

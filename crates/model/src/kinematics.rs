@@ -7,7 +7,8 @@ use crate::error::{check_len, ModelError};
 use crate::model::{JointKind, Model, Placement};
 use crate::spatial::{axis_angle, Inertia, Motion};
 
-/// Body placements and base-frame motion subspaces for configuration `q`.
+/// Body placements and base-frame motion subspaces for configuration `q`
+/// (one value per actuated joint; mimic joints follow their leaders).
 pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), ModelError> {
     check_len("q", model.nv(), q.len())?;
     fk_pass(model, data, q);
@@ -17,26 +18,33 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64]) -> Result<(
 /// FK without the length check (callers have checked).
 #[inline]
 pub(crate) fn fk_pass(model: &Model, data: &mut Data, q: &[f64]) {
-    for (i, j) in model.joints.iter().enumerate() {
+    for &i in model.order() {
+        let j = &model.joints[i];
+        let qi = model.joint_position(i, q);
         let parent = data.body_placement(j.parent);
         let joint_frame = parent.compose(&j.placement);
         let axis = joint_frame.r * j.axis;
-        match j.kind {
+        let s = match j.kind {
             JointKind::Revolute => {
                 data.body[i] = Placement {
-                    r: joint_frame.r * axis_angle(&j.axis, q[i]),
+                    r: joint_frame.r * axis_angle(&j.axis, qi),
                     p: joint_frame.p,
                 };
-                data.s[i] = Motion::new(axis, joint_frame.p.cross(&axis));
+                Motion::new(axis, joint_frame.p.cross(&axis))
             }
             JointKind::Prismatic => {
                 data.body[i] = Placement {
                     r: joint_frame.r,
-                    p: joint_frame.p + axis * q[i],
+                    p: joint_frame.p + axis * qi,
                 };
-                data.s[i] = Motion::new(Vector3::zeros(), axis);
+                Motion::new(Vector3::zeros(), axis)
             }
-        }
+        };
+        // a mimic joint moves `multiplier` times as fast as its leader
+        data.s[i] = match j.mimic {
+            None => s,
+            Some(m) => s.scale(m.multiplier),
+        };
     }
 }
 
@@ -54,12 +62,13 @@ pub(crate) fn inertia_pass(model: &Model, data: &mut Data) {
 /// Body velocities and `Ṡ` (after [`fk_pass`]).
 #[inline]
 pub(crate) fn velocity_pass(model: &Model, data: &mut Data, qd: &[f64]) {
-    for (i, j) in model.joints.iter().enumerate() {
+    for &i in model.order() {
+        let j = &model.joints[i];
         let vp = match j.parent {
             Some(p) => data.v[p],
             None => Motion::ZERO,
         };
-        data.v[i] = vp + data.s[i].scale(qd[i]);
+        data.v[i] = vp + data.s[i].scale(qd[j.idx_v]);
         data.s_dot[i] = data.v[i].cross_motion(&data.s[i]);
     }
 }
@@ -72,7 +81,8 @@ pub fn frame_placement(model: &Model, data: &Data, frame: usize) -> Placement {
 
 /// Geometric Jacobian (6×n, linear rows then angular rows, base-frame axes)
 /// of the point `point` [m] fixed in link frame `frame`, after
-/// [`forward_kinematics`]. Columns of joints that do not move the link are zero.
+/// [`forward_kinematics`]. Columns of joints that do not move the link are
+/// zero; a mimic joint that moves it adds its motion to its leader's column.
 pub fn point_jacobian(
     model: &Model,
     data: &Data,
@@ -93,9 +103,12 @@ pub fn point_jacobian(
     let mut k = f.body;
     while let Some(j) = k {
         let s = &data.s[j];
+        let col = model.joints[j].idx_v;
         let lin = s.velocity_at(&p);
-        out.fixed_view_mut::<3, 1>(0, j).copy_from(&lin);
-        out.fixed_view_mut::<3, 1>(3, j).copy_from(&s.w);
+        for a in 0..3 {
+            out[(a, col)] += lin[a];
+            out[(3 + a, col)] += s.w[a];
+        }
         k = model.joints[j].parent;
     }
     Ok(())

@@ -6,8 +6,22 @@
 //! [`Model::joints`]; Cartesian quantities are in the base frame, SI units.
 //!
 //! Supported: kinematic trees of revolute, continuous, prismatic and fixed
-//! joints with any origins and axes. Floating, planar, spherical and mimic
-//! joints are refused with an error naming the joint.
+//! joints with any origins and axes. Floating, planar and spherical joints
+//! are refused with an error naming the joint.
+//!
+//! Mimic joints (URDF `<mimic>`, e.g. the Panda's second finger) follow their
+//! leader as in Pinocchio (`buildModelFromUrdf(…, mimic=True)`):
+//! `q = multiplier · q_leader + offset`, no degree of freedom of their own, so
+//! `nv` counts the actuated joints only and every term (`M`, `C`, `g`, RNEA,
+//! Jacobians) is the reduced one, `Gᵀ (·) G` of the model with the mimic joint
+//! free, `G` the constant map from the actuated to all joint velocities: the
+//! mimic's motion adds `multiplier × its own axis` to its leader's column.
+//! Refused, naming the joint: an unknown leader, a fixed leader, a leader that
+//! is a mimic itself (chains and self-reference, refused by Pinocchio too), a
+//! multiplier or offset that is not finite. Unlike Pinocchio, continuous
+//! joints may lead or mimic (phri's configuration is an angle, not cos/sin)
+//! and a leader may sit below its mimic in the tree. A `<mimic>` on a fixed
+//! joint is ignored, as Pinocchio does.
 //!
 //! Refused as well, each naming the culprit: effort or velocity limits ≤ 0
 //! (a revolute or prismatic joint must give both; a continuous joint without
@@ -37,5 +51,5 @@ pub use dynamics::{
 pub use error::{check_len, LengthError, ModelError};
 pub use geometry::{parry_shapes, CollisionObject, Shape};
 pub use kinematics::{forward_kinematics, frame_placement, point_jacobian};
-pub use model::{Frame, Joint, JointKind, Model, Placement, MAX_URDF_BYTES};
+pub use model::{Frame, Joint, JointKind, Mimic, Model, Placement, MAX_URDF_BYTES};
 pub use xml_depth::MAX_XML_DEPTH;

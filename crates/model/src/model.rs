@@ -72,7 +72,21 @@ impl Placement {
     }
 }
 
-/// One actuated joint and the rigid body it moves.
+/// How a mimic joint follows its leader (URDF `<mimic>`, as in Pinocchio):
+/// `q = multiplier · q_leader + offset`, so `q̇ = multiplier · q̇_leader`. The
+/// mimic joint has no degree of freedom of its own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mimic {
+    /// index of the leader in [`Model::joints`]: an actuated joint (`< nv`)
+    pub leader: usize,
+    /// [rad/rad, m/m, m/rad or rad/m, after the two joints' kinds]
+    pub multiplier: f64,
+    /// [rad or m, the mimic joint's unit]
+    pub offset: f64,
+}
+
+/// One moving joint and the rigid body it moves: an actuated joint (one
+/// degree of freedom) or a mimic joint that follows one.
 #[derive(Clone, Debug)]
 pub struct Joint {
     /// joint name from the URDF
@@ -82,11 +96,19 @@ pub struct Joint {
     pub kind: JointKind,
     /// index of the parent joint, `None` when the parent body is the root
     pub parent: Option<usize>,
+    /// column of the joint's motion in every joint-space array (Pinocchio's
+    /// `idx_v`): its own index for an actuated joint, its leader's for a mimic joint
+    pub idx_v: usize,
+    /// `Some` for a mimic joint: the leader it follows
+    pub mimic: Option<Mimic>,
     /// joint frame in the parent body frame at `q = 0`
     pub placement: Placement,
     /// unit axis, joint frame
     pub axis: Vector3<f64>,
-    /// position limits [rad or m]; ±∞ for continuous joints
+    /// position limits [rad or m]; ±∞ for continuous joints. The limits
+    /// (position, velocity, effort) of a mimic joint are the URDF's, checked
+    /// like any joint's but enforced by nothing: it has no degree of freedom
+    /// (Pinocchio keeps none for it either)
     pub lower: f64,
     pub upper: f64,
     /// velocity limit [rad/s or m/s], > 0; ∞ only for a continuous joint
@@ -111,12 +133,15 @@ pub struct Frame {
     pub placement: Placement,
 }
 
-/// Immutable robot model. Joint `i` moves body `i`; parents precede children.
+/// Immutable robot model. Joint `i` moves body `i`. The actuated joints
+/// come first, in depth-first order: joint `i < nv` is column `i` of every
+/// joint-space array. Mimic joints follow, in depth-first order; a parent may
+/// then come after its child, so recursions run in [`Model::order`].
 #[derive(Clone, Debug)]
 pub struct Model {
     /// robot name from the URDF
     pub name: String,
-    /// actuated joints in depth-first order (the order of every joint-space array)
+    /// moving joints: the [`Model::nv`] actuated ones, then the mimic ones
     pub joints: Vec<Joint>,
     /// every URDF link, with the body it rides on
     pub frames: Vec<Frame>,
@@ -128,6 +153,10 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// mass attached rigidly to the root (does not enter the dynamics) [kg]
     pub root_mass: f64,
+    /// number of actuated joints (= configuration and velocity dimension)
+    pub(crate) nv: usize,
+    /// every joint index once, parents before children (depth-first preorder)
+    pub(crate) order: Vec<usize>,
     pub(crate) frame_index: HashMap<String, usize>,
 }
 
@@ -201,26 +230,83 @@ impl MassProps {
 /// inertia (a body keeps inertia only with mass: [`MassProps::split`]). Otherwise its column of `M` is zero at every `q` (singular `M`:
 /// forward dynamics, the residual and the controller's inverse fail).
 /// Configuration-dependent singularities (mass only on the axis) are the
-/// configuration's check (`phri-config`, at the start posture).
-fn moves_mass(joints: &[Joint]) -> Result<(), ModelError> {
+/// configuration's check (`phri-config`, at the start posture). An actuated
+/// joint moves its own subtree and those of its mimic joints whose multiplier
+/// is not zero; the deepest joint that moves nothing is named.
+fn moves_mass(joints: &[Joint], order: &[usize], nv: usize) -> Result<(), ModelError> {
     let mut mass: Vec<f64> = joints.iter().map(|j| j.mass).collect();
     let mut inertia: Vec<f64> = joints.iter().map(|j| j.inertia_com.trace()).collect();
-    for i in (0..joints.len()).rev() {
-        let moves = match joints[i].kind {
-            JointKind::Prismatic => mass[i] > 0.0,
-            JointKind::Revolute => mass[i] > 0.0 || inertia[i] > 0.0,
-        };
-        if !moves {
-            return Err(ModelError::MovesNoMass {
-                joint: joints[i].name.clone(),
-            });
-        }
+    for &i in order.iter().rev() {
         if let Some(p) = joints[i].parent {
             mass[p] += mass[i];
             inertia[p] += inertia[i];
         }
     }
-    Ok(())
+    let mut moves = vec![false; nv];
+    for (i, j) in joints.iter().enumerate() {
+        let scale = j.mimic.map_or(1.0, |m| m.multiplier);
+        let subtree = match j.kind {
+            JointKind::Prismatic => mass[i] > 0.0,
+            JointKind::Revolute => mass[i] > 0.0 || inertia[i] > 0.0,
+        };
+        moves[j.idx_v] |= scale != 0.0 && subtree;
+    }
+    match moves.iter().rposition(|&m| !m) {
+        Some(i) => Err(ModelError::MovesNoMass {
+            joint: joints[i].name.clone(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A checked `<mimic>`: leader (URDF joint index), multiplier, offset.
+type UrdfMimic = (usize, f64, f64);
+
+/// Check every `<mimic>` of a moving joint (a fixed joint's is ignored, as
+/// Pinocchio does): its leader must exist, move, and not be a mimic joint
+/// itself (Pinocchio refuses chains); multiplier (default 1) and offset
+/// (default 0) must be finite. Returns per URDF joint `(leader, multiplier,
+/// offset)`, the leader as a URDF joint index.
+fn mimics(robot: &urdf_rs::Robot) -> Result<Vec<Option<UrdfMimic>>, ModelError> {
+    let by_name: HashMap<&str, usize> = robot
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| (j.name.as_str(), i))
+        .collect();
+    let moving = |j: &urdf_rs::Joint| j.joint_type != urdf_rs::JointType::Fixed;
+    let mut out = Vec::with_capacity(robot.joints.len());
+    for j in &robot.joints {
+        let Some(m) = j.mimic.as_ref().filter(|_| moving(j)) else {
+            out.push(None);
+            continue;
+        };
+        let el = format!("joint '{}' mimic", j.name);
+        let multiplier = finite(m.multiplier.unwrap_or(1.0), &el, "multiplier")?;
+        let offset = finite(m.offset.unwrap_or(0.0), &el, "offset")?;
+        let leader =
+            *by_name
+                .get(m.joint.as_str())
+                .ok_or_else(|| ModelError::MimicUnknownLeader {
+                    joint: j.name.clone(),
+                    leader: m.joint.clone(),
+                })?;
+        let l = &robot.joints[leader];
+        if !moving(l) {
+            return Err(ModelError::MimicLeaderFixed {
+                joint: j.name.clone(),
+                leader: l.name.clone(),
+            });
+        }
+        if l.mimic.is_some() {
+            return Err(ModelError::MimicChain {
+                joint: j.name.clone(),
+                leader: l.name.clone(),
+            });
+        }
+        out.push(Some((leader, multiplier, offset)));
+    }
+    Ok(out)
 }
 
 impl Model {
@@ -338,12 +424,8 @@ impl Model {
                     });
                 }
             }
-            if j.mimic.is_some() {
-                return Err(ModelError::Mimic {
-                    joint: j.name.clone(),
-                });
-            }
         }
+        let mimic_of = mimics(robot)?;
         let roots: Vec<usize> = (0..robot.links.len())
             .filter(|&i| parent_joint[i].is_none())
             .collect();
@@ -358,6 +440,8 @@ impl Model {
         };
 
         let mut joints: Vec<Joint> = Vec::new();
+        // URDF joint index of each body, in depth-first order
+        let mut urdf_joint: Vec<usize> = Vec::new();
         let mut frames: Vec<Frame> = Vec::new();
         let mut props: Vec<MassProps> = Vec::new();
         let mut root_props = MassProps::ZERO;
@@ -431,6 +515,8 @@ impl Model {
                         child_link: j.child.link.clone(),
                         kind,
                         parent: parent_body,
+                        idx_v: 0,
+                        mimic: None,
                         placement,
                         axis: axis / norm,
                         lower,
@@ -442,6 +528,7 @@ impl Model {
                         inertia_com: Matrix3::zeros(),
                     });
                     props.push(MassProps::ZERO);
+                    urdf_joint.push(ji);
                     (Some(joints.len() - 1), Placement::IDENTITY)
                 }
             };
@@ -536,21 +623,61 @@ impl Model {
             // links not reachable from the root can only sit on a cycle
             return Err(ModelError::NoRoot);
         }
-        if joints.is_empty() {
-            return Err(ModelError::NoActuatedJoint);
-        }
-        // depth-first order from a stack may interleave subtrees; the algorithms need only parent < child
-        debug_assert!(joints
-            .iter()
-            .enumerate()
-            .all(|(i, j)| j.parent.is_none_or(|p| p < i)));
         for (j, p) in joints.iter_mut().zip(props.iter()) {
             let (m, c, i_c) = p.split();
             j.mass = m;
             j.com = c;
             j.inertia_com = i_c;
         }
-        moves_mass(&joints)?;
+        // actuated joints first, mimic joints after, each in depth-first order
+        // (the identity without mimic joints)
+        let n = joints.len();
+        let is_mimic = |b: usize| mimic_of[urdf_joint[b]].is_some();
+        let mut new_index = vec![0usize; n];
+        let mut body_of_urdf: HashMap<usize, usize> = HashMap::with_capacity(n);
+        let (mut actuated, mut followers) = (0usize, 0usize);
+        let nv = (0..n).filter(|&b| !is_mimic(b)).count();
+        for b in 0..n {
+            new_index[b] = if is_mimic(b) {
+                followers += 1;
+                nv + followers - 1
+            } else {
+                actuated += 1;
+                actuated - 1
+            };
+            body_of_urdf.insert(urdf_joint[b], new_index[b]);
+        }
+        if nv == 0 {
+            return Err(ModelError::NoActuatedJoint);
+        }
+        let mut slots: Vec<Option<Joint>> = (0..n).map(|_| None).collect();
+        for (b, mut j) in joints.into_iter().enumerate() {
+            j.parent = j.parent.map(|p| new_index[p]);
+            let i = new_index[b];
+            j.idx_v = i;
+            if let Some((leader, multiplier, offset)) = mimic_of[urdf_joint[b]] {
+                // the leader moves (checked) and every link was reached: it is a body
+                let leader = *body_of_urdf.get(&leader).ok_or(ModelError::NoRoot)?;
+                j.idx_v = leader;
+                j.mimic = Some(Mimic {
+                    leader,
+                    multiplier,
+                    offset,
+                });
+            }
+            slots[i] = Some(j);
+        }
+        let joints: Vec<Joint> = slots.into_iter().flatten().collect();
+        debug_assert_eq!(joints.len(), n);
+        for f in &mut frames {
+            f.body = f.body.map(|b| new_index[b]);
+        }
+        for c in &mut collisions {
+            c.body = c.body.map(|b| new_index[b]);
+        }
+        // depth-first preorder (parents first) in the new indices
+        let order: Vec<usize> = new_index;
+        moves_mass(&joints, &order, nv)?;
         let frame_index = frames
             .iter()
             .enumerate()
@@ -564,14 +691,47 @@ impl Model {
             skipped_meshes,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             root_mass: root_props.m,
+            nv,
+            order,
             frame_index,
         })
     }
 
-    /// Number of actuated joints (= configuration and velocity dimension).
+    /// Number of actuated joints (= configuration and velocity dimension;
+    /// mimic joints have none of their own, as in Pinocchio).
     #[inline]
     pub fn nv(&self) -> usize {
-        self.joints.len()
+        self.nv
+    }
+
+    /// The actuated joints, in array order: `actuated()[i]` is column `i`
+    /// of every joint-space array (limits per degree of freedom come from here).
+    #[inline]
+    pub fn actuated(&self) -> &[Joint] {
+        &self.joints[..self.nv]
+    }
+
+    /// The mimic joints (those after the actuated ones in [`Model::joints`]).
+    #[inline]
+    pub fn mimic_joints(&self) -> &[Joint] {
+        &self.joints[self.nv..]
+    }
+
+    /// Every joint index once, parents before children: the order of the
+    /// forward recursions (backward ones run it reversed).
+    #[inline]
+    pub fn order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// Position of joint `i` [rad or m] in configuration `q` (one value per
+    /// actuated joint): `q[i]`, or `multiplier · q[leader] + offset` for a mimic joint.
+    #[inline]
+    pub fn joint_position(&self, i: usize, q: &[f64]) -> f64 {
+        match self.joints[i].mimic {
+            None => q[i],
+            Some(m) => m.multiplier * q[m.leader] + m.offset,
+        }
     }
 
     /// Index of a link frame by name.
@@ -584,7 +744,7 @@ impl Model {
 
     /// Actuated joint names, in array order.
     pub fn joint_names(&self) -> Vec<&str> {
-        self.joints.iter().map(|j| j.name.as_str()).collect()
+        self.actuated().iter().map(|j| j.name.as_str()).collect()
     }
 
     /// Is joint `j` an ancestor of (or equal to) joint `i`?
@@ -594,9 +754,6 @@ impl Model {
         while let Some(x) = k {
             if x == j {
                 return true;
-            }
-            if x < j {
-                return false;
             }
             k = self.joints[x].parent;
         }

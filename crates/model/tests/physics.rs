@@ -213,7 +213,12 @@ fn rk4(model: &Model, d: &mut Data, q: &mut [f64], qd: &mut [f64], dt: f64) {
 
 #[test]
 fn energy_is_conserved_without_torque() {
-    for (name, model) in [("lwr4", lwr4()), ("tree", tree())] {
+    for (name, model) in [
+        ("lwr4", lwr4()),
+        ("tree", tree()),
+        ("panda", panda()),
+        ("mimic9", random_mimic_tree(3, 9, 0.5)),
+    ] {
         let n = model.nv();
         let mut d = Data::new(&model);
         let mut r = rng(6);

@@ -29,10 +29,125 @@ fn floating_planar_spherical_joints_are_refused_by_name() {
     }
 }
 
+/// The leader `j` (base → a) and a mimic joint `m` (a → b, revolute) whose `<mimic>` is `mimic`.
+fn with_mimic(mimic: &str) -> Result<Model, ModelError> {
+    let b = LINK.replace("name=\"a\"", "name=\"b\"");
+    robot(&format!("{}{b}<joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"1 0 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>{mimic}</joint>", joint("revolute", "")))
+}
+
 #[test]
-fn mimic_joints_are_refused_by_name() {
-    let body = format!("{}<link name=\"b\"/><joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"j\"/></joint>", joint("revolute", ""));
-    assert!(matches!(robot(&body), Err(ModelError::Mimic { joint }) if joint == "m"));
+fn mimic_joints_follow_their_leader_without_a_degree_of_freedom() {
+    let m = with_mimic("<mimic joint=\"j\" multiplier=\"-2\" offset=\"0.5\"/>").unwrap();
+    assert_eq!(m.nv(), 1);
+    assert_eq!(m.joints.len(), 2);
+    assert_eq!(m.joint_names(), vec!["j"]);
+    let f = &m.mimic_joints()[0];
+    assert_eq!(f.name, "m");
+    assert_eq!(f.idx_v, 0);
+    assert_eq!(
+        f.mimic,
+        Some(Mimic {
+            leader: 0,
+            multiplier: -2.0,
+            offset: 0.5
+        })
+    );
+    assert_eq!(m.joint_position(1, &[0.25]), 0.0);
+    // multiplier 1 and offset 0 when omitted
+    let m = with_mimic("<mimic joint=\"j\"/>").unwrap();
+    let f = m.mimic_joints()[0].mimic.unwrap();
+    assert_eq!((f.multiplier, f.offset), (1.0, 0.0));
+    // a <mimic> on a fixed joint is ignored (Pinocchio does the same)
+    let fixed = format!(
+        "{}{}<joint name=\"m\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/><mimic joint=\"nowhere\"/></joint>",
+        joint("revolute", ""),
+        LINK.replace("name=\"a\"", "name=\"b\"")
+    );
+    let m = robot(&fixed).unwrap();
+    assert_eq!((m.nv(), m.joints.len()), (1, 1));
+}
+
+#[test]
+fn malformed_mimic_joints_are_refused_by_name() {
+    match with_mimic("<mimic joint=\"nope\"/>") {
+        Err(e @ ModelError::MimicUnknownLeader { .. }) => {
+            assert!(e.to_string().contains("'m' mimics 'nope'"), "{e}")
+        }
+        other => panic!("unknown leader: {other:?}"),
+    }
+    // following itself, or a leader that follows another joint: Pinocchio refuses chains
+    assert!(matches!(
+        with_mimic("<mimic joint=\"m\"/>"),
+        Err(ModelError::MimicChain { joint, leader }) if joint == "m" && leader == "m"
+    ));
+    let c = LINK.replace("name=\"a\"", "name=\"c\"");
+    let chain = format!(
+        "{c}<joint name=\"n\" type=\"revolute\"><parent link=\"a\"/><child link=\"c\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"m\"/></joint>"
+    );
+    let b = LINK.replace("name=\"a\"", "name=\"b\"");
+    let two = robot(&format!("{}{b}<joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"j\"/></joint>{chain}", joint("revolute", "")));
+    assert!(
+        matches!(&two, Err(ModelError::MimicChain { joint, leader }) if joint == "n" && leader == "m"),
+        "{two:?}"
+    );
+    // two joints that follow each other: a cycle, refused as a chain
+    let b = LINK.replace("name=\"a\"", "name=\"b\"");
+    let cycle = robot(&format!("{}{b}<joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"j\"/></joint>", joint("revolute", "<mimic joint=\"m\"/>")));
+    assert!(
+        matches!(&cycle, Err(ModelError::MimicChain { .. })),
+        "{cycle:?}"
+    );
+    // a fixed leader
+    let c = LINK.replace("name=\"a\"", "name=\"c\"");
+    let fixed_leader = robot(&format!("{}{c}<joint name=\"f\" type=\"fixed\"><parent link=\"a\"/><child link=\"c\"/></joint><link name=\"b\"><inertial><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link><joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"f\"/></joint>", joint("revolute", "")));
+    match fixed_leader {
+        Err(e @ ModelError::MimicLeaderFixed { .. }) => {
+            assert!(e.to_string().contains("'m' mimics 'f'"), "{e}")
+        }
+        other => panic!("fixed leader: {other:?}"),
+    }
+    for (attr, value) in [
+        ("multiplier", "nan"),
+        ("multiplier", "inf"),
+        ("offset", "-inf"),
+        ("offset", "NaN"),
+    ] {
+        match with_mimic(&format!("<mimic joint=\"j\" {attr}=\"{value}\"/>")) {
+            Err(ModelError::NotFinite { element, field }) => {
+                assert!(element.contains("'m'"), "{element}");
+                assert_eq!(field, attr);
+            }
+            other => panic!("{attr}={value}: {other:?}"),
+        }
+    }
+    // a mimic joint keeps the checks of its own limits
+    let zero = with_mimic("<mimic joint=\"j\"/>").map(|_| ());
+    assert!(zero.is_ok());
+    let b = LINK.replace("name=\"a\"", "name=\"b\"");
+    let bad = robot(&format!("{}{b}<joint name=\"m\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"1\"/><mimic joint=\"j\"/></joint>", joint("revolute", "")));
+    assert!(
+        matches!(&bad, Err(ModelError::LimitNotPositive { joint, .. }) if joint == "m"),
+        "{bad:?}"
+    );
+}
+
+#[test]
+fn a_leader_whose_only_mimic_moves_nothing_is_refused() {
+    // the leader carries no mass itself, its mimic carries the mass with multiplier 0
+    let text = format!(
+        "<robot name=\"r\"><link name=\"base\"/><link name=\"a\"/>{}<joint name=\"j\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint><joint name=\"m\" type=\"revolute\"><parent link=\"base\"/><child link=\"b\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"j\" multiplier=\"{{k}}\"/></joint></robot>",
+        LINK.replace("name=\"a\"", "name=\"b\"")
+    );
+    let zero = Model::from_urdf_str(&text.replace("{k}", "0"));
+    assert!(
+        matches!(&zero, Err(ModelError::MovesNoMass { joint }) if joint == "j"),
+        "{zero:?}"
+    );
+    // with a non-zero multiplier the mimic's body gives the leader's column its inertia
+    let m = Model::from_urdf_str(&text.replace("{k}", "0.5")).unwrap();
+    let mut d = Data::new(&m);
+    let mm = crba(&m, &mut d, &[0.3]).unwrap();
+    assert!((mm[(0, 0)] - 0.25).abs() < 1e-12, "{mm}");
 }
 
 #[test]

@@ -255,9 +255,9 @@ impl Avoidance {
     /// Limits from the model's joints (position range less
     /// `params.position_margin`, velocity), acceleration from the params.
     pub fn new(model: &Model, params: AvoidanceParams) -> Avoidance {
-        let lower: Vec<f64> = model.joints.iter().map(|j| j.lower).collect();
-        let upper: Vec<f64> = model.joints.iter().map(|j| j.upper).collect();
-        let velocity: Vec<f64> = model.joints.iter().map(|j| j.velocity).collect();
+        let lower: Vec<f64> = model.actuated().iter().map(|j| j.lower).collect();
+        let upper: Vec<f64> = model.actuated().iter().map(|j| j.upper).collect();
+        let velocity: Vec<f64> = model.actuated().iter().map(|j| j.velocity).collect();
         Avoidance::from_limits(&lower, &upper, &velocity, params)
     }
 

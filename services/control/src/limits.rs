@@ -26,10 +26,10 @@ pub struct LimitActivity {
 impl Limits {
     pub fn from_model(model: &Model, margin: f64) -> Limits {
         Limits {
-            lower: model.joints.iter().map(|j| j.lower).collect(),
-            upper: model.joints.iter().map(|j| j.upper).collect(),
-            velocity: model.joints.iter().map(|j| j.velocity).collect(),
-            effort: model.joints.iter().map(|j| j.effort).collect(),
+            lower: model.actuated().iter().map(|j| j.lower).collect(),
+            upper: model.actuated().iter().map(|j| j.upper).collect(),
+            velocity: model.actuated().iter().map(|j| j.velocity).collect(),
+            effort: model.actuated().iter().map(|j| j.effort).collect(),
             margin,
         }
     }

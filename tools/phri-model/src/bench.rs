@@ -3,12 +3,33 @@
 use std::hint::black_box;
 use std::time::Instant;
 
+use std::path::PathBuf;
+
 use phri_model::{Data, Model};
 use rand::{Rng, SeedableRng};
 use serde_json::json;
 
 use crate::inspect::load;
-use crate::Flags;
+
+/// `phri-model bench`'s arguments.
+#[derive(clap::Args, Debug)]
+pub(crate) struct BenchArgs {
+    /// Robot description (URDF)
+    #[arg(value_name = "ROBOT.urdf")]
+    urdf: PathBuf,
+    /// Timed batches, each on a new random state (at most 100000)
+    #[arg(long, value_name = "N", default_value_t = 500, value_parser = parse_samples)]
+    samples: usize,
+}
+
+/// A positive sample count of at most [`MAX_SAMPLES`].
+fn parse_samples(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n > MAX_SAMPLES => Err(format!("{n} is more than {MAX_SAMPLES}")),
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!("'{s}' is not a positive integer")),
+    }
+}
 
 /// Calls per timed batch; the median is taken over batches, each on a new random state.
 const CALLS_PER_BATCH: usize = 200;
@@ -19,7 +40,7 @@ pub(crate) const MAX_SAMPLES: usize = 100_000;
 
 fn random_state(model: &Model, rng: &mut impl Rng) -> (Vec<f64>, Vec<f64>) {
     let q = model
-        .joints
+        .actuated()
         .iter()
         .map(|j| {
             let (lo, hi) = if j.lower.is_finite() && j.upper.is_finite() && j.upper > j.lower {
@@ -65,25 +86,9 @@ fn median_ns(
     per_call[per_call.len() / 2]
 }
 
-pub(crate) fn run(args: &[String]) -> Result<String, String> {
-    let path = args.first().ok_or("bench needs a URDF file")?;
-    let flags = Flags::parse(&args[1..], &["--samples"])?;
-    let samples = match flags.get("--samples") {
-        Some(s) => s
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| format!("--samples: '{s}' is not a positive integer"))
-            .and_then(|n| {
-                if n <= MAX_SAMPLES {
-                    Ok(n)
-                } else {
-                    Err(format!("--samples: {n} is more than {MAX_SAMPLES}"))
-                }
-            })?,
-        None => 500,
-    };
-    let model = load(path)?;
+pub(crate) fn run(args: &BenchArgs) -> Result<String, String> {
+    let samples = args.samples;
+    let model = load(&args.urdf)?;
     let mut data = Data::new(&model);
     let mut jac = Data::jacobian_buffer(&model);
     let last = model.frames.len() - 1;

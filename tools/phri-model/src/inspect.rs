@@ -1,10 +1,32 @@
 //! `phri-model inspect`: every dynamics term at one state, as JSON.
 
+use std::path::{Path, PathBuf};
+
 use nalgebra::{DMatrix, Vector3};
 use phri_model::{Data, Model};
 use serde_json::{json, Map, Value};
 
-use crate::{parse_vector, Flags};
+use crate::{parse_values, Values};
+
+/// `phri-model inspect`'s arguments.
+#[derive(clap::Args, Debug)]
+pub(crate) struct InspectArgs {
+    /// Robot description (URDF)
+    #[arg(value_name = "ROBOT.urdf")]
+    urdf: PathBuf,
+    /// Joint positions [rad or m], one per actuated joint in the order of `joints` (mimic joints follow their leader)
+    #[arg(long, value_name = "v1,v2,…", required = true, allow_hyphen_values = true, value_parser = parse_values)]
+    q: Option<Values>,
+    /// Joint velocities [rad/s or m/s] [default: zero]
+    #[arg(long, value_name = "v1,v2,…", allow_hyphen_values = true, value_parser = parse_values)]
+    qd: Option<Values>,
+    /// Joint accelerations [rad/s² or m/s²] for tau (RNEA) [default: zero]
+    #[arg(long, value_name = "v1,v2,…", allow_hyphen_values = true, value_parser = parse_values)]
+    qdd: Option<Values>,
+    /// Also print the Jacobian of point x,y,z [m] fixed in link LINK's frame
+    #[arg(long, value_name = "LINK:x,y,z", allow_hyphen_values = true, value_parser = parse_point)]
+    point: Option<(String, Vector3<f64>)>,
+}
 
 /// `m` as rows of numbers; an entry that is not finite (JSON has no NaN or
 /// ∞: it would print as `null`) is refused naming the term `what`.
@@ -35,52 +57,67 @@ fn finite<'a>(what: &str, mut values: impl Iterator<Item = &'a f64>) -> Result<(
 }
 
 /// Load a URDF and map the library error to one line.
-pub(crate) fn load(path: &str) -> Result<Model, String> {
+pub(crate) fn load(path: &Path) -> Result<Model, String> {
     Model::from_urdf_file(path).map_err(|e| e.to_string())
 }
 
-fn state(flags: &Flags, name: &str, n: usize, required: bool) -> Result<Vec<f64>, String> {
-    match flags.get(name) {
-        Some(text) => {
-            let v = parse_vector(name, text)?;
-            if v.len() != n {
-                return Err(format!(
-                    "{name}: expected {n} values (one per actuated joint), got {}",
-                    v.len()
-                ));
-            }
-            Ok(v)
-        }
-        None if required => Err(format!("{name} is required")),
+/// The values of flag `name`, one per actuated joint; zeros when not given.
+fn state(name: &str, values: &Option<Values>, n: usize) -> Result<Vec<f64>, String> {
+    match values {
+        Some(Values(v)) if v.len() != n => Err(format!(
+            "{name}: expected {n} values (one per actuated joint), got {}",
+            v.len()
+        )),
+        Some(Values(v)) => Ok(v.clone()),
         None => Ok(vec![0.0; n]),
     }
 }
 
-/// `LINK:x,y,z`
-fn parse_point(model: &Model, text: &str) -> Result<(usize, Vector3<f64>), String> {
+/// `LINK:x,y,z` (the link is looked up once the model is loaded)
+fn parse_point(text: &str) -> Result<(String, Vector3<f64>), String> {
     let (link, xyz) = text
         .rsplit_once(':')
-        .ok_or_else(|| format!("--point: expected LINK:x,y,z, got '{text}'"))?;
-    let v = parse_vector("--point", xyz)?;
+        .ok_or_else(|| format!("expected LINK:x,y,z, got '{text}'"))?;
+    let Values(v) = parse_values(xyz)?;
     if v.len() != 3 {
-        return Err(format!("--point: expected 3 coordinates, got {}", v.len()));
+        return Err(format!("expected 3 coordinates, got {}", v.len()));
     }
-    let frame = model.frame_id(link).map_err(|e| format!("--point: {e}"))?;
-    Ok((frame, Vector3::new(v[0], v[1], v[2])))
+    Ok((link.to_string(), Vector3::new(v[0], v[1], v[2])))
 }
 
-pub(crate) fn run(args: &[String]) -> Result<String, String> {
-    let path = args.first().ok_or("inspect needs a URDF file")?;
-    let flags = Flags::parse(&args[1..], &["--q", "--qd", "--qdd", "--point"])?;
-    let model = load(path)?;
+/// Each mimic joint with the actuated joint it follows:
+/// `q = multiplier · q_leader + offset`.
+fn mimic_json(model: &Model) -> Value {
+    Value::Array(
+        model
+            .mimic_joints()
+            .iter()
+            .filter_map(|j| {
+                let m = j.mimic?;
+                Some(json!({
+                    "joint": j.name,
+                    "leader": model.joints[m.leader].name,
+                    "multiplier": m.multiplier,
+                    "offset": m.offset,
+                }))
+            })
+            .collect(),
+    )
+}
+
+pub(crate) fn run(args: &InspectArgs) -> Result<String, String> {
+    let model = load(&args.urdf)?;
     let n = model.nv();
-    let q = state(&flags, "--q", n, true)?;
-    let qd = state(&flags, "--qd", n, false)?;
-    let qdd = state(&flags, "--qdd", n, false)?;
-    let point = flags
-        .get("--point")
-        .map(|p| parse_point(&model, p))
-        .transpose()?;
+    let q = state("--q", &args.q, n)?;
+    let qd = state("--qd", &args.qd, n)?;
+    let qdd = state("--qdd", &args.qdd, n)?;
+    let point = match &args.point {
+        Some((link, x)) => Some((
+            model.frame_id(link).map_err(|e| format!("--point: {e}"))?,
+            *x,
+        )),
+        None => None,
+    };
 
     let mut data = Data::new(&model);
     let e = |e: phri_model::ModelError| e.to_string();
@@ -108,6 +145,7 @@ pub(crate) fn run(args: &[String]) -> Result<String, String> {
     let mut out = Map::new();
     out.insert("robot".into(), json!(model.name));
     out.insert("joints".into(), json!(model.joint_names()));
+    out.insert("mimic_joints".into(), mimic_json(&model));
     out.insert("M".into(), matrix_json("M", &m)?);
     out.insert("C".into(), matrix_json("C", &c)?);
     out.insert("C_qd".into(), vector_json("C_qd", &c_qd)?);

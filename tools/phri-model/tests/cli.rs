@@ -1,4 +1,5 @@
-//! The `phri-model` binary: JSON on success, one line on stderr and exit 2 on bad input.
+//! The `phri-model` binary: JSON on success, one line on stderr and exit 2 on
+//! bad input (the command line is clap's, through `phri_runtime::cli`).
 
 use std::process::Command;
 
@@ -104,13 +105,12 @@ fn bad_input_is_one_line_and_exit_2() {
             vec!["inspect", &urdf, "--q", q7, "--point", "lwr_flange:0,0"],
             "3 coordinates",
         ),
-        (vec!["inspect", &urdf], "--q is required"),
-        (
-            vec!["inspect", &urdf, "--q", q7, "--bogus", "1"],
-            "unknown argument",
-        ),
-        (vec!["frobnicate"], "unknown command"),
-        (vec![], "usage"),
+        (vec!["inspect", &urdf], "--q"),
+        (vec!["inspect", &urdf, "--q", q7, "--bogus", "1"], "--bogus"),
+        (vec!["inspect", &urdf, "--q", q7, "--q", q7], "--q"),
+        (vec!["inspect", "--q", q7], "ROBOT.urdf"),
+        (vec!["frobnicate"], "frobnicate"),
+        (vec!["completions", "tcsh"], "tcsh"),
     ];
     for (args, needle) in cases {
         let (code, out, err) = run(&args);
@@ -121,8 +121,124 @@ fn bad_input_is_one_line_and_exit_2() {
             "{args:?}: stderr '{err}' lacks '{needle}'"
         );
         assert!(!err.contains("panicked"), "{args:?}");
-        assert!(err.starts_with("phri-model: "));
+        assert!(err.starts_with("phri-model: "), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
+    // no command at all: the usage on stderr, exit 2
+    let (code, out, err) = run(&[]);
+    assert_eq!(code, 2);
+    assert!(out.is_empty(), "stdout {out}");
+    assert!(
+        err.contains("Usage: phri-model") && err.contains("inspect"),
+        "{err}"
+    );
+}
+
+#[test]
+fn flags_take_negative_values_and_the_equals_form() {
+    let urdf = repo("deploy/robots/kuka_lwr4.urdf");
+    let (code, out, err) = run(&[
+        "inspect",
+        &urdf,
+        "--q=-0.1,-0.2,0.3,-0.4,0.5,-0.6,0.7",
+        "--qd",
+        "-1,0,0,0,0,0,-1",
+        "--point=lwr_flange:-0.1,0,0.1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["jacobian"].as_array().unwrap().len(), 6);
+    let (code, out, err) = run(&["bench", &urdf, "--samples=3"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["samples"], 3);
+}
+
+#[test]
+fn help_version_and_completions() {
+    let (code, out, _) = run(&["--help"]);
+    assert_eq!(code, 0);
+    for sub in ["inspect", "bench", "completions"] {
+        assert!(out.contains(sub), "{out}");
+    }
+    let (code, out, _) = run(&["inspect", "--help"]);
+    assert_eq!(code, 0);
+    for flag in ["--q", "--qd", "--qdd", "--point"] {
+        assert!(out.contains(flag), "{out}");
+    }
+    let (code, out, _) = run(&["bench", "--help"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("--samples"), "{out}");
+    let (code, out, _) = run(&["--version"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("phri-model "), "{out}");
+    for shell in ["bash", "zsh", "fish"] {
+        let (code, out, err) = run(&["completions", shell]);
+        assert_eq!(code, 0, "{shell}: {err}");
+        assert!(
+            out.contains("phri-model") && out.contains("inspect"),
+            "{shell}"
+        );
+        // fish spells flags `-l samples`
+        assert!(out.contains("samples"), "{shell}");
+    }
+}
+
+#[test]
+fn the_panda_loads_with_its_mimic_finger() {
+    let urdf = repo("deploy/robots/panda/panda.urdf");
+    // 7 arm joints and one finger; the second finger follows the first
+    let q8 = "0.1,-0.3,0.2,-2.0,0.1,1.6,0.7,0.03";
+    let (code, out, err) = run(&[
+        "inspect",
+        &urdf,
+        "--q",
+        q8,
+        "--point",
+        "panda_rightfinger:0,0,0.05",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let joints: Vec<&str> = v["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j.as_str().unwrap())
+        .collect();
+    assert_eq!(joints.len(), 8);
+    assert_eq!(joints[7], "panda_finger_joint1");
+    assert_eq!(
+        v["mimic_joints"],
+        serde_json::json!([{
+            "joint": "panda_finger_joint2",
+            "leader": "panda_finger_joint1",
+            "multiplier": 1.0,
+            "offset": 0.0
+        }])
+    );
+    assert_eq!(v["M"].as_array().unwrap().len(), 8);
+    assert_eq!(v["jacobian"][0].as_array().unwrap().len(), 8);
+    // the fingers sit 2 × 0.03 m apart (the mimic opens by as much as its leader)
+    let fk = |link: &str, row: usize| v["fk"][link][row][3].as_f64().unwrap();
+    let gap = ((0..3)
+        .map(|r| (fk("panda_leftfinger", r) - fk("panda_rightfinger", r)).powi(2))
+        .sum::<f64>())
+    .sqrt();
+    assert!((gap - 0.06).abs() < 1e-12, "finger gap {gap}");
+    // a ninth value (the mimic's own) is refused
+    refused(
+        &["inspect", &urdf, "--q", &format!("{q8},0.03")],
+        "expected 8",
+    );
+    // the default robot has no mimic joints
+    let (_, out, _) = run(&[
+        "inspect",
+        &repo("deploy/robots/kuka_lwr4.urdf"),
+        "--q",
+        "0,0,0,0,0,0,0",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["mimic_joints"], serde_json::json!([]));
 }
 
 /// One line on stderr, exit 2, nothing on stdout, no panic or abort.

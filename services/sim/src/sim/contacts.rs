@@ -256,7 +256,8 @@ fn apply_force(
     };
     let mut b = body;
     while let Some(j) = b {
-        tau_ext[j] += data.s[j].dot(&w);
+        // a mimic joint acts on its leader's column (S_j carries the multiplier)
+        tau_ext[model.joints[j].idx_v] += data.s[j].dot(&w);
         b = model.joints[j].parent;
     }
     let last = model.nv() - 1;

@@ -229,7 +229,7 @@ impl Simulator {
         let rng = SmallRng::seed_from_u64(seed.unwrap_or(cfg.seed));
         let mut sim = Simulator {
             data: Data::new(&model),
-            effort: model.joints.iter().map(|j| j.effort).collect(),
+            effort: model.actuated().iter().map(|j| j.effort).collect(),
             n,
             h,
             viscous,
