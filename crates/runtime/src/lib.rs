@@ -2,14 +2,14 @@
 //! sleep, real-time scheduling, shutdown on signals, and the service context
 //! (arguments, configuration through `phri-config`, the node).
 
-pub mod args;
+pub mod cli;
 pub mod clock;
+pub mod log;
 pub mod rt;
 pub mod rundir;
 pub mod service;
 pub mod shutdown;
 
-pub use args::{Args, ArgsError};
 pub use clock::{now_ns, sleep_until_ns};
 pub use service::{
     attach_hint, prefix_or_default, ServiceContext, ServiceError, DEFAULT_PREFIX, PREFIX_ENV,

@@ -44,6 +44,16 @@ pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     Ok(())
 }
 
+/// Return the calling thread to the normal scheduler (SCHED_OTHER), e.g.
+/// once its real-time loop has ended: waiting at real-time priority for a
+/// normal thread on the same CPU (the log writer's flush at exit) would
+/// starve that thread and spin until the wait times out.
+pub fn make_normal() {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: plain syscall with valid arguments; failure leaves the policy as it was.
+    let _ = unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &param) };
+}
+
 /// The calling process's scheduling policy name.
 pub fn policy() -> &'static str {
     // SAFETY: plain syscall.

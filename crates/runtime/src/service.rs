@@ -7,13 +7,12 @@ use std::process::ExitCode;
 use phri_config::{Config, ConfigError, Loaded, Scenario};
 use phri_ipc::{IpcError, IpcNode};
 
-use crate::{Args, ArgsError, Shutdown};
+use crate::cli::ServiceFlags;
+use crate::Shutdown;
 
 /// Why a service could not start.
 #[derive(Debug, thiserror::Error)]
 pub enum ServiceError {
-    #[error(transparent)]
-    Args(#[from] ArgsError),
     #[error(transparent)]
     Config(#[from] ConfigError),
     #[error(transparent)]
@@ -35,7 +34,8 @@ pub struct ServiceContext {
     /// SCHED_FIFO priority (0: normal scheduler)
     pub rt_priority: i32,
     pub shutdown: Shutdown,
-    pub args: Args,
+    /// the command line's shared flags
+    pub flags: ServiceFlags,
 }
 
 /// Environment variable the supervisor sets for every service: when the cell
@@ -95,9 +95,6 @@ pub fn cell_start_ns() -> Option<u64> {
     (t <= crate::now_ns()).then_some(t)
 }
 
-/// Flags every service accepts: `--config FILE --prefix P --rt-priority N --set k=v --name N`.
-pub const COMMON_FLAGS: &[&str] = &["--config", "--prefix", "--rt-priority", "--set", "--name"];
-
 /// Switch every service accepts: build everything from the configuration,
 /// check it, and exit (0: it would run; 2 and one line: what it refuses),
 /// opening no channel. The supervisor runs it for every service before it
@@ -105,33 +102,50 @@ pub const COMMON_FLAGS: &[&str] = &["--config", "--prefix", "--rt-priority", "--
 pub const CHECK_FLAG: &str = "--check";
 
 impl ServiceContext {
-    /// Parse the process arguments (`extra` are service-specific valued flags)
-    /// and load the configuration.
-    pub fn from_args(default_name: &str, extra: &[&str]) -> Result<ServiceContext, ServiceError> {
-        let valued: Vec<&str> = COMMON_FLAGS.iter().chain(extra.iter()).copied().collect();
-        let args = Args::parse(std::env::args().skip(1), &valued, &[CHECK_FLAG])?;
-        let config_path = PathBuf::from(args.get("--config").unwrap_or("deploy/phri.toml"));
+    /// Parse the process arguments (the flags every service takes, and the
+    /// service's own `E`) and load the configuration. `bin` names the binary
+    /// (help, errors), `default_name` is the service's node name unless
+    /// `--name` gives one. `--help`, `--version`, `completions` and a refused
+    /// flag exit here (see [`crate::cli`]).
+    pub fn from_cli<E: clap::Args + clap::FromArgMatches>(
+        bin: &'static str,
+        default_name: &str,
+        about: &'static str,
+    ) -> Result<(ServiceContext, E), ServiceError> {
+        let (flags, extra) = crate::cli::parse_service::<E>(bin, about);
+        Ok((ServiceContext::from_flags(default_name, flags)?, extra))
+    }
+
+    /// The context of parsed [`ServiceFlags`]: loads and checks the configuration.
+    pub fn from_flags(
+        default_name: &str,
+        flags: ServiceFlags,
+    ) -> Result<ServiceContext, ServiceError> {
         // settings that another user could write are never read
-        crate::rundir::check_trusted_file(&config_path)?;
-        let loaded = Loaded::load(&config_path, None, &args.all("--set"))?;
-        let prefix = prefix_or_default(args.get("--prefix"));
-        let rt_priority = args.parse_value::<i32>("--rt-priority")?.unwrap_or(0);
+        crate::rundir::check_trusted_file(&flags.config)?;
+        let sets: Vec<&str> = flags.set.iter().map(String::as_str).collect();
+        let loaded = Loaded::load(&flags.config, None, &sets)?;
+        let prefix = flags.prefix();
         let shutdown = Shutdown::install().map_err(ServiceError::Signals)?;
-        let name = args.get("--name").unwrap_or(default_name).to_string();
+        let name = flags
+            .name
+            .clone()
+            .unwrap_or_else(|| default_name.to_string());
+        crate::log::set_service(&name);
         Ok(ServiceContext {
             name,
             loaded,
             prefix,
-            rt_priority,
+            rt_priority: flags.rt_priority,
             shutdown,
-            args,
+            flags,
         })
     }
 
     /// Started with [`CHECK_FLAG`]: the service returns (exit 0) once its
     /// steps are built from the configuration, before it opens any channel.
     pub fn checking(&self) -> bool {
-        self.args.has(CHECK_FLAG)
+        self.flags.check
     }
 
     /// Start the dead-man when supervised ([`SUPERVISED_ENV`]): a thread at
@@ -146,7 +160,6 @@ impl ServiceContext {
         let (node_name, prefix) = (format!("{}-deadman", self.name), self.prefix.clone());
         let limit_ns = (self.config().supervisor.deadman_s * 1e9) as u64;
         let shutdown = self.shutdown.clone();
-        let name = self.name.clone();
         let (ready, started) = std::sync::mpsc::channel::<Result<(), IpcError>>();
         std::thread::spawn(move || {
             // the node and its port live on this thread (iceoryx2 ports are not Send)
@@ -172,13 +185,10 @@ impl ServiceContext {
                     last = now;
                 }
                 if now.saturating_sub(last) > limit_ns {
-                    // one write: the services share the supervisor's stderr,
-                    // and `eprintln!` writes each formatted piece apart
-                    let line = format!(
-                        "{name}: no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)\n",
+                    tracing::warn!(
+                        "no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)",
                         now.saturating_sub(last) as f64 * 1e-9
                     );
-                    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
                     shutdown.request();
                 }
             }
@@ -213,19 +223,45 @@ impl ServiceContext {
         phri_ipc::node(&format!("{}-{suffix}", self.name), &self.prefix)
     }
 
+    /// The mailbox through which a real-time loop logs (at `warn`): the
+    /// events are formatted and written by a thread at normal priority,
+    /// started here (call it before [`ServiceContext::go_realtime`]), that
+    /// ends with the service.
+    pub fn deferred_log<T: std::fmt::Display + Send + 'static>(&self) -> crate::log::Deferred<T> {
+        let shutdown = self.shutdown.clone();
+        let (mailbox, _thread) = crate::log::deferred(
+            64,
+            std::time::Duration::from_millis(50),
+            move || !shutdown.requested(),
+            crate::log::warn,
+        );
+        mailbox
+    }
+
     /// Switch to SCHED_FIFO if configured and permitted; say what happened on stderr.
     pub fn go_realtime(&self) {
         if self.rt_priority > 0 {
             if let Err(e) = crate::rt::make_realtime(self.rt_priority) {
-                eprintln!("{}: {e}; running under {}", self.name, crate::rt::policy());
+                tracing::warn!("{e}; running under {}", crate::rt::policy());
             }
         }
     }
 }
 
 /// Run a service body; print its error as one line and exit non-zero.
-pub fn run<E: std::fmt::Display>(name: &str, body: impl FnOnce() -> Result<(), E>) -> ExitCode {
-    match body() {
+/// Logging ([`crate::log::init`]) runs for the body's time; its lines are
+/// flushed before the error line, which stays the last one.
+pub fn run<E: std::fmt::Display>(
+    name: &'static str,
+    body: impl FnOnce() -> Result<(), E>,
+) -> ExitCode {
+    let log = crate::log::init(name);
+    let result = body();
+    // the body's loop may have run at real-time priority: the log writer's
+    // flush below waits for a thread at normal priority on the same CPU
+    crate::rt::make_normal();
+    drop(log);
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let line = e.to_string().replace('\n', " ");

@@ -21,12 +21,28 @@ use phri_ipc::{
 const MAX_REQUESTS: usize = 8;
 use phri_runtime::{now_ns, ServiceContext};
 
+/// A refused input, for the log: the error and how many so far.
+struct Refused {
+    error: phri_control::InputError,
+    count: u64,
+}
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({} inputs refused)", self.error, self.count)
+    }
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-control", body)
 }
 
 fn body() -> Result<(), Box<dyn std::error::Error>> {
-    let ctx = ServiceContext::from_args("control", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-control",
+        "control",
+        "The reaction controller: answers every robot/state with the only robot/command (avoidance, detection and reaction, collaboration)",
+    )?;
     let cfg = ctx.config();
     let model = ctx.robot_model()?;
     let n = model.nv();
@@ -50,6 +66,9 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let mut hands = PERCEPTION_HAND.latest_reader(&node)?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
     ctx.start_deadman()?;
+    // refused inputs are logged by a thread at normal priority
+    let log = ctx.deferred_log::<Refused>();
+    let mut refused = 0u64;
     ctx.go_realtime();
 
     let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
@@ -73,7 +92,13 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         let mut input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
             Ok(input) => input,
             Err(e) => {
-                eprintln!("phri-control: {e}");
+                refused += 1;
+                if refused.is_power_of_two() {
+                    log.post(Refused {
+                        error: e,
+                        count: refused,
+                    });
+                }
                 continue;
             }
         };

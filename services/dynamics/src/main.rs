@@ -9,12 +9,32 @@ use phri_dynamics::DynamicsStep;
 use phri_ipc::{Queue, DYNAMICS_RESIDUAL, ROBOT_STATE};
 use phri_runtime::{now_ns, ServiceContext};
 
+/// A refused `robot/state` sample, for the log: the error and how many so far.
+struct BadSample {
+    error: phri_dynamics::DynamicsError,
+    count: u64,
+}
+
+impl std::fmt::Display for BadSample {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: {} ({} bad samples)",
+            ROBOT_STATE.name, self.error, self.count
+        )
+    }
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-dynamics", body)
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("dynamics", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-dynamics",
+        "dynamics",
+        "The momentum residual of robot/state (collision detection, eqs. 4-8) on dynamics/residual",
+    )?;
     let mut step = DynamicsStep::new(ctx.robot_model()?, &ctx.config().dynamics)?;
     if ctx.checking() {
         return Ok(());
@@ -23,6 +43,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
     let residuals = DYNAMICS_RESIDUAL.publisher(&node)?;
     ctx.start_deadman()?;
+    // bad samples are logged by a thread at normal priority
+    let log = ctx.deferred_log::<BadSample>();
     ctx.go_realtime();
 
     let mut bad_samples = 0u64;
@@ -37,10 +59,10 @@ fn body() -> Result<(), Box<dyn Error>> {
                 Err(e) => {
                     bad_samples += 1;
                     if bad_samples.is_power_of_two() {
-                        eprintln!(
-                            "phri-dynamics: {}: {e} ({bad_samples} bad samples)",
-                            ROBOT_STATE.name
-                        );
+                        log.post(BadSample {
+                            error: e,
+                            count: bad_samples,
+                        });
                     }
                 }
             }

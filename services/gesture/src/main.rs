@@ -14,7 +14,11 @@ fn main() -> ExitCode {
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("gesture", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-gesture",
+        "gesture",
+        "Gestures of the tracked person (wave, push) as collaboration requests on hri/request",
+    )?;
     let cfg = ctx.config().gesture.clone();
     let mut detector = WaveDetector::new(&cfg)?;
     if ctx.checking() {
@@ -44,8 +48,8 @@ fn body() -> Result<(), Box<dyn Error>> {
         for w in waves {
             seq += 1;
             requests.publish(&follow_request(&w, seq, now_ns()))?;
-            eprintln!(
-                "phri-gesture: person {} waves the {}: follow requested",
+            tracing::info!(
+                "person {} waves the {}: follow requested",
                 w.person,
                 w.part.name()
             );

@@ -28,12 +28,33 @@ use phri_sim::link::GRACE_POLL_NS;
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator};
 
+/// What the 1 kHz loop has to say, posted to the log's thread.
+enum LinkEvent {
+    /// a run of missed commands ended
+    Missed(phri_sim::MissRun),
+    /// so many commands missed in a row that the brakes engaged
+    Brakes { missed: u32 },
+}
+
+impl std::fmt::Display for LinkEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinkEvent::Missed(run) => write!(f, "{run}"),
+            LinkEvent::Brakes { missed } => write!(f, "{missed} commands missing: brakes engaged"),
+        }
+    }
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-sim", body)
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("sim", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-sim",
+        "sim",
+        "The simulated cell: the arm at 1 kHz, the scripted person, contacts (robot/state, sim/world, sim/truth)",
+    )?;
     let model = ctx.robot_model()?;
     let n = model.nv();
     let cfg = ctx.config().sim.clone();
@@ -47,7 +68,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     if let Some(start) = phri_runtime::service::cell_start_ns() {
         let resumed = snapshot::resume(&mut sim, start, now_ns(), snapshot_path.as_deref());
         for line in resumed.log_lines() {
-            eprintln!("phri-sim: {line}");
+            tracing::info!("{line}");
         }
     }
 
@@ -65,6 +86,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let saver_thread =
         snapshot_path.map(|path| spawn_saver(path, Arc::clone(&shared_arm), ctx.shutdown.clone()));
     ctx.start_deadman()?;
+    // the 1 kHz loop's events are logged by a thread at normal priority
+    let log = ctx.deferred_log::<LinkEvent>();
     ctx.go_realtime();
     // notes when command events arrive, so that latency is measured at
     // receipt, not at the next tick
@@ -127,10 +150,10 @@ fn body() -> Result<(), Box<dyn Error>> {
             };
             let out = link.cycle(newest.as_ref(), seq, &timing);
             if let Some(run) = out.miss_run {
-                eprintln!("phri-sim: {run}");
+                log.post(LinkEvent::Missed(run));
             }
             if out.brake_engaged {
-                eprintln!("phri-sim: {} commands missing: brakes engaged", out.missed);
+                log.post(LinkEvent::Brakes { missed: out.missed });
             }
             sim.step(out.torque(), out.brake);
             seq += 1;
@@ -153,7 +176,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         let _ = t.join();
     }
     if let Some(run) = link.finish() {
-        eprintln!("phri-sim: {run}");
+        tracing::warn!("{run}");
     }
     result
 }
@@ -184,7 +207,7 @@ fn spawn_saver(path: PathBuf, arm: Arc<SharedArm>, shutdown: Shutdown) -> JoinHa
             if let Some(s) = arm.load() {
                 if let Err(e) = snapshot::save(&path, &s) {
                     if !reported {
-                        eprintln!("phri-sim: cannot save the arm's state: {e}");
+                        tracing::warn!("cannot save the arm's state: {e}");
                         reported = true;
                     }
                 }

@@ -5,13 +5,10 @@ use std::path::PathBuf;
 
 use phri_config::{ConfigError, Invalid};
 use phri_ipc::IpcError;
-use phri_runtime::ArgsError;
 
 /// Everything that stops the supervisor (its binary prints it and exits 2).
 #[derive(Debug, thiserror::Error)]
 pub enum SupervisorError {
-    #[error(transparent)]
-    Args(#[from] ArgsError),
     /// the configuration, the scenario or the robot model (file and key named)
     #[error(transparent)]
     Config(#[from] ConfigError),

@@ -28,14 +28,45 @@ use phri_ipc::{
     PERCEPTION_REPULSION, ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
-use phri_runtime::{now_ns, sleep_until_ns, Args, Shutdown};
+use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
 use phri_supervisor::cpu::{self, CpuUse};
 use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
 use phri_supervisor::shm::{self, SHM_DIR};
 use phri_supervisor::state::{StateJson, STATE_FILE};
 use phri_supervisor::{Plan, Roster, SupervisorError, SupervisorState};
 
-const USAGE: &str = "usage: phri-supervisor [--config deploy/phri.toml] [--scenario NAME|FILE] [--duration SECONDS] [--report FILE] [--set section.key=value]... [--prefix P] [--run-dir DIR]";
+/// The supervisor's command line.
+#[derive(clap::Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Starts the phri cell's services, supervises them (restarts, the dead-man, CPU use) and writes the run's report",
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    /// Cell configuration (TOML)
+    #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
+    config: PathBuf,
+    /// Scenario to run: a name under deploy/scenarios/ or a file
+    #[arg(long, value_name = "NAME|FILE")]
+    scenario: Option<String>,
+    /// Stop the cell after this long [s] (default: the scenario's own length)
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    duration: Option<f64>,
+    /// Write the run's report (JSON) to this file
+    #[arg(long, value_name = "FILE")]
+    report: Option<String>,
+    /// Override one configuration value, e.g. `--set control.kv=12` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// iceoryx2 prefix of the cell [default: phri_]
+    #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV)]
+    prefix: Option<String>,
+    /// Run directory (state files, report) [default: one per prefix under $XDG_RUNTIME_DIR, else /tmp/phri-UID]
+    #[arg(long, value_name = "DIR")]
+    run_dir: Option<PathBuf>,
+    #[command(subcommand)]
+    completions: Option<phri_runtime::cli::CompletionsCmd>,
+}
 
 /// Period of the supervision loop [ns].
 const TICK_NS: u64 = 10_000_000;
@@ -176,7 +207,7 @@ impl Cell {
                 .write(dir)
         });
         if let Err(e) = written {
-            eprintln!("phri-supervisor: {e}");
+            tracing::warn!("{e}");
         }
     }
 
@@ -208,14 +239,14 @@ impl Cell {
             let mut killed = false;
             while child.try_exited().is_none() {
                 if now_ns() > deadline + 2_000_000_000 {
-                    eprintln!(
-                        "phri-supervisor: {name} (pid {}) does not end even after SIGKILL",
+                    tracing::warn!(
+                        "{name} (pid {}) does not end even after SIGKILL",
                         child.pid()
                     );
                     break;
                 }
                 if now_ns() > deadline && !killed {
-                    eprintln!("phri-supervisor: {name} ignored SIGTERM, killing it");
+                    tracing::warn!("{name} ignored SIGTERM, killing it");
                     child.signal(libc::SIGKILL);
                     killed = true;
                 }
@@ -232,8 +263,8 @@ fn close_ipc(node: IpcNode, ports: Option<Ports>, prefix: &str) {
     drop(node);
     match phri_ipc::remove_leftovers(prefix) {
         Ok(0) => {}
-        Ok(n) => eprintln!("phri-supervisor: removed {n} shared-memory files the run left"),
-        Err(alive) => eprintln!("phri-supervisor: {alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
+        Ok(n) => tracing::info!("removed {n} shared-memory files the run left"),
+        Err(alive) => tracing::warn!("{alive} node(s) of prefix {prefix} still attached (a monitor or recorder?): the last one out cleans up"),
     }
 }
 
@@ -361,31 +392,19 @@ fn check_services(plan: &Plan, launch: &Launch) -> Result<(), SupervisorError> {
 }
 
 fn body() -> Result<(), SupervisorError> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &[
-            "--config",
-            "--scenario",
-            "--duration",
-            "--report",
-            "--set",
-            "--prefix",
-            "--run-dir",
-        ],
-        &["--help"],
-    )?;
-    if args.has("--help") {
-        println!("{USAGE}");
+    let args: Cli = phri_runtime::cli::parse("phri-supervisor");
+    if let Some(phri_runtime::cli::CompletionsCmd::Completions { shell }) = args.completions {
+        phri_runtime::cli::completions::<Cli>("phri-supervisor", shell);
         return Ok(());
     }
     let me = std::process::id();
     // everything is checked before anything starts: the configuration, the
     // scenario, the robot model, the run length, the binaries
     let plan = Plan::load(
-        Path::new(args.get("--config").unwrap_or("deploy/phri.toml")),
-        args.get("--scenario"),
-        &args.all("--set"),
-        args.parse_value::<f64>("--duration")?,
+        &args.config,
+        args.scenario.as_deref(),
+        &args.set.iter().map(String::as_str).collect::<Vec<_>>(),
+        args.duration,
     )?;
     let bin_dir = std::env::current_exe()
         .map_err(SupervisorError::CurrentExe)?
@@ -395,11 +414,11 @@ fn body() -> Result<(), SupervisorError> {
     plan.check_binaries(&bin_dir)?;
     // one namespace by default (PHRI_PREFIX, else phri_): tools in another
     // terminal find the cell without flags; a second cell there is refused
-    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
+    let prefix = phri_runtime::prefix_or_default(args.prefix.as_deref().filter(|p| !p.is_empty()));
 
     // the run directory is this user's alone
-    let run_dir = match args.get("--run-dir") {
-        Some(d) => PathBuf::from(d),
+    let run_dir = match &args.run_dir {
+        Some(d) => d.clone(),
         None => default_run_dir(&prefix)?,
     };
     let run_dir_existed = run_dir.exists();
@@ -417,7 +436,7 @@ fn body() -> Result<(), SupervisorError> {
     }
     // iceoryx2's node counter of this prefix: not another user's, not altered
     shm::check_global_mgmt(Path::new(SHM_DIR), &prefix)?;
-    let mut report_file = ReportFile::open(args.get("--report"))?;
+    let mut report_file = ReportFile::open(args.report.as_deref())?;
     let shutdown = Shutdown::install().map_err(SupervisorError::Signals)?;
     let mut launch = Launch {
         bin_dir,
@@ -467,12 +486,9 @@ fn body() -> Result<(), SupervisorError> {
         close_ipc(node, Some(ports), &prefix);
         return Err(e.into());
     }
-    eprintln!(
-        "phri-supervisor: cell {prefix}, run directory {}",
-        run_dir.display()
-    );
-    eprintln!(
-        "phri-supervisor: attach from another terminal: {}",
+    tracing::info!("cell {prefix}, run directory {}", run_dir.display());
+    tracing::info!(
+        "attach from another terminal: {}",
         phri_runtime::attach_hint(&prefix)
     );
 
@@ -502,8 +518,8 @@ fn body() -> Result<(), SupervisorError> {
         let now = now_ns();
         match adopt {
             Some(prev) => {
-                eprintln!(
-                    "phri-supervisor: adopted {name} (pid {}) from the previous supervisor",
+                tracing::info!(
+                    "adopted {name} (pid {}) from the previous supervisor",
                     prev.pid
                 );
                 cell.roster.adopted(i, now, prev.pid, prev.restarts);
@@ -515,7 +531,7 @@ fn body() -> Result<(), SupervisorError> {
             }
             None => match cell.spawn(i) {
                 Ok(child) => {
-                    eprintln!("phri-supervisor: started {name} (pid {})", child.id());
+                    tracing::info!("started {name} (pid {})", child.id());
                     cell.roster.started(i, now, child.id());
                     cell.procs.push(Some(Proc::Child(child)));
                 }
@@ -627,8 +643,8 @@ fn body() -> Result<(), SupervisorError> {
         if stalled_ns > STALL_NS {
             // this process did not run (a stopped supervisor, a starved CPU):
             // the services' silence meanwhile is not theirs to answer for
-            eprintln!(
-                "phri-supervisor: stalled for {} ms: heartbeats judged afresh",
+            tracing::warn!(
+                "stalled for {} ms: heartbeats judged afresh",
                 stalled_ns / 1_000_000
             );
             roster.judge_afresh(now);
@@ -650,8 +666,8 @@ fn body() -> Result<(), SupervisorError> {
                 .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
             if let Some(pid) = intruder {
                 let who = cmdline_of(pid);
-                eprintln!(
-                    "phri-supervisor: pid {pid} ({who}) publishes on {}, and is not the controller this supervisor started: stopping the cell (the robot first: it brakes)",
+                tracing::warn!(
+                    "pid {pid} ({who}) publishes on {}, and is not the controller this supervisor started: stopping the cell (the robot first: it brakes)",
                     ROBOT_COMMAND.name
                 );
                 let reason = format!(
@@ -686,17 +702,17 @@ fn body() -> Result<(), SupervisorError> {
                     "{name} ended {n} times within {} s (last: {detail}): the cell is not whole",
                     sup.crash_loop_window_s
                 );
-                eprintln!("phri-supervisor: {reason}; stopping the cell");
+                tracing::warn!("{reason}; stopping the cell");
                 eval.degrade(reason.clone());
                 stop_reason = Some(reason);
                 break;
             }
             match restart_at {
-                Some(at) => eprintln!(
-                    "phri-supervisor: {name} {detail}; restarting in {} ms",
+                Some(at) => tracing::warn!(
+                    "{name} {detail}; restarting in {} ms",
                     (at - now) / 1_000_000
                 ),
-                None => eprintln!("phri-supervisor: {name} {detail}"),
+                None => tracing::warn!("{name} {detail}"),
             }
         }
         if start_error.is_some() || stop_reason.is_some() {
@@ -705,8 +721,8 @@ fn body() -> Result<(), SupervisorError> {
         if starting_until.is_some_and(|until| now >= until) {
             starting_until = None;
             if !cell.roster.whole() {
-                eprintln!(
-                    "phri-supervisor: {} s after the start, not heard yet: {}",
+                tracing::warn!(
+                    "{} s after the start, not heard yet: {}",
                     sup.startup_s,
                     cell.roster.unheard().join(", ")
                 );
@@ -723,8 +739,8 @@ fn body() -> Result<(), SupervisorError> {
             let victim = match cpu::culprit(&cell.roster, &cpu_use, f.index, window) {
                 Some((c, share)) => {
                     let culprit = &cell.roster.get(c).name;
-                    eprintln!(
-                        "phri-supervisor: {} silent on {heartbeat} for {} ms while {culprit} used {:.0} % of a CPU they share: killing {culprit} instead",
+                    tracing::warn!(
+                        "{} silent on {heartbeat} for {} ms while {culprit} used {:.0} % of a CPU they share: killing {culprit} instead",
                         sv.name,
                         f.silent_ns / 1_000_000,
                         share.min(1.0) * 100.0
@@ -751,16 +767,16 @@ fn body() -> Result<(), SupervisorError> {
                     // no CPU samples over its silence (this process was held
                     // up too): no verdict without evidence, judged again
                     None => {
-                        eprintln!(
-                            "phri-supervisor: {} silent on {heartbeat} for {} ms; no CPU samples over that time: judged again",
+                        tracing::warn!(
+                            "{} silent on {heartbeat} for {} ms; no CPU samples over that time: judged again",
                             sv.name,
                             f.silent_ns / 1_000_000
                         );
                         continue;
                     }
                     Some((b, share)) => {
-                        eprintln!(
-                            "phri-supervisor: {} silent on {heartbeat} for {} ms: frozen, killing it (busiest on its CPUs: {} at {:.0} %)",
+                        tracing::warn!(
+                            "{} silent on {heartbeat} for {} ms: frozen, killing it (busiest on its CPUs: {} at {:.0} %)",
                             sv.name,
                             f.silent_ns / 1_000_000,
                             cell.roster.get(b).name,
@@ -785,7 +801,7 @@ fn body() -> Result<(), SupervisorError> {
             match cell.spawn(i) {
                 Ok(child) => {
                     let name = &cell.roster.get(i).name;
-                    eprintln!("phri-supervisor: restarted {name} (pid {})", child.id());
+                    tracing::info!("restarted {name} (pid {})", child.id());
                     eval.event(
                         now,
                         "restart",
@@ -798,7 +814,7 @@ fn body() -> Result<(), SupervisorError> {
                     changed = true;
                 }
                 Err(e) => {
-                    eprintln!("phri-supervisor: {e}");
+                    tracing::warn!("{e}");
                     cell.roster.restart_failed(i, now);
                     if let Some(n) = cell.roster.crash_looping(i, now) {
                         let reason = format!(
@@ -817,7 +833,7 @@ fn body() -> Result<(), SupervisorError> {
             // a restart opened a node: the node counter must still be ours alone
             if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &prefix) {
                 let reason = e.to_string();
-                eprintln!("phri-supervisor: {reason}; stopping the cell");
+                tracing::warn!("{reason}; stopping the cell");
                 eval.degrade(reason.clone());
                 stop_reason = Some(reason);
             }
@@ -830,7 +846,7 @@ fn body() -> Result<(), SupervisorError> {
     }
 
     if let Some(reason) = start_error {
-        eprintln!("phri-supervisor: {reason}: stopping everything started");
+        tracing::warn!("{reason}: stopping everything started");
         cell.stop();
         close_ipc(node, Some(ports), &prefix);
         cell.remove_state();
@@ -876,8 +892,8 @@ fn body() -> Result<(), SupervisorError> {
             report.evaluation.truth_samples_lost
         ));
     }
-    eprintln!(
-        "phri-supervisor: {} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections; {verdict}",
+    tracing::info!(
+        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections; {verdict}",
         report.scenario, report.duration_s, report.torque_loop.cycles, report.torque_loop.missed_deadlines, report.torque_loop.latency_us.p99, report.contacts.len(), report.false_detections
     );
     match stop_reason {

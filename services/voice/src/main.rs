@@ -15,34 +15,34 @@ use phri_ipc::{
 use phri_runtime::{now_ns, ServiceContext};
 use phri_voice::{wav, Hands, Listener};
 
-const HELP: &str = "\
-phri-voice: voice commands for the phri cell (pocketsphinx, offline)
+const ABOUT: &str = "Voice commands for the phri cell (pocketsphinx, offline): audio/mic → hri/request and voice/utterance";
 
-USAGE:
-    phri-voice [--config FILE] [--prefix P] [--set section.key=value]...
-        the service: audio/mic → hri/request and voice/utterance
-    phri-voice --wav FILE... [--config FILE] [--set section.key=value]...
-        decode recordings (16 kHz mono 16-bit WAV) and print one JSON line per
-        utterance: file, text (empty when refused), intent, score, start_s,
-        end_s, verdict, decode_ms; then a summary on stderr (decoding cost
-        against real time). The hand gate is off: no scene to look at.
+const LONG_ABOUT: &str = "\
+Voice commands for the phri cell (pocketsphinx, offline).
+
+As a service: audio/mic → hri/request (source voice) and voice/utterance.
+With --wav FILE...: decode recordings (16 kHz mono 16-bit WAV) and print one
+JSON line per utterance: file, text (empty when refused), intent, score,
+start_s, end_s, verdict, decode_ms; then a summary on stderr (decoding cost
+against real time). The hand gate is off: no scene to look at.
 
 The grammar: follow [the] (right | left) hand | begin collaboration |
 end collaboration | stop. Settings: [voice] in deploy/phri.toml.
 Needs Debian's libpocketsphinx-dev and pocketsphinx-en-us.";
 
+/// phri-voice's own flag.
+#[derive(clap::Args, Debug)]
+struct WavMode {
+    /// Decode these recordings and print one JSON line per utterance instead of running the service
+    #[arg(long, value_name = "FILE", num_args = 1..)]
+    wav: Vec<PathBuf>,
+}
+
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.iter().any(|a| a == "--help" || a == "-h") {
-        println!("{HELP}");
-        return ExitCode::SUCCESS;
-    }
-    if args.iter().any(|a| a == "--version" || a == "-V") {
-        println!("phri-voice {}", env!("CARGO_PKG_VERSION"));
-        return ExitCode::SUCCESS;
-    }
-    if args.iter().any(|a| a == "--wav") {
-        return match wav_mode(&args) {
+    let (flags, WavMode { wav }) =
+        phri_runtime::cli::parse_service_with::<WavMode>("phri-voice", ABOUT, Some(LONG_ABOUT));
+    if !wav.is_empty() {
+        return match wav_mode(&flags, &wav) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("phri-voice: {e}");
@@ -50,39 +50,26 @@ fn main() -> ExitCode {
             }
         };
     }
-    phri_runtime::service::run("phri-voice", body)
+    phri_runtime::service::run("phri-voice", || body(flags))
 }
 
 /// `--wav FILE... [--config FILE] [--set k=v]...`
-fn wav_mode(args: &[String]) -> Result<(), Box<dyn Error>> {
-    let mut files = Vec::new();
-    let mut config = PathBuf::from("deploy/phri.toml");
-    let mut sets = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--wav" => {}
-            "--config" => config = it.next().ok_or("--config needs a value")?.into(),
-            "--set" => sets.push(it.next().ok_or("--set needs a value")?.as_str()),
-            f if f.starts_with("--") => {
-                return Err(format!("unknown argument '{f}' (see --help)").into())
-            }
-            f => files.push(PathBuf::from(f)),
-        }
-    }
-    if files.is_empty() {
-        return Err("--wav needs at least one file".into());
-    }
+fn wav_mode(
+    flags: &phri_runtime::cli::ServiceFlags,
+    files: &[PathBuf],
+) -> Result<(), Box<dyn Error>> {
+    let config = &flags.config;
+    let sets: Vec<&str> = flags.set.iter().map(String::as_str).collect();
     let loaded = if config.exists() {
-        phri_config::Loaded::load(&config, None, &sets)?
+        phri_config::Loaded::load(config, None, &sets)?
     } else {
-        phri_config::Loaded::load_text("", &config, None, &sets)?
+        phri_config::Loaded::load_text("", config, None, &sets)?
     };
     let cfg = &loaded.config.voice;
     let mut listener = Listener::new(cfg)?;
     let mut latencies = Vec::new();
     let mut utterances = 0usize;
-    for file in &files {
+    for file in files {
         let audio = wav::read(file)?;
         let mut chunk = AudioChunk::zeroed();
         chunk.rate_hz = AUDIO_RATE_HZ;
@@ -145,8 +132,8 @@ fn line(file: &std::path::Path, u: &Utterance) -> String {
     .to_string()
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("voice", &[])?;
+fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
+    let ctx = ServiceContext::from_flags("voice", flags)?;
     let cfg = ctx.config().voice.clone();
     let mut listener = Listener::new(&cfg)?;
     // numbers that grow across restarts: microseconds of CLOCK_MONOTONIC
@@ -180,8 +167,8 @@ fn body() -> Result<(), Box<dyn Error>> {
             if chunk.rate_hz != AUDIO_RATE_HZ || chunk.samples as usize > AUDIO_CHUNK_SAMPLES {
                 // another rate, or more samples than a chunk holds: refused whole
                 if refused == 0 {
-                    eprintln!(
-                        "phri-voice: {}: refusing chunk {} ({} Hz, {} samples): phri needs {AUDIO_RATE_HZ} Hz, at most {AUDIO_CHUNK_SAMPLES} samples",
+                    tracing::warn!(
+                        "{}: refusing chunk {} ({} Hz, {} samples): phri needs {AUDIO_RATE_HZ} Hz, at most {AUDIO_CHUNK_SAMPLES} samples",
                         AUDIO_MIC.name, chunk.seq, chunk.rate_hz, chunk.samples
                     );
                 }
@@ -203,12 +190,12 @@ fn body() -> Result<(), Box<dyn Error>> {
                 latencies.push(r.stamp_ns.saturating_sub(r.utterance_end_ns) as f64 * 1e-6);
             }
             utterances.publish(&h.utterance)?;
-            eprintln!("phri-voice: {}", describe(&h.utterance));
+            tracing::info!("{}", describe(&h.utterance));
         }
     }
     latencies.sort_by(f64::total_cmp);
-    eprintln!(
-        "phri-voice: decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost, {refused} refused",
+    tracing::info!(
+        "decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost, {refused} refused",
         listener.decode_s / listener.audio_s.max(1e-9),
         listener.audio_s,
         listener.decode_s,

@@ -20,7 +20,11 @@ fn main() -> ExitCode {
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("camera", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-camera",
+        "camera",
+        "The simulated depth camera: renders the cell at the camera rate on camera/depth",
+    )?;
     let cfg = &ctx.config().camera;
     let mut camera = CameraSim::new(ctx.robot_model()?, cfg)?;
     let pixels = camera.pixels();
@@ -57,7 +61,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 Ok(accepted) => accepted.to_string(),
                 Err(refused) => refused.to_string(),
             };
-            eprintln!("phri-camera: {}: fault {}: {said}", FAULT_DEPTH.name, f.seq);
+            tracing::warn!("{}: fault {}: {said}", FAULT_DEPTH.name, f.seq);
         })?;
         worlds.update()?;
         let Some(world) = worlds.get() else { continue };

@@ -94,10 +94,7 @@ impl Out {
             Err(e) => {
                 self.refused += 1;
                 if self.refused.is_power_of_two() {
-                    eprintln!(
-                        "phri-perception: refused {e} ({} refused so far)",
-                        self.refused
-                    );
+                    tracing::warn!("refused {e} ({} refused so far)", self.refused);
                 }
             }
         }
@@ -106,7 +103,11 @@ impl Out {
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("perception", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-perception",
+        "perception",
+        "Depth ingestion: filters camera/depth, removes the robot, publishes perception/depth, the skeleton and the hand",
+    )?;
     let cfg = &ctx.config().perception;
     let camera_cfg = &ctx.config().camera;
     let model = ctx.robot_model()?;
@@ -183,7 +184,9 @@ fn body() -> Result<(), Box<dyn Error>> {
                     Some(Err(e)) => {
                         out.refused += 1;
                         if let Some(n) = unreadable.hit(now_ns()) {
-                            eprintln!("phri-perception: refused {e} ({n} unreadable files since the last line)");
+                            tracing::warn!(
+                                "refused {e} ({n} unreadable files since the last line)"
+                            );
                         }
                     }
                 }

@@ -11,13 +11,26 @@ use phri_ipc::{Queue, PERCEPTION_DEPTH, PERCEPTION_REPULSION};
 use phri_perception::Worker;
 use phri_runtime::{now_ns, ServiceContext};
 
+/// The worker's own flag.
+#[derive(clap::Args, Debug)]
+struct WorkerFlag {
+    /// Index of this worker: it owns the control points `[repulsion]` assigns to it
+    #[arg(long, value_name = "I", required = true)]
+    worker: Option<u32>,
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-repulsion", body)
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("repulsion", &["--worker"])?;
-    let worker: u32 = ctx.args.require("--worker")?;
+    let (ctx, WorkerFlag { worker }) = ServiceContext::from_cli(
+        "phri-repulsion",
+        "repulsion",
+        "A repulsion worker: the depth-space distances and repulsive vectors (eqs. 15-18) of the control points it owns, on perception/repulsion",
+    )?;
+    // required by clap unless `completions` ran (and exited)
+    let worker = worker.ok_or("--worker is required")?;
     let mut w = Worker::new(ctx.robot_model()?, &ctx.config().repulsion, worker)?;
     if ctx.checking() {
         return Ok(());
@@ -40,7 +53,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             Err(e) => {
                 errors += 1;
                 if errors.is_power_of_two() {
-                    eprintln!("phri-repulsion {worker}: {e} ({errors} frames failed)");
+                    tracing::warn!("worker {worker}: {e} ({errors} frames failed)");
                 }
                 continue;
             }

@@ -15,18 +15,37 @@ use std::time::Duration;
 
 use phri_runtime::{now_ns, ServiceContext};
 
+/// How the stand-in misbehaves.
+#[derive(clap::Args, Debug)]
+struct Misbehave {
+    /// Busy-loop from this cell time on [s]
+    #[arg(long, value_name = "S")]
+    spin_from: Option<f64>,
+    /// Stop busy-looping at this cell time [s]
+    #[arg(long, value_name = "S")]
+    spin_until: Option<f64>,
+    /// Exit with status 1 after running this long [s]
+    #[arg(long, value_name = "S")]
+    exit_after: Option<f64>,
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-test-service", body)
 }
 
 fn body() -> Result<(), Box<dyn std::error::Error>> {
-    let ctx = ServiceContext::from_args(
+    let (
+        ctx,
+        Misbehave {
+            spin_from,
+            spin_until,
+            exit_after,
+        },
+    ) = ServiceContext::from_cli(
+        "phri-test-service",
         "test-service",
-        &["--spin-from", "--spin-until", "--exit-after"],
+        "A stand-in service for the supervisor's tests, misbehaving on request",
     )?;
-    let spin_from: Option<f64> = ctx.args.parse_value("--spin-from")?;
-    let spin_until: Option<f64> = ctx.args.parse_value("--spin-until")?;
-    let exit_after: Option<f64> = ctx.args.parse_value("--exit-after")?;
     if ctx.checking() {
         return Ok(());
     }

@@ -20,17 +20,15 @@ use phri_voice::wav;
 const MAX_BURST: u64 = 100;
 
 fn main() -> ExitCode {
-    if std::env::args().any(|a| a == "--help" || a == "-h") {
-        println!(
-            "phri-mic: the microphone stand-in on audio/mic\n\nUSAGE:\n    phri-mic [--config FILE] [--prefix P] [--set section.key=value]... [--check]\n\n[audio] source = \"sim\" plays the scenario's [[voice]] lines (files under deploy/audio/)\nover background noise, on the simulator's clock; \"wav_dir\" replays [audio] wav_dir."
-        );
-        return ExitCode::SUCCESS;
-    }
     phri_runtime::service::run("phri-mic", body)
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let ctx = ServiceContext::from_args("mic", &[])?;
+    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+        "phri-mic",
+        "mic",
+        "The microphone stand-in on audio/mic. [audio] source = \"sim\" plays the scenario's [[voice]] lines (files under deploy/audio/) over background noise, on the simulator's clock; \"wav_dir\" replays [audio] wav_dir, paced by the wall clock.",
+    )?;
     let cfg = ctx.config().audio.clone();
     let playback = match cfg.source {
         AudioSource::Sim => {
