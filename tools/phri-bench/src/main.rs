@@ -5,6 +5,8 @@
 //! distribution of each hop of one cycle (JSON, microseconds):
 //! state published → residual published → controller woke → command
 //! published → command received by the robot.
+//!
+//! `phri-bench completions bash|zsh|fish`: a shell completion script.
 
 mod transport;
 
@@ -13,12 +15,79 @@ use std::error::Error;
 use std::path::PathBuf;
 use std::process::{Command, ExitCode, Stdio};
 
+use clap::{Parser, Subcommand};
+
 use phri_ipc::*;
-use phri_runtime::{now_ns, sleep_until_ns, Args};
+use phri_runtime::{now_ns, sleep_until_ns};
 use serde_json::json;
 
+const BIN: &str = "phri-bench";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Reproducible performance figures: the torque loop's hop latencies, the transport's hand-off time (JSON on stdout)",
+    long_about = "Reproducible performance figures, as JSON on stdout. Each benchmark runs under its own private \
+iceoryx2 prefix (bench<pid>_, benchtx<pid>_): it never attaches to, nor disturbs, a running cell's channels.",
+    args_override_self = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Start a cell of its own, listen to the torque loop and print each hop's latency distribution [µs]
+    Loop {
+        /// Length of the measured run [s] (the first 1.5 s are start-up, not measured)
+        #[arg(long, value_name = "SECONDS", default_value_t = 30.0, allow_negative_numbers = true, value_parser = positive)]
+        duration: f64,
+        /// Scenario the cell runs
+        #[arg(long, value_name = "NAME", default_value = "free-motion")]
+        scenario: String,
+        /// Cell configuration (TOML) [default: deploy/phri.toml of the build's checkout]
+        #[arg(long, value_name = "FILE")]
+        config: Option<PathBuf>,
+    },
+    /// Hand-off time of one payload between two processes: iceoryx2 zero-copy against a Unix socket [µs]
+    Transport {
+        /// Round trips per payload size (at least 10)
+        #[arg(long, value_name = "N", default_value_t = 2000)]
+        iterations: usize,
+    },
+    /// The answering side of `transport` (started by it)
+    #[command(name = "transport-peer", hide = true)]
+    TransportPeer {
+        /// iceoryx2 prefix of the benchmark's services
+        prefix: String,
+        /// Unix socket to answer on
+        socket: String,
+    },
+    /// Print a shell completion script to stdout (bash, zsh, fish, elvish or powershell)
+    Completions {
+        /// Shell to write the script for
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+}
+
+/// A positive, finite number.
+fn positive(v: &str) -> Result<f64, String> {
+    match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err("must be a positive number".into()),
+    }
+}
+
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-bench", || body().map_err(|e| e.to_string()))
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Cmd::Completions { shell } = cli.command {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli.command).map_err(|e| e.to_string()))
 }
 
 fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
@@ -30,41 +99,27 @@ fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
     json!({"n": v.len(), "p50": at(0.5), "p99": at(0.99), "p999": at(0.999), "max": v[v.len() - 1]})
 }
 
-const USAGE: &str = "usage: phri-bench loop [--duration SECONDS] [--scenario NAME] [--config FILE]\n       phri-bench transport [--iterations N]";
-
-fn body() -> Result<(), Box<dyn Error>> {
-    let mut argv = std::env::args().skip(1);
-    match argv.next().as_deref() {
-        Some("loop") => {}
-        Some("transport") => {
-            let args = Args::parse(argv, &["--iterations"], &[])?;
-            let n = args
-                .parse_value::<usize>("--iterations")?
-                .unwrap_or(2000)
-                .max(10);
-            let out = transport::run(n)?;
+fn body(command: Cmd) -> Result<(), Box<dyn Error>> {
+    let (duration, scenario, config) = match command {
+        Cmd::Loop {
+            duration,
+            scenario,
+            config,
+        } => (duration, scenario, config),
+        Cmd::Transport { iterations } => {
+            let out = transport::run(iterations.max(10))?;
             println!("{}", serde_json::to_string_pretty(&out)?);
             return Ok(());
         }
-        Some("transport-peer") => {
-            let prefix = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
-            let socket = argv.next().ok_or("transport-peer PREFIX SOCKET")?;
-            return Ok(transport::peer(&prefix, &socket)?);
-        }
-        _ => return Err(USAGE.into()),
-    }
-    let args = Args::parse(argv, &["--duration", "--scenario", "--config"], &[])?;
-    let duration = args.parse_value::<f64>("--duration")?.unwrap_or(30.0);
-    let scenario = args.get("--scenario").unwrap_or("free-motion").to_string();
+        Cmd::TransportPeer { prefix, socket } => return Ok(transport::peer(&prefix, &socket)?),
+        Cmd::Completions { .. } => return Ok(()),
+    };
     let exe_dir = std::env::current_exe()?
         .parent()
         .map(PathBuf::from)
         .unwrap_or_default();
     let repo = exe_dir.join("../..");
-    let config = args
-        .get("--config")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo.join("deploy/phri.toml"));
+    let config = config.unwrap_or_else(|| repo.join("deploy/phri.toml"));
     let prefix = format!("bench{}_", std::process::id());
     let report = std::env::temp_dir().join(format!("phri-bench-{prefix}.json"));
     let mut sup = Command::new(exe_dir.join("phri-supervisor"))
@@ -158,4 +213,16 @@ fn body() -> Result<(), Box<dyn Error>> {
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own consistency checks (names, conflicts, positionals), which
+    /// release builds skip at run time.
+    #[test]
+    fn the_command_is_consistent() {
+        super::Cli::command().debug_assert();
+    }
 }

@@ -11,6 +11,7 @@
 //!
 //! Exit status: 0 done, 1 usage error, 2 the cell cannot be acted on
 //! (state.json missing, garbage or untrusted, service unknown, down or dead).
+//! `phri-fault completions bash|zsh|fish` prints a shell completion script.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -18,33 +19,132 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use clap::{CommandFactory, FromArgMatches, Parser};
+
 use phri_ipc::{DepthFault, DepthFaultKind, IpcNode, Publisher, Zeroed, FAULT_DEPTH};
+use phri_runtime::cli::CompletionsCmd;
 use phri_supervisor::process::process_matches;
 use phri_supervisor::StateJson;
 
-const USAGE: &str = "usage: phri-fault [--run-dir DIR | --prefix P] SERVICE ACTION [--times N] [--every SECONDS] [--random MIN,MAX] [--seed S] [--until SECONDS] [--json]
-  SERVICE  a service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
-  ACTION   kill            SIGKILL
-           term            SIGTERM
-           freeze SECONDS  SIGSTOP, SIGCONT after SECONDS
-           slow PERCENT --for SECONDS
-                           SIGSTOP/SIGCONT in 10 ms slices: the process runs PERCENT % of the time
-           corrupt KIND [--frames N]
-                           (SERVICE camera, the simulated one) corrupt the next N frames (default 30):
-                           noise (2 % flying pixels), zeros (blind frame), size (header
-                           disagrees with the payload), stale (capture time 1 s back)
-           delay MS --for SECONDS
-                           (SERVICE camera) publish every frame MS late for SECONDS
-  --run-dir DIR     the cell's run directory (default: the supervisor's default for --prefix)
-  --prefix P        the cell's iceoryx2 prefix (default: $PHRI_PREFIX, else phri_)
-  --times N         injections (default 1; 0 = until --until, state.json disappears or Ctrl-C)
-  --every SECONDS   wait this long before each injection
-  --random MIN,MAX  wait a uniformly random time in [MIN, MAX] s before each injection
-                    (without --every/--random: the first injection is immediate, the next 1 s apart)
-  --seed S          seed of the random choices (default: from the clock)
-  --until SECONDS   inject nothing later than this many seconds after the start
-  --json            one JSON object per injection instead of a text line
-exit status: 0 done, 1 usage, 2 state.json missing/garbage/untrusted, service unknown/down, pid dead or not the service's";
+const BIN: &str = "phri-fault";
+
+/// The actions and exit statuses, after the flags in `--help`.
+const AFTER_HELP: &str = "Actions:
+  kill            SIGKILL
+  term            SIGTERM
+  freeze SECONDS  SIGSTOP, SIGCONT after SECONDS
+  slow PERCENT --for SECONDS
+                  SIGSTOP/SIGCONT in 10 ms slices: the process runs PERCENT % of the time
+  corrupt KIND [--frames N]
+                  (SERVICE camera, the simulated one) corrupt the next N frames (default 30):
+                  noise (2 % flying pixels), zeros (blind frame), size (header
+                  disagrees with the payload), stale (capture time 1 s back)
+  delay MS --for SECONDS
+                  (SERVICE camera) publish every frame MS late for SECONDS
+
+Without --every/--random the first injection is immediate, the next 1 s apart.
+
+Exit status: 0 done, 1 usage, 2 state.json missing/garbage/untrusted, service unknown/down, pid dead or not the service's";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Injects process faults (kill, term, freeze, slow) into a running cell's services, and corrupts or delays the simulated camera's depth frames",
+    override_usage = "phri-fault [--run-dir DIR | --prefix P] SERVICE ACTION [VALUE] [OPTIONS]\n       phri-fault completions <SHELL>",
+    after_help = AFTER_HELP,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    args_override_self = true
+)]
+struct Cli {
+    /// A service of state.json, `random` (any of them) or `random:a,b,...` (one of a set)
+    #[arg(value_name = "SERVICE", required = true)]
+    service: Option<String>,
+    /// What to do to it
+    #[arg(value_name = "ACTION", required = true, value_parser = ["kill", "term", "freeze", "slow", "corrupt", "delay"])]
+    action: Option<String>,
+    /// The action's value: freeze SECONDS, slow PERCENT, corrupt KIND (noise, zeros, size, stale), delay MS
+    #[arg(value_name = "VALUE", allow_negative_numbers = true)]
+    value: Option<String>,
+    /// The cell's run directory [default: the supervisor's default for --prefix]
+    #[arg(long, value_name = "DIR")]
+    run_dir: Option<PathBuf>,
+    /// The cell's iceoryx2 prefix [default: phri_]
+    #[arg(long, value_name = "P", env = phri_runtime::PREFIX_ENV)]
+    prefix: Option<String>,
+    /// Injections (0: until --until, state.json disappears or Ctrl-C)
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    times: u64,
+    /// Wait this long before each injection [s]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative, conflicts_with = "random")]
+    every: Option<f64>,
+    /// Wait a uniformly random time in [MIN, MAX] before each injection [s]
+    #[arg(long, value_name = "MIN,MAX", allow_hyphen_values = true, value_parser = min_max)]
+    random: Option<(f64, f64)>,
+    /// Seed of the random choices [default: from the clock]
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// Inject nothing later than this long after the start [s]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
+    until: Option<f64>,
+    /// How long slow and delay last [s]
+    #[arg(long = "for", value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
+    for_s: Option<f64>,
+    /// Frames corrupt acts on [default: 30]
+    #[arg(long, value_name = "N", value_parser = positive_count)]
+    frames: Option<u32>,
+    /// One JSON object per injection instead of a text line
+    #[arg(long)]
+    json: bool,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
+
+/// A non-negative, finite number.
+fn non_negative(v: &str) -> Result<f64, String> {
+    match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err("not a non-negative number".into()),
+    }
+}
+
+/// `MIN,MAX`, both non-negative, MIN ≤ MAX.
+fn min_max(v: &str) -> Result<(f64, f64), String> {
+    let (a, b) = v
+        .split_once(',')
+        .ok_or_else(|| "expected MIN,MAX".to_string())?;
+    let (a, b) = (non_negative(a)?, non_negative(b)?);
+    if b < a {
+        return Err("MIN > MAX".into());
+    }
+    Ok((a, b))
+}
+
+/// A count above 0.
+fn positive_count(v: &str) -> Result<u32, String> {
+    v.trim()
+        .parse::<u32>()
+        .ok()
+        .filter(|&n| n > 0)
+        .ok_or_else(|| "not a positive count".into())
+}
+
+/// Parse `argv` (the first is the program name): `--help`/`--version` print
+/// and exit 0 here; a usage error is [`Fail::Usage`] (one line, exit 1).
+fn parse_cli(argv: impl IntoIterator<Item = std::ffi::OsString>) -> Result<Cli, Fail> {
+    Cli::command()
+        .name(BIN)
+        .bin_name(BIN)
+        .try_get_matches_from(argv)
+        .and_then(|mut m| Cli::from_arg_matches_mut(&mut m))
+        .map_err(|e| match e.kind() {
+            clap::error::ErrorKind::DisplayHelp
+            | clap::error::ErrorKind::DisplayVersion
+            | clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => e.exit(),
+            _ => Fail::Usage(phri_runtime::cli::one_line(&e)),
+        })
+}
 
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -135,70 +235,12 @@ fn parse_f64(flag: &str, v: &str) -> Result<f64, Fail> {
     }
 }
 
-fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
-    let mut run_dir = None;
-    let mut prefix: Option<String> = None;
-    let mut pos: Vec<String> = Vec::new();
-    let mut times = 1u64;
-    let mut every = None;
-    let mut random = None;
-    let mut seed = None;
-    let mut until = None;
-    let mut for_s = None;
-    let mut frames = None;
-    let mut json = false;
-    let mut it = args.into_iter();
-    while let Some(a) = it.next() {
-        let mut val = |flag: &str| {
-            it.next()
-                .ok_or_else(|| Fail::Usage(format!("{flag} needs a value")))
-        };
-        match a.as_str() {
-            "--help" | "-h" => return Err(Fail::Usage(String::new())),
-            "--run-dir" => run_dir = Some(PathBuf::from(val("--run-dir")?)),
-            "--prefix" => prefix = Some(val("--prefix")?),
-            "--times" => {
-                let v = val("--times")?;
-                times = v
-                    .parse()
-                    .map_err(|_| Fail::Usage(format!("--times: not a count: {v:?}")))?;
-            }
-            "--every" => every = Some(parse_f64("--every", &val("--every")?)?),
-            "--random" => {
-                let v = val("--random")?;
-                let (a, b) = v
-                    .split_once(',')
-                    .ok_or_else(|| Fail::Usage(format!("--random: expected MIN,MAX, got {v:?}")))?;
-                let (a, b) = (parse_f64("--random", a)?, parse_f64("--random", b)?);
-                if b < a {
-                    return Err(Fail::Usage(format!("--random: MIN > MAX in {v:?}")));
-                }
-                random = Some((a, b));
-            }
-            "--seed" => {
-                let v = val("--seed")?;
-                seed = Some(
-                    v.parse()
-                        .map_err(|_| Fail::Usage(format!("--seed: not an integer: {v:?}")))?,
-                );
-            }
-            "--until" => until = Some(parse_f64("--until", &val("--until")?)?),
-            "--for" => for_s = Some(parse_f64("--for", &val("--for")?)?),
-            "--frames" => {
-                let v = val("--frames")?;
-                frames = Some(v.parse::<u32>().ok().filter(|&n| n > 0).ok_or_else(|| {
-                    Fail::Usage(format!("--frames: not a positive count: {v:?}"))
-                })?);
-            }
-            "--json" => json = true,
-            s if s.starts_with("--") => return Err(Fail::Usage(format!("unknown option {s}"))),
-            _ => pos.push(a),
-        }
-    }
-    let mut pos = pos.into_iter();
-    let service = pos
-        .next()
-        .ok_or_else(|| Fail::Usage("SERVICE is missing".into()))?;
+/// The options of a parsed command line (the `completions` subcommand is handled before).
+fn options(cli: Cli) -> Result<Opts, Fail> {
+    // clap requires both unless a subcommand is given
+    let (Some(service), Some(action)) = (cli.service, cli.action) else {
+        return Err(Fail::Usage("SERVICE and ACTION are required".into()));
+    };
     let target = if service == "random" {
         Target::Random(None)
     } else if let Some(set) = service.strip_prefix("random:") {
@@ -215,18 +257,20 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
     } else {
         Target::One(service)
     };
-    let action = match pos.next().as_deref() {
-        Some("kill") => Action::Kill,
-        Some("term") => Action::Term,
-        Some("freeze") => {
-            let v = pos
-                .next()
+    let mut value = cli.value;
+    let for_s = cli.for_s;
+    let action = match action.as_str() {
+        "kill" => Action::Kill,
+        "term" => Action::Term,
+        "freeze" => {
+            let v = value
+                .take()
                 .ok_or_else(|| Fail::Usage("freeze needs SECONDS".into()))?;
             Action::Freeze(parse_f64("freeze", &v)?)
         }
-        Some("slow") => {
-            let v = pos
-                .next()
+        "slow" => {
+            let v = value
+                .take()
                 .ok_or_else(|| Fail::Usage("slow needs PERCENT".into()))?;
             let percent = parse_f64("slow", &v)?;
             if percent > 100.0 {
@@ -235,8 +279,8 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             let for_s = for_s.ok_or_else(|| Fail::Usage("slow needs --for SECONDS".into()))?;
             Action::Slow { percent, for_s }
         }
-        Some("corrupt") => {
-            let v = pos.next().ok_or_else(|| {
+        "corrupt" => {
+            let v = value.take().ok_or_else(|| {
                 Fail::Usage("corrupt needs KIND (noise, zeros, size, stale)".into())
             })?;
             let kind = DepthFaultKind::from_name(&v)
@@ -249,14 +293,14 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
                 })?;
             Action::Depth {
                 kind,
-                frames: frames.unwrap_or(30),
+                frames: cli.frames.unwrap_or(30),
                 delay_ms: 0.0,
                 for_s: 0.0,
             }
         }
-        Some("delay") => {
-            let v = pos
-                .next()
+        "delay" => {
+            let v = value
+                .take()
                 .ok_or_else(|| Fail::Usage("delay needs MS".into()))?;
             let delay_ms = parse_f64("delay", &v)?;
             let for_s = for_s.ok_or_else(|| Fail::Usage("delay needs --for SECONDS".into()))?;
@@ -267,10 +311,9 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
                 for_s,
             }
         }
-        Some(a) => return Err(Fail::Usage(format!("unknown ACTION {a:?}"))),
-        None => return Err(Fail::Usage("ACTION is missing".into())),
+        a => return Err(Fail::Usage(format!("unknown ACTION {a:?}"))),
     };
-    if let Some(extra) = pos.next() {
+    if let Some(extra) = value {
         return Err(Fail::Usage(format!("unexpected argument {extra:?}")));
     }
     if matches!(action, Action::Depth { .. })
@@ -280,23 +323,20 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
             "corrupt and delay act on the simulated camera: SERVICE must be camera".into(),
         ));
     }
-    if every.is_some() && random.is_some() {
-        return Err(Fail::Usage(
-            "--every and --random exclude each other".into(),
-        ));
-    }
+    let (times, every, random, until) = (cli.times, cli.every, cli.random, cli.until);
     if times == 0 && until.is_none() && every.is_none() && random.is_none() {
         return Err(Fail::Usage("--times 0 needs --every or --random".into()));
     }
-    let run_dir = match run_dir {
+    let run_dir = match cli.run_dir {
         Some(d) => d,
         None => {
-            let p = phri_runtime::prefix_or_default(prefix.as_deref());
+            let p =
+                phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
             phri_runtime::rundir::default_run_dir(&p)
                 .map_err(|e| Fail::Cell(format!("--prefix {p}: {e}")))?
         }
     };
-    let seed = seed.unwrap_or_else(|| {
+    let seed = cli.seed.unwrap_or_else(|| {
         let t = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .unwrap_or_default();
@@ -311,7 +351,7 @@ fn parse_args(args: Vec<String>) -> Result<Opts, Fail> {
         random,
         seed,
         until,
-        json,
+        json: cli.json,
     })
 }
 
@@ -670,18 +710,25 @@ fn run(opts: &Opts) -> Result<(), Fail> {
 }
 
 fn main() -> ExitCode {
-    let opts = match parse_args(std::env::args().skip(1).collect()) {
+    let opts = match parse_cli(std::env::args_os()) {
+        Ok(Cli {
+            completions: Some(CompletionsCmd::Completions { shell }),
+            ..
+        }) => {
+            phri_runtime::cli::completions::<Cli>(BIN, shell);
+            return ExitCode::SUCCESS;
+        }
+        Ok(cli) => options(cli),
+        Err(e) => Err(e),
+    };
+    let opts = match opts {
         Ok(o) => o,
         Err(Fail::Usage(m)) => {
-            if m.is_empty() {
-                println!("{USAGE}");
-                return ExitCode::SUCCESS;
-            }
-            eprintln!("phri-fault: {m}\n{USAGE}");
+            eprintln!("{BIN}: {m}");
             return ExitCode::from(1);
         }
         Err(Fail::Cell(m)) => {
-            eprintln!("phri-fault: {m}");
+            eprintln!("{BIN}: {m}");
             return ExitCode::from(2);
         }
     };
@@ -700,5 +747,17 @@ fn main() -> ExitCode {
             eprintln!("phri-fault: {m}");
             ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own consistency checks (names, conflicts, positionals), which
+    /// release builds skip at run time.
+    #[test]
+    fn the_command_is_consistent() {
+        super::Cli::command().debug_assert();
     }
 }

@@ -1,6 +1,7 @@
-//! Command-line contract of `phri-fault`: usage errors exit 1 with one line,
-//! a cell that cannot be acted on exits 2 (the live injections are exercised
-//! by the system tests in the top-level `tests/`).
+//! Command-line contract of `phri-fault`: usage errors exit 1 with one line
+//! naming the flag or argument, a cell that cannot be acted on exits 2 (the
+//! live injections are exercised by the system tests in the top-level `tests/`);
+//! `--help`, `--version` and `completions` exit 0.
 
 use std::process::Command;
 
@@ -49,7 +50,142 @@ fn frame_faults_only_target_the_camera_and_check_their_arguments() {
         let (code, err) = fault(&args);
         assert_eq!(code, 1, "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
+}
+
+fn out(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-fault"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn help_version_and_completions() {
+    for flag in ["--help", "-h"] {
+        let (code, stdout, _) = out(&[flag]);
+        assert_eq!(code, 0, "{flag}");
+        for needle in [
+            "SERVICE",
+            "ACTION",
+            "--run-dir",
+            "--prefix",
+            "PHRI_PREFIX",
+            "--times",
+            "--random",
+            "--json",
+        ] {
+            assert!(
+                stdout.contains(needle),
+                "{flag}: {needle} missing: {stdout}"
+            );
+        }
+    }
+    let (_, long, _) = out(&["--help"]);
+    assert!(
+        long.contains("corrupt KIND") && long.contains("Exit status"),
+        "{long}"
+    );
+    let (code, stdout, _) = out(&["--version"]);
+    assert_eq!(code, 0);
+    assert_eq!(
+        stdout.trim(),
+        format!("phri-fault {}", env!("CARGO_PKG_VERSION"))
+    );
+    for shell in ["bash", "zsh", "fish"] {
+        let (code, stdout, err) = out(&["completions", shell]);
+        assert_eq!(code, 0, "{shell}: {err}");
+        assert!(
+            stdout.contains("phri-fault") && stdout.contains("run-dir"),
+            "{shell}"
+        );
+    }
+}
+
+#[test]
+fn mistyped_flags_and_actions_get_a_suggestion_in_one_line() {
+    let d = std::env::temp_dir().to_string_lossy().into_owned();
+    for (args, needles) in [
+        (
+            vec!["--run-dir", &d, "sim", "kill", "--tims", "3"],
+            ["--tims", "'--times'"],
+        ),
+        (vec!["--run-dir", &d, "sim", "kil"], ["kil", "'kill'"]),
+        (
+            vec![
+                "--run-dir",
+                &d,
+                "sim",
+                "kill",
+                "--every",
+                "1",
+                "--random",
+                "1,2",
+            ],
+            ["--every", "--random"],
+        ),
+        (
+            vec!["--run-dir", &d, "sim", "kill", "--random", "2,1"],
+            ["--random", "MIN > MAX"],
+        ),
+        (
+            vec!["--run-dir", &d, "sim", "kill", "--times", "many"],
+            ["--times", "many"],
+        ),
+        (
+            vec!["--run-dir", &d, "sim", "kill", "--every", "-1"],
+            ["--every", "-1"],
+        ),
+        (vec!["--run-dir", &d, "sim"], ["ACTION", "required"]),
+    ] {
+        let (code, err) = fault(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("phri-fault: "), "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n} not in {err}");
+        }
+    }
+}
+
+/// `--flag=value` and flags after the positionals reach the same checks:
+/// with a run directory that has no state.json, a well-formed command line
+/// gets as far as the cell (exit 2), a bad value stops at the usage (exit 1).
+#[test]
+fn flag_equals_value_is_accepted() {
+    let dir = std::env::temp_dir().join(format!("phri-fault-eq-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run_dir = format!("--run-dir={}", dir.display());
+    let (code, err) = fault(&[
+        &run_dir,
+        "camera",
+        "corrupt",
+        "noise",
+        "--frames=5",
+        "--times=2",
+        "--json",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("state.json"), "{err}");
+    let (code, err) = fault(&[&run_dir, "sim", "slow", "50", "--for=-1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--for"), "{err}");
+    let (code, err) = fault(&[
+        &run_dir,
+        "sim",
+        "kill",
+        "--random=0.5,1",
+        "--seed=7",
+        "--until=3",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -9,9 +9,13 @@
 //!
 //! Exit status: 0 done (request accepted), 1 usage, 2 the cell cannot be
 //! reached or did not answer, 3 the request was refused (the reason is printed).
+//! `phri-hri completions bash|zsh|fish` prints a shell completion script.
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
+
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 use phri_ipc::{
     CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, IpcNode, Queue, RequestKind,
@@ -19,19 +23,99 @@ use phri_ipc::{
 };
 use phri_runtime::now_ns;
 
-const USAGE: &str = "usage: phri-hri [--prefix P] request KIND [PART] [--person ID] [--text T] [--wait SECONDS] [--json]
-       phri-hri [--prefix P] watch [--once] [--seconds S] [--json]
-  request KIND [PART]  ask the robot: begin|follow right_hand|left_hand, end, stop
-                       (begin/follow without PART: the part last used)
-    --person ID        the tracker's id of the person asking (default: whoever shows the part)
-    --text T           what was asked, for the report (default: the command)
-    --wait SECONDS     wait this long for the controller's answer on collab/state (default 1)
-  watch                print the collaboration state when it changes (Ctrl-C ends)
-    --once             print the current state once and exit
-    --seconds S        end after S seconds
-  --prefix P           the cell's iceoryx2 prefix (default: $PHRI_PREFIX, else phri_)
-  --json               JSON instead of text lines
-exit status: 0 done (accepted), 1 usage, 2 no cell or no answer, 3 refused";
+const BIN: &str = "phri-hri";
+
+/// Examples and exit statuses, after the flags in `--help`.
+const AFTER_HELP: &str = "Examples:
+  phri-hri request follow right_hand
+  phri-hri request end
+  phri-hri watch --once --json
+
+Exit status: 0 done (accepted), 1 usage, 2 no cell or no answer, 3 refused";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Collaboration requests from the command line (hri/request) and the collaboration state (collab/state)",
+    after_help = AFTER_HELP,
+    args_override_self = true
+)]
+struct Cli {
+    /// The cell's iceoryx2 prefix [default: phri_]
+    #[arg(long, value_name = "P", env = phri_runtime::PREFIX_ENV, global = true)]
+    prefix: Option<String>,
+    /// JSON instead of text lines
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Ask the robot: begin|follow right_hand|left_hand, end, stop; wait for the controller's answer
+    Request {
+        /// What is asked (begin/follow without PART: the part last used)
+        #[arg(value_name = "KIND", value_parser = kind_parser())]
+        kind: RequestKind,
+        /// The collaborative part to begin or follow
+        #[arg(value_name = "PART", value_parser = part_parser())]
+        part: Option<CollabPart>,
+        /// The tracker's id of the person asking (default: whoever shows the part)
+        #[arg(long, value_name = "ID")]
+        person: Option<u32>,
+        /// What was asked, for the report (default: the command)
+        #[arg(long, value_name = "T")]
+        text: Option<String>,
+        /// How long to wait for the controller's answer on collab/state [s]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 1.0,
+            allow_negative_numbers = true,
+            value_parser = seconds
+        )]
+        wait: f64,
+    },
+    /// Print the collaboration state when it changes (Ctrl-C ends)
+    Watch {
+        /// Print the current state once and exit
+        #[arg(long)]
+        once: bool,
+        /// End after this long [s]
+        #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = seconds)]
+        seconds: Option<f64>,
+    },
+    /// Print a shell completion script to stdout (bash, zsh, fish, elvish or powershell)
+    Completions {
+        /// Shell to write the script for
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+}
+
+fn kind_parser() -> impl TypedValueParser<Value = RequestKind> {
+    PossibleValuesParser::new(RequestKind::ALL.iter().map(|k| k.name()))
+        .try_map(|s| RequestKind::from_name(&s))
+}
+
+fn part_parser() -> impl TypedValueParser<Value = CollabPart> {
+    PossibleValuesParser::new(CollabPart::ALL.iter().map(|p| p.name()))
+        .try_map(|s| CollabPart::from_name(&s))
+}
+
+/// A duration between 0 and one day [s].
+fn seconds(v: &str) -> Result<f64, String> {
+    let s: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{v}' is not a valid number"))?;
+    if !(0.0..=86_400.0).contains(&s) {
+        return Err(format!("{s} is not between 0 and 86400 s"));
+    }
+    Ok(s)
+}
 
 enum Command {
     Request {
@@ -53,101 +137,70 @@ struct Args {
     command: Command,
 }
 
-/// One clear line for a bad command line.
-struct Usage(String);
-
-fn number<T: std::str::FromStr>(flag: &str, v: Option<&String>) -> Result<T, Usage> {
-    let v = v.ok_or_else(|| Usage(format!("{flag}: a value is missing")))?;
-    v.parse()
-        .map_err(|_| Usage(format!("{flag}: '{v}' is not a valid number")))
+/// What the command line asks for.
+enum Parsed {
+    Run(Args),
+    Completions(clap_complete::Shell),
 }
 
-fn seconds(flag: &str, v: Option<&String>) -> Result<f64, Usage> {
-    let s: f64 = number(flag, v)?;
-    if !(0.0..=86_400.0).contains(&s) {
-        return Err(Usage(format!("{flag}: {s} is not between 0 and 86400 s")));
-    }
-    Ok(s)
-}
-
-fn parse(argv: &[String]) -> Result<Args, Usage> {
-    let mut prefix = None;
-    let mut json = false;
-    let mut positional = Vec::new();
-    let (mut person, mut text, mut wait_s) = (u32::MAX, None, 1.0);
-    let (mut once, mut secs) = (false, None);
-    let mut it = argv.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--prefix" => {
-                prefix = Some(
-                    it.next()
-                        .ok_or_else(|| Usage("--prefix: a value is missing".into()))?
-                        .clone(),
-                )
+/// Parse `argv` (the first is the program name): `--help`/`--version` print
+/// and exit 0 here, no command prints the help and exits 1; `Err` is the one
+/// line of a bad command line (exit 1).
+fn parse(argv: impl IntoIterator<Item = std::ffi::OsString>) -> Result<Parsed, String> {
+    let cli = Cli::command()
+        .name(BIN)
+        .bin_name(BIN)
+        .try_get_matches_from(argv)
+        .and_then(|mut m| Cli::from_arg_matches_mut(&mut m))
+        .map_err(|e| match e.kind() {
+            clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                e.exit()
             }
-            "--json" => json = true,
-            "--person" => person = number("--person", it.next())?,
-            "--text" => {
-                text = Some(
-                    it.next()
-                        .ok_or_else(|| Usage("--text: a value is missing".into()))?
-                        .clone(),
-                )
+            // no command at all: the help on stderr, exit 1 (usage)
+            clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                let _ = e.print();
+                std::process::exit(1)
             }
-            "--wait" => wait_s = seconds("--wait", it.next())?,
-            "--once" => once = true,
-            "--seconds" => secs = Some(seconds("--seconds", it.next())?),
-            s if s.starts_with("--") => return Err(Usage(format!("{s}: unknown flag"))),
-            s => positional.push(s.to_string()),
-        }
-    }
-    let prefix = phri_runtime::prefix_or_default(prefix.as_deref());
-    let command = match positional.first().map(String::as_str) {
-        Some("request") => {
-            let kind = positional.get(1).ok_or_else(|| {
-                Usage("request: KIND is missing (begin, follow, end, stop)".into())
-            })?;
-            let kind = RequestKind::from_name(kind).map_err(|e| Usage(e.to_string()))?;
-            let part = match positional.get(2) {
-                Some(p) => CollabPart::from_name(p).map_err(|e| Usage(e.to_string()))?,
-                None => CollabPart::None,
+            _ => phri_runtime::cli::one_line(&e),
+        })?;
+    let prefix = phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    let command = match cli.command {
+        Cmd::Completions { shell } => return Ok(Parsed::Completions(shell)),
+        Cmd::Request {
+            kind,
+            part,
+            person,
+            text,
+            wait,
+        } => {
+            // the default text: the command as typed
+            let typed = match part {
+                None => kind.name().to_string(),
+                Some(p) => format!("{} {}", kind.name(), p.name()),
             };
-            if positional.len() > 3 {
-                return Err(Usage(format!("request: unexpected '{}'", positional[3])));
-            }
+            let part = part.unwrap_or(CollabPart::None);
             if matches!(kind, RequestKind::End | RequestKind::Stop) && part != CollabPart::None {
-                return Err(Usage(format!("request {}: takes no part", kind.name())));
+                return Err(format!("request {}: takes no part", kind.name()));
             }
-            let text = text.unwrap_or_else(|| positional[1..].join(" "));
+            let text = text.unwrap_or(typed);
             if text.len() >= REQUEST_TEXT {
-                return Err(Usage(format!("--text: at most {} bytes", REQUEST_TEXT - 1)));
+                return Err(format!("--text: at most {} bytes", REQUEST_TEXT - 1));
             }
             Command::Request {
                 kind,
                 part,
-                person,
+                person: person.unwrap_or(u32::MAX),
                 text,
-                wait_s,
+                wait_s: wait,
             }
         }
-        Some("watch") => {
-            if positional.len() > 1 {
-                return Err(Usage(format!("watch: unexpected '{}'", positional[1])));
-            }
-            Command::Watch {
-                once,
-                seconds: secs,
-            }
-        }
-        Some(other) => return Err(Usage(format!("{other}: unknown command (request, watch)"))),
-        None => return Err(Usage("a command is missing (request, watch)".into())),
+        Cmd::Watch { once, seconds } => Command::Watch { once, seconds },
     };
-    Ok(Args {
+    Ok(Parsed::Run(Args {
         prefix,
-        json,
+        json: cli.json,
         command,
-    })
+    }))
 }
 
 /// The request as sent: source `cli`, sequence number = send time.
@@ -317,15 +370,14 @@ fn run(args: Args) -> Result<ExitCode, String> {
 }
 
 fn main() -> ExitCode {
-    let argv: Vec<String> = std::env::args().skip(1).collect();
-    if argv.iter().any(|a| a == "--help" || a == "-h") {
-        println!("{USAGE}");
-        return ExitCode::SUCCESS;
-    }
-    let args = match parse(&argv) {
-        Ok(a) => a,
-        Err(Usage(e)) => {
-            eprintln!("phri-hri: {e}\n{USAGE}");
+    let args = match parse(std::env::args_os()) {
+        Ok(Parsed::Run(a)) => a,
+        Ok(Parsed::Completions(shell)) => {
+            phri_runtime::cli::completions::<Cli>(BIN, shell);
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("{BIN}: {e}");
             return ExitCode::from(1);
         }
     };
@@ -339,5 +391,17 @@ fn main() -> ExitCode {
             eprintln!("phri-hri: {e}");
             ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own consistency checks (names, conflicts, positionals), which
+    /// release builds skip at run time.
+    #[test]
+    fn the_command_is_consistent() {
+        super::Cli::command().debug_assert();
     }
 }

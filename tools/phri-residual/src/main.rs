@@ -1,4 +1,5 @@
 //! `phri-residual --urdf FILE --log LOG.csv [--ki K] [--dt S] [--config phri.toml]`
+//! (`phri-residual completions bash|zsh|fish`: a shell completion script)
 //!
 //! Runs the residual observer of `phri-estimation` (the one the dynamics
 //! service runs) over a recorded log, so that thresholds and gains can be
@@ -11,40 +12,76 @@
 
 use std::error::Error;
 use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::path::PathBuf;
 use std::process::ExitCode;
+
+use clap::Parser;
 
 use phri_config::{Loaded, PerJoint, ResidualConfig};
 use phri_estimation::ResidualObserver;
-use phri_runtime::Args;
+use phri_runtime::cli::CompletionsCmd;
 
-const USAGE: &str =
-    "usage: phri-residual --urdf FILE --log LOG.csv [--ki K] [--dt S] [--config phri.toml]";
+const BIN: &str = "phri-residual";
 
-fn main() -> ExitCode {
-    phri_runtime::service::run("phri-residual", body)
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Runs the momentum residual observer offline over a recorded log (CSV in, `t,r1..rn` CSV out)",
+    long_about = "Runs the residual observer of phri-estimation (the one the dynamics service runs) over a recorded log, \
+to tune thresholds and gains on data from a real arm. The log's header is `t,q1..qn,tau1..taun` (joint order as \
+phri-model prints it; t [s], q [rad], tau the applied joint torque [Nm]); stdout gets `t,r1..rn` (r [Nm]).",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    args_override_self = true
+)]
+struct Cli {
+    /// Robot model (URDF) the log was recorded with
+    #[arg(long, value_name = "FILE", required = true)]
+    urdf: Option<String>,
+    /// Recorded log: CSV `t,q1..qn,tau1..taun` (t [s], q [rad], tau [Nm])
+    #[arg(long, value_name = "LOG.csv", required = true)]
+    log: Option<String>,
+    /// Observer gain K_I on every joint [1/s] (default: the configuration's `dynamics.gain`)
+    #[arg(long, value_name = "K", allow_negative_numbers = true, value_parser = positive)]
+    ki: Option<f64>,
+    /// Integrate with this fixed period [s] instead of the log's t column
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive)]
+    dt: Option<f64>,
+    /// phri configuration to take `[dynamics]` from (friction model, thresholds); without it no friction is compensated
+    #[arg(long, value_name = "phri.toml")]
+    config: Option<PathBuf>,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &["--urdf", "--log", "--ki", "--dt", "--config"],
-        &["--help"],
-    )?;
-    if args.has("--help") {
-        println!("{USAGE}");
-        return Ok(());
+/// A positive, finite number.
+fn positive(v: &str) -> Result<f64, String> {
+    match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err("must be a positive number".into()),
     }
-    let urdf = args
-        .get("--urdf")
-        .ok_or(format!("--urdf is required\n{USAGE}"))?;
-    let log = args
-        .get("--log")
-        .ok_or(format!("--log is required\n{USAGE}"))?;
+}
+
+fn main() -> ExitCode {
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli))
+}
+
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    // clap requires both unless a subcommand is given
+    let (Some(urdf), Some(log)) = (cli.urdf.as_deref(), cli.log.as_deref()) else {
+        return Err("--urdf and --log are required".into());
+    };
     let model = phri_model::Model::from_urdf_file(urdf).map_err(|e| e.to_string())?;
     let n = model.nv();
-    let mut cfg = match args.get("--config") {
+    let mut cfg = match &cli.config {
         Some(path) => {
-            Loaded::load(std::path::Path::new(path), None, &[])
+            Loaded::load(path, None, &[])
                 .map_err(|e| e.to_string())?
                 .config
                 .dynamics
@@ -55,16 +92,10 @@ fn body() -> Result<(), Box<dyn Error>> {
             ..Loaded::defaults().config.dynamics
         },
     };
-    if let Some(ki) = args.parse_value::<f64>("--ki")? {
-        if !(ki.is_finite() && ki > 0.0) {
-            return Err(format!("--ki: {ki} must be positive").into());
-        }
+    if let Some(ki) = cli.ki {
         cfg.gain = PerJoint::All(ki);
     }
-    let dt = args.parse_value::<f64>("--dt")?;
-    if dt.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
-        return Err("--dt: must be positive".into());
-    }
+    let dt = cli.dt;
     if let Some(d) = dt {
         // a fixed period: never treat a sample as a gap
         cfg.max_gap_s = cfg.max_gap_s.max(2.0 * d);
@@ -156,4 +187,16 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     out.flush().map_err(w)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own consistency checks (names, conflicts, positionals), which
+    /// release builds skip at run time.
+    #[test]
+    fn the_command_is_consistent() {
+        super::Cli::command().debug_assert();
+    }
 }

@@ -179,3 +179,82 @@ fn bad_logs_are_one_line_errors() {
     let (code, _, err) = run(&["--urdf", &urdf(), "--log", "x", "--ki", "-1"]);
     assert_eq!(code, 2, "{err}");
 }
+
+#[test]
+fn help_version_and_completions() {
+    for flag in ["--help", "-h"] {
+        let (code, out, _) = run(&[flag]);
+        assert_eq!(code, 0, "{flag}");
+        for needle in ["--urdf", "--log", "--ki", "--dt", "--config", "[1/s]"] {
+            assert!(out.contains(needle), "{flag}: {needle} missing: {out}");
+        }
+    }
+    let (code, out, _) = run(&["--version"]);
+    assert_eq!(code, 0);
+    assert_eq!(
+        out.trim(),
+        format!("phri-residual {}", env!("CARGO_PKG_VERSION"))
+    );
+    for shell in ["bash", "zsh", "fish"] {
+        let (code, out, err) = run(&["completions", shell]);
+        assert_eq!(code, 0, "{shell}: {err}");
+        assert!(
+            out.contains("phri-residual") && out.contains("urdf"),
+            "{shell}"
+        );
+    }
+}
+
+#[test]
+fn bad_command_lines_are_one_line_naming_the_flag() {
+    let u = urdf();
+    for (args, needles) in [
+        (
+            vec!["--urdf", &u, "--log", "x.csv", "--confg", "c.toml"],
+            vec!["--confg", "'--config'"],
+        ),
+        (vec!["--urdf", &u], vec!["--log"]),
+        (vec!["--log", "x.csv"], vec!["--urdf"]),
+        (
+            vec!["--urdf", &u, "--log", "x", "--ki", "-1"],
+            vec!["--ki", "positive"],
+        ),
+        (
+            vec!["--urdf", &u, "--log", "x", "--dt=0"],
+            vec!["--dt", "positive"],
+        ),
+        (
+            vec!["--urdf", &u, "--log", "x", "--ki", "fast"],
+            vec!["--ki", "fast"],
+        ),
+    ] {
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("phri-residual: "), "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n} not in {err}");
+        }
+    }
+}
+
+/// `--flag=value` gives what `--flag value` gives.
+#[test]
+fn flag_equals_value_is_the_same_run() {
+    let log = tmp(
+        "eq.csv",
+        &log_with_external_torque([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    );
+    let l = log.to_str().unwrap();
+    let u = urdf();
+    let (code, spaced, err) = run(&["--urdf", &u, "--log", l, "--ki", "40", "--dt", "0.001"]);
+    assert_eq!(code, 0, "{err}");
+    let (urdf_eq, log_eq) = (format!("--urdf={u}"), format!("--log={l}"));
+    let (code, joined, err) = run(&[&urdf_eq, &log_eq, "--ki=40", "--dt=0.001"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(spaced.lines().count(), 2001);
+    assert_eq!(spaced, joined);
+    // a different gain gives a different residual: the flag is read
+    let (_, other, _) = run(&[&urdf_eq, &log_eq, "--ki=5", "--dt=0.001"]);
+    assert_ne!(spaced, other);
+}

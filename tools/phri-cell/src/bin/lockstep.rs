@@ -7,19 +7,80 @@
 //!                 [--set section.key=value ...] [--offset S ...] [--sweep FROM,TO,STEP]
 //!                 [--latency-ms MS] [--outage perception|dynamics|control:FROM:TO ...]
 //!                 [--no-perception]
+//!   phri-lockstep completions bash|zsh|fish
 
 use std::error::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use phri_cell::{Cell, CellOptions};
-use phri_config::Loaded;
-use phri_runtime::Args;
+use clap::Parser;
 
-const USAGE: &str = "usage: phri-lockstep --scenario NAME|FILE [--duration S] [--config FILE] [--set k=v ...] [--offset S ...] [--sweep FROM,TO,STEP] [--latency-ms MS] [--outage perception|dynamics|control:FROM:TO ...] [--no-perception]";
+use phri_cell::{Cell, CellOptions, Outage};
+use phri_config::Loaded;
+use phri_runtime::cli::CompletionsCmd;
+
+const BIN: &str = "phri-lockstep";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Runs a scenario with the whole cell in one process, in lock-step (deterministic, faster than real time), and prints what happened as JSON",
+    long_about = "Runs a scenario with the whole cell in one process, in lock-step (deterministic, faster than real time), \
+and prints what happened as JSON on stdout (one line per run on stderr). With several --offset values (or --sweep \
+FROM,TO,STEP) it runs once per offset of the person's script against the robot's cycle.",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    args_override_self = true
+)]
+struct Cli {
+    /// Scenario: a name of the configuration's scenarios, or a scenario file
+    #[arg(long, value_name = "NAME|FILE", required = true)]
+    scenario: Option<String>,
+    /// Simulated time of each run [s] (default: the scenario's duration)
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    duration: Option<f64>,
+    /// Cell configuration (TOML)
+    #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
+    config: PathBuf,
+    /// Override one configuration value, e.g. `--set control.kv=12` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Offset of the person's script against the robot's cycle [s] (repeatable: one run each)
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = finite)]
+    offset: Vec<f64>,
+    /// Offsets FROM, FROM+STEP, … up to TO [s], one run each (after the --offset runs), e.g. `--sweep -4,0,0.5`
+    #[arg(long, value_name = "FROM,TO,STEP", allow_hyphen_values = true)]
+    sweep: Option<String>,
+    /// Capture → repulsion results at the controller [ms] (default 6.5: the multi-process cell's p99)
+    #[arg(long = "latency-ms", value_name = "MS", allow_negative_numbers = true)]
+    latency_ms: Option<f64>,
+    /// A service outage in simulated time [s], `perception|dynamics|control:FROM:TO` (repeatable)
+    #[arg(long, value_name = "SERVICE:FROM:TO")]
+    outage: Vec<Outage>,
+    /// Run without the camera and perception
+    #[arg(long)]
+    no_perception: bool,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
+
+/// A finite number.
+fn finite(v: &str) -> Result<f64, String> {
+    v.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| "not a number".to_string())
+}
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-lockstep", body)
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli))
 }
 
 /// `FROM,TO,STEP` as the offsets it spans.
@@ -41,63 +102,31 @@ fn sweep(s: &str) -> Result<Vec<f64>, String> {
     Ok((0..=steps).map(|k| v[0] + k as f64 * v[2]).collect())
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &[
-            "--scenario",
-            "--duration",
-            "--config",
-            "--set",
-            "--offset",
-            "--sweep",
-            "--latency-ms",
-            "--outage",
-        ],
-        &["--no-perception", "--help"],
-    )
-    .map_err(|e| format!("{e}; {USAGE}"))?;
-    if args.has("--help") {
-        println!("{USAGE}");
-        return Ok(());
-    }
-    let config = PathBuf::from(args.get("--config").unwrap_or("deploy/phri.toml"));
-    let name = args
-        .get("--scenario")
-        .ok_or_else(|| format!("--scenario is required; {USAGE}"))?;
-    let loaded = Loaded::load(&config, Some(name), &args.all("--set"))?;
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    // clap requires it unless a subcommand is given
+    let name = cli.scenario.as_deref().ok_or("--scenario is required")?;
+    let sets: Vec<&str> = cli.set.iter().map(String::as_str).collect();
+    let loaded = Loaded::load(&cli.config, Some(name), &sets)?;
     let model = loaded.model()?;
-    let duration = args
-        .parse_value::<f64>("--duration")?
-        .unwrap_or(loaded.scenario.duration_s);
+    let duration = cli.duration.unwrap_or(loaded.scenario.duration_s);
     if !(duration > 0.0 && duration.is_finite()) {
         return Err(
             format!("--duration: must be a positive number of seconds, got {duration}").into(),
         );
     }
-    let mut offsets = Vec::new();
-    for o in args.all("--offset") {
-        let x = o
-            .parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("--offset: not a number: {o}"))?;
-        offsets.push(x);
-    }
-    if let Some(s) = args.get("--sweep") {
+    let mut offsets = cli.offset.clone();
+    if let Some(s) = &cli.sweep {
         offsets.extend(sweep(s)?);
     }
     if offsets.is_empty() {
         offsets.push(0.0);
     }
     let mut opts = CellOptions {
-        perception: !args.has("--no-perception"),
+        perception: !cli.no_perception,
         ..CellOptions::default()
     };
-    for o in args.all("--outage") {
-        opts.outages.push(o.parse()?);
-    }
-    if let Some(l) = args.parse_value::<f64>("--latency-ms")? {
+    opts.outages.extend(cli.outage.iter().copied());
+    if let Some(l) = cli.latency_ms {
         opts.perception_latency_ms = l;
     }
     let periods = (duration / loaded.config.sim.dt_s).round() as u64;
@@ -131,4 +160,16 @@ fn body() -> Result<(), Box<dyn Error>> {
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own consistency checks (names, conflicts, positionals), which
+    /// release builds skip at run time.
+    #[test]
+    fn the_command_is_consistent() {
+        super::Cli::command().debug_assert();
+    }
 }
