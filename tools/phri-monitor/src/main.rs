@@ -2,35 +2,151 @@
 //! (subscribers only, never a publisher, never creating a channel; normal
 //! scheduling, sleeping between polls).
 //!
-//! - `echo CHANNEL --prefix P [--count N] [--every N] [--json]`: print samples (frames summarised)
-//! - `list --prefix P [--seconds S] [--json]`: live nodes, every channel's ports, rate, drops
-//! - `hz CHANNEL --prefix P [--seconds S] [--once] [--json]`: rate, jitter, age, bandwidth, drops
-//! - `top --prefix P [--seconds S] [--json]`: dashboard refreshing 4×/s
+//! - `echo CHANNEL [--count N] [--every N] [--seconds S] [--json]`: print samples (frames summarised)
+//! - `list [--seconds S] [--json]`: live nodes, every channel's ports, rate, drops
+//! - `hz CHANNEL [--seconds S] [--once] [--json]`: rate, jitter, age, bandwidth, drops
+//! - `top [--seconds S] [--json] [--once]`: dashboard (ratatui), refreshed 4×/s
+//! - `completions SHELL`: a shell completion script
+//!
+//! Every command takes `--prefix P` (else `PHRI_PREFIX`, else `phri_`).
+//! `top` needs a terminal on stdout: without one it says so in one line and
+//! exits 2 (`top --once` prints one text snapshot, `top --json` JSON lines).
 
 mod probe;
+mod top;
 
-use std::collections::VecDeque;
+use std::collections::HashMap;
 use std::error::Error;
+use std::io::IsTerminal;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use clap::builder::PossibleValuesParser;
+use clap::{Parser, Subcommand};
 use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
 use phri_ipc::*;
-use phri_runtime::{Args, Shutdown};
+use phri_runtime::Shutdown;
 use serde_json::{json, Value};
 
 use probe::{last, Probe};
+use top::{ChannelRow, KeyOutcome, ServiceRow, Snapshot, TopState, View};
 
 type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
 
-const USAGE: &str = "usage: phri-monitor echo CHANNEL | hz CHANNEL | list | top  [--prefix PREFIX (default: $PHRI_PREFIX, else phri_)] [--seconds S] [--json] [--once] [--count N] [--every N]";
+const BIN: &str = "phri-monitor";
 
 /// Pause between polls: the monitor never competes with the torque loop.
 const POLL: Duration = Duration::from_millis(2);
+/// `top`'s refresh period: statistics trimmed, the newest values read, the screen redrawn.
+const REFRESH: Duration = Duration::from_millis(250);
+/// Window of `top`'s channel statistics [ns].
+const WINDOW_NS: u64 = 1_000_000_000;
+/// What `top --once` watches before printing its one snapshot.
+const ONCE_SPAN: Duration = Duration::from_secs(1);
+/// Size of `top --once`'s snapshot when stdout is not a terminal [columns, rows].
+const SNAPSHOT_SIZE: (u16, u16) = (160, 48);
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Attaches read-only to the live channels of a running cell: echo a channel, measure its rate, list the nodes and channels, or watch a dashboard",
+    propagate_version = true
+)]
+struct Cli {
+    /// iceoryx2 prefix of the cell [default: phri_]
+    #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV, global = true)]
+    prefix: Option<String>,
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Print a channel's samples as key=value lines (frames summarised)
+    Echo {
+        /// Channel to print
+        #[arg(value_parser = channel_names())]
+        channel: String,
+        /// Stop after printing N samples
+        #[arg(long, value_name = "N")]
+        count: Option<u64>,
+        /// Print one sample in N (0 counts as 1)
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        every: u64,
+        /// Stop after S seconds
+        #[arg(long, value_name = "S", value_parser = positive)]
+        seconds: Option<f64>,
+        /// One JSON object per sample
+        #[arg(long)]
+        json: bool,
+    },
+    /// Measure a channel: rate, interval, age, bandwidth, drops, each window
+    Hz {
+        /// Channel to measure
+        #[arg(value_parser = channel_names())]
+        channel: String,
+        /// Measuring window [s]
+        #[arg(long, value_name = "S", value_parser = positive, default_value_t = 1.0)]
+        seconds: f64,
+        /// One window, then exit
+        #[arg(long)]
+        once: bool,
+        /// One JSON object per window
+        #[arg(long)]
+        json: bool,
+    },
+    /// The cell's nodes and every channel's ports, rate, samples and drops
+    List {
+        /// Measuring window [s]
+        #[arg(long, value_name = "S", value_parser = positive, default_value_t = 1.0)]
+        seconds: f64,
+        /// One JSON object
+        #[arg(long)]
+        json: bool,
+    },
+    /// Dashboard of the cell: channels (stale ones in red), services, the controller's mode, alarms and live plots; q quits, s sorts, Up/Down select a channel, Enter shows its newest message
+    Top {
+        /// Stop after S seconds [default: until q or Ctrl-C]
+        #[arg(long, value_name = "S", value_parser = positive)]
+        seconds: Option<f64>,
+        /// A JSON object per refresh (4 per second) instead of the dashboard
+        #[arg(long)]
+        json: bool,
+        /// Watch 1 s, print one snapshot (text, or JSON with --json) and exit; works without a terminal
+        #[arg(long)]
+        once: bool,
+    },
+    /// Print a shell completion script to stdout
+    Completions {
+        /// Shell to write the script for
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+}
+
+/// The cell's channel names, for the CHANNEL argument (and its completion).
+fn channel_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(ALL.iter().copied())
+}
+
+/// A finite number of seconds above 0.
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        Ok(_) => Err("must be positive".to_string()),
+        Err(e) => Err(e.to_string()),
+    }
+}
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-monitor", || body().map_err(|e| e.to_string()))
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Cmd::Completions { shell } = cli.cmd {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
 }
 
 struct NodeInfo {
@@ -71,7 +187,7 @@ fn cell_nodes(prefix: &str) -> Result<Vec<NodeInfo>> {
     Ok(out)
 }
 
-/// Parsed common options.
+/// Options of `echo`, `hz` and `list`.
 struct Opts {
     prefix: String,
     json: bool,
@@ -79,28 +195,6 @@ struct Opts {
     once: bool,
     count: u64,
     every: u64,
-}
-
-fn parse(argv: impl Iterator<Item = String>) -> Result<Opts> {
-    let args = Args::parse(
-        argv,
-        &["--prefix", "--count", "--every", "--seconds"],
-        &["--json", "--once"],
-    )
-    .map_err(|e| format!("{e}; {USAGE}"))?;
-    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
-    let seconds = args.parse_value::<f64>("--seconds")?;
-    if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
-        return Err("--seconds must be positive".into());
-    }
-    Ok(Opts {
-        prefix,
-        json: args.has("--json"),
-        seconds,
-        once: args.has("--once"),
-        count: args.parse_value::<u64>("--count")?.unwrap_or(u64::MAX),
-        every: args.parse_value::<u64>("--every")?.unwrap_or(1).max(1),
-    })
 }
 
 /// Fail unless some live node runs under the prefix; return the nodes.
@@ -119,27 +213,73 @@ fn monitor_node(prefix: &str) -> Result<IpcNode, IpcError> {
     node(&format!("monitor{}", std::process::id()), prefix)
 }
 
-fn body() -> Result {
-    let mut argv = std::env::args().skip(1);
-    let cmd = argv.next().ok_or(USAGE)?;
-    let channel = match cmd.as_str() {
-        "echo" | "hz" => {
-            let c = argv.next().ok_or(USAGE)?;
-            probe::check_channel(&c)?;
-            Some(c)
-        }
-        "list" | "top" => None,
-        other => return Err(format!("unknown command '{other}'; {USAGE}").into()),
+fn body(cli: Cli) -> Result {
+    let prefix = phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    let mut o = Opts {
+        prefix,
+        json: false,
+        seconds: None,
+        once: false,
+        count: u64::MAX,
+        every: 1,
     };
-    let opts = parse(argv)?;
-    let nodes = require_cell(&opts.prefix)?;
+    let dashboard = matches!(
+        cli.cmd,
+        Cmd::Top {
+            json: false,
+            once: false,
+            ..
+        }
+    );
+    if dashboard && !std::io::stdout().is_terminal() {
+        return Err("top: stdout is not a terminal; use `top --once` for one text snapshot or `top --json` for a JSON line per refresh".into());
+    }
+    let nodes = require_cell(&o.prefix)?;
     let shutdown = Shutdown::install()?;
-    let node = monitor_node(&opts.prefix)?;
-    match cmd.as_str() {
-        "echo" => echo(&node, &channel.unwrap(), &opts, &shutdown),
-        "hz" => hz(&node, &channel.unwrap(), &opts, &shutdown),
-        "list" => list(&node, nodes, &opts, &shutdown),
-        _ => top(&node, &opts, &shutdown),
+    let node = monitor_node(&o.prefix)?;
+    match cli.cmd {
+        Cmd::Echo {
+            channel,
+            count,
+            every,
+            seconds,
+            json,
+        } => {
+            o.count = count.unwrap_or(u64::MAX);
+            o.every = every.max(1);
+            o.seconds = seconds;
+            o.json = json;
+            echo(&node, &channel, &o, &shutdown)
+        }
+        Cmd::Hz {
+            channel,
+            seconds,
+            once,
+            json,
+        } => {
+            o.seconds = Some(seconds);
+            o.once = once;
+            o.json = json;
+            hz(&node, &channel, &o, &shutdown)
+        }
+        Cmd::List { seconds, json } => {
+            o.seconds = Some(seconds);
+            o.json = json;
+            list(&node, nodes, &o, &shutdown)
+        }
+        Cmd::Top {
+            seconds,
+            json,
+            once,
+        } => {
+            let end = seconds.map(Duration::from_secs_f64);
+            if json || once {
+                top_lines(&node, &o.prefix, end, json, once, &shutdown)
+            } else {
+                top_dashboard(&node, &o.prefix, end, &shutdown)
+            }
+        }
+        Cmd::Completions { .. } => Ok(()),
     }
 }
 
@@ -156,7 +296,7 @@ fn echo(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
             if json {
                 println!("{v}");
             } else {
-                println!("{}", text_line(&v));
+                println!("{}", top::echo_fields(&v).join(" "));
             }
             printed += 1;
         }
@@ -172,18 +312,6 @@ fn echo(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
         }
     }
     Ok(())
-}
-
-/// One compact human-readable line from a JSON value: `key=value` pairs.
-fn text_line(v: &Value) -> String {
-    match v {
-        Value::Object(m) => m
-            .iter()
-            .map(|(k, v)| format!("{k}={}", v))
-            .collect::<Vec<_>>()
-            .join(" "),
-        other => other.to_string(),
-    }
 }
 
 /// The error of a channel that does not exist.
@@ -227,20 +355,6 @@ fn f(v: &Value, key: &str, digits: usize) -> String {
     match v.get(key).and_then(|x| x.as_f64()) {
         Some(x) => format!("{x:.digits$}"),
         None => "-".into(),
-    }
-}
-
-fn human_bytes(v: &Value) -> String {
-    let b = v
-        .get("bandwidth_bps")
-        .and_then(|x| x.as_f64())
-        .unwrap_or(0.0);
-    if b >= 1e6 {
-        format!("{:.1} MB/s", b / 1e6)
-    } else if b >= 1e3 {
-        format!("{:.1} kB/s", b / 1e3)
-    } else {
-        format!("{b:.0} B/s")
     }
 }
 
@@ -322,7 +436,7 @@ fn hz(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
                 f(&v, "mean_interval_ms", 3),
                 f(&v, "max_interval_ms", 3),
                 f(&v, "age_ms", 2),
-                human_bytes(&v),
+                top::human_bandwidth(v["bandwidth_bps"].as_f64().unwrap_or(0.0)),
                 v["drops"],
                 v["samples"],
                 v["publishers"],
@@ -337,170 +451,254 @@ fn hz(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
     Ok(())
 }
 
-const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
-const SPARK_LEN: usize = 60;
+/// `top`'s data side: every channel's probe, and the newest messages read into a [`TopState`].
+struct Sampler {
+    probes: Vec<Box<dyn Probe>>,
+    i_state: usize,
+    i_status: usize,
+    i_res: usize,
+    i_health: usize,
+    i_collab: usize,
+    /// each stream's mean interval when last measured [ms]
+    known_mean_ms: HashMap<&'static str, f64>,
+}
 
-fn sparkline(values: &VecDeque<f64>) -> String {
-    let finite = values.iter().copied().filter(|x| x.is_finite());
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
-        (l.min(x), h.max(x))
-    });
-    values
-        .iter()
-        .map(|&x| {
-            if !x.is_finite() {
-                ' '
-            } else if hi - lo < 1e-12 {
-                BARS[0]
-            } else {
-                BARS[(((x - lo) / (hi - lo)) * 7.0).round().clamp(0.0, 7.0) as usize]
-            }
+impl Sampler {
+    fn open(node: &IpcNode) -> Result<Sampler> {
+        let probes = probe::open_all(node)?;
+        let idx = |name: &str| {
+            probes
+                .iter()
+                .position(|p| p.name() == name)
+                .ok_or_else(|| format!("channel '{name}' has no probe"))
+        };
+        Ok(Sampler {
+            i_state: idx(ROBOT_STATE.name)?,
+            i_status: idx(CONTROL_STATUS.name)?,
+            i_res: idx(DYNAMICS_RESIDUAL.name)?,
+            i_health: idx(SUPERVISOR_HEALTH.name)?,
+            i_collab: idx(COLLAB_STATE.name)?,
+            known_mean_ms: HashMap::new(),
+            probes,
         })
-        .collect()
-}
-
-fn push(h: &mut VecDeque<f64>, x: f64) {
-    if h.len() == SPARK_LEN {
-        h.pop_front();
     }
-    h.push_back(x);
-}
 
-fn top(node: &IpcNode, o: &Opts, sd: &Shutdown) -> Result {
-    let mut probes = probe::open_all(node)?;
-    let idx = |name: &str| probes.iter().position(|p| p.name() == name).unwrap();
-    let (i_status, i_res, i_health, i_collab) = (
-        idx(CONTROL_STATUS.name),
-        idx(DYNAMICS_RESIDUAL.name),
-        idx(SUPERVISOR_HEALTH.name),
-        idx(COLLAB_STATE.name),
-    );
-    let (mut dist_h, mut norm_h) = (VecDeque::new(), VecDeque::new());
-    let refresh = Duration::from_millis(250);
-    let window_ns = 1_000_000_000;
-    let t_start = Instant::now();
-    let end = o.seconds.map(Duration::from_secs_f64);
-    while !sd.requested() && end.is_none_or(|e| t_start.elapsed() < e) {
-        let t0 = Instant::now();
-        while t0.elapsed() < refresh && !sd.requested() {
-            std::thread::sleep(POLL);
-            poll_all(&mut probes)?;
+    /// Drain every channel's queue into its statistics.
+    fn poll(&mut self) -> Result<(), IpcError> {
+        poll_all(&mut self.probes)
+    }
+
+    /// One refresh at `t_s` [s since start]: trim the statistics to their
+    /// window, read the newest messages into `st`, extend the plots; the
+    /// channels' figures are returned as `top --json` prints them.
+    fn refresh(
+        &mut self,
+        node: &IpcNode,
+        st: &mut TopState,
+        t_s: f64,
+    ) -> Result<serde_json::Map<String, Value>, IpcError> {
+        for p in self.probes.iter_mut() {
+            p.stats_mut().trim(WINDOW_NS);
         }
-        for p in probes.iter_mut() {
-            p.stats_mut().trim(window_ns);
-        }
-        let status: Option<ControlStatus> = last(probes[i_status].as_ref());
-        let residual: Option<Residual> = last(probes[i_res].as_ref());
-        let health: Option<Health> = last(probes[i_health].as_ref());
-        let collab: Option<CollabState> = last(probes[i_collab].as_ref());
-        let phase = collab.map(|c| CollabPhase::name_of(c.phase));
-        // F̂ of the collaborative contact [N], base frame
-        let force = collab
-            .filter(|c| c.n_forces > 0 && c.phase != CollabPhase::Idle as u32)
-            .map(|c| c.forces[0].force);
-        if let Some(s) = &status {
-            push(&mut dist_h, s.min_distance);
-        }
-        if let Some(r) = &residual {
-            push(&mut norm_h, r.norm);
-        }
-        let services: Vec<Value> = health
+        let state: Option<JointState> = last(self.probes[self.i_state].as_ref());
+        let status: Option<ControlStatus> = last(self.probes[self.i_status].as_ref());
+        let residual: Option<Residual> = last(self.probes[self.i_res].as_ref());
+        let health: Option<Health> = last(self.probes[self.i_health].as_ref());
+        let collab: Option<CollabState> = last(self.probes[self.i_collab].as_ref());
+        st.t_s = t_s;
+        st.snapshot = Snapshot {
+            mode: status.map(|s| ControlMode::name_of(s.mode)),
+            min_distance: status.map(|s| s.min_distance).filter(|x| x.is_finite()),
+            residual_norm: residual.map(|r| r.norm).filter(|x| x.is_finite()),
+            residual_flags: residual.map_or(0, |r| r.flags),
+            collab_phase: collab.map(|c| CollabPhase::name_of(c.phase)),
+            contact_force: collab
+                .filter(|c| c.n_forces > 0 && c.phase != CollabPhase::Idle as u32)
+                .map(|c| c.forces[0].force),
+            braking: state.is_some_and(|s| s.status & robot_status::BRAKING != 0),
+            health_seen: health.is_some(),
+        };
+        st.services = health
             .map(|h| {
                 h.services[..(h.count as usize).min(MAX_SERVICES)]
                     .iter()
-                    .map(|s| {
-                        json!({"name": s.name_str(), "pid": s.pid, "alive": s.alive != 0,
-                               "restarts": s.restarts})
+                    .map(|s| ServiceRow {
+                        name: s.name_str().to_string(),
+                        pid: s.pid,
+                        alive: s.alive != 0,
+                        restarts: s.restarts,
                     })
                     .collect()
             })
             .unwrap_or_default();
-        let mode = status.map(|s| ControlMode::name_of(s.mode));
-        let min_d = status.map(|s| s.min_distance).filter(|x| x.is_finite());
-        let norm = residual.map(|r| r.norm).filter(|x| x.is_finite());
-        if o.json {
-            let channels = channels_json(node, &probes)?;
-            println!(
-                "{}",
-                json!({"prefix": o.prefix, "t_s": t_start.elapsed().as_secs_f64(),
-                       "mode": mode, "min_distance": min_d, "residual_norm": norm,
-                       "collab_phase": phase, "contact_force_n": force,
-                       "services": services, "channels": channels})
-            );
-        } else {
-            let mut s = String::from("\x1b[2J\x1b[H");
-            s += &format!(
-                "phri-monitor top  prefix '{}'  t {:.1} s  (Ctrl-C quits)\n\n",
-                o.prefix,
-                t_start.elapsed().as_secs_f64()
-            );
-            s += &format!(
-                "mode {}   min distance {}   residual norm {}\n",
-                mode.unwrap_or("-"),
-                min_d.map_or("-".into(), |d| format!("{d:.3} m")),
-                norm.map_or("-".into(), |n| format!("{n:.2} Nm"))
-            );
-            s += &format!(
-                "collaboration {}   F̂ {}\n",
-                phase.unwrap_or("-"),
-                force.map_or("-".into(), |f| {
-                    let n = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
-                    format!("{n:.1} N [{:.1}, {:.1}, {:.1}]", f[0], f[1], f[2])
-                })
-            );
-            s += &format!("  distance {}\n", sparkline(&dist_h));
-            s += &format!("  residual {}\n\n", sparkline(&norm_h));
-            s += &format!(
-                "{:<22} {:>4} {:>4} {:>9} {:>9} {:>9} {:>9} {:>11} {:>6}\n",
-                "channel",
-                "pub",
-                "sub",
-                "rate Hz",
-                "mean ms",
-                "max ms",
-                "age ms",
-                "bandwidth",
-                "drops"
-            );
-            for p in &probes {
-                if !p.present() {
-                    s += &format!("{:<22} (absent)\n", p.name());
-                    continue;
+        let channels = channels_json(node, &self.probes)?;
+        st.channels = self
+            .probes
+            .iter()
+            .map(|p| {
+                let v = channels.get(p.name()).unwrap_or(&Value::Null);
+                let name = p.name();
+                if let Some(m) = v.get("mean_interval_ms").and_then(Value::as_f64) {
+                    self.known_mean_ms.insert(name, m);
                 }
-                let v = channel_json(node, p.as_ref())?;
-                s += &format!(
-                    "{:<22} {:>4} {:>4} {:>9} {:>9} {:>9} {:>9} {:>11} {:>6}\n",
-                    p.name(),
-                    v["publishers"].to_string(),
-                    v["subscribers"].to_string(),
-                    f(&v, "rate_hz", 1),
-                    f(&v, "mean_interval_ms", 3),
-                    f(&v, "max_interval_ms", 3),
-                    f(&v, "age_ms", 2),
-                    human_bytes(&v),
-                    v["total_drops"].to_string()
-                );
+                let known = self.known_mean_ms.get(name).copied();
+                let recv_age = p.stats().recv_age_ms();
+                ChannelRow::from_json(name, v, ON_DEMAND.contains(&name), known, recv_age)
+            })
+            .collect();
+        let h = &mut st.history;
+        if let Some(s) = status {
+            h.distance.push(t_s, s.min_distance);
+        }
+        if let Some(r) = residual {
+            h.residual.push(t_s, r.norm);
+        }
+        if let Some(s) = state {
+            let dof = (s.dof as usize).min(MAX_DOF);
+            h.torque.resize_with(dof, Default::default);
+            for (series, &tau) in h.torque.iter_mut().zip(&s.tau[..dof]) {
+                series.push(t_s, tau);
             }
-            s += &format!(
-                "\n{:<16} {:>8} {:>6} {:>9}\n",
-                "service", "pid", "alive", "restarts"
-            );
-            for sv in &services {
-                s += &format!(
-                    "{:<16} {:>8} {:>6} {:>9}\n",
-                    sv["name"].as_str().unwrap_or("?"),
-                    sv["pid"].to_string(),
-                    if sv["alive"] == json!(true) {
-                        "yes"
-                    } else {
-                        "NO"
-                    },
-                    sv["restarts"].to_string()
-                );
+        }
+        self.follow_echo(st);
+        Ok(channels)
+    }
+
+    /// Keep the echoed channel's newest message in `st` (and only that
+    /// channel's frames summarised).
+    fn follow_echo(&mut self, st: &mut TopState) {
+        let shown = match st.view {
+            View::Echo(name) => Some(name),
+            View::Channels => None,
+        };
+        for p in self.probes.iter_mut() {
+            let on = shown == Some(p.name());
+            p.keep_latest(on);
+            if on {
+                if let Some(v) = p.latest() {
+                    st.echo = Some(v);
+                }
             }
-            print!("{s}");
-            use std::io::Write;
-            let _ = std::io::stdout().flush();
+        }
+    }
+}
+
+/// `top`'s JSON line (`--json`): the snapshot, the services and every channel's figures.
+fn top_json(
+    prefix: &str,
+    t_s: f64,
+    st: &TopState,
+    channels: serde_json::Map<String, Value>,
+) -> Value {
+    let s = &st.snapshot;
+    let services: Vec<Value> = st
+        .services
+        .iter()
+        .map(|s| json!({"name": s.name, "pid": s.pid, "alive": s.alive, "restarts": s.restarts}))
+        .collect();
+    json!({"prefix": prefix, "t_s": t_s,
+           "mode": s.mode, "min_distance": s.min_distance, "residual_norm": s.residual_norm,
+           "collab_phase": s.collab_phase, "contact_force_n": s.contact_force,
+           "services": services, "channels": channels})
+}
+
+/// `top --json` (a line per refresh) and `top --once` (watch [`ONCE_SPAN`],
+/// then one snapshot: the dashboard as text, or one JSON line).
+fn top_lines(
+    node: &IpcNode,
+    prefix: &str,
+    end: Option<Duration>,
+    json: bool,
+    once: bool,
+    sd: &Shutdown,
+) -> Result {
+    let mut sampler = Sampler::open(node)?;
+    let mut st = TopState::new(prefix);
+    let t_start = Instant::now();
+    let ended = |t: Duration| end.is_some_and(|e| t >= e);
+    while !sd.requested() && !ended(t_start.elapsed()) {
+        let t0 = Instant::now();
+        while t0.elapsed() < REFRESH && !sd.requested() {
+            std::thread::sleep(POLL);
+            sampler.poll()?;
+        }
+        let channels = sampler.refresh(node, &mut st, t_start.elapsed().as_secs_f64())?;
+        let t = t_start.elapsed();
+        let done = once && (t >= ONCE_SPAN || sd.requested() || ended(t));
+        if json && (!once || done) {
+            println!("{}", top_json(prefix, t.as_secs_f64(), &st, channels));
+        }
+        if done {
+            if !json {
+                print!("{}", snapshot_text(&st));
+            }
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// The dashboard drawn off screen at the terminal's size (else
+/// [`SNAPSHOT_SIZE`]), as plain text.
+fn snapshot_text(st: &TopState) -> String {
+    let (w, h) = if std::io::stdout().is_terminal() {
+        ratatui::crossterm::terminal::size().unwrap_or(SNAPSHOT_SIZE)
+    } else {
+        SNAPSHOT_SIZE
+    };
+    let area = ratatui::layout::Rect::new(0, 0, w, h);
+    let mut buf = ratatui::buffer::Buffer::empty(area);
+    top::render(st, area, &mut buf);
+    top::buffer_text(&buf)
+}
+
+/// Gives the terminal back (raw mode off, main screen) however the dashboard ends;
+/// a panic is covered by the hook `ratatui::try_init` installs.
+struct RestoreTerminal;
+
+impl Drop for RestoreTerminal {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+/// The live dashboard: redrawn (only the cells that changed) at each refresh,
+/// key and resize; keys as [`top::on_key`].
+fn top_dashboard(node: &IpcNode, prefix: &str, end: Option<Duration>, sd: &Shutdown) -> Result {
+    use ratatui::crossterm::event::{self, Event};
+    let mut sampler = Sampler::open(node)?;
+    let mut st = TopState::new(prefix);
+    let mut term =
+        ratatui::try_init().map_err(|e| format!("top: cannot set up the terminal: {e}"))?;
+    let _restore = RestoreTerminal;
+    let t_start = Instant::now();
+    let mut next = t_start + REFRESH;
+    let mut dirty = true;
+    while !sd.requested() && end.is_none_or(|e| t_start.elapsed() < e) {
+        if dirty {
+            term.draw(|f| top::render(&st, f.area(), f.buffer_mut()))?;
+            dirty = false;
+        }
+        // waiting for a key is the pause between polls
+        if event::poll(POLL)? {
+            match event::read()? {
+                Event::Key(k) => {
+                    if top::on_key(&mut st, k) == KeyOutcome::Quit {
+                        break;
+                    }
+                    sampler.follow_echo(&mut st);
+                    dirty = true;
+                }
+                Event::Resize(..) => dirty = true,
+                _ => {}
+            }
+        }
+        sampler.poll()?;
+        let now = Instant::now();
+        if now >= next {
+            sampler.refresh(node, &mut st, t_start.elapsed().as_secs_f64())?;
+            next = (next + REFRESH).max(now);
+            dirty = true;
         }
     }
     Ok(())

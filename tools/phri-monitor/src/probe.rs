@@ -34,6 +34,8 @@ pub struct Stats {
     events: VecDeque<Event>,
     last_seq: HashMap<u64, u64>,
     newest_pub_ns: Option<u64>,
+    /// when the newest sample was received [ns, CLOCK_MONOTONIC]
+    newest_recv_ns: Option<u64>,
     window_start_ns: u64,
     pub total_samples: u64,
     pub total_drops: u64,
@@ -53,6 +55,7 @@ impl Stats {
         if pub_ns.is_some() {
             self.newest_pub_ns = pub_ns;
         }
+        self.newest_recv_ns = Some(now_ns());
     }
 
     fn record(&mut self, stream: u64, seq: u64, pub_ns: Option<u64>, bytes: usize) {
@@ -65,6 +68,7 @@ impl Stats {
         if pub_ns.is_some() {
             self.newest_pub_ns = pub_ns;
         }
+        self.newest_recv_ns = Some(now);
         self.total_samples += 1;
         self.total_drops += drops;
         self.events.push_back(Event {
@@ -89,6 +93,13 @@ impl Stats {
             self.events.pop_front();
         }
         self.window_start_ns = self.window_start_ns.max(cut);
+    }
+
+    /// Time since the newest sample was received [ms] (streams whose
+    /// messages carry no publish time have no `age_ms`).
+    pub fn recv_age_ms(&self) -> Option<f64> {
+        self.newest_recv_ns
+            .map(|r| now_ns().saturating_sub(r) as f64 * 1e-6)
     }
 
     /// The window's figures as JSON (`null` where unknown).
@@ -137,6 +148,12 @@ pub trait Probe {
     fn stats(&self) -> &Stats;
     fn stats_mut(&mut self) -> &mut Stats;
     fn as_any(&self) -> &dyn Any;
+    /// the newest sample as `echo` shows it (`None`: none seen, or a frame
+    /// channel not asked to [`Probe::keep_latest`])
+    fn latest(&self) -> Option<Value>;
+    /// keep the newest sample's JSON while polling (frames: a pass over the
+    /// pixels each, so only while someone looks; messages always keep it)
+    fn keep_latest(&mut self, on: bool);
 }
 
 /// The ports of a channel the probe subscribed to, this monitor's subscriber left out.
@@ -216,6 +233,10 @@ impl<T: Message> Probe for MsgProbe<T> {
     fn as_any(&self) -> &dyn Any {
         self
     }
+    fn latest(&self) -> Option<Value> {
+        self.last.as_ref().map(to_json)
+    }
+    fn keep_latest(&mut self, _on: bool) {}
 }
 
 /// Probe of a depth-frame channel (`[u16]` with a [`FrameHeader`]).
@@ -223,6 +244,9 @@ pub struct FrameProbe {
     channel: FrameChannel,
     sub: Option<FrameSubscriber>,
     stats: Stats,
+    /// the newest frame's summary, while [`Probe::keep_latest`] is on
+    latest: Option<Value>,
+    keep: bool,
 }
 
 impl FrameProbe {
@@ -232,6 +256,8 @@ impl FrameProbe {
             channel,
             sub,
             stats: Stats::new(),
+            latest: None,
+            keep: false,
         };
         if let Some(s) = &p.sub {
             while let Some(f) = s.receive()? {
@@ -265,6 +291,9 @@ impl Probe for FrameProbe {
             let h = *f.user_header();
             let bytes = f.payload().len() * 2 + std::mem::size_of::<FrameHeader>();
             self.stats.record(0, h.seq, Some(h.published_ns), bytes);
+            if self.keep {
+                self.latest = Some(frame_json(&h, f.payload()));
+            }
             if let Some(cb) = each.as_mut() {
                 if !cb(frame_json(&h, f.payload())) {
                     return Ok(false);
@@ -281,6 +310,15 @@ impl Probe for FrameProbe {
     }
     fn as_any(&self) -> &dyn Any {
         self
+    }
+    fn latest(&self) -> Option<Value> {
+        self.latest.clone()
+    }
+    fn keep_latest(&mut self, on: bool) {
+        self.keep = on;
+        if !on {
+            self.latest = None;
+        }
     }
 }
 
@@ -307,17 +345,6 @@ impl ChannelVisitor for Opener<'_> {
     }
     fn frames(&mut self, channel: FrameChannel) {
         self.add(|node| FrameProbe::open(node, channel));
-    }
-}
-
-/// `name` if it is a channel of the cell.
-pub fn check_channel(name: &str) -> Result<(), ProbeError> {
-    if ALL.contains(&name) {
-        Ok(())
-    } else {
-        Err(ProbeError::UnknownChannel {
-            name: name.to_string(),
-        })
     }
 }
 

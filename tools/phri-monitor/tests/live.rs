@@ -1,5 +1,5 @@
 //! Starts a real cell (the release supervisor, free-motion scenario) and checks
-//! what `phri-monitor list` and `hz` measure on it, and that the monitor only
+//! what `phri-monitor list`, `hz` and `top --once` measure on it, and that the monitor only
 //! ever subscribes (the cell's publisher counts are unchanged).
 
 use std::path::{Path, PathBuf};
@@ -67,10 +67,46 @@ fn errors_are_one_line_and_exit_2() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains(&format!("'{prefix}'")), "{err}");
+    // the dashboard needs a terminal: said before looking for a cell
+    let out = monitor(&["top", "--prefix", prefix.as_str()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("not a terminal") && err.contains("--once"),
+        "{err}"
+    );
+    // a mistyped flag: one line naming it, with clap's suggestion
+    let out = monitor(&["list", "--jsn"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--jsn") && err.contains("--json"), "{err}");
 }
 
 #[test]
-fn list_and_hz_on_a_live_cell() {
+fn completions_list_the_subcommands_and_channels() {
+    let out = monitor(&["completions", "bash"]);
+    assert!(out.status.success());
+    let script = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "echo",
+        "hz",
+        "list",
+        "top",
+        "--prefix",
+        "--once",
+        "robot/state",
+    ] {
+        assert!(
+            script.contains(word),
+            "{word} missing from the bash completions"
+        );
+    }
+}
+
+#[test]
+fn list_hz_and_top_on_a_live_cell() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     // the cell's binaries sit beside this package's (same target directory)
     let supervisor =
@@ -86,7 +122,7 @@ fn list_and_hz_on_a_live_cell() {
     let mut cell = Command::new(&supervisor)
         .current_dir(&root)
         .args(["--config", "deploy/phri.toml", "--scenario", "free-motion"])
-        .args(["--duration", "8", "--prefix", &prefix, "--run-dir"])
+        .args(["--duration", "11", "--prefix", &prefix, "--run-dir"])
         .arg(&run_dir)
         .stdout(Stdio::null())
         .stderr(Stdio::inherit())
@@ -181,6 +217,52 @@ fn list_and_hz_on_a_live_cell() {
     let rate = hz["rate_hz"].as_f64().unwrap_or(0.0);
     let expected_bw = rate * std::mem::size_of::<phri_ipc::JointState>() as f64;
     assert!(within(bw, expected_bw, 0.03), "{hz}");
+
+    // top --json --once: one JSON line of the snapshot
+    let top = json_of(&monitor(&["top", "--json", "--once", "--prefix", &prefix]));
+    eprintln!("top: {top}");
+    assert_eq!(top["prefix"], prefix.as_str());
+    assert!(top["mode"].is_string(), "{top}");
+    assert!(
+        top["min_distance"].is_number() || top["min_distance"].is_null(),
+        "{top}"
+    );
+    let services = top["services"].as_array().expect("services");
+    assert!(
+        services
+            .iter()
+            .any(|s| s["name"] == "sim" && s["alive"] == true),
+        "{services:?}"
+    );
+    assert_eq!(
+        top["channels"].as_object().expect("channels").len(),
+        phri_ipc::ALL.len()
+    );
+    assert!(
+        rate_ok(&top["channels"]["robot/state"], 1000.0, 0.2),
+        "{top}"
+    );
+    // top --once: the dashboard as text, without a terminal
+    let out = monitor(&["top", "--once", "--prefix", &prefix]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "phri-monitor top",
+        &format!("prefix '{prefix}'"),
+        "mode ",
+        "robot/state",
+        "services (supervisor/health)",
+        "sim",
+        "min distance [m]",
+        "joint torque",
+    ] {
+        assert!(text.contains(needle), "'{needle}' missing from\n{text}");
+    }
+    assert!(!text.contains('\x1b'), "plain text, no escape codes");
 
     let t0 = Instant::now();
     let status = loop {
