@@ -5,6 +5,8 @@ pub mod config;
 pub mod foxglove;
 pub mod json;
 pub mod plot;
+pub mod progress;
+pub mod svg;
 pub mod text;
 
 use phri_ipc::{visit_named, Channel, ChannelVisitor, FrameChannel, Message};

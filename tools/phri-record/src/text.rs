@@ -1,129 +1,120 @@
-//! Text for the plots: a 5×7 bitmap font (digits, capitals, the punctuation
-//! of units and numbers), drawn at an integer scale. A character without a
-//! glyph is drawn as a box.
+//! Text for the figures: DejaVu Sans (a subset, committed under
+//! `assets/` with its licence and embedded in the binary, so no system font
+//! is needed), laid out with its advances and kerning and rasterised
+//! anti-aliased with `ab_glyph`. The SVG writer ([`crate::svg`]) embeds the
+//! same font, so a figure's text measures the same in PNG and SVG.
+//!
+//! Sizes are font sizes in pixels (the em height); positions are pixels of
+//! the canvas, x to the right, y down, a pixel `(i, j)` covering
+//! `[i, i+1] × [j, j+1]`.
+
+use std::sync::OnceLock;
+
+use ab_glyph::{point, Font, FontRef, GlyphId, PxScale, ScaleFont};
 
 use crate::plot::{Canvas, Rgb};
 
-/// Glyph cell: 5 columns × 7 rows, plus 1 column of spacing.
-pub const GLYPH_W: i64 = 5;
-pub const GLYPH_H: i64 = 7;
-const ADVANCE: i64 = GLYPH_W + 1;
+/// The embedded font file (TrueType): DejaVu Sans 2.37, subset.
+pub const FONT_TTF: &[u8] = include_bytes!("../assets/DejaVuSans-subset.ttf");
+/// The font's family name as the SVG declares it.
+pub const FONT_FAMILY: &str = "DejaVu Sans";
 
-/// Rows of a glyph, top first; bit 4 is the leftmost column.
-fn glyph(ch: char) -> [u8; 7] {
-    match ch {
-        '0' => [0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e],
-        '1' => [0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e],
-        '2' => [0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f],
-        '3' => [0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e],
-        '4' => [0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02],
-        '5' => [0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e],
-        '6' => [0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e],
-        '7' => [0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08],
-        '8' => [0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e],
-        '9' => [0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c],
-        'A' => [0x0e, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11],
-        'B' => [0x1e, 0x11, 0x11, 0x1e, 0x11, 0x11, 0x1e],
-        'C' => [0x0e, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0e],
-        'D' => [0x1c, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1c],
-        'E' => [0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f],
-        'F' => [0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x10],
-        'G' => [0x0e, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0f],
-        'H' => [0x11, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11],
-        'I' => [0x0e, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e],
-        'J' => [0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0c],
-        'K' => [0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11],
-        'L' => [0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1f],
-        'M' => [0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11],
-        'N' => [0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11],
-        'O' => [0x0e, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e],
-        'P' => [0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10, 0x10],
-        'Q' => [0x0e, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0d],
-        'R' => [0x1e, 0x11, 0x11, 0x1e, 0x14, 0x12, 0x11],
-        'S' => [0x0f, 0x10, 0x10, 0x0e, 0x01, 0x01, 0x1e],
-        'T' => [0x1f, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04],
-        'U' => [0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e],
-        'V' => [0x11, 0x11, 0x11, 0x11, 0x11, 0x0a, 0x04],
-        'W' => [0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0a],
-        'X' => [0x11, 0x11, 0x0a, 0x04, 0x0a, 0x11, 0x11],
-        'Y' => [0x11, 0x11, 0x11, 0x0a, 0x04, 0x04, 0x04],
-        'Z' => [0x1f, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1f],
-        'a' => [0, 0, 0x0e, 0x01, 0x0f, 0x11, 0x0f],
-        'b' => [0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x1e],
-        'c' => [0, 0, 0x0e, 0x10, 0x10, 0x11, 0x0e],
-        'd' => [0x01, 0x01, 0x0d, 0x13, 0x11, 0x11, 0x0f],
-        'e' => [0, 0, 0x0e, 0x11, 0x1f, 0x10, 0x0e],
-        'f' => [0x06, 0x09, 0x08, 0x1c, 0x08, 0x08, 0x08],
-        'g' => [0, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x0e],
-        'h' => [0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11],
-        'i' => [0x04, 0, 0x0c, 0x04, 0x04, 0x04, 0x0e],
-        'j' => [0x02, 0, 0x06, 0x02, 0x02, 0x12, 0x0c],
-        'k' => [0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12],
-        'l' => [0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e],
-        'm' => [0, 0, 0x1a, 0x15, 0x15, 0x11, 0x11],
-        'n' => [0, 0, 0x16, 0x19, 0x11, 0x11, 0x11],
-        'o' => [0, 0, 0x0e, 0x11, 0x11, 0x11, 0x0e],
-        'p' => [0, 0, 0x1e, 0x11, 0x1e, 0x10, 0x10],
-        'q' => [0, 0, 0x0d, 0x13, 0x0f, 0x01, 0x01],
-        'r' => [0, 0, 0x16, 0x19, 0x10, 0x10, 0x10],
-        's' => [0, 0, 0x0e, 0x10, 0x0e, 0x01, 0x1e],
-        't' => [0x08, 0x08, 0x1c, 0x08, 0x08, 0x09, 0x06],
-        'u' => [0, 0, 0x11, 0x11, 0x11, 0x13, 0x0d],
-        'v' => [0, 0, 0x11, 0x11, 0x11, 0x0a, 0x04],
-        'w' => [0, 0, 0x11, 0x11, 0x15, 0x15, 0x0a],
-        'x' => [0, 0, 0x11, 0x0a, 0x04, 0x0a, 0x11],
-        'y' => [0, 0, 0x11, 0x11, 0x0f, 0x01, 0x0e],
-        'z' => [0, 0, 0x1f, 0x02, 0x04, 0x08, 0x1f],
-        ' ' => [0; 7],
-        '.' => [0, 0, 0, 0, 0, 0x0c, 0x0c],
-        ',' => [0, 0, 0, 0, 0x0c, 0x04, 0x08],
-        '-' => [0, 0, 0, 0x1f, 0, 0, 0],
-        '+' => [0, 0x04, 0x04, 0x1f, 0x04, 0x04, 0],
-        '[' => [0x0e, 0x08, 0x08, 0x08, 0x08, 0x08, 0x0e],
-        ']' => [0x0e, 0x02, 0x02, 0x02, 0x02, 0x02, 0x0e],
-        '(' => [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02],
-        ')' => [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08],
-        '/' => [0, 0x01, 0x02, 0x04, 0x08, 0x10, 0],
-        ':' => [0, 0x0c, 0x0c, 0, 0x0c, 0x0c, 0],
-        '=' => [0, 0, 0x1f, 0, 0x1f, 0, 0],
-        '|' => [0x04; 7],
-        '%' => [0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03],
-        '<' => [0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02],
-        '>' => [0x08, 0x04, 0x02, 0x01, 0x02, 0x04, 0x08],
-        '_' => [0, 0, 0, 0, 0, 0, 0x1f],
-        _ => [0x1f, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1f],
+/// The embedded font, parsed once.
+pub fn font() -> &'static FontRef<'static> {
+    static FONT: OnceLock<FontRef<'static>> = OnceLock::new();
+    // the font is a constant of the build, checked by a unit test
+    FONT.get_or_init(|| FontRef::try_from_slice(FONT_TTF).expect("the embedded font parses"))
+}
+
+/// Where a text's x coordinate is: its start, its middle or its end
+/// (SVG's `text-anchor`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Anchor {
+    Start,
+    Middle,
+    End,
+}
+
+impl Anchor {
+    /// The fraction of the text's width left of the anchor.
+    pub fn fraction(self) -> f64 {
+        match self {
+            Anchor::Start => 0.0,
+            Anchor::Middle => 0.5,
+            Anchor::End => 1.0,
+        }
+    }
+
+    /// SVG `text-anchor` value.
+    pub fn svg(self) -> &'static str {
+        match self {
+            Anchor::Start => "start",
+            Anchor::Middle => "middle",
+            Anchor::End => "end",
+        }
     }
 }
 
-/// Width of `s` in pixels at `scale`.
-pub fn width(s: &str, scale: i64) -> i64 {
-    let n = s.chars().count() as i64;
-    if n == 0 {
-        0
-    } else {
-        (n * ADVANCE - 1) * scale
+/// `ab_glyph`'s scale for a font size of `size` [px, the em as in CSS's
+/// `font-size`]: `ab_glyph` scales the ascent-to-descent height to the given
+/// pixels, SVG the em.
+fn px_scale(size: f64) -> PxScale {
+    let f = font();
+    let em = f.units_per_em().unwrap_or(2048.0);
+    PxScale::from(size as f32 * f.height_unscaled() / em)
+}
+
+/// The glyphs of `s` at `size` [px]: (glyph, x offset from the start [px]),
+/// and the advance of the whole line [px].
+fn layout(s: &str, size: f64) -> (Vec<(GlyphId, f32)>, f32) {
+    let f = font().as_scaled(px_scale(size));
+    let mut caret = 0.0f32;
+    let mut prev: Option<GlyphId> = None;
+    let mut out = Vec::with_capacity(s.len());
+    for ch in s.chars() {
+        let id = f.glyph_id(ch);
+        if let Some(p) = prev {
+            caret += f.kern(p, id);
+        }
+        out.push((id, caret));
+        caret += f.h_advance(id);
+        prev = Some(id);
     }
+    (out, caret)
 }
 
-/// Height of a line of text in pixels at `scale`.
-pub fn height(scale: i64) -> i64 {
-    GLYPH_H * scale
+/// Width of `s` at `size` [px]: the sum of its advances and kerning.
+pub fn width(s: &str, size: f64) -> f64 {
+    layout(s, size).1 as f64
 }
 
-/// Draw `s` with its top-left corner at (x, y) [px].
-pub fn draw(c: &mut Canvas, x: i64, y: i64, s: &str, col: Rgb, scale: i64) {
-    for (i, ch) in s.chars().enumerate() {
-        let gx = x + i as i64 * ADVANCE * scale;
-        for (r, bits) in glyph(ch).iter().enumerate() {
-            for col_i in 0..GLYPH_W {
-                if bits >> (GLYPH_W - 1 - col_i) & 1 == 1 {
-                    for dy in 0..scale {
-                        for dx in 0..scale {
-                            c.set(gx + col_i * scale + dx, y + r as i64 * scale + dy, col);
-                        }
-                    }
-                }
-            }
+/// Height of a capital letter above the baseline at `size` [px] (to centre
+/// a line of text on a point: baseline at the point's y + cap height / 2).
+pub fn cap_height(size: f64) -> f64 {
+    let f = font();
+    let id = f.glyph_id('H');
+    let em = f.units_per_em().unwrap_or(2048.0);
+    // an outline's bounds are in font units, y up: `min.y` is its top
+    let units = f.outline(id).map_or(0.73 * em, |o| o.bounds.min.y);
+    (units / em) as f64 * size
+}
+
+/// Draw `s` anti-aliased at `size` [px], its baseline at `y` and its anchor
+/// at `x` [px]: each pixel a glyph covers is blended towards `col` by the
+/// covered fraction.
+pub fn draw(c: &mut Canvas, x: f64, y: f64, s: &str, col: Rgb, size: f64, anchor: Anchor) {
+    let (glyphs, w) = layout(s, size);
+    let x0 = x - anchor.fraction() * w as f64;
+    let scale = px_scale(size);
+    for (id, dx) in glyphs {
+        let g = id.with_scale_and_position(scale, point(x0 as f32 + dx, y as f32));
+        if let Some(outline) = font().outline_glyph(g) {
+            let b = outline.px_bounds();
+            outline.draw(|gx, gy, coverage| {
+                let px = b.min.x as i64 + gx as i64;
+                let py = b.min.y as i64 + gy as i64;
+                c.blend(px, py, col, coverage);
+            });
         }
     }
 }
@@ -153,35 +144,65 @@ mod tests {
     use crate::plot::{BLACK, WHITE};
 
     #[test]
-    fn every_glyph_is_distinct_and_fits_five_columns() {
-        let chars: Vec<char> =
-            "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz .,-+[]()/:=|%<>_"
-                .chars()
-                .collect();
-        for (i, a) in chars.iter().enumerate() {
-            assert!(glyph(*a).iter().all(|r| *r < 32), "{a}");
-            for b in &chars[i + 1..] {
-                assert_ne!(glyph(*a), glyph(*b), "{a} and {b}");
-            }
+    fn the_embedded_font_has_the_glyphs_of_the_labels() {
+        let f = font();
+        for ch in "0123456789 AZaz.,-+[]()/:=|%<>_µ°²‖−≤ρτ".chars() {
+            assert_ne!(f.glyph_id(ch), GlyphId(0), "no glyph for {ch:?}");
         }
-        assert_eq!(glyph('µ'), glyph('\u{2016}'), "no glyph: a box");
+        assert_eq!(
+            f.glyph_id('\u{4e00}'),
+            GlyphId(0),
+            "a CJK character is not in the subset"
+        );
     }
 
     #[test]
-    fn draws_the_glyph_bits_scaled() {
-        let mut c = Canvas::new(40, 20);
-        draw(&mut c, 1, 2, "1-", BLACK, 2);
-        // '1' row 0 is 0b00100: column 2 only, 2×2 pixels each
-        assert_eq!(c.get(1 + 4, 2), BLACK);
-        assert_eq!(c.get(1 + 5, 3), BLACK);
-        assert_eq!(c.get(1 + 3, 2), WHITE);
-        assert_eq!(c.get(1 + 6, 2), WHITE);
-        // '-' row 3 is full, starting one advance (6 columns × 2) later
-        for x in 0..10 {
-            assert_eq!(c.get(1 + 12 + x, 2 + 6), BLACK);
-        }
-        assert_eq!(width("1-", 2), 22);
-        assert_eq!(height(2), 14);
+    fn widths_grow_with_text_and_size_and_kerning_applies() {
+        assert_eq!(width("", 16.0), 0.0);
+        let w1 = width("1", 16.0);
+        // DejaVu Sans digits advance 1303/2048 em
+        assert!((w1 - 16.0 * 1303.0 / 2048.0).abs() < 0.01, "{w1}");
+        assert!((width("11", 16.0) - 2.0 * w1).abs() < 1e-6);
+        assert!((width("11", 32.0) - 2.0 * width("11", 16.0)).abs() < 1e-4);
+        // "AV" is kerned tighter than its two advances
+        assert!(width("AV", 16.0) < width("A", 16.0) + width("V", 16.0) - 0.5);
+        let cap = cap_height(20.0);
+        assert!((14.0..15.5).contains(&cap), "{cap}");
+    }
+
+    #[test]
+    fn text_is_anti_aliased_and_anchored() {
+        let mut c = Canvas::new(120, 40);
+        draw(&mut c, 60.0, 25.0, "Hx [m]", BLACK, 16.0, Anchor::Middle);
+        let greys: Vec<u8> = c.px.chunks(3).map(|p| p[0]).collect();
+        let black = greys.iter().filter(|&&g| g < 40).count();
+        let partial = greys.iter().filter(|&&g| (40..215).contains(&g)).count();
+        assert!(black > 30, "{black} dark pixels");
+        assert!(
+            partial > 30,
+            "{partial} intermediate pixels: not anti-aliased"
+        );
+        // centred on x = 60: ink on both sides, nothing near the edges
+        let ink_cols: Vec<usize> = (0..120)
+            .filter(|&x| (0..40).any(|y| c.get(x, y) != WHITE))
+            .collect();
+        let (lo, hi) = (ink_cols[0], *ink_cols.last().unwrap());
+        assert!(lo > 5 && hi < 115, "{lo}..{hi}");
+        let w = width("Hx [m]", 16.0);
+        assert!(
+            ((lo + hi) as f64 / 2.0 - 60.0).abs() < 3.0,
+            "{lo}..{hi}, width {w}"
+        );
+        // 'H' stands on the baseline (y = 25): ink above it, none far below but the bracket's
+        assert!((0..120).all(|x| (30..40).all(|y| c.get(x, y) == WHITE || x > 60)));
+        // right-anchored text ends at its x
+        let mut c = Canvas::new(120, 40);
+        draw(&mut c, 100.0, 25.0, "10", BLACK, 16.0, Anchor::End);
+        let last = (0..120)
+            .filter(|&x| (0..40).any(|y| c.get(x, y) != WHITE))
+            .max()
+            .unwrap();
+        assert!((97..=100).contains(&last), "{last}");
     }
 
     #[test]

@@ -1,4 +1,5 @@
 //! Record a real cell for 3 s, read the MCAP back with the `mcap` crate, plot it.
+//! The recording holds the 3-D scene in Foxglove's schemas, as phri-viz serves it.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -118,8 +119,25 @@ fn record_read_back_and_plot() {
     let mut frame_pixels: BTreeMap<u32, String> = BTreeMap::new();
     let mut images: BTreeMap<u32, String> = BTreeMap::new();
     let mut last_state_t = 0u64;
+    // the scene's topics: schema name, schema encoding, message encoding; a message of each
+    let mut scene: BTreeMap<String, (String, String, String)> = BTreeMap::new();
+    let mut scene_last: BTreeMap<String, Vec<u8>> = BTreeMap::new();
     for m in mcap::MessageStream::new(&buf).expect("message stream") {
         let m = m.expect("message");
+        if m.channel.topic.starts_with("/viz/") {
+            let schema = m.channel.schema.as_ref().expect("schema");
+            scene.insert(
+                m.channel.topic.clone(),
+                (
+                    schema.name.clone(),
+                    schema.encoding.clone(),
+                    m.channel.message_encoding.clone(),
+                ),
+            );
+            scene_last.insert(m.channel.topic.clone(), m.data.to_vec());
+            *counts.entry(m.channel.topic.clone()).or_default() += 1;
+            continue;
+        }
         assert_eq!(m.channel.message_encoding, "json");
         let schema = m.channel.schema.as_ref().expect("schema");
         assert_eq!(schema.encoding, "jsonschema");
@@ -207,6 +225,75 @@ fn record_read_back_and_plot() {
     }
     assert!(counts["perception/depth"] >= 5);
     assert!(counts["robot/stats"] >= 20 && counts["supervisor/health"] >= 20);
+
+    // the 3-D scene, in Foxglove's schemas, on phri-viz's topics
+    let pb = |name: &str| {
+        (
+            name.to_string(),
+            "protobuf".to_string(),
+            "protobuf".to_string(),
+        )
+    };
+    for topic in phri_viz::topics::SCENE {
+        assert_eq!(
+            scene.get(*topic),
+            Some(&pb("foxglove.SceneUpdate")),
+            "{topic}"
+        );
+    }
+    assert_eq!(scene.get("/viz/tf"), Some(&pb("foxglove.FrameTransforms")));
+    assert_eq!(scene.get("/viz/joints"), Some(&pb("foxglove.JointStates")));
+    assert_eq!(
+        scene.get("/viz/depth/points"),
+        Some(&pb("foxglove.PointCloud"))
+    );
+    assert_eq!(
+        scene.get("/viz/depth/image"),
+        Some(&pb("foxglove.RawImage"))
+    );
+    assert_eq!(
+        scene.get("/viz/status"),
+        Some(&(
+            "phri.viz.Status".to_string(),
+            "jsonschema".to_string(),
+            "json".to_string()
+        ))
+    );
+    assert_eq!(scene.len(), phri_viz::TOPICS.len(), "{scene:?}");
+    // rates: the scene at 30 Hz, joint states at 250 Hz, a cloud per recorded filtered frame
+    let robot = counts["/viz/robot"];
+    assert!((60..=100).contains(&robot), "/viz/robot: {robot} in 3 s");
+    let joints = counts["/viz/joints"];
+    assert!(
+        (600..=800).contains(&joints),
+        "/viz/joints: {joints} in 3 s"
+    );
+    assert_eq!(counts["/viz/depth/points"], counts["perception/depth"]);
+    // and they decode: a capsule per link, seven joints, the camera's image
+    use phri_viz::foxglove::messages::{JointStates, RawImage, SceneUpdate};
+    use phri_viz::foxglove::Decode;
+    let robot = SceneUpdate::decode(&scene_last["/viz/robot"][..]).expect("SceneUpdate");
+    assert!(robot.entities.len() >= 7, "{}", robot.entities.len());
+    assert!(robot.entities.iter().all(|e| e.spheres.len() >= 2));
+    let person = SceneUpdate::decode(&scene_last["/viz/person"][..]).expect("SceneUpdate");
+    assert!(
+        !person.entities.is_empty(),
+        "the coexistence scenario's person"
+    );
+    let j = JointStates::decode(&scene_last["/viz/joints"][..]).expect("JointStates");
+    assert_eq!(j.joints.len(), 7);
+    let im = RawImage::decode(&scene_last["/viz/depth/image"][..]).expect("RawImage");
+    assert_eq!(
+        (im.width, im.height, im.encoding.as_str()),
+        (160, 120, "16UC1")
+    );
+    let status: serde_json::Value =
+        serde_json::from_slice(&scene_last["/viz/status"]).expect("JSON status");
+    assert_eq!(
+        status["residual"].as_array().map(Vec::len),
+        Some(7),
+        "{status}"
+    );
 
     // plot
     let out = tmp.join("plots");
@@ -329,6 +416,37 @@ fn record_read_back_and_plot() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("--compression 'gzip'"), "{err}");
+    // the command line: one line naming the flag, exit 2; completions
+    for (args, needle) in [
+        (vec!["--seconds", "0"], "--seconds"),
+        (vec!["--frame-every", "0"], "--frame-every"),
+        (vec!["--seconds", "soon"], "--seconds"),
+        (vec!["--sconds", "3"], "--seconds"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+            .args(["--prefix", &prefix, "--out"])
+            .arg(tmp.join("never.mcap"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+        .args(["--prefix", &prefix])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--out"), "{err}");
+    let o = Command::new(env!("CARGO_BIN_EXE_phri-record"))
+        .args(["completions", "bash"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--frame-downsample"));
 
     // the cell finishes its run on its own, successfully
     let mut child = cell.0.take().unwrap();

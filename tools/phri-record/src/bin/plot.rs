@@ -1,6 +1,10 @@
-//! `phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]`: figures of a
-//! recording as PNG, each with a title, axis labels in SI units, tick values
-//! and a legend.
+//! `phri-plot --file FILE.mcap --out DIR [--without FREE.mcap] [--format png|svg|both]`:
+//! figures of a recording as PNG and SVG (`--format`, default both: each
+//! figure's PNG where it always was, its SVG beside it), each with a title,
+//! axis labels in SI units, tick values and a legend, the text in the
+//! embedded DejaVu Sans (anti-aliased in the PNG, `<text>` in the SVG).
+//! A progress bar on stderr while reading when stderr is a terminal; in a
+//! pipe the output is what it always was.
 //!
 //! - `ee_trajectory.png` (like the paper's Fig. 7): end-effector x-y path
 //!   (`control/status` `ee`), blue while the person is farther than the
@@ -24,15 +28,43 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use clap::Parser;
+
 use phri_ipc::{
     residual_flags, BodyPart, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, SIM_TRUTH,
 };
 use phri_record::plot::*;
+use phri_record::progress::Progress;
 use phri_record::{read_file, ReadError, METADATA_NAME};
-use phri_runtime::Args;
+use phri_runtime::cli::CompletionsCmd;
 use serde_json::Value;
 
-const USAGE: &str = "usage: phri-plot --file FILE.mcap --out DIR [--without FREE.mcap]";
+const BIN: &str = "phri-plot";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Draws the figures of a phri-record recording (MCAP) as PNG and SVG: end-effector path, momentum residual, minimum distance, and the collaboration's hand and contact force when the recording has a collaboration",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    /// Recording to plot (MCAP written by phri-record)
+    #[arg(long, value_name = "FILE.mcap", required = true)]
+    file: Option<String>,
+    /// Directory to write the figures into (created if missing)
+    #[arg(long, value_name = "DIR", required = true)]
+    out: Option<PathBuf>,
+    /// A recording without the person (e.g. free-motion): its end-effector path drawn underneath in grey
+    #[arg(long, value_name = "FREE.mcap")]
+    without: Option<String>,
+    /// Which files each figure is written as: NAME.png, NAME.svg, or both
+    #[arg(long, value_enum, value_name = "FORMAT", default_value_t = Format::Both)]
+    format: Format,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
 /// someone nearer than this to a control point counts as present \[m\] (ρ of eq. 16)
 const NEAR_M: f64 = 0.4;
 const GREEN: Rgb = [44, 160, 44];
@@ -42,32 +74,34 @@ const W: usize = 900;
 const H: usize = 600;
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-plot", || body().map_err(|e| e.to_string()))
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
 }
 
 fn num(v: &Value, k: &str) -> f64 {
     v.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN)
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &["--file", "--out", "--without"],
-        &[],
-    )
-    .map_err(|e| format!("{e}; {USAGE}"))?;
-    let file = args
-        .get("--file")
-        .ok_or_else(|| format!("--file is required; {USAGE}"))?;
-    let out = PathBuf::from(
-        args.get("--out")
-            .ok_or_else(|| format!("--out is required; {USAGE}"))?,
-    );
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    // clap requires both unless a subcommand is given
+    let (Some(file), Some(out)) = (cli.file.as_deref(), cli.out.clone()) else {
+        return Err("--file and --out are required".into());
+    };
+    let format = cli.format;
     let buf = read_file(file)?;
 
-    // the collision threshold from the recording's metadata
+    // the collision threshold from the recording's metadata; the message count
     let mut threshold: Option<f64> = None;
-    if let Some(summary) = mcap::Summary::read(&buf).map_err(ReadError::mcap(file))? {
+    let summary = mcap::Summary::read(&buf).map_err(ReadError::mcap(file))?;
+    let total = summary
+        .as_ref()
+        .and_then(|s| s.stats.as_ref())
+        .map(|s| s.message_count);
+    if let Some(summary) = summary {
         for idx in &summary.metadata_indexes {
             if idx.name == METADATA_NAME {
                 let m = mcap::read::metadata(&buf, idx).map_err(ReadError::mcap(file))?;
@@ -95,11 +129,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     let t_start = Instant::now();
     let mut next_report = t_start + Duration::from_secs(1);
     let mut n = 0u64;
+    let progress = Progress::new(BIN, total, "messages");
     let stream = mcap::MessageStream::new(&buf).map_err(ReadError::mcap(file))?;
     for m in stream {
         let m = m.map_err(ReadError::mcap(file))?;
         n += 1;
-        if Instant::now() >= next_report {
+        progress.inc(1);
+        if !progress.shown() && Instant::now() >= next_report {
             next_report += Duration::from_secs(1);
             eprintln!("phri-plot: {n} messages read");
         }
@@ -193,6 +229,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             prev_collision = c;
         }
     }
+    progress.finish();
     if ee.is_empty() && norm.is_empty() {
         return Err(format!(
             "{file}: no {} or {} messages",
@@ -203,13 +240,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create '{}': {e}", out.display()))?;
 
     // the same path without the person, if given
-    let without: Vec<(f64, f64)> = match args.get("--without") {
+    let without: Vec<(f64, f64)> = match cli.without.as_deref() {
         Some(f) => ee_path(f)?,
         None => Vec::new(),
     };
 
     // (a) end-effector path, equal scale on both axes
-    let mut c = Canvas::new(W, H);
+    let mut c = Figure::new(W, H);
     let xs = || ee.iter().map(|p| p.0).chain(without.iter().map(|p| p.0));
     let ys = || ee.iter().map(|p| p.1).chain(without.iter().map(|p| p.1));
     if let (Some(xr), Some(yr)) = (range(xs()), range(ys())) {
@@ -251,18 +288,18 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
         a.polyline(&mut c, &run, if near { RED } else { BLUE });
     }
-    save(&c, &out, "ee_trajectory.png")?;
+    c.save(&out, "ee_trajectory", format)?;
 
     // (b) residual norm over time
-    let mut c = Canvas::new(W, H);
+    let mut c = Figure::new(W, H);
     if let (Some(xr), Some(yr)) = (
         range(norm.iter().map(|p| p.0)),
         range(norm.iter().map(|p| p.1).chain(threshold).chain([0.0])),
     ) {
         let a = Axes::new(&c, xr, yr);
         a.draw(&mut c);
-        a.label(&mut c, "momentum residual", "t [s]", "|r| [Nm]");
-        let mut legend = vec![(BLUE, "|r|")];
+        a.label(&mut c, "momentum residual", "t [s]", "‖r‖ [Nm]");
+        let mut legend = vec![(BLUE, "‖r‖")];
         if threshold.is_some() {
             legend.push((RED, "threshold"));
         }
@@ -278,10 +315,10 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
         a.polyline(&mut c, &norm, BLUE);
     }
-    save(&c, &out, "residual.png")?;
+    c.save(&out, "residual", format)?;
 
     // (c) minimum distance over time
-    let mut c = Canvas::new(W, H);
+    let mut c = Figure::new(W, H);
     if let (Some(xr), Some(yr)) = (
         range(dist.iter().map(|p| p.0)),
         range(dist.iter().map(|p| p.1).chain([0.0])),
@@ -296,11 +333,11 @@ fn body() -> Result<(), Box<dyn Error>> {
         );
         a.polyline(&mut c, &dist, BLUE);
     }
-    save(&c, &out, "min_distance.png")?;
+    c.save(&out, "min_distance", format)?;
 
     if collaborated {
         // (d) Figs. 8/11: end effector (solid colours) and hand (darker) x, y, z
-        let mut c = Canvas::new(W, H);
+        let mut c = Figure::new(W, H);
         let all = || ee_t.iter().chain(hand_t.iter()).flatten();
         if let (Some(xr), Some(yr)) = (range(all().map(|p| p.0)), range(all().map(|p| p.1))) {
             let a = Axes::new(&c, xr, yr);
@@ -336,9 +373,9 @@ fn body() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
-        save(&c, &out, "collaboration.png")?;
+        c.save(&out, "collaboration", format)?;
         // (e) estimated against true contact force
-        let mut c = Canvas::new(W, H);
+        let mut c = Figure::new(W, H);
         let all = || f_est.iter().chain(f_true.iter());
         if let (Some(xr), Some(yr)) = (
             range(all().map(|p| p.0)),
@@ -361,7 +398,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 a.polyline(&mut c, run, BLUE);
             }
         }
-        save(&c, &out, "contact_force.png")?;
+        c.save(&out, "contact_force", format)?;
     }
     eprintln!(
         "phri-plot: {n} messages; {} ee points, {} residuals ({} collision onsets, threshold {}), {} distances -> {}",
@@ -399,8 +436,4 @@ fn ee_path(file: &str) -> Result<Vec<(f64, f64)>, Box<dyn Error>> {
         return Err(format!("{file}: no {} messages", CONTROL_STATUS.name).into());
     }
     Ok(out)
-}
-
-fn save(c: &Canvas, dir: &std::path::Path, name: &str) -> Result<(), PngError> {
-    c.save_png(&dir.join(name))
 }

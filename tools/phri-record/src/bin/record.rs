@@ -9,27 +9,109 @@
 //! and the same image as `foxglove.RawImage` (16UC1) on `<channel>/image` for
 //! Foxglove's Image panel. Chunks are compressed with zstd. N (10), K (4) and
 //! the compression come from `[record]` of `--config`; the flags override them.
-//! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes.
+//!
+//! Beside them, the 3-D scene as `phri-viz` serves it, on the same topics and
+//! in Foxglove's own schemas (protobuf; the status in JSON): `/viz/robot`,
+//! `/viz/person`, `/viz/repulsion`, `/viz/collab` (`foxglove.SceneUpdate`,
+//! 30 Hz), `/viz/tf` (`foxglove.FrameTransforms`), `/viz/joints`
+//! (`foxglove.JointStates`, 250 Hz), `/viz/status` (`phri.viz.Status`), and
+//! the recorded `perception/depth` frames as `/viz/depth/points`
+//! (`foxglove.PointCloud`) and `/viz/depth/image` (`foxglove.RawImage`): a
+//! recording opens in Foxglove with `deploy/foxglove/phri-layout.json` as the
+//! live cell does. The robot model is the configuration's (`--config`, else
+//! the built-in defaults).
+//!
+//! Stops after `--seconds` or on Ctrl-C and writes the summary and indexes; a
+//! progress bar on a terminal, a line per second otherwise.
 
 use std::collections::BTreeMap;
 use std::error::Error;
 use std::fs::File;
 use std::io::BufWriter;
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use clap::Parser;
 use phri_ipc::*;
 use phri_record::config::{self, RecordConfig};
 use phri_record::json::{log_ns, to_json};
+use phri_record::progress::Progress;
 use phri_record::{foxglove, ENCODING, METADATA_NAME};
-use phri_runtime::{now_ns, Args, Shutdown};
+use phri_runtime::cli::CompletionsCmd;
+use phri_runtime::{now_ns, Shutdown};
+use phri_viz::{Output, Pipeline, Rates};
 use serde_json::{json, Value};
 
-const USAGE: &str = "usage: phri-record [--prefix P (default: $PHRI_PREFIX, else phri_)] --out FILE.mcap [--seconds S] [--frame-every N] [--frame-downsample K] [--compression zstd|lz4|none] [--config phri.toml] [--threshold NM]";
+const BIN: &str = "phri-record";
 const POLL: Duration = Duration::from_millis(5);
+/// Rates of the 3-D scene in a recording: the scene as phri-viz serves it by default.
+const SCENE_RATES: Rates = Rates {
+    scene_hz: 30.0,
+    joints_hz: 250.0,
+    // both set from [record] frame_downsample
+    depth_downsample: 4,
+    cloud_downsample: 4,
+};
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Records a running cell to MCAP: every channel as JSON, depth frames downsampled, and the 3-D scene in Foxglove's schemas (read-only)",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    /// iceoryx2 prefix of the cell [default: phri_]
+    #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV)]
+    prefix: Option<String>,
+    /// MCAP file to write
+    #[arg(long, value_name = "FILE.mcap", required = true)]
+    out: Option<PathBuf>,
+    /// Stop after this long [s] (default: on Ctrl-C)
+    #[arg(long, value_name = "S")]
+    seconds: Option<f64>,
+    /// Keep every N-th depth frame [default: [record] frame_every, 10]
+    #[arg(long, value_name = "N")]
+    frame_every: Option<u64>,
+    /// Keep one depth pixel in K per axis [default: [record] frame_downsample, 4]
+    #[arg(long, value_name = "K")]
+    frame_downsample: Option<usize>,
+    /// Chunk compression: zstd, lz4 or none [default: [record] compression, zstd]
+    #[arg(long, value_name = "zstd|lz4|none")]
+    compression: Option<String>,
+    /// Cell configuration: [record], the robot model and the collision threshold
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Collision norm threshold written into the metadata for phri-plot [Nm] [default: the configuration's]
+    #[arg(long, value_name = "NM", allow_negative_numbers = true)]
+    threshold: Option<f64>,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-record", || body().map_err(|e| e.to_string()))
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
+}
+
+/// The 3-D scene of the recording: phri-viz's pipeline and what it made last.
+struct Viz {
+    pipeline: Option<Pipeline>,
+    out: Vec<Output>,
+}
+
+impl Viz {
+    fn offer<T: std::any::Any>(&mut self, m: &T) {
+        if let Some(p) = &mut self.pipeline {
+            p.offer(m, &|_| true, &mut self.out);
+        }
+    }
 }
 
 /// `out(topic, log_ns, seq, json)`: `topic` indexes [`Rec::topics`].
@@ -62,8 +144,9 @@ trait Rec {
     }
     /// subscribe if the channel exists now (a recorder never creates one); true when subscribed
     fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError>;
-    /// drain the queue: `out(topic, log_ns, seq, json)` per recorded message
-    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError>;
+    /// drain the queue: `out(topic, log_ns, seq, json)` per recorded message;
+    /// the scene's inputs go to `viz`
+    fn poll(&mut self, out: &mut Out, viz: &mut Viz) -> Result<(), IpcError>;
 }
 
 struct MsgRec<T: Message> {
@@ -81,11 +164,12 @@ impl<T: Message> Rec for MsgRec<T> {
         }
         Ok(self.sub.is_some())
     }
-    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError> {
+    fn poll(&mut self, out: &mut Out, viz: &mut Viz) -> Result<(), IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(());
         };
         while let Some(m) = sub.receive()? {
+            viz.offer(&m);
             let v = to_json(&m);
             out(0, log_ns(&m, &v, now_ns()), m.seq() as u32, v);
         }
@@ -155,7 +239,7 @@ impl Rec for FrameRec {
         }
         Ok(self.sub.is_some())
     }
-    fn poll(&mut self, out: &mut Out) -> Result<(), IpcError> {
+    fn poll(&mut self, out: &mut Out, viz: &mut Viz) -> Result<(), IpcError> {
         let Some(sub) = &self.sub else {
             return Ok(());
         };
@@ -166,6 +250,12 @@ impl Rec for FrameRec {
             }
             let h = *f.user_header();
             let (dw, dh, data) = downsample(&h, f.payload(), self.k);
+            // the filtered depth is the scene's point cloud and image
+            if self.channel.name == PERCEPTION_DEPTH.name {
+                if let Some(p) = &mut viz.pipeline {
+                    p.offer_frame(&h, f.payload());
+                }
+            }
             drop(f);
             let t = if h.published_ns > 0 {
                 h.published_ns
@@ -212,57 +302,68 @@ fn mcap_err(e: mcap::McapError) -> String {
     format!("mcap: {e}")
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &[
-            "--prefix",
-            "--out",
-            "--seconds",
-            "--frame-every",
-            "--frame-downsample",
-            "--config",
-            "--threshold",
-            "--compression",
-        ],
-        &[],
-    )
-    .map_err(|e| format!("{e}; {USAGE}"))?;
-    let prefix = phri_runtime::prefix_or_default(args.get("--prefix"));
-    let out_path = args
-        .get("--out")
-        .ok_or_else(|| format!("--out is required; {USAGE}"))?
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    let prefix = phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    // clap requires it unless a subcommand is given
+    let out_path = cli
+        .out
+        .as_ref()
+        .ok_or("--out is required")?
+        .display()
         .to_string();
-    let seconds = args.parse_value::<f64>("--seconds")?;
+    let seconds = cli.seconds;
     if seconds.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
         return Err("--seconds must be positive".into());
     }
     // [record] of --config, then the flags over it
-    let (mut rc, mut threshold) = match args.get("--config") {
-        Some(p) => config::from_file(p)?,
+    let config_path = cli.config.as_ref().map(|p| p.display().to_string());
+    let (mut rc, mut threshold) = match &config_path {
+        Some(p) => config::from_file(p).map_err(|e| format!("--config {p}: {e}"))?,
         None => (config::defaults(), None),
     };
-    if let Some(v) = args.parse_value::<u64>("--frame-every")? {
+    if let Some(v) = cli.frame_every {
         rc.frame_every = v;
     }
-    if let Some(v) = args.parse_value::<usize>("--frame-downsample")? {
+    if let Some(v) = cli.frame_downsample {
         rc.frame_downsample = v;
     }
-    if let Some(v) = args.get("--compression") {
+    if let Some(v) = &cli.compression {
         rc.compression = v
             .parse()
-            .map_err(|e: phri_config::Invalid| format!("--compression {}; {USAGE}", e.reason))?;
+            .map_err(|e: phri_config::Invalid| format!("--compression {}", e.reason))?;
     }
     // the keys' messages name them: record.frame_every → --frame-every
     rc.validate().map_err(|e| {
         let flag = e.key.trim_start_matches("record.").replace('_', "-");
-        format!("--{flag}: {}; {USAGE}", e.reason)
+        format!("--{flag}: {}", e.reason)
     })?;
     let compression = config::mcap_compression(rc.compression);
     let (every, k) = (rc.frame_every, rc.frame_downsample);
-    if let Some(t) = args.parse_value::<f64>("--threshold")? {
+    if let Some(t) = cli.threshold {
         threshold = Some(t);
     }
+    // the scene's robot model, thresholds and control points: the configuration's
+    let loaded = match &config_path {
+        Some(p) => phri_config::Loaded::load(std::path::Path::new(p), None, &[])
+            .map_err(|e| format!("--config {p}: {e}"))?,
+        None => phri_config::Loaded::defaults(),
+    };
+    let rates = Rates {
+        depth_downsample: k,
+        cloud_downsample: k,
+        ..SCENE_RATES
+    };
+    let mut viz = Viz {
+        pipeline: match Pipeline::from_config(&loaded, rates) {
+            Ok(p) => Some(p),
+            Err(e) => {
+                // the channels are still worth recording
+                eprintln!("{BIN}: warning: no 3-D scene in the recording: {e}");
+                None
+            }
+        },
+        out: Vec::new(),
+    };
     if phri_ipc::live_nodes(&prefix) == 0 {
         return Err(
             format!("no cell running under prefix '{prefix}' (no live iceoryx2 node)").into(),
@@ -271,7 +372,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let shutdown = Shutdown::install()?;
     let node = node(&format!("record{}", std::process::id()), &prefix)?;
 
-    let file = File::create(&out_path).map_err(|e| format!("cannot create '{out_path}': {e}"))?;
+    let file =
+        File::create(&out_path).map_err(|e| format!("--out: cannot create '{out_path}': {e}"))?;
     let mut w = mcap::WriteOptions::new()
         .compression(compression)
         .profile(phri_record::PROFILE)
@@ -300,6 +402,19 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
         ids.push(rec_ids);
     }
+    // the scene's topics, in Foxglove's schemas: (topic, channel id, messages written)
+    let mut scene_ids: Vec<(&'static str, u16, u32)> = Vec::new();
+    if viz.pipeline.is_some() {
+        for t in phri_viz::topics::all() {
+            let schema = w
+                .add_schema(&t.schema.name, &t.schema.encoding, &t.schema.data)
+                .map_err(mcap_err)?;
+            let id = w
+                .add_channel(schema, t.name, &t.encoding, &BTreeMap::new())
+                .map_err(mcap_err)?;
+            scene_ids.push((t.name, id, 0));
+        }
+    }
     let mut meta = BTreeMap::new();
     meta.insert("prefix".to_string(), prefix.clone());
     meta.insert(
@@ -312,6 +427,18 @@ fn body() -> Result<(), Box<dyn Error>> {
             "camera/depth, perception/depth: every {every}-th received frame, header fields plus the depth image downsampled {k}x per axis (top-left pixel of each block; 640x480 -> {}x{}) in 'data' (u16 millimetres, row-major, 0 = no reading); the same image as foxglove.RawImage on <channel>/image", 640 / k, 480 / k
         ),
     );
+    if viz.pipeline.is_some() {
+        meta.insert(
+            "scene".into(),
+            format!(
+                "the 3-D scene as phri-viz serves it, in Foxglove's schemas: {} (SceneUpdate at {} Hz, JointStates and phri.viz.Status at {} Hz, the recorded perception/depth frames as PointCloud and RawImage); robot model {}",
+                phri_viz::TOPICS.join(", "),
+                rates.scene_hz,
+                rates.joints_hz,
+                loaded.urdf().display()
+            ),
+        );
+    }
     meta.insert("frame_every".into(), every.to_string());
     meta.insert("frame_downsample".into(), k.to_string());
     meta.insert("compression".into(), rc.compression.name().to_string());
@@ -327,12 +454,18 @@ fn body() -> Result<(), Box<dyn Error>> {
 
     let t0 = Instant::now();
     let end = seconds.map(Duration::from_secs_f64);
-    // messages per channel (its own topic) and in all (image views included)
+    // a bar of whole seconds for a timed recording, a message counter otherwise
+    let bar = match seconds {
+        Some(s) => Progress::new(BIN, Some(s.ceil() as u64), "s"),
+        None => Progress::new(BIN, None, "messages"),
+    };
+    // messages per channel (its own topic) and in all (image views and scene included)
     let mut counts = vec![0u64; recs.len()];
     let mut total = 0u64;
     let mut next_attach = Instant::now();
     let mut next_report = t0 + Duration::from_secs(1);
     let mut write_err: Option<String> = None;
+    let mut buf: Vec<u8> = Vec::new();
     while !shutdown.requested() && end.is_none_or(|e| t0.elapsed() < e) {
         if Instant::now() >= next_attach {
             for r in recs.iter_mut() {
@@ -346,47 +479,86 @@ fn body() -> Result<(), Box<dyn Error>> {
             let total = &mut total;
             let w = &mut w;
             let we = &mut write_err;
-            r.poll(&mut |topic, t, seq, v| {
-                let Some(&id) = rec_ids.get(topic) else {
-                    return;
-                };
-                let data = serde_json::to_vec(&v).expect("JSON values serialize");
-                let hdr = mcap::records::MessageHeader {
-                    channel_id: id,
-                    sequence: seq,
-                    log_time: t,
-                    publish_time: t,
-                };
-                match w.write_to_known_channel(&hdr, &data) {
-                    Ok(()) => {
-                        *total += 1;
-                        if topic == 0 {
-                            *count += 1;
+            r.poll(
+                &mut |topic, t, seq, v| {
+                    let Some(&id) = rec_ids.get(topic) else {
+                        return;
+                    };
+                    let data = serde_json::to_vec(&v).expect("JSON values serialize");
+                    let hdr = mcap::records::MessageHeader {
+                        channel_id: id,
+                        sequence: seq,
+                        log_time: t,
+                        publish_time: t,
+                    };
+                    match w.write_to_known_channel(&hdr, &data) {
+                        Ok(()) => {
+                            *total += 1;
+                            if topic == 0 {
+                                *count += 1;
+                            }
                         }
+                        Err(e) if we.is_none() => *we = Some(mcap_err(e)),
+                        Err(_) => {}
                     }
-                    Err(e) if we.is_none() => *we = Some(mcap_err(e)),
-                    Err(_) => {}
+                },
+                &mut viz,
+            )?;
+        }
+        if let Some(p) = &mut viz.pipeline {
+            p.tick(now_ns(), &|_| true, &mut viz.out);
+        }
+        for o in viz.out.drain(..) {
+            let Some((_, id, seq)) = scene_ids.iter_mut().find(|(t, _, _)| *t == o.topic) else {
+                continue;
+            };
+            buf.clear();
+            if let Err(e) = o.message.encode(&mut buf) {
+                write_err.get_or_insert(format!("{}: {e}", o.topic));
+                continue;
+            }
+            *seq = seq.wrapping_add(1);
+            let hdr = mcap::records::MessageHeader {
+                channel_id: *id,
+                sequence: *seq,
+                log_time: o.log_ns,
+                publish_time: o.log_ns,
+            };
+            match w.write_to_known_channel(&hdr, &buf) {
+                Ok(()) => total += 1,
+                Err(e) => {
+                    write_err.get_or_insert(mcap_err(e));
                 }
-            })?;
+            }
         }
         if let Some(e) = write_err.take() {
             return Err(e.into());
         }
+        match seconds {
+            Some(_) => bar.set_position(t0.elapsed().as_secs()),
+            None => bar.set_position(total),
+        }
         if Instant::now() >= next_report {
             next_report += Duration::from_secs(1);
-            eprintln!(
-                "phri-record: {:.0} s  {}",
-                t0.elapsed().as_secs_f64(),
-                progress(&recs, &counts)
-            );
+            if bar.shown() {
+                bar.set_message(format!("{total} messages"));
+            } else {
+                eprintln!(
+                    "phri-record: {:.0} s  {}",
+                    t0.elapsed().as_secs_f64(),
+                    progress(&recs, &counts)
+                );
+            }
         }
         std::thread::sleep(POLL);
     }
+    bar.finish();
     let summary = w.finish().map_err(mcap_err)?;
     drop(w);
     let size = std::fs::metadata(&out_path).map(|m| m.len()).unwrap_or(0);
+    let scene: u64 = scene_ids.iter().map(|(_, _, n)| u64::from(*n)).sum();
     eprintln!(
-        "phri-record: wrote {out_path}: {total} messages in {:.1} s, {:.1} MB, {} chunks; {}",
+        "phri-record: wrote {out_path}: {total} messages in {:.1} s, {:.1} MB, {} chunks; {}; scene {scene}",
         t0.elapsed().as_secs_f64(),
         size as f64 / 1e6,
         summary.chunk_indexes.len(),

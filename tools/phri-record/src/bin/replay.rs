@@ -1,7 +1,8 @@
-//! `phri-replay --file FILE.mcap --prefix P [--speed X] [--channels a,b]`
+//! `phri-replay --file FILE.mcap [--prefix P] [--speed X] [--channels a,b]`
 //!
 //! Publishes the recorded messages of the chosen channels into the cell with
-//! prefix `P` at their recorded timing (scaled by `--speed`), rebuilding the
+//! prefix `P` (`--prefix`, else `PHRI_PREFIX`, else `phri_`, like every
+//! tool) at their recorded timing (scaled by `--speed`), rebuilding the
 //! `#[repr(C)]` messages from their JSON. Replayable: `robot/state`,
 //! `dynamics/residual`, `control/status`, `sim/truth`, `sim/world`,
 //! `perception/repulsion` (the default: those of them present in the file).
@@ -9,19 +10,60 @@
 //! recorded downsampled), nor `robot/stats` and `supervisor/health` (live
 //! summaries of processes, not data). Repulsion results steer a controller's
 //! avoidance, so they are refused into a cell whose robot is commanded.
+//! Into a prefix where a live cell runs, the others are refused as well: every
+//! replayable channel but the repulsion results takes one publisher, and the
+//! cell's own holds it. A progress bar on stderr when it is a terminal; in a
+//! pipe, the per-second lines it always printed.
 
 use std::collections::BTreeMap;
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use clap::Parser;
 use phri_ipc::*;
 use phri_record::json::{from_json, JsonError};
+use phri_record::progress::Progress;
 use phri_record::{is_frame_channel, read_file, ReadError};
-use phri_runtime::{Args, Shutdown};
+use phri_runtime::cli::CompletionsCmd;
+use phri_runtime::Shutdown;
 use serde_json::Value;
 
-const USAGE: &str = "usage: phri-replay --file FILE.mcap --prefix P [--speed X] [--channels a,b]";
+const BIN: &str = "phri-replay";
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Publishes a phri-record recording (MCAP) into a cell at its recorded timing: robot/state, dynamics/residual, control/status, sim/truth, sim/world, perception/repulsion; never robot/command",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    /// Recording to replay (MCAP written by phri-record)
+    #[arg(long, value_name = "FILE.mcap", required = true)]
+    file: Option<String>,
+    /// iceoryx2 prefix of the cell to publish into [default: phri_]
+    #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV)]
+    prefix: Option<String>,
+    /// Replay speed: 2 replays twice as fast as recorded, 0.5 at half speed
+    #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = positive)]
+    speed: f64,
+    /// Channels to replay, comma-separated [default: every replayable channel in the file]
+    #[arg(long, value_name = "a,b")]
+    channels: Option<String>,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
+
+/// A finite speed above 0.
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        Ok(_) => Err("must be positive".to_string()),
+        Err(e) => Err(e.to_string()),
+    }
+}
 /// Channels phri-replay can rebuild.
 const REPLAYABLE: &[&str] = &[
     ROBOT_STATE.name,
@@ -33,7 +75,12 @@ const REPLAYABLE: &[&str] = &[
 ];
 
 fn main() -> ExitCode {
-    phri_runtime::service::run("phri-replay", || body().map_err(|e| e.to_string()))
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
 }
 
 /// A recorded message that could not be published.
@@ -85,35 +132,31 @@ impl ChannelVisitor for Outs<'_> {
     fn frames(&mut self, _: FrameChannel) {}
 }
 
-fn out_for(node: &IpcNode, name: &str) -> Result<Box<dyn Out>, Box<dyn Error>> {
+fn out_for(node: &IpcNode, prefix: &str, name: &str) -> Result<Box<dyn Out>, Box<dyn Error>> {
     let mut outs = Outs { node, out: None };
     if !REPLAYABLE.contains(&name) || !visit_named(name, &mut outs) {
         return Err(format!("cannot replay '{name}'").into());
     }
     match outs.out {
-        Some(out) => Ok(out?),
+        Some(Ok(out)) => Ok(out),
+        // a live cell's own publisher holds the channel
+        Some(Err(e @ IpcError::PublisherTaken { .. })) => Err(format!(
+            "refusing to replay into prefix '{prefix}': {e}; a cell runs there: choose another with --prefix"
+        )
+        .into()),
+        Some(Err(e)) => Err(e.into()),
         None => Err(format!("cannot replay '{name}'").into()),
     }
 }
 
-fn body() -> Result<(), Box<dyn Error>> {
-    let args = Args::parse(
-        std::env::args().skip(1),
-        &["--file", "--prefix", "--speed", "--channels"],
-        &[],
-    )
-    .map_err(|e| format!("{e}; {USAGE}"))?;
-    let file = args
-        .get("--file")
-        .ok_or_else(|| format!("--file is required; {USAGE}"))?;
-    let prefix = args
-        .get("--prefix")
-        .ok_or_else(|| format!("--prefix is required; {USAGE}"))?;
-    let speed = args.parse_value::<f64>("--speed")?.unwrap_or(1.0);
-    if !(speed > 0.0 && speed.is_finite()) {
-        return Err("--speed must be positive".into());
-    }
-    let requested: Option<Vec<String>> = args.get("--channels").map(|s| {
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    // clap requires --file unless a subcommand is given
+    let Some(file) = cli.file.as_deref() else {
+        return Err("--file is required".into());
+    };
+    let prefix = &phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    let speed = cli.speed;
+    let requested: Option<Vec<String>> = cli.channels.as_deref().map(|s| {
         s.split(',')
             .map(|c| c.trim().to_string())
             .filter(|c| !c.is_empty())
@@ -205,12 +248,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     let mut outs: BTreeMap<&'static str, Box<dyn Out>> = BTreeMap::new();
     for c in &chosen {
-        outs.insert(c, out_for(&node, c)?);
+        outs.insert(c, out_for(&node, prefix, c)?);
     }
     let mut counts: BTreeMap<&'static str, u64> = chosen.iter().map(|c| (*c, 0)).collect();
     let t_first = msgs[0].0;
     let t0 = Instant::now();
     let mut next_report = t0 + Duration::from_secs(1);
+    let bar = Progress::new(BIN, Some(msgs.len() as u64), "messages");
     for (t, name, data) in &msgs {
         if shutdown.requested() {
             break;
@@ -221,9 +265,14 @@ fn body() -> Result<(), Box<dyn Error>> {
             std::thread::sleep(due - now);
         }
         let v: Value = serde_json::from_slice(data).map_err(|e| format!("{file}: {name}: {e}"))?;
-        outs.get_mut(name).unwrap().send(&v)?;
-        *counts.get_mut(name).unwrap() += 1;
-        if Instant::now() >= next_report {
+        if let Some(out) = outs.get_mut(name) {
+            out.send(&v)?;
+        }
+        *counts.entry(name).or_default() += 1;
+        bar.inc(1);
+        if bar.shown() {
+            bar.set_message(format!("recording {:.1} s", (t - t_first) as f64 * 1e-9));
+        } else if Instant::now() >= next_report {
             next_report += Duration::from_secs(1);
             eprintln!(
                 "phri-replay: {:.0} s (recording {:.1} s)  {}",
@@ -233,6 +282,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             );
         }
     }
+    bar.finish();
     eprintln!(
         "phri-replay: done after {:.1} s: {}",
         t0.elapsed().as_secs_f64(),

@@ -1,0 +1,309 @@
+//! `phri-viz`: the live cell in 3-D, served over Foxglove's WebSocket
+//! protocol (open `ws://127.0.0.1:8765` in Foxglove, then the layout
+//! `deploy/foxglove/phri-layout.json`).
+//!
+//! Read-only like the monitor: it subscribes to the cell's channels and never
+//! publishes on one, runs under the normal scheduler, and keeps off the CPUs
+//! the configuration pins the torque loop to (`[services.sim|dynamics|control]
+//! cpus`) when the machine has others. Topics and what they show:
+//! [`phri_viz::topics`]; messages are built only for topics a client subscribed to.
+
+use std::collections::HashMap;
+use std::error::Error;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use foxglove::{PartialMetadata, RawChannel, WebSocketServer};
+use phri_ipc::*;
+use phri_runtime::cli::CompletionsCmd;
+use phri_runtime::{now_ns, Shutdown};
+use phri_viz::{cpu, topics, Output, Pipeline, Rates};
+
+const BIN: &str = "phri-viz";
+/// Time between two polls of the channels.
+const POLL: Duration = Duration::from_millis(4);
+/// Time between two attempts to subscribe to channels that do not exist yet.
+const ATTACH_EVERY: Duration = Duration::from_secs(1);
+
+/// The command line.
+#[derive(Parser, Debug)]
+#[command(
+    version = phri_runtime::cli::VERSION,
+    about = "Serves the live cell in 3-D over Foxglove's WebSocket protocol: robot and person capsules, depth, repulsion, collaboration, joint states, residual, mode and phase (read-only)",
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    /// iceoryx2 prefix of the cell [default: phri_]
+    #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV)]
+    prefix: Option<String>,
+    /// Cell configuration (TOML): the robot model, the residual's thresholds, the control points' names, the torque loop's CPUs
+    #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
+    config: PathBuf,
+    /// Address the WebSocket server listens on (port 0: any free port)
+    #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:8765")]
+    addr: SocketAddr,
+    /// Scene rate: capsules, vectors, frames, depth cloud and image [Hz]
+    #[arg(long, value_name = "HZ", default_value_t = 30.0)]
+    rate: f64,
+    /// Joint-state and status rate [Hz] (at or above the robot's rate: every state)
+    #[arg(long, value_name = "HZ", default_value_t = 250.0)]
+    joint_rate: f64,
+    /// Keep every K-th depth pixel per axis in the depth image
+    #[arg(long, value_name = "K", default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=64))]
+    depth_downsample: u32,
+    /// Keep every K-th depth pixel per axis in the point cloud
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    cloud_downsample: u32,
+    #[command(subcommand)]
+    completions: Option<CompletionsCmd>,
+}
+
+fn main() -> ExitCode {
+    let cli: Cli = phri_runtime::cli::parse(BIN);
+    if let Some(CompletionsCmd::Completions { shell }) = cli.completions {
+        phri_runtime::cli::completions::<Cli>(BIN, shell);
+        return ExitCode::SUCCESS;
+    }
+    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
+}
+
+fn rate(flag: &str, hz: f64) -> Result<f64, String> {
+    if hz.is_finite() && hz > 0.0 && hz <= 10_000.0 {
+        Ok(hz)
+    } else {
+        Err(format!("{flag} {hz}: must be a rate in (0, 10000] Hz"))
+    }
+}
+
+/// One channel the scene is made of: subscribed once it exists.
+trait Source {
+    fn name(&self) -> &'static str;
+    /// subscribe if the channel exists now (a viewer never creates one)
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError>;
+    /// hand what arrived to the pipeline
+    fn poll(
+        &mut self,
+        p: &mut Pipeline,
+        wanted: &dyn Fn(&str) -> bool,
+        out: &mut Vec<Output>,
+    ) -> Result<(), IpcError>;
+}
+
+struct Messages<T: Message> {
+    channel: Channel<T>,
+    queue: Queue,
+    sub: Option<Subscriber<T>>,
+}
+
+impl<T: Message> Messages<T> {
+    fn boxed(channel: Channel<T>, queue: Queue) -> Box<dyn Source> {
+        Box::new(Messages {
+            channel,
+            queue,
+            sub: None,
+        })
+    }
+}
+
+impl<T: Message> Source for Messages<T> {
+    fn name(&self) -> &'static str {
+        self.channel.name
+    }
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError> {
+        if self.sub.is_none() {
+            self.sub = self.channel.subscriber_if_exists(node, self.queue)?;
+        }
+        Ok(self.sub.is_some())
+    }
+    fn poll(
+        &mut self,
+        p: &mut Pipeline,
+        wanted: &dyn Fn(&str) -> bool,
+        out: &mut Vec<Output>,
+    ) -> Result<(), IpcError> {
+        if let Some(sub) = &self.sub {
+            sub.drain(|m| p.offer(m, wanted, out))?;
+        }
+        Ok(())
+    }
+}
+
+/// The filtered depth: only the newest frame, its depths copied only when a
+/// client wants the cloud or the image.
+struct Frames {
+    sub: Option<FrameSubscriber>,
+}
+
+impl Source for Frames {
+    fn name(&self) -> &'static str {
+        PERCEPTION_DEPTH.name
+    }
+    fn attach(&mut self, node: &IpcNode) -> Result<bool, IpcError> {
+        if self.sub.is_none() {
+            self.sub = PERCEPTION_DEPTH.frame_subscriber_if_exists(node, Queue::Latest)?;
+        }
+        Ok(self.sub.is_some())
+    }
+    fn poll(
+        &mut self,
+        p: &mut Pipeline,
+        wanted: &dyn Fn(&str) -> bool,
+        out: &mut Vec<Output>,
+    ) -> Result<(), IpcError> {
+        let Some(sub) = &self.sub else {
+            return Ok(());
+        };
+        if let Some(f) = sub.latest()? {
+            if wanted(topics::POINTS) || wanted(topics::IMAGE) {
+                p.offer_frame(f.user_header(), f.payload());
+            } else {
+                p.offer(f.user_header(), wanted, out);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn sources() -> Vec<Box<dyn Source>> {
+    vec![
+        // every state: the joint rate is counted on the robot's clock
+        Messages::boxed(ROBOT_STATE, Queue::Drain),
+        Messages::boxed(DYNAMICS_RESIDUAL, Queue::Latest),
+        Messages::boxed(CONTROL_STATUS, Queue::Latest),
+        Messages::boxed(COLLAB_STATE, Queue::Latest),
+        Messages::boxed(SIM_WORLD, Queue::Latest),
+        // one result per worker per frame
+        Messages::boxed(PERCEPTION_REPULSION, Queue::Drain),
+        Messages::boxed(PERCEPTION_HAND, Queue::Latest),
+        Box::new(Frames { sub: None }),
+    ]
+}
+
+/// Keep off the torque loop's CPUs, under the normal scheduler; before any
+/// thread starts, so that the server's threads inherit it.
+fn keep_off_the_loop(config: &phri_config::Config) {
+    if let Err(e) = cpu::normal_scheduler() {
+        tracing::warn!("cannot switch to the normal scheduler: {e}");
+    }
+    let avoid = cpu::torque_loop_cpus(config);
+    let usable = match cpu::usable_cpus() {
+        Ok(c) => c,
+        Err(e) => {
+            tracing::warn!("cannot read this process's CPUs: {e}; not pinned");
+            return;
+        }
+    };
+    match cpu::allowed(&usable, &avoid) {
+        Some(cpus) if cpus.len() < usable.len() => match cpu::pin(&cpus) {
+            Ok(()) => tracing::info!("on CPUs {cpus:?}, off the torque loop's {avoid:?}"),
+            Err(e) => tracing::warn!("cannot pin to CPUs {cpus:?}: {e}"),
+        },
+        Some(cpus) => {
+            tracing::info!("on CPUs {cpus:?} (the torque loop is pinned to none of them)")
+        }
+        None => tracing::warn!(
+            "only the torque loop's CPUs {avoid:?} are usable: not pinned (normal scheduler)"
+        ),
+    }
+}
+
+fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
+    let rates = Rates {
+        scene_hz: rate("--rate", cli.rate)?,
+        joints_hz: rate("--joint-rate", cli.joint_rate)?,
+        depth_downsample: cli.depth_downsample as usize,
+        cloud_downsample: cli.cloud_downsample as usize,
+    };
+    let prefix = phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    let loaded = phri_config::Loaded::load(&cli.config, None, &[])
+        .map_err(|e| format!("--config {}: {e}", cli.config.display()))?;
+    let mut pipeline = Pipeline::from_config(&loaded, rates)
+        .map_err(|e| format!("--config {}: {e}", cli.config.display()))?;
+    keep_off_the_loop(&loaded.config);
+
+    let shutdown = Shutdown::install()?;
+    let ctx = foxglove::Context::new();
+    let mut channels: HashMap<&'static str, Arc<RawChannel>> = HashMap::new();
+    for t in topics::all() {
+        let ch = ctx
+            .channel_builder(t.name)
+            .schema(t.schema)
+            .message_encoding(t.encoding)
+            .build_raw()
+            .map_err(|e| format!("topic {}: {e}", t.name))?;
+        channels.insert(t.name, ch);
+    }
+    let server = WebSocketServer::new()
+        .name(BIN)
+        .bind(cli.addr.ip().to_string(), cli.addr.port())
+        .context(&ctx)
+        .start_blocking()
+        .map_err(|e| format!("--addr {}: cannot serve: {e}", cli.addr))?;
+    let port = server.port();
+    // the line a script (or a test) waits for: the port actually bound
+    eprintln!(
+        "{BIN}: serving ws://{}:{port} (prefix '{prefix}')",
+        cli.addr.ip()
+    );
+
+    let node = node(&format!("viz{}", std::process::id()), &prefix)?;
+    let mut sources = sources();
+    let mut attached = vec![false; sources.len()];
+    let mut next_attach = Instant::now();
+    let mut out: Vec<Output> = Vec::new();
+    let mut buf: Vec<u8> = Vec::new();
+    let mut sent: HashMap<&'static str, u64> = HashMap::new();
+    let mut next_report = Instant::now() + Duration::from_secs(10);
+    let mut reported_at = Instant::now();
+    while !shutdown.requested() {
+        if Instant::now() >= next_attach {
+            for (s, a) in sources.iter_mut().zip(attached.iter_mut()) {
+                if !*a && s.attach(&node)? {
+                    *a = true;
+                    tracing::info!("subscribed to {}", s.name());
+                }
+            }
+            next_attach = Instant::now() + ATTACH_EVERY;
+        }
+        let wanted = |topic: &str| channels.get(topic).is_some_and(|c| c.has_sinks());
+        for s in sources.iter_mut() {
+            s.poll(&mut pipeline, &wanted, &mut out)?;
+        }
+        pipeline.tick(now_ns(), &wanted, &mut out);
+        for o in out.drain(..) {
+            let Some(ch) = channels.get(o.topic) else {
+                continue;
+            };
+            buf.clear();
+            match o.message.encode(&mut buf) {
+                Ok(()) => {
+                    ch.log_with_meta(&buf, PartialMetadata::with_log_time(o.log_ns));
+                    *sent.entry(o.topic).or_default() += 1;
+                }
+                Err(e) => tracing::warn!("{}: {e}", o.topic),
+            }
+        }
+        if Instant::now() >= next_report {
+            let dt = reported_at.elapsed().as_secs_f64();
+            let mut rates: Vec<String> = sent
+                .iter()
+                .map(|(t, n)| format!("{t} {:.1}/s", *n as f64 / dt))
+                .collect();
+            rates.sort();
+            if rates.is_empty() {
+                rates.push("nothing subscribed".into());
+            }
+            tracing::info!("{} client(s); {}", server.client_count(), rates.join(", "));
+            sent.clear();
+            reported_at = Instant::now();
+            next_report += Duration::from_secs(10);
+        }
+        std::thread::sleep(POLL);
+    }
+    server.stop().wait_blocking();
+    Ok(())
+}
