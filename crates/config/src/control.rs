@@ -68,6 +68,15 @@ pub struct ControlConfig {
     /// the end effector's position feedback is capped at this speed [m/s], below
     /// the repulsion's V_max, so that repulsion always wins near an obstacle
     pub feedback_max_speed: f64,
+    /// the rest of the end effector's position feedback (away from or
+    /// beside its obstacle, or with none near) is capped at this [m/s]
+    pub feedback_free_speed: f64,
+    /// the end effector's feedback may beat its repulsion by a net approach
+    /// speed of `approach_gain × (clearance − approach_clearance_m)`: a path
+    /// through a person's reach is followed up to this clearance [m] ...
+    pub approach_clearance_m: f64,
+    /// ... at this gain [1/s] (0: the repulsion always wins)
+    pub approach_gain: f64,
     /// perception results older than this are stale [ms]: with an obstacle last
     /// seen nearer than `near_distance_m` a protective stop, otherwise the task slows down
     pub perception_max_age_ms: f64,
@@ -80,6 +89,39 @@ pub struct ControlConfig {
     pub repulsion_filter_s: f64,
     /// under avoidance the reference velocity changes by at most this per second [rad/s²]
     pub reference_accel_limit: f64,
+    /// what slows the task's path near an obstacle
+    pub path_pace: PathPace,
+    /// how the body control points (all but the end effector) avoid
+    pub body_avoidance: BodyAvoidance,
+    /// `null_space`: each body point's speed away from its obstacle, as a
+    /// task below the end effector's, is this times `‖V_Call(P)‖`
+    pub body_repulsion_gain: f64,
+}
+
+/// What slows the task's path near an obstacle (`[control] path_pace`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PathPace {
+    /// the component of the end effector's repulsive vector against the
+    /// path's direction, over `V_max`: the path runs on while the end
+    /// effector goes around an obstacle beside it (eq. 19)
+    Opposing,
+    /// the end effector's whole risk `‖V_Call(P_e)‖/V_max`, whatever its
+    /// direction (phri before issue 14)
+    Risk,
+}
+
+/// How the body control points avoid (`[control] body_avoidance`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BodyAvoidance {
+    /// eq. 20's velocity bounds, and each point's repulsion as a task of
+    /// lower priority in the null space of the end effector's (SNS with a
+    /// task hierarchy): the arm moves away, the end effector keeps its path
+    NullSpace,
+    /// the paper's eq. 20 only: motions toward an obstacle are slowed, none
+    /// moves away
+    Bounds,
 }
 
 /// SNS and joint-velocity-bound settings of the avoidance (`[control.avoidance_params]`).
@@ -118,6 +160,7 @@ impl ControlConfig {
             ("perception_max_age_ms", self.perception_max_age_ms),
             ("perception_stop_after_ms", self.perception_stop_after_ms),
             ("feedback_max_speed", self.feedback_max_speed),
+            ("feedback_free_speed", self.feedback_free_speed),
             ("reference_accel_limit", self.reference_accel_limit),
             ("retreat_ramp_s", self.retreat_ramp_s),
         ] {
@@ -138,6 +181,9 @@ impl ControlConfig {
             ("position_margin", self.position_margin),
             ("near_distance_m", self.near_distance_m),
             ("repulsion_filter_s", self.repulsion_filter_s),
+            ("body_repulsion_gain", self.body_repulsion_gain),
+            ("approach_clearance_m", self.approach_clearance_m),
+            ("approach_gain", self.approach_gain),
         ] {
             non_negative(S, name, v)?;
         }

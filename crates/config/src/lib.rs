@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use toml::{Table, Value};
 
 pub use collaboration::{CollaborationConfig, GestureConfig, OnRequest, SkeletonConfig};
-pub use control::{AvoidanceParams, ControlConfig};
+pub use control::{AvoidanceParams, BodyAvoidance, ControlConfig, PathPace};
 pub use dynamics::ResidualConfig;
 pub use error::{ConfigError, Invalid};
 pub use human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};

@@ -14,7 +14,11 @@
 //! 3. the global speed scale (e.g. slower while perception is stale)
 //!    multiplies both bounds;
 //! 4. `ẋ_r = ẋ_t + V_Call(P_e)` ([`end_effector_velocity`], eq. 19) is
-//!    resolved by SNS within the bounds.
+//!    resolved by SNS within the bounds;
+//! 5. with the body task on ([`Avoidance::set_body_task`], `[control]
+//!    body_avoidance = "null_space"`), each body point moving away from its
+//!    obstacle is a task below the end effector's, in its null space
+//!    ([`crate::body_task`]).
 //!
 //! # Sign convention of eq. 20
 //!
@@ -58,7 +62,11 @@ use nalgebra::{DMatrixView, Dim, Matrix, RawStorage, Vector3};
 pub use phri_config::AvoidanceParams;
 use phri_model::{check_len, Model};
 
+use crate::body_task::{BodyTask, BodyTaskOutcome};
 use crate::sns::{SnsError, SnsSolver};
+
+/// Most body points of one cycle the null-space task takes.
+pub const MAX_BODY_POINTS: usize = 64;
 
 /// Joint velocity bounds from the position, velocity and acceleration limits
 /// (sns_ik's `shapeJointVelocityBound`), written into `qd_min`, `qd_max`:
@@ -224,6 +232,8 @@ pub struct AvoidanceOutput<'a> {
     /// the velocity bounds SNS used (speed scale included)
     pub qd_min: &'a [f64],
     pub qd_max: &'a [f64],
+    /// the body points' null-space task (all zero when it is off)
+    pub body: BodyTaskOutcome,
 }
 
 /// Per-cycle avoidance and SNS, preallocated for one robot.
@@ -249,6 +259,15 @@ pub struct Avoidance {
     sol_max: Vec<f64>,
     risk: f64,
     sns: SnsSolver,
+    /// the body points' repulsion as a task below the end effector's
+    /// (`None`: eq. 20's bounds only)
+    body: Option<BodyTask>,
+    /// the body points' repulsion, and the posture below it, apply this
+    /// cycle ([`Avoidance::pause_body_task`])
+    body_active: bool,
+    posture_active: bool,
+    /// the solution: SNS's, plus the body task's correction
+    qd: Vec<f64>,
 }
 
 impl Avoidance {
@@ -291,6 +310,10 @@ impl Avoidance {
             sol_max: vec![0.0; n],
             risk: 0.0,
             sns: SnsSolver::new(n, 3),
+            body: None,
+            body_active: true,
+            posture_active: true,
+            qd: vec![0.0; n],
         };
         a.q_min.copy_from_slice(lower);
         a.q_max.copy_from_slice(upper);
@@ -315,6 +338,18 @@ impl Avoidance {
         &self.params
     }
 
+    /// Body points: besides eq. 20's bounds, each one's repulsion as a task
+    /// below the end effector's, moving away at `gain × ‖V_Call‖`
+    /// ([`crate::body_task`]); `None`: eq. 20 only (the default).
+    pub fn set_body_task(&mut self, gain: Option<f64>) {
+        self.body = gain.map(|g| {
+            let mut b = BodyTask::new(self.n(), MAX_BODY_POINTS);
+            b.set_gain(g);
+            b.reserve_posture();
+            b
+        });
+    }
+
     /// Number of joints.
     pub fn n(&self) -> usize {
         self.qd_min.len()
@@ -329,6 +364,26 @@ impl Avoidance {
     /// the points added so far).
     pub fn bounds(&self) -> (&[f64], &[f64]) {
         (&self.qd_min, &self.qd_max)
+    }
+
+    /// Leave the body points' repulsion (`repulsion`) and the posture below
+    /// it (`posture`) out of the body task in the following cycles, or take
+    /// them again (a no-op without a body task): e.g. while the end effector
+    /// goes to a person's hand, whose arm the body points would roll away
+    /// from (and the wrist into the hand), and, in contact, the posture (the
+    /// arm yields to the hand in its null space as it did before).
+    pub fn pause_body_task(&mut self, repulsion: bool, posture: bool) {
+        self.body_active = !repulsion;
+        self.posture_active = !posture;
+    }
+
+    /// With the body task on: the posture its null space pulls toward when
+    /// no body point asks to move away, `gain × (posture − q)` for this
+    /// cycle's `q` (call after [`Avoidance::begin`]; empty: none).
+    pub fn set_posture(&mut self, posture: &[f64], q: &[f64], gain: f64) {
+        if let Some(b) = self.body.as_mut() {
+            b.set_posture(posture, q, gain);
+        }
     }
 
     /// Start a cycle: joint-limit bounds at `q`.
@@ -346,6 +401,9 @@ impl Avoidance {
             &mut self.qd_max,
         );
         self.risk = 0.0;
+        if let Some(b) = self.body.as_mut() {
+            b.clear();
+        }
         Ok(())
     }
 
@@ -374,6 +432,9 @@ impl Avoidance {
             &mut self.qd_max,
         );
         self.risk = self.risk.max(f);
+        if let Some(b) = self.body.as_mut().filter(|_| self.body_active) {
+            b.add(jacobian, v_call);
+        }
         Ok(f)
     }
 
@@ -422,8 +483,20 @@ impl Avoidance {
             &self.sol_max,
             self.params.damping,
         )?;
+        self.qd.copy_from_slice(r.qd);
+        let body = match self.body.as_mut().filter(|_| self.posture_active) {
+            Some(b) => b.apply(
+                &task_jacobian.rows(0, 3),
+                r.saturated,
+                &mut self.qd,
+                &self.sol_min,
+                &self.sol_max,
+            ),
+            None => BodyTaskOutcome::default(),
+        };
         Ok(AvoidanceOutput {
-            qd: r.qd,
+            qd: &self.qd,
+            body,
             scale: r.scale,
             saturated: r.saturated,
             iterations: r.iterations,

@@ -457,7 +457,7 @@ impl Controller {
                 protective_stop::step(&self.reference, q, qd, gains, &mut self.accel)
             }
             ControlMode::Task | ControlMode::Slow => {
-                let c = self.task.step(dt, s.speed_scale, s.ee_risk, &self.ee);
+                let c = self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee);
                 self.counters.waypoints_reached = self.task.waypoints_reached();
                 Behaviour::Cartesian(c)
             }
@@ -509,7 +509,8 @@ impl Controller {
     ) {
         let (model, data, rf, cfg) = (&self.model, &mut self.data, &mut self.reference, &self.cfg);
         let faults: Faults = if with_perception {
-            self.resolver.avoid(model, data, rf, c, dt, cfg, fresh)
+            self.resolver
+                .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh)
         } else {
             self.resolver
                 .clik(model, data, rf, c, dt, cfg, &self.posture, &self.vmax_ref)

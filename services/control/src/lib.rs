@@ -23,6 +23,7 @@
 //! messages and the step, for `main.rs` and the lock-step cell.
 
 pub mod avoidance;
+pub mod body_task;
 pub mod clik;
 pub mod collab;
 pub mod controller;

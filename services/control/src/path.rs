@@ -34,6 +34,15 @@ impl Path {
         (k + 1) % self.waypoints.len()
     }
 
+    /// Unit direction of the segment at `s` (from its waypoint to the next;
+    /// zero for coinciding waypoints).
+    pub fn direction(&self, s: f64) -> Vector3<f64> {
+        let n = self.waypoints.len();
+        let s = s.rem_euclid(self.period());
+        let k = ((s / self.segment_time).floor() as usize).min(n - 1);
+        unit(self.waypoints[(k + 1) % n] - self.waypoints[k])
+    }
+
     /// Position \[m\] and its derivative with respect to path time [m/s] at `s`.
     pub fn sample(&self, s: f64) -> (Vector3<f64>, Vector3<f64>) {
         let n = self.waypoints.len();
@@ -43,6 +52,16 @@ impl Path {
         let (a, b) = (self.waypoints[k], self.waypoints[(k + 1) % n]);
         let (p, dp) = min_jerk(u);
         (a + (b - a) * p, (b - a) * (dp / self.segment_time))
+    }
+}
+
+/// `v / ‖v‖`, or zero for a (nearly) zero or non-finite `v`.
+fn unit(v: Vector3<f64>) -> Vector3<f64> {
+    let n = v.norm();
+    if n > 1e-12 && n.is_finite() {
+        v / n
+    } else {
+        Vector3::zeros()
     }
 }
 
@@ -69,6 +88,11 @@ impl Approach {
 
     pub fn done(&self) -> bool {
         self.t >= self.duration
+    }
+
+    /// Unit direction of the move (zero for a move of no length).
+    pub fn direction(&self) -> Vector3<f64> {
+        unit(self.to - self.from)
     }
 
     /// Advance by `dt`; returns position and velocity.

@@ -2,11 +2,13 @@
 //! effector becomes the joint reference. Under perception (paper Sect. V)
 //! the end effector's repulsive vector adds to its task velocity (eq. 19),
 //! every other control point shapes the joint velocity bounds (eq. 20) and
-//! SNS solves the task within them and the joint-limit bounds; without
-//! perception, CLIK with a null-space posture.
+//! SNS solves the task within them and the joint-limit bounds, and (with
+//! `body_avoidance = "null_space"`) each body point moves away from its
+//! obstacle in the task's null space; without perception, CLIK with a
+//! null-space posture.
 
 use nalgebra::{Matrix6xX, Vector3};
-use phri_config::{ControlConfig, PointConfig};
+use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
 use phri_model::{Data, Model, ModelError};
 
 use crate::avoidance::Avoidance;
@@ -45,7 +47,13 @@ impl Resolver {
     pub fn new(model: &Model, ee_frame: usize, cfg: &ControlConfig) -> Resolver {
         Resolver {
             clik: Clik::new(model, ee_frame),
-            avoidance: Avoidance::new(model, cfg.avoidance_params),
+            avoidance: {
+                let mut a = Avoidance::new(model, cfg.avoidance_params);
+                if cfg.body_avoidance == BodyAvoidance::NullSpace {
+                    a.set_body_task(Some(cfg.body_repulsion_gain));
+                }
+                a
+            },
             points: Vec::new(),
             jac_ee: Data::jacobian_buffer(model),
             jac_point: Data::jacobian_buffer(model),
@@ -134,7 +142,8 @@ impl Resolver {
     /// velocity adds to its task velocity (eq. 19); every other control point
     /// shapes the joint velocity bounds (eq. 20); SNS solves the task within
     /// them and the joint-limit bounds. Moves `q_ref`, writes `qd_ref`.
-    /// `perception`: fresh results (`None`: stale, no repulsion).
+    /// `perception`: fresh results (`None`: stale, no repulsion); `posture`:
+    /// the body task's lowest level (empty: none).
     #[allow(clippy::too_many_arguments)]
     pub fn avoid(
         &mut self,
@@ -144,6 +153,7 @@ impl Resolver {
         c: &CartesianRef,
         dt: f64,
         cfg: &ControlConfig,
+        posture: &[f64],
         perception: Option<PerceptionView<'_>>,
     ) -> Faults {
         let mut faults = Faults::default();
@@ -157,20 +167,22 @@ impl Resolver {
             reference.qd_ref.fill(0.0);
             return faults;
         }
+        // the body points move away in the task's null space, except while
+        // collaborating (the hand's arm would roll the wrist into the hand);
+        // the posture below them, except in contact with the hand
+        self.avoidance
+            .pause_body_task(c.collab_hand.is_some(), c.collab_touching);
         if self.avoidance.begin(&reference.q_ref).is_err() {
             faults.avoidance += 1;
             reference.qd_ref.fill(0.0);
             return faults;
         }
+        self.avoidance
+            .set_posture(posture, &reference.q_ref, cfg.posture_gain);
         let x = phri_model::frame_placement(model, data, ee).p;
-        // position feedback capped below the repulsion's V_max
-        let mut fb = (c.x_d - x) * cfg.clik_gain;
-        let cap = cfg.feedback_max_speed;
-        if fb.norm() > cap {
-            fb *= cap / fb.norm();
-        }
-        let xdot_task = c.xd_d + fb;
         let mut v_ee = Vector3::zeros();
+        // the end effector's clearance to its obstacle [m] (∞: none seen)
+        let mut ee_clearance = f64::INFINITY;
         let alpha = if cfg.repulsion_filter_s > 0.0 {
             1.0 - (-dt / cfg.repulsion_filter_s).exp()
         } else {
@@ -190,6 +202,9 @@ impl Resolver {
                 } else {
                     Vector3::from(p.v_call)
                 };
+                if k == 0 && p.active != 0 && !behind_the_hand && !p.min_distance.is_nan() {
+                    ee_clearance = p.min_distance;
+                }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
                     break;
                 };
@@ -209,6 +224,27 @@ impl Resolver {
                 }
             }
         }
+        // position feedback: toward the end effector's obstacle capped below
+        // the repulsion's V_max; the task's elsewhere faster (to rejoin its
+        // path), the collaboration's at the cautious cap everywhere (it
+        // approaches, follows and backs off from a person's hand)
+        let task = c.path_time.is_some();
+        let fb = cap_feedback(
+            (c.x_d - x) * cfg.clik_gain,
+            &v_ee,
+            FeedbackCaps {
+                toward: cfg.feedback_max_speed,
+                free: if task {
+                    cfg.feedback_free_speed
+                } else {
+                    cfg.feedback_max_speed
+                },
+                clearance: ee_clearance,
+                approach_clearance: cfg.approach_clearance_m,
+                approach_gain: if task { cfg.approach_gain } else { 0.0 },
+            },
+        );
+        let xdot_task = c.xd_d + fb;
         // slew-limited towards the SNS solution (which stays within the bounds
         // it was computed for; the limit only delays reaching it)
         let dv = cfg.reference_accel_limit * dt;
@@ -237,6 +273,68 @@ impl Resolver {
     }
 }
 
+/// The caps of [`cap_feedback`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedbackCaps {
+    /// toward the obstacle, once `‖V_Call‖ ≥ toward` [m/s]
+    pub toward: f64,
+    /// the whole feedback [m/s]
+    pub free: f64,
+    /// the end effector's clearance to its obstacle [m] (∞: none)
+    pub clearance: f64,
+    /// the net approach may go on down to this clearance [m] ...
+    pub approach_clearance: f64,
+    /// ... at `gain × (clearance − approach_clearance)` [1/s] (0: never)
+    pub approach_gain: f64,
+}
+
+/// The end effector's position feedback `fb` [m/s], capped (`v_call`: its
+/// repulsive vector, base frame [m/s]):
+/// - the whole at `free`, so that an end effector pushed off its path by
+///   an obstacle rejoins the path once past it rather than trailing it;
+/// - its component toward the obstacle (against `v_call`) at the larger of
+///   1. `free` with no repulsion, down to `toward` once `‖v_call‖ ≥ toward`
+///      (where feedback and repulsion balance, `‖v_call‖ = toward` below
+///      the repulsion's `V_max`, the repulsion wins), and
+///   2. `‖v_call‖ + gain (clearance − approach_clearance)`: the feedback
+///      may beat the repulsion by a net approach speed that falls linearly
+///      with the clearance and ends at `approach_clearance` (speed and
+///      separation: a path through a person's reach is followed up to that
+///      clearance, slowly near it, never nearer).
+///
+/// A non-finite `v_call` caps the whole at `toward`.
+pub fn cap_feedback(fb: Vector3<f64>, v_call: &Vector3<f64>, caps: FeedbackCaps) -> Vector3<f64> {
+    let FeedbackCaps { toward, free, .. } = caps;
+    let free = free.max(toward);
+    let norm = v_call.norm();
+    let mut out = fb;
+    if norm > 1e-9 && norm.is_finite() {
+        let u = v_call / norm;
+        let along = fb.dot(&u);
+        let repelled = free - (free - toward) * (norm / toward.max(1e-9)).min(1.0);
+        let margin = caps.clearance - caps.approach_clearance;
+        let approach = if caps.approach_gain > 0.0 && margin > 0.0 {
+            norm + caps.approach_gain * margin
+        } else {
+            0.0
+        };
+        let cap = repelled.max(approach).min(free);
+        if along < -cap {
+            out += u * (-cap - along);
+        }
+    } else if !norm.is_finite() {
+        // no usable direction: the cautious cap everywhere
+        if out.norm() > toward {
+            out *= toward / out.norm();
+        }
+        return out;
+    }
+    if out.norm() > free {
+        out *= free / out.norm();
+    }
+    out
+}
+
 /// Margin by which an obstacle must lie beyond the collaborative hand's
 /// centre to be "behind" it \[m\]: less than the hand's radius, so that the
 /// hand's own near surface, were it not masked, still repels the end effector.
@@ -259,4 +357,63 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
         return false;
     }
     (o - x).dot(&to_hand) / d >= d - margin
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn caps(clearance: f64, approach_gain: f64) -> FeedbackCaps {
+        FeedbackCaps {
+            toward: 0.1,
+            free: 0.5,
+            clearance,
+            approach_clearance: 0.08,
+            approach_gain,
+        }
+    }
+
+    #[test]
+    fn feedback_toward_the_obstacle_loses_to_a_strong_repulsion() {
+        // the obstacle lies in −x: the repulsion points +x
+        let toward = Vector3::new(-3.0, 0.0, 0.0);
+        let side = Vector3::new(0.0, 3.0, 0.0);
+        // no repulsion: the whole cap
+        let fb = cap_feedback(toward, &Vector3::zeros(), caps(f64::INFINITY, 0.0));
+        assert!((fb.norm() - 0.5).abs() < 1e-12);
+        // a strong repulsion (≥ toward): 0.1 m/s toward it, less than ‖V_Call‖
+        let v = Vector3::new(0.25, 0.0, 0.0);
+        let fb = cap_feedback(toward, &v, caps(0.1, 0.0));
+        assert!((fb.x + 0.1).abs() < 1e-12);
+        // a weak one: the cap falls linearly from 0.5 to 0.1 as ‖V_Call‖ grows to 0.1
+        let fb = cap_feedback(toward, &Vector3::new(0.05, 0.0, 0.0), caps(0.3, 0.0));
+        assert!((fb.x + 0.3).abs() < 1e-12);
+        // beside the obstacle: not capped below the whole cap
+        let fb = cap_feedback(side, &v, caps(0.1, 0.0));
+        assert!((fb - Vector3::new(0.0, 0.5, 0.0)).norm() < 1e-12);
+        // toward and beside: only the part toward it is cut
+        let fb = cap_feedback(Vector3::new(-0.2, 0.2, 0.0), &v, caps(0.1, 0.0));
+        assert!((fb - Vector3::new(-0.1, 0.2, 0.0)).norm() < 1e-12);
+        // a malformed repulsion: the cautious cap everywhere
+        let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+        assert!((cap_feedback(side, &nan, caps(0.1, 0.0)).norm() - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_approach_beats_the_repulsion_only_down_to_its_clearance() {
+        let toward = Vector3::new(-3.0, 0.0, 0.0);
+        let v = Vector3::new(0.25, 0.0, 0.0);
+        // 0.13 m: ‖V_Call‖ + 2 (0.13 − 0.08) = 0.35 m/s, a net approach of 0.1 m/s
+        let fb = cap_feedback(toward, &v, caps(0.13, 2.0));
+        assert!((fb.x + 0.35).abs() < 1e-12);
+        assert!((-fb.x - v.x - 0.1).abs() < 1e-12);
+        // at the clearance and nearer: the repulsion wins again
+        for d in [0.08, 0.05, 0.0] {
+            let fb = cap_feedback(toward, &v, caps(d, 2.0));
+            assert!((fb.x + 0.1).abs() < 1e-12, "{d}: {fb:?}");
+        }
+        // never beyond the whole cap
+        let fb = cap_feedback(toward, &v, caps(0.4, 2.0));
+        assert!((fb.x + 0.5).abs() < 1e-12);
+    }
 }

@@ -26,6 +26,9 @@ pub struct Safety {
     pub speed_scale: f64,
     /// risk at the end effector `‖V_Call(P_e)‖/V_max ∈ [0, 1]` (0 without fresh perception)
     pub ee_risk: f64,
+    /// the end effector's repulsive vector `V_Call(P_e)` [m/s], base frame
+    /// (0 without fresh perception; as received, so possibly not finite)
+    pub ee_v_call: Vector3<f64>,
 }
 
 /// What the judgement remembers between periods, and reports.
@@ -108,9 +111,11 @@ impl SafetyMonitor {
                 .fold(0.0, f64::max)
                 .min(1.0)
         });
-        let ee_risk = perception
+        let ee_v_call = perception
             .and_then(|v| v.points.first())
-            .map_or(0.0, |p| (Vector3::from(p.v_call).norm() / v_max).min(1.0));
+            .map_or_else(Vector3::zeros, |p| Vector3::from(p.v_call));
+        // NaN.min(1) = 1: a non-finite repulsion is full risk
+        let ee_risk = (ee_v_call.norm() / v_max).min(1.0);
         Safety {
             residual_fresh,
             collision,
@@ -123,6 +128,7 @@ impl SafetyMonitor {
                 cfg.slow_scale.clamp(0.0, 1.0)
             },
             ee_risk,
+            ee_v_call,
         }
     }
 }

@@ -2,11 +2,15 @@
 //! cycles through the configured waypoints on minimum-jerk segments. After
 //! a (re)start it first approaches the path on a straight minimum-jerk move,
 //! then the path's time law ramps smoothly from rest. The path time runs
-//! slower while perception is stale and near obstacles in front of the end
-//! effector (ṡ scaled by `speed_scale · (1 − f)`, `f` its risk).
+//! slower while perception is stale, and as much as an obstacle ahead of the
+//! end effector needs: ṡ is scaled by `speed_scale · (1 − f)`, where `f` is
+//! the component of the end effector's repulsive vector against the path's
+//! direction over `V_max` (`path_pace = "opposing"`; an obstacle beside the
+//! path does not slow it, the end effector goes around it by eq. 19), or its
+//! whole risk `‖V_Call(P_e)‖/V_max` (`"risk"`).
 
 use nalgebra::Vector3;
-use phri_config::ControlConfig;
+use phri_config::{ControlConfig, PathPace};
 
 use crate::modes::CartesianRef;
 use crate::path::{Approach, Path};
@@ -32,6 +36,27 @@ pub struct TaskState {
     waypoints_reached: u64,
     /// segments ended (the path's, reached or not, and each rejoining approach)
     segments_ended: u64,
+    /// what slows the path near an obstacle
+    pace: PathPace,
+    /// `V_max` of eq. 16 [m/s]
+    v_max: f64,
+}
+
+/// The share of the time law an obstacle takes away, `f ∈ [0, 1]`: the
+/// component of the end effector's repulsive vector `v_call` [m/s] against
+/// the unit direction of motion `dir` over `v_max` (`Opposing`), or its
+/// whole norm (`Risk`). A non-finite `v_call` is full risk.
+pub fn path_slowdown(pace: PathPace, v_call: &Vector3<f64>, dir: &Vector3<f64>, v_max: f64) -> f64 {
+    let against = match pace {
+        PathPace::Opposing => (-v_call.dot(dir)).max(0.0),
+        PathPace::Risk => v_call.norm(),
+    };
+    let f = against / v_max.max(1e-9);
+    if f.is_nan() || !v_call.iter().all(|x| x.is_finite()) {
+        1.0
+    } else {
+        f.clamp(0.0, 1.0)
+    }
 }
 
 impl TaskState {
@@ -51,6 +76,8 @@ impl TaskState {
             waypoint_tolerance: cfg.waypoint_tolerance,
             waypoints_reached: 0,
             segments_ended: 0,
+            pace: cfg.path_pace,
+            v_max: cfg.avoidance_params.v_max_repulsion,
         }
     }
 
@@ -85,16 +112,22 @@ impl TaskState {
 
     /// One period of `dt` \[s\]: the end effector's reference. `speed_scale`
     /// (1, or slower while perception is stale) scales the joint velocity
-    /// bounds and the time law; `ee_risk` ∈ [0, 1] slows the time law further;
-    /// `ee` is the measured end effector \[m\] (to count waypoints reached).
+    /// bounds and the time law; the end effector's repulsive vector `v_call`
+    /// [m/s] (0 without fresh perception) slows the time law further
+    /// ([`path_slowdown`]); `ee` is the measured end effector \[m\] (to count
+    /// waypoints reached).
     pub fn step(
         &mut self,
         dt: f64,
         speed_scale: f64,
-        ee_risk: f64,
+        v_call: &Vector3<f64>,
         ee: &Vector3<f64>,
     ) -> CartesianRef {
-        let time_scale = speed_scale * (1.0 - ee_risk);
+        let dir = match &self.approach {
+            Some(a) => a.direction(),
+            None => self.path.direction(self.s),
+        };
+        let time_scale = speed_scale * (1.0 - path_slowdown(self.pace, v_call, &dir, self.v_max));
         let (x_d, xd_d) = match self.approach.as_mut() {
             Some(a) => {
                 let out = a.step(dt * time_scale);
@@ -154,9 +187,9 @@ mod tests {
         t.start(from);
         let dt = 0.001;
         // the approach ends at the path's start, at rest, without moving the path time
-        let mut last = t.step(dt, 1.0, 0.0, &from);
+        let mut last = t.step(dt, 1.0, &Vector3::zeros(), &from);
         while t.approach.is_some() {
-            last = t.step(dt, 1.0, 0.0, &last.x_d);
+            last = t.step(dt, 1.0, &Vector3::zeros(), &last.x_d);
         }
         assert!((last.x_d - w[0]).norm() < 1e-12 && last.xd_d.norm() < 1e-9);
         assert_eq!(last.path_time, Some(0.0));
@@ -164,30 +197,61 @@ mod tests {
         let cycle = t.path.period();
         let mut ee = last.x_d;
         for _ in 0..((2.0 * cycle + 0.6) / dt) as usize {
-            ee = t.step(dt, 1.0, 0.0, &ee).x_d;
+            ee = t.step(dt, 1.0, &Vector3::zeros(), &ee).x_d;
         }
         assert_eq!(t.waypoints_reached(), 6);
     }
 
-    #[test]
-    fn risk_and_stale_perception_slow_the_time_law() {
-        let mut fast = task();
-        let mut slow = task();
-        let mut halted = task();
-        for t in [&mut fast, &mut slow, &mut halted] {
-            t.approach = None;
-            t.ramp_u = 1.0;
-        }
-        let ee = Vector3::zeros();
+    /// The path time after 100 ms at full pace from the path's start, with
+    /// `v_call` at the end effector, under `pace`.
+    fn path_time_after(pace: PathPace, speed_scale: f64, v_call: Vector3<f64>) -> f64 {
+        let mut t = task();
+        t.pace = pace;
+        t.approach = None;
+        t.ramp_u = 1.0;
         for _ in 0..100 {
-            fast.step(0.001, 1.0, 0.0, &ee);
-            slow.step(0.001, 0.3, 0.5, &ee);
-            halted.step(0.001, 1.0, 1.0, &ee);
+            t.step(0.001, speed_scale, &v_call, &Vector3::zeros());
         }
-        assert!((fast.path_time() - 0.1).abs() < 1e-12);
-        assert!((slow.path_time() - 0.015).abs() < 1e-12);
+        t.path_time()
+    }
+
+    #[test]
+    fn only_an_obstacle_ahead_slows_the_time_law() {
+        let t = task();
+        let v_max = t.v_max;
+        // the first segment, P1 → P2
+        let dir = t.path.direction(0.0);
+        let w = &t.path.waypoints;
+        assert!((dir - (w[1] - w[0]).normalize()).norm() < 1e-12);
+        let side = dir.cross(&Vector3::z()).normalize();
+        let opposing = PathPace::Opposing;
+        // nothing near, or a person beside the path: full pace
+        assert!((path_time_after(opposing, 1.0, Vector3::zeros()) - 0.1).abs() < 1e-12);
+        assert!((path_time_after(opposing, 1.0, side * v_max) - 0.1).abs() < 1e-12);
+        // behind the end effector (pushing it along): full pace
+        assert!((path_time_after(opposing, 1.0, dir * v_max) - 0.1).abs() < 1e-12);
+        // ahead, at half risk: half pace; at full risk: halted
+        assert!((path_time_after(opposing, 1.0, -dir * 0.5 * v_max) - 0.05).abs() < 1e-12);
+        assert_eq!(path_time_after(opposing, 1.0, -dir * v_max), 0.0);
+        // ahead and to the side: only the component against the path counts
+        let v = (-dir + side) * (0.5 * v_max);
+        assert!((path_time_after(opposing, 1.0, v) - 0.05).abs() < 1e-12);
+        // stale perception: slow_scale on top
+        assert!((path_time_after(opposing, 0.3, -dir * 0.5 * v_max) - 0.015).abs() < 1e-12);
+        // a malformed repulsion halts the path
+        let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+        assert_eq!(path_time_after(opposing, 1.0, nan), 0.0);
+    }
+
+    #[test]
+    fn risk_pace_slows_for_any_repulsion() {
+        let t = task();
+        let side = t.path.direction(0.0).cross(&Vector3::z()).normalize();
+        let risk = PathPace::Risk;
+        assert!((path_time_after(risk, 1.0, Vector3::zeros()) - 0.1).abs() < 1e-12);
+        assert!((path_time_after(risk, 0.3, side * 0.5 * t.v_max) - 0.015).abs() < 1e-12);
         assert_eq!(
-            halted.path_time(),
+            path_time_after(risk, 1.0, side * t.v_max),
             0.0,
             "full risk at the end effector halts the path"
         );
