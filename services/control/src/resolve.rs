@@ -169,7 +169,8 @@ impl Resolver {
         }
         // the body points move away in the task's null space, except while
         // collaborating (the hand's arm would roll the wrist into the hand);
-        // the posture below them, except in contact with the hand
+        // the posture below them, except in contact with the hand (the arm
+        // yields to it in its null space)
         self.avoidance
             .pause_body_task(c.collab_hand.is_some(), c.collab_touching);
         if self.avoidance.begin(&reference.q_ref).is_err() {
