@@ -394,8 +394,10 @@ pub struct FrameHeader {
     pub removed_pixels: u32,
     /// valid pixels left
     pub valid_pixels: u32,
-    #[serde(skip)]
-    pub _pad: u32,
+    /// the frame's arrival at ingestion → this publication [ns], saturating
+    /// (perception/depth only; 0 on camera/depth). Was padding: the layout
+    /// and size are unchanged.
+    pub ingest_ns: u32,
 }
 
 /// Result for one control point.
@@ -440,8 +442,9 @@ pub struct RepulsionResult {
     /// workers in the configuration
     pub workers: u32,
     pub n_points: u32,
-    #[serde(skip)]
-    pub _pad: u32,
+    /// the frame's arrival at ingestion → this result's publication [ns],
+    /// saturating (0: unknown). Was padding: the layout and size are unchanged.
+    pub since_arrival_ns: u32,
     /// processing time [ns]
     pub compute_ns: u64,
     pub points: [PointRepulsion; MAX_POINTS_PER_WORKER],

@@ -393,6 +393,7 @@ fn repulsion_view_is_pinned() {
             "seq": 88, "frame_seq": 120, "capture_ns": 4_990_000_000u64,
             "published_ns": 5_001_000_000u64, "frame_capture_wall_ns": 4_990_500_000u64,
             "worker": 1, "workers": 2, "n_points": 2, "compute_ns": 800_000,
+            "since_arrival_ns": 0,
             "points": [
                 {"point": 2, "active": true, "v_call": [-0.25, 0.0, 0.125],
                  "min_distance": 0.35, "obstacle": [1.0, 0.0, 1.0], "position": [0.65, 0.0, 1.0]},

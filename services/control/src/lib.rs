@@ -14,8 +14,9 @@
 //!    the reaction, protective stop, recover;
 //! 4. avoidance ([`resolve`], [`avoidance`], [`sns`]): the end effector's
 //!    repulsion adds to the task (eq. 19), the other control points shape the
-//!    joint velocity bounds (eq. 20), SNS solves within them; CLIK ([`clik`])
-//!    without perception;
+//!    joint velocity bounds (eq. 20), SNS solves within them, and below the
+//!    end effector's task the body points move away ([`body_task`]); CLIK
+//!    ([`clik`]) without perception;
 //! 5. the computed-torque law `τ = M a + C q̇ + g` with gravity compensated;
 //! 6. torque, velocity and position limits of the model ([`limits`]).
 //!

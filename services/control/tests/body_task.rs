@@ -30,6 +30,17 @@ impl Rng {
     }
 }
 
+/// SNS alone, with the body task, the end effector's and the point's
+/// Jacobians, and the bounds.
+struct Solved {
+    alone: Vec<f64>,
+    with: Vec<f64>,
+    je: Matrix6xX<f64>,
+    jp: Matrix6xX<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
 /// One cycle with one body point: (SNS alone, with the body task).
 fn solve(
     model: &Model,
@@ -37,14 +48,7 @@ fn solve(
     point: (usize, Vector3<f64>),
     v_call: Vector3<f64>,
     xdot: Vector3<f64>,
-) -> (
-    Vec<f64>,
-    Vec<f64>,
-    Matrix6xX<f64>,
-    Matrix6xX<f64>,
-    Vec<f64>,
-    Vec<f64>,
-) {
+) -> Solved {
     let mut data = Data::new(model);
     phri_model::forward_kinematics(model, &mut data, q).unwrap();
     let ee = model.frame_id("lwr_flange").unwrap();
@@ -66,7 +70,14 @@ fn solve(
     }
     let with = out.pop().unwrap();
     let alone = out.pop().unwrap();
-    (alone, with, je, jp, bounds.0, bounds.1)
+    Solved {
+        alone,
+        with,
+        je,
+        jp,
+        lo: bounds.0,
+        hi: bounds.1,
+    }
 }
 
 fn lin(j: &Matrix6xX<f64>, qd: &[f64]) -> Vector3<f64> {
@@ -87,7 +98,14 @@ fn the_elbow_moves_away_and_the_end_effector_does_not_notice() {
     // a hand approaching the elbow from +y, the end effector moving along +y
     let v_call = Vector3::new(0.0, -0.15, 0.0);
     let xdot = Vector3::new(0.0, 0.2, 0.0);
-    let (alone, with, je, jp, lo, hi) = solve(&model, &q, elbow, v_call, xdot);
+    let Solved {
+        alone,
+        with,
+        je,
+        jp,
+        lo,
+        hi,
+    } = solve(&model, &q, elbow, v_call, xdot);
     let u = v_call.normalize();
     let away_alone = u.dot(&lin(&jp, &alone));
     let away_with = u.dot(&lin(&jp, &with));
@@ -130,7 +148,14 @@ fn on_random_problems_the_task_is_kept_and_no_point_comes_closer() {
             rng.uniform(-0.3, 0.3),
             rng.uniform(-0.3, 0.3),
         );
-        let (alone, with, je, jp, lo, hi) = solve(&model, &q, point, v_call, xdot);
+        let Solved {
+            alone,
+            with,
+            je,
+            jp,
+            lo,
+            hi,
+        } = solve(&model, &q, point, v_call, xdot);
         // the end effector's velocity is SNS's (exactly up to round-off)
         let d = (lin(&je, &with) - lin(&je, &alone)).norm();
         assert!(d < 1e-9, "end effector changed by {d}");

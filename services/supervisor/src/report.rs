@@ -101,6 +101,9 @@ pub struct PerceptionReport {
     pub dropped_frames: u64,
     /// capture → the last worker's result [ms]
     pub frame_to_repulsion_ms: Percentiles,
+    /// the frame's arrival at ingestion → the last worker's result [ms]
+    /// (frames whose results all carry the arrival)
+    pub arrival_to_repulsion_ms: Percentiles,
 }
 
 /// `--report` JSON.
@@ -223,10 +226,12 @@ pub struct Evaluator {
     /// camera frames: (seq, capture wall time) of the recent ones, and the count
     frames_seen: u64,
     last_frame_seq: Option<u64>,
-    /// per frame in flight: (frame seq, capture wall ns, workers answered bitmask, workers, last publish ns)
-    in_flight: Vec<(u64, u64, u32, u32, u64)>,
+    /// per frame in flight: (frame seq, capture wall ns, workers answered bitmask, workers, last
+    /// publish ns, earliest arrival at ingestion ns: `None` once a result did not carry it)
+    in_flight: Vec<(u64, u64, u32, u32, u64, Option<u64>)>,
     complete_frames: u64,
     frame_latency_ms: Vec<f64>,
+    arrival_latency_ms: Vec<f64>,
     /// why the run was degraded (see [`Report::degraded`])
     degraded: Vec<String>,
     /// CLOCK_MONOTONIC − robot clock [ns], from the newest controller status
@@ -277,6 +282,7 @@ impl Evaluator {
             in_flight: Vec::new(),
             complete_frames: 0,
             frame_latency_ms: Vec::new(),
+            arrival_latency_ms: Vec::new(),
             degraded: Vec::new(),
             robot_to_mono_ns: 0,
             truth_lost: 0,
@@ -615,6 +621,7 @@ impl Evaluator {
                     0,
                     m.workers,
                     m.published_ns,
+                    Some(u64::MAX),
                 ));
                 self.in_flight.len() - 1
             }
@@ -622,10 +629,19 @@ impl Evaluator {
         let f = &mut self.in_flight[idx];
         f.2 |= bit;
         f.4 = f.4.max(m.published_ns);
+        // the frame's arrival at ingestion, as each result tells it
+        f.5 = match (f.5, m.since_arrival_ns) {
+            (Some(a), d) if d > 0 => Some(a.min(m.published_ns.saturating_sub(u64::from(d)))),
+            _ => None,
+        };
         if f.2 & all == all {
             self.complete_frames += 1;
             self.frame_latency_ms
                 .push(f.4.saturating_sub(f.1) as f64 * 1e-6);
+            if let Some(a) = f.5.filter(|a| *a != u64::MAX) {
+                self.arrival_latency_ms
+                    .push(f.4.saturating_sub(a) as f64 * 1e-6);
+            }
             self.in_flight.swap_remove(idx);
         }
     }
@@ -634,13 +650,20 @@ impl Evaluator {
         if self.frames_seen == 0 && self.complete_frames == 0 {
             return None;
         }
-        let mut v = self.frame_latency_ms.clone();
-        v.sort_by(f64::total_cmp);
-        let at = |p: f64| {
-            if v.is_empty() {
-                0.0
-            } else {
-                v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+        let percentiles = |samples: &[f64]| {
+            let mut v = samples.to_vec();
+            v.sort_by(f64::total_cmp);
+            let at = |p: f64| {
+                if v.is_empty() {
+                    0.0
+                } else {
+                    v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+                }
+            };
+            Percentiles {
+                p50: at(0.5),
+                p99: at(0.99),
+                max: v.last().copied().unwrap_or(0.0),
             }
         };
         // the frame in flight at the end is not dropped
@@ -651,11 +674,8 @@ impl Evaluator {
         Some(PerceptionReport {
             frames: self.frames_seen,
             dropped_frames: dropped,
-            frame_to_repulsion_ms: Percentiles {
-                p50: at(0.5),
-                p99: at(0.99),
-                max: v.last().copied().unwrap_or(0.0),
-            },
+            frame_to_repulsion_ms: percentiles(&self.frame_latency_ms),
+            arrival_to_repulsion_ms: percentiles(&self.arrival_latency_ms),
         })
     }
 

@@ -58,7 +58,13 @@ struct Collab {
 impl Out {
     /// Ingest one frame into a loaned sample and publish it; a refused frame
     /// is counted and logged (rate-limited), not an error.
-    fn handle(&mut self, header: &mut FrameHeader, input: &[u16]) -> Result<(), IpcError> {
+    /// `arrived_ns`: when the frame arrived here [ns, CLOCK_MONOTONIC].
+    fn handle(
+        &mut self,
+        header: &mut FrameHeader,
+        input: &[u16],
+        arrived_ns: u64,
+    ) -> Result<(), IpcError> {
         let mut sample = self.frames.loan(input.len())?;
         let now = self.history.newest_ns();
         // the collaborative hand, while a collaboration is on
@@ -84,6 +90,7 @@ impl Out {
         {
             Ok(outcome) => {
                 header.published_ns = now_ns();
+                header.ingest_ns = saturating_u32(header.published_ns.saturating_sub(arrived_ns));
                 *sample.user_header_mut() = *header;
                 self.frames.send(sample)?;
                 if let (Some(c), Some((part, mask))) = (self.collab.as_ref(), masking) {
@@ -168,8 +175,9 @@ fn body() -> Result<(), Box<dyn Error>> {
         match &mut source {
             Source::Camera(frames) => {
                 while let Some(frame) = frames.receive()? {
+                    let arrived = now_ns();
                     let mut header = *frame.user_header();
-                    out.handle(&mut header, frame.payload())?;
+                    out.handle(&mut header, frame.payload(), arrived)?;
                 }
             }
             Source::Png {
@@ -180,7 +188,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 let mut header = FrameHeader::default();
                 match replay.next_frame(out.history.newest_ns(), now_ns(), &mut header) {
                     None => {}
-                    Some(Ok(depths)) => out.handle(&mut header, &depths)?,
+                    Some(Ok(depths)) => out.handle(&mut header, &depths, woke_ns)?,
                     Some(Err(e)) => {
                         out.refused += 1;
                         if let Some(n) = unreadable.hit(now_ns()) {
@@ -196,4 +204,9 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
     }
     Ok(())
+}
+
+/// `ns` as a u32, saturating (4.29 s).
+fn saturating_u32(ns: u64) -> u32 {
+    u32::try_from(ns).unwrap_or(u32::MAX)
 }

@@ -48,6 +48,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             continue;
         };
         let t0 = now_ns();
+        let header = *frame.user_header();
         let msg = match w.respond(frame.user_header(), frame.payload()) {
             Ok(msg) => msg,
             Err(e) => {
@@ -61,6 +62,14 @@ fn body() -> Result<(), Box<dyn Error>> {
         drop(frame);
         msg.compute_ns = now_ns() - t0;
         msg.published_ns = now_ns();
+        // the frame arrived at ingestion ingest_ns before ingestion published it
+        msg.since_arrival_ns = match header.ingest_ns {
+            0 => 0,
+            ingest => {
+                let arrived = header.published_ns.saturating_sub(u64::from(ingest));
+                u32::try_from(msg.published_ns.saturating_sub(arrived)).unwrap_or(u32::MAX)
+            }
+        };
         results.publish(msg)?;
     }
     Ok(())
