@@ -139,6 +139,15 @@ fn flying_pixels_cause_no_false_detection_in_a_running_cell() {
             "run {run}: {}",
             r["events"]
         );
+        // perception's latencies, from capture and from the frame's arrival
+        // at ingestion (carried through perception/depth and the results)
+        let p = &r["perception"];
+        let capture = p["frame_to_repulsion_ms"]["p50"].as_f64().unwrap();
+        let arrival = p["arrival_to_repulsion_ms"]["p50"].as_f64().unwrap();
+        assert!(
+            arrival > 0.0 && arrival < capture,
+            "run {run}: arrival → result {arrival} ms, capture → result {capture} ms"
+        );
         // the arm went on with its task through the noise
         assert!(
             r["task"]["waypoints_reached"].as_u64().unwrap() >= 5,
