@@ -888,7 +888,13 @@ fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
         .as_array()
         .unwrap()
         .iter()
-        .filter(|x| x["part"] == "hand_left" && x["link"] == "lwr_link_7")
+        // the end effector's link, or the wrist it sits on: the position
+        // task leaves the orientation free, and this hand, still coming in
+        // when the approach starts, meets the wider wrist first (the
+        // lock-step cell: every touch on link 6; BENCHMARKS.md)
+        .filter(|x| {
+            x["part"] == "hand_left" && (x["link"] == "lwr_link_7" || x["link"] == "lwr_link_6")
+        })
         .collect();
     assert!(!hand.is_empty(), "the robot never reached the left hand");
     assert!(

@@ -270,6 +270,12 @@ impl ForceEstimator {
         phri_model::frame_placement(&self.model, &self.data, frame).apply(&Vector3::zeros())
     }
 
+    /// The kinematics of the last [`ForceEstimator::estimate`] or
+    /// [`ForceEstimator::placement`] (body placements, base frame).
+    pub fn data(&self) -> &Data {
+        &self.data
+    }
+
     /// The last estimate.
     pub fn last(&self) -> &ForceEstimate {
         &self.last

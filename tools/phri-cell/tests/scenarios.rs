@@ -327,18 +327,18 @@ struct ElbowRun {
     s: phri_cell::CellSummary,
     ended_by: Option<(f64, phri_ipc::CollabReason)>,
     /// closest true surface distance left arm ↔ links 3-4 while the arm
-    /// crosses and stays (7.6-10.4 s) \[m\], and when \[s\]
+    /// crosses and stays (7.6-11.0 s) \[m\], and when \[s\]
     closest: (f64, f64),
     /// its mean while the arm is held in front of the elbow and the end
-    /// effector reaches the right hand (8.4-10.0 s) \[m\]
+    /// effector reaches the right hand (8.4-10.6 s) \[m\]
     mean_held: f64,
     /// the first touch of the right hand on link 7 \[s\] and the left arm's
     /// distance to links 3-4 then \[m\]
     touch: Option<(f64, f64)>,
-    /// per period, 8.2-10.0 s: the distance perception reported (the
+    /// per period, 8.2-10.6 s: the distance perception reported (the
     /// masked hand excluded) less the true distance left arm ↔ robot \[m\]
     seen_less_true: Vec<f64>,
-    /// smallest SNS task scale, 8.0-10.0 s
+    /// smallest SNS task scale, 8.2-10.6 s
     task_scale: f64,
 }
 
@@ -349,21 +349,21 @@ fn elbow_run(l: &phri_config::Loaded) -> ElbowRun {
     let (mut seen_less_true, mut task_scale) = (Vec::new(), 1.0f64);
     let (s, ended_by) = run_collab(&mut c, 23.0, |c| {
         let t = now(c);
-        if !(7.6..10.4).contains(&t) {
+        if !(7.6..11.0).contains(&t) {
             return;
         }
         let d = common::parts_to_links(c, &LEFT_ARM, &ELBOW);
         if d < closest.0 {
             closest = (d, t);
         }
-        if (8.4..10.0).contains(&t) {
+        if (8.4..10.6).contains(&t) {
             sum += d;
             n += 1;
         }
         if touch.is_none() && hand_on_link_7(c) {
             touch = Some((t, d));
         }
-        if (8.2..10.0).contains(&t) {
+        if (8.2..10.6).contains(&t) {
             if c.status.min_distance > 0.0 {
                 let left = common::parts_to_links(c, &LEFT_ARM, &LINKS);
                 seen_less_true.push(c.status.min_distance - left);
@@ -439,7 +439,7 @@ fn safe_collaboration_elbow_keeps_the_crossing_arm_off_the_elbow_and_reaches_the
     // in front of the elbow
     let (t_touch, d_touch) = r.touch.expect("the right hand was not reached");
     assert!(
-        t_touch < 10.0 && d_touch < 0.15,
+        t_touch < 10.6 && d_touch < 0.15,
         "reached at {t_touch:.2} s with the left arm {d_touch:.3} m from the elbow"
     );
     assert!(r

@@ -50,13 +50,20 @@ fn voice_starts_and_ends_the_collaboration_and_the_rest_is_refused() {
         .modes
         .iter()
         .all(|(t, m)| !collab.contains(&m.as_str()) || *t >= follow_t));
-    let last_collab = s
+    let over = s
         .modes
         .iter()
-        .filter(|(_, m)| collab.contains(&m.as_str()))
+        .find(|(t, m)| *t >= end_t && !collab.contains(&m.as_str()))
         .map(|(t, _)| *t)
-        .fold(0.0, f64::max);
-    assert!(last_collab < end_t, "{:?}", s.modes);
+        .expect("the collaboration ends");
+    assert!(over < end_t + 1.0, "{:?}", s.modes);
+    assert!(
+        s.modes
+            .iter()
+            .all(|(t, m)| !collab.contains(&m.as_str()) || *t < over),
+        "{:?}",
+        s.modes
+    );
     assert!(first("task", end_t).is_some(), "{:?}", s.modes);
     // the left hand touched, nothing else, no force above the hand's limit
     assert_eq!(s.unintended_contacts, 0, "{:?}", s.contacts);

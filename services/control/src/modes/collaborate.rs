@@ -11,7 +11,10 @@
 //! - approach / follow: the robot point moves toward the filtered hand until
 //!   the surfaces touch (aiming `reach_into_m` into the modelled hand, which
 //!   depth places only to centimetres), at `approach_speed` far from it and
-//!   `contact_speed` within `slow_down_m`;
+//!   `contact_speed` within `slow_down_m`, relative to a hand that comes
+//!   toward it (the robot backs away from a faster one). The hand is carried
+//!   forward by its velocity over the filter's lag, and the gap is to the
+//!   nearest of the robot part and the wrist's collision objects;
 //! - contact: admittance on the estimated force: the end effector yields
 //!   along F̂ at `admittance` [m/(N s)], so the person pushes it around,
 //!   and keeps pressing the hand with `contact_hold_n`;
@@ -41,6 +44,9 @@ const WRIST_SEEN_M: f64 = 0.08;
 /// The desired end effector stays this close to the measured one \[m\]:
 /// blocked by avoidance or by the hand, the reference waits instead of winding up.
 const MAX_LEAD_M: f64 = 0.05;
+/// A hand closing in slower than this is still \[m/s\] (the refined hand's
+/// velocity jitters by up to 0.09 m/s in depth's noise).
+const CLOSING_MIN: f64 = 0.1;
 
 /// The collaboration's inputs of one period.
 #[derive(Clone, Copy, Debug, Default)]
@@ -70,13 +76,23 @@ pub struct Collaboration {
     wrist_frame: usize,
     /// the repulsion control point on the wrist link (`[[repulsion.points]]`), if any
     wrist_point: Option<usize>,
+    /// the model's collision objects of the robot part's and the wrist's
+    /// links: the gap to the hand is to the nearest of them too (the wrist
+    /// may meet a hand coming from its side first)
+    near_objects: Vec<usize>,
     /// joint collision thresholds of the detector \[Nm\]
     collision_threshold: [f64; MAX_DOF],
     n: usize,
-    /// the hand the approach follows, low-passed \[m\], base frame
+    /// the hand the approach follows \[m\], base frame: the low-passed
+    /// sightings carried forward by the filter's lag and the sighting's age
     hand: Option<Vector3<f64>>,
+    /// the sightings low-passed \[m\], base frame (they trail a moving hand
+    /// by `hand_filter_s` × its speed)
+    hand_lp: Option<Vector3<f64>>,
     /// the newest sighting: position \[m\], capture time \[ns, robot clock\]
     sighting: Option<(Vector3<f64>, u64)>,
+    /// the hand's velocity from its sightings, low-passed \[m/s\], base frame
+    hand_velocity: Vector3<f64>,
     /// the hand was seen in this period
     hand_seen: bool,
     /// desired end-effector position \[m\], base frame
@@ -87,6 +103,9 @@ pub struct Collaboration {
     estimate: Option<ForceEstimate>,
     /// surface gap robot point ↔ hand \[m\]
     gap: f64,
+    /// surface gap hand ↔ the nearest of the robot part and the wrist's
+    /// collision objects \[m\]: the approach slows down by it
+    near_gap: f64,
     wrist_since: Option<f64>,
     collision: bool,
     /// after a collaboration: full detection re-arms once the residual was
@@ -141,6 +160,13 @@ impl Collaboration {
                 point: Vector3::from(c.robot_point),
             },
             wrist_frame,
+            near_objects: model
+                .collisions
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.link == c.robot_link || o.link == c.wrist_link)
+                .map(|(i, _)| i)
+                .collect(),
             wrist_point: cfg
                 .repulsion
                 .points
@@ -149,12 +175,15 @@ impl Collaboration {
             collision_threshold,
             n,
             hand: None,
+            hand_lp: None,
             sighting: None,
+            hand_velocity: Vector3::zeros(),
             hand_seen: false,
             x_d: Vector3::zeros(),
             robot_point: Vector3::zeros(),
             estimate: None,
             gap: f64::INFINITY,
+            near_gap: f64::INFINITY,
             wrist_since: None,
             collision: false,
             rearm: None,
@@ -210,6 +239,12 @@ impl Collaboration {
     }
 
     /// Capture time of the newest sighting of the hand [ns, robot clock].
+    /// The collaborative hand's velocity from its sightings, low-passed
+    /// \[m/s\], base frame (zero while no hand is followed).
+    pub fn hand_velocity(&self) -> Vector3<f64> {
+        self.hand_velocity
+    }
+
     pub fn hand_capture_ns(&self) -> Option<u64> {
         self.sighting.map(|(_, t)| t)
     }
@@ -277,7 +312,9 @@ impl Collaboration {
             let answer = self.machine.request(r, robot, conf, t);
             if answer.accepted && !was_active && self.machine.active() {
                 self.hand = None;
+                self.hand_lp = None;
                 self.sighting = None;
+                self.hand_velocity = Vector3::zeros();
             }
             self.last_answer = Some(Answered {
                 request: *r,
@@ -304,15 +341,37 @@ impl Collaboration {
                 let new = self.sighting.is_none_or(|(_, t0)| capture > t0);
                 if c >= self.cfg.min_hand_confidence && new {
                     let x = Vector3::from(x);
+                    // the velocity between consecutive sightings, low-passed
+                    // like the position (a gap longer than a skeleton's
+                    // life says nothing of the motion)
+                    if let Some((x0, t0)) = self.sighting {
+                        let gap_s = capture.saturating_sub(t0) as f64 * 1e-9;
+                        if gap_s > 0.0 && gap_s <= MAX_SKELETON_AGE_S {
+                            let a = 1.0 - (-gap_s / self.cfg.hand_filter_s.max(1e-3)).exp();
+                            self.hand_velocity += ((x - x0) / gap_s - self.hand_velocity) * a;
+                        }
+                    }
                     self.sighting = Some((x, capture));
                     self.hand_seen = true;
                 }
             }
-            if let Some((x, _)) = self.sighting {
-                let alpha = 1.0 - (-dt / self.cfg.hand_filter_s.max(1e-3)).exp();
-                self.hand = Some(match self.hand {
+            if let Some((x, capture)) = self.sighting {
+                let tau = self.cfg.hand_filter_s.max(1e-3);
+                let alpha = 1.0 - (-dt / tau).exp();
+                let lp = match self.hand_lp {
                     Some(h) => h + (x - h) * alpha,
                     None => x,
+                };
+                self.hand_lp = Some(lp);
+                // where the hand is now while approaching and following:
+                // the low-pass trails it by τ·v, the sighting is `age` old
+                // (in contact its motion is the push, the admittance's)
+                let age = (stamp_ns.saturating_sub(capture) as f64 * 1e-9).min(MAX_SKELETON_AGE_S);
+                self.hand = Some(match self.machine.phase() {
+                    CollabPhase::Approach | CollabPhase::Follow => {
+                        lp + self.hand_velocity * (tau + age)
+                    }
+                    _ => lp,
                 });
             }
         }
@@ -353,11 +412,13 @@ impl Collaboration {
         let wrist_push =
             self.machine.active() && self.wrist_push(t, q, residual, fresh_skeleton, wrist_seen);
         // 5. the gap and the phase
-        self.gap = match self.hand {
+        (self.gap, self.near_gap) = match self.hand {
             Some(h) => {
-                (h - self.robot_point).norm() - self.cfg.robot_radius_m - self.cfg.hand_radius_m
+                let part = (h - self.robot_point).norm() - self.cfg.robot_radius_m;
+                let near = self.surface_distance(&h).min(part);
+                (part - self.cfg.hand_radius_m, near - self.cfg.hand_radius_m)
             }
-            None => f64::INFINITY,
+            None => (f64::INFINITY, f64::INFINITY),
         };
         let origin = self.forces.frame_origin(self.contact.frame);
         let backed_off = self
@@ -394,7 +455,9 @@ impl Collaboration {
         if was && !self.machine.active() {
             self.rearm = Some(None);
             self.hand = None;
+            self.hand_lp = None;
             self.sighting = None;
+            self.hand_velocity = Vector3::zeros();
         }
         self.update_rearm(t, residual);
         phase
@@ -433,6 +496,31 @@ impl Collaboration {
             frame: self.contact.frame,
             point: axis + normal * radius,
         }
+    }
+
+    /// The distance \[m\] from `x` (base frame) to the surface of the
+    /// robot part's and the wrist's collision objects (their capsules), at
+    /// the joints of the last kinematics (∞: none).
+    fn surface_distance(&self, x: &Vector3<f64>) -> f64 {
+        let (model, data) = (self.forces.model(), self.forces.data());
+        let mut d = f64::INFINITY;
+        for o in self
+            .near_objects
+            .iter()
+            .filter_map(|&i| model.collisions.get(i))
+        {
+            let (radius, half, r) = o.shape.capsule();
+            let pose = o.pose(data);
+            let a = pose.apply(&(r * Vector3::new(0.0, 0.0, -half)));
+            let b = pose.apply(&(r * Vector3::new(0.0, 0.0, half)));
+            let ab = b - a;
+            let t = match ab.norm_squared() > 1e-12 {
+                true => ((x - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0),
+                false => 0.0,
+            };
+            d = d.min((x - (a + ab * t)).norm() - radius);
+        }
+        d
     }
 
     fn update_rearm(&mut self, t: f64, residual: Option<&[f64]>) {
@@ -539,9 +627,24 @@ impl Collaboration {
                     if to.norm() > 1e-6 {
                         let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
                         let target = h - to.normalize() * reach + offset;
-                        let near = (self.gap.max(0.0) / c.slow_down_m).min(1.0);
-                        let speed = (c.contact_speed + (c.approach_speed - c.contact_speed) * near)
-                            * speed_scale.clamp(0.0, 1.0);
+                        let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
+                        // within `slow_down_m`, the hand's own speed toward
+                        // the robot point is taken from the robot's, which
+                        // backs away from a hand coming faster, so that they
+                        // meet at `contact_speed` relative; the safety
+                        // judgement's scale slows the approach, never the
+                        // backing away
+                        let closing = -self.hand_velocity.dot(&(to / to.norm()));
+                        let closing = match closing > CLOSING_MIN && self.near_gap < c.slow_down_m {
+                            true => closing,
+                            false => 0.0,
+                        };
+                        let speed =
+                            c.contact_speed + (c.approach_speed - c.contact_speed) * near - closing;
+                        let speed = match speed >= 0.0 {
+                            true => speed.min(c.approach_speed) * speed_scale.clamp(0.0, 1.0),
+                            false => speed.max(-c.approach_speed.max(closing)),
+                        };
                         let delta = target - self.x_d;
                         let d = delta.norm();
                         if d > 1e-9 {

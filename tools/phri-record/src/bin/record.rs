@@ -603,13 +603,14 @@ mod tests {
         let d = [1000u16, 0, 1200, 0, 900, 0, 800, 0];
         let (dw, dh, data) = downsample(&h, &d, 2);
         assert_eq!((dw, dh, data.clone()), (2, 1, vec![1000, 1200]));
-        // as the hand-written view had it
+        // as the hand-written view had it, and the arrival → publication
+        // time of issue 14 (a former padding field)
         let expected = json!({
             "seq": 12, "capture_ns": 100, "capture_wall_ns": 200, "published_ns": 300,
             "width": 4, "height": 2, "fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": null,
             "depth_scale": 0.001, "pose_r": h.pose_r, "pose_t": h.pose_t,
             "q": [0.5, -0.25, 1.0], "q_stamp_ns": 90, "dof": 3, "removed_pixels": 2,
-            "valid_pixels": 5, "downsample": 2, "data_width": 2, "data_height": 1,
+            "valid_pixels": 5, "ingest_ns": 0, "downsample": 2, "data_width": 2, "data_height": 1,
             "data": [1000, 1200],
         });
         assert_eq!(frame_json(&h, 2, dw, dh, &data), expected);
