@@ -24,7 +24,7 @@ use crate::Simulator;
 /// File name of the snapshot inside the run directory.
 pub const FILE_NAME: &str = "sim-arm.state";
 /// How often the arm's positions are saved for a restarted simulator.
-pub const SAVE_PERIOD: Duration = Duration::from_millis(20);
+pub const SAVE_PERIOD: Duration = Duration::from_millis(10);
 /// A snapshot older than this is not the arm's state any more \[ns\].
 pub const MAX_AGE_NS: u64 = 2_000_000_000;
 const VERSION: u32 = 1;
