@@ -47,6 +47,9 @@ const MAX_LEAD_M: f64 = 0.05;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
+/// In contact, the wrist this much nearer the hand than the robot part \[m\]
+/// holds it: the admittance does not close in further.
+const WRIST_AHEAD_M: f64 = 0.005;
 
 /// The collaboration's inputs of one period.
 #[derive(Clone, Copy, Debug, Default)]
@@ -670,6 +673,15 @@ impl Collaboration {
                         false => Vector3::zeros(),
                     };
                     velocity = (e.forces[0] + hold) * c.admittance;
+                    // the wrist nearer the hand than the robot part: it takes
+                    // the force F̂ does not see at the part; no closing in
+                    if self.near_gap < self.gap - WRIST_AHEAD_M {
+                        if let Some(h) = self.hand {
+                            if let Some(a) = (h - self.robot_point).try_normalize(1e-9) {
+                                velocity -= a * velocity.dot(&a).max(0.0);
+                            }
+                        }
+                    }
                     let v = velocity.norm();
                     if v > c.approach_speed {
                         velocity *= c.approach_speed / v;
