@@ -44,12 +44,12 @@ use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
 use crate::shapes::camera_box_rect;
 
-/// Parameters of the repulsive profile (16) (REFERENCE §3: α = 6, ρ = 0.4 m,
-/// V_max = 0.21 m/s, labelled as the paper's values by a third party).
 /// Pixels per run of the window scan that is skipped whole when none of
 /// them can be in range.
 const SKIP_RUN: usize = 16;
 
+/// Parameters of the repulsive profile (16) (REFERENCE §3: α = 6, ρ = 0.4 m,
+/// V_max = 0.21 m/s, labelled as the paper's values by a third party).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RepulsionParams {

@@ -116,6 +116,16 @@ impl CollisionObject {
         data.body_placement(self.body).compose(&self.placement)
     }
 
+    /// The capsule of [`Shape::capsule`] posed in the base frame (after
+    /// [`crate::forward_kinematics`]): its axis endpoints `(a, b)` \[m\] and
+    /// radius \[m\].
+    pub fn capsule_segment(&self, data: &Data) -> (Vector3<f64>, Vector3<f64>, f64) {
+        let pose = self.pose(data);
+        let (radius, half_length, rot) = self.shape.capsule();
+        let axis = rot * Vector3::new(0.0, 0.0, half_length);
+        (pose.apply(&-axis), pose.apply(&axis), radius)
+    }
+
     /// The parry3d shape and its base-frame pose (after [`crate::forward_kinematics`]).
     pub fn parry(&self, data: &Data) -> (SharedShape, Isometry3<f64>) {
         let (shape, local) = self.shape.to_parry();

@@ -1,6 +1,6 @@
 //! The robot's collision geometry as capsules at a joint state.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use phri_depth::Capsule;
 use phri_model::{Data, Model};
 
@@ -12,11 +12,7 @@ use phri_model::{Data, Model};
 pub fn robot_capsules(model: &Model, data: &Data, margin: f64, out: &mut Vec<Capsule>) {
     out.clear();
     for c in &model.collisions {
-        let pose = c.pose(data);
-        let (radius, half_length, rot) = c.shape.capsule();
-        let axis = rot * Vector3::new(0.0, 0.0, half_length);
-        let a = pose.apply(&-axis);
-        let b = pose.apply(&axis);
+        let (a, b, radius) = c.capsule_segment(data);
         out.push(Capsule::new(
             Point3::from(a),
             Point3::from(b),

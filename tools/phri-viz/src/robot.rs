@@ -60,17 +60,8 @@ impl RobotView {
     /// Every collision object as a capsule at the last pose, with its link's name.
     pub fn capsules(&self) -> impl Iterator<Item = (&str, Capsule)> + '_ {
         self.model.collisions.iter().map(|c| {
-            let pose = c.pose(&self.data);
-            let (radius, half_length, rot) = c.shape.capsule();
-            let axis = rot * Vector3::new(0.0, 0.0, half_length);
-            (
-                c.link.as_str(),
-                Capsule {
-                    a: pose.apply(&-axis),
-                    b: pose.apply(&axis),
-                    radius,
-                },
-            )
+            let (a, b, radius) = c.capsule_segment(&self.data);
+            (c.link.as_str(), Capsule { a, b, radius })
         })
     }
 

@@ -241,13 +241,13 @@ impl Collaboration {
         self.hand
     }
 
-    /// Capture time of the newest sighting of the hand [ns, robot clock].
     /// The collaborative hand's velocity from its sightings, low-passed
     /// \[m/s\], base frame (zero while no hand is followed).
     pub fn hand_velocity(&self) -> Vector3<f64> {
         self.hand_velocity
     }
 
+    /// Capture time of the newest sighting of the hand [ns, robot clock].
     pub fn hand_capture_ns(&self) -> Option<u64> {
         self.sighting.map(|(_, t)| t)
     }
@@ -314,10 +314,7 @@ impl Collaboration {
             let was_active = self.machine.active();
             let answer = self.machine.request(r, robot, conf, t);
             if answer.accepted && !was_active && self.machine.active() {
-                self.hand = None;
-                self.hand_lp = None;
-                self.sighting = None;
-                self.hand_velocity = Vector3::zeros();
+                self.forget_hand();
             }
             self.last_answer = Some(Answered {
                 request: *r,
@@ -457,10 +454,7 @@ impl Collaboration {
         };
         if was && !self.machine.active() {
             self.rearm = Some(None);
-            self.hand = None;
-            self.hand_lp = None;
-            self.sighting = None;
-            self.hand_velocity = Vector3::zeros();
+            self.forget_hand();
         }
         self.update_rearm(t, residual);
         phase
@@ -501,6 +495,14 @@ impl Collaboration {
         }
     }
 
+    /// A collaboration begins or ends: nothing of the hand carries over.
+    fn forget_hand(&mut self) {
+        self.hand = None;
+        self.hand_lp = None;
+        self.sighting = None;
+        self.hand_velocity = Vector3::zeros();
+    }
+
     /// The distance \[m\] from `x` (base frame) to the surface of the
     /// robot part's and the wrist's collision objects (their capsules), at
     /// the joints of the last kinematics (∞: none).
@@ -512,10 +514,7 @@ impl Collaboration {
             .iter()
             .filter_map(|&i| model.collisions.get(i))
         {
-            let (radius, half, r) = o.shape.capsule();
-            let pose = o.pose(data);
-            let a = pose.apply(&(r * Vector3::new(0.0, 0.0, -half)));
-            let b = pose.apply(&(r * Vector3::new(0.0, 0.0, half)));
+            let (a, b, radius) = o.capsule_segment(data);
             let ab = b - a;
             let t = match ab.norm_squared() > 1e-12 {
                 true => ((x - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0),
