@@ -582,7 +582,20 @@ fn a_refused_second_supervisor_writes_nothing_and_names_the_running_one() {
         "{err}"
     );
     assert!(!other.exists(), "{:?}", files_in(&other));
-    assert_eq!(snapshot(), before, "the running cell's files changed");
+    let after = snapshot();
+    let text = |s: &[Vec<u8>; 3]| {
+        s.iter()
+            .map(|b| String::from_utf8_lossy(b).into_owned())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        after,
+        before,
+        "the running cell's files changed: before {:?}, after {:?}; supervisor: {}",
+        text(&before),
+        text(&after),
+        cell.stderr()
+    );
     assert_eq!(mtime(), before_mtime);
     // the running cell restarts its controller with its own configuration
     // (once started: an exit during the start-up fails the start)

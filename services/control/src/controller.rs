@@ -104,6 +104,8 @@ pub struct Controller {
     collab_from_segment: Option<u64>,
     /// end-effector position at the measured joints \[m\], base frame
     ee: Vector3<f64>,
+    /// the task's latest end-effector reference \[m\], base frame
+    task_x_d: Vector3<f64>,
     accel: Vec<f64>,
     tau: Vec<f64>,
     counters: ControlCounters,
@@ -179,6 +181,7 @@ impl Controller {
             quiet_since: None,
             collab_from_segment: None,
             ee: Vector3::zeros(),
+            task_x_d: Vector3::zeros(),
             accel: vec![0.0; n],
             tau: vec![0.0; n],
             counters: ControlCounters::default(),
@@ -459,6 +462,7 @@ impl Controller {
             ControlMode::Task | ControlMode::Slow => {
                 let c = self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee);
                 self.counters.waypoints_reached = self.task.waypoints_reached();
+                self.task_x_d = c.x_d;
                 Behaviour::Cartesian(c)
             }
             ControlMode::Recover => {
@@ -587,6 +591,12 @@ impl Controller {
     /// End-effector position at the measured joints \[m\], base frame.
     pub fn ee(&self) -> Vector3<f64> {
         self.ee
+    }
+
+    /// The task's latest end-effector reference \[m\], base frame (where its
+    /// path is, whether or not the end effector follows it).
+    pub fn task_reference(&self) -> Vector3<f64> {
+        self.task_x_d
     }
 
     /// The task's segments ended since the start (path segments, reached or

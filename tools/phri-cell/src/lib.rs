@@ -43,6 +43,7 @@ use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simul
 
 mod outage;
 mod summary;
+pub mod trace;
 
 pub use outage::{Down, Outage, OutageError};
 pub use summary::{CellSummary, ContactEpisode, GestureRequest};

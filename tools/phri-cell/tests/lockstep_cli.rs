@@ -52,6 +52,7 @@ fn help_version_and_completions() {
             "--latency-ms",
             "--outage",
             "--no-perception",
+            "--trace",
         ] {
             assert!(text.contains(needle), "{flag}: {needle} missing: {text}");
         }
@@ -151,4 +152,85 @@ fn negative_values_and_flag_equals_value_reach_the_runs() {
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["perception_latency_ms"], 3.0);
     assert_eq!(v["duration_s"], 0.1);
+}
+
+/// `--trace FILE`: one row per 100 ms of the run, whose ground truth agrees
+/// with the run's summary (the sampled closest distance is never below the
+/// per-period minimum, and comes within 2 cm of it; the waypoints count up to
+/// the summary's); more than one run, or an unwritable file, is refused.
+#[test]
+fn the_trace_is_the_runs_time_series() {
+    let dir = std::env::temp_dir().join(format!("phri-trace-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("trace.csv");
+    let path = file.to_string_lossy().into_owned();
+    let o = lockstep(&[
+        "--config",
+        &config(),
+        "--scenario",
+        "coexistence",
+        "--duration",
+        "14",
+        "--trace",
+        &path,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON on stdout");
+    let summary = &v["runs"][0]["summary"];
+    let text = std::fs::read_to_string(&file).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 140, "one row per 100 ms of 14 s");
+    let num = |r: &Vec<&str>, name: &str| r[col(name)].parse::<f64>().expect(name);
+    let closest = rows
+        .iter()
+        .map(|r| num(r, "closest_true_m"))
+        .fold(f64::INFINITY, f64::min);
+    let min = summary["min_distance_m"].as_f64().unwrap();
+    assert!(
+        closest >= min - 1e-3 && closest < min + 0.02,
+        "{closest} vs {min}"
+    );
+    let wp: Vec<f64> = rows.iter().map(|r| num(r, "waypoints")).collect();
+    assert!(wp.windows(2).all(|w| w[1] >= w[0]));
+    assert_eq!(wp.last().copied(), summary["waypoints"].as_f64());
+    // the end effector follows its path reference while nobody is near (the first 4 s)
+    for r in rows.iter().take(40).skip(20) {
+        let e: f64 = ["x", "y", "z"]
+            .iter()
+            .map(|a| (num(r, &format!("ee_{a}_m")) - num(r, &format!("ref_{a}_m"))).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(e < 0.03, "{e} m off the path at {}", r[0]);
+    }
+    let o = lockstep(&[
+        "--config",
+        &config(),
+        "--scenario",
+        "coexistence",
+        "--sweep",
+        "0,1,1",
+        "--trace",
+        &path,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--trace"), "{}", stderr(&o));
+    let bad = dir.join("missing").join("trace.csv");
+    let o = lockstep(&[
+        "--config",
+        &config(),
+        "--scenario",
+        "coexistence",
+        "--trace",
+        &bad.to_string_lossy(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--trace") && stderr(&o).lines().count() == 1,
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,7 +6,7 @@
 //!   phri-lockstep --scenario coexistence [--duration S] [--config deploy/phri.toml]
 //!                 [--set section.key=value ...] [--offset S ...] [--sweep FROM,TO,STEP]
 //!                 [--latency-ms MS] [--outage perception|dynamics|control:FROM:TO ...]
-//!                 [--no-perception]
+//!                 [--no-perception] [--trace FILE [--trace-every-ms MS]]
 //!   phri-lockstep completions bash|zsh|fish
 
 use std::error::Error;
@@ -61,6 +61,14 @@ struct Cli {
     /// Run without the camera and perception
     #[arg(long)]
     no_perception: bool,
+    /// Write the run's time series as CSV to FILE (one run only): end effector and its path
+    /// reference, waypoints, the closest human–robot pair (ground truth), what perception told the
+    /// controller
+    #[arg(long, value_name = "FILE")]
+    trace: Option<PathBuf>,
+    /// One trace row every MS of simulated time
+    #[arg(long = "trace-every-ms", value_name = "MS", default_value_t = 100.0, value_parser = finite)]
+    trace_every_ms: f64,
     #[command(subcommand)]
     completions: Option<CompletionsCmd>,
 }
@@ -121,6 +129,27 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     if offsets.is_empty() {
         offsets.push(0.0);
     }
+    if cli.trace.is_some() && offsets.len() > 1 {
+        return Err(format!(
+            "--trace: one run only, got {} offsets (drop --sweep or extra --offset)",
+            offsets.len()
+        )
+        .into());
+    }
+    if !(cli.trace_every_ms > 0.0) {
+        return Err(format!("--trace-every-ms: must be > 0, got {}", cli.trace_every_ms).into());
+    }
+    let mut trace = match &cli.trace {
+        Some(path) => {
+            let file = std::fs::File::create(path)
+                .map_err(|e| format!("--trace: cannot write {}: {e}", path.display()))?;
+            Some(phri_cell::trace::Trace::new(
+                std::io::BufWriter::new(file),
+                (cli.trace_every_ms * 1e6) as u64,
+            )?)
+        }
+        None => None,
+    };
     let mut opts = CellOptions {
         perception: !cli.no_perception,
         ..CellOptions::default()
@@ -137,6 +166,9 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
         let mut cell = Cell::new(&loaded, model.clone(), &opts)?;
         for _ in 0..periods {
             cell.tick()?;
+            if let Some(t) = trace.as_mut() {
+                t.sample(&cell)?;
+            }
         }
         let s = cell.summary();
         eprintln!(
@@ -150,6 +182,9 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
         );
         total += s.unintended_contacts;
         runs.push(serde_json::json!({"offset_s": offset, "summary": s}));
+    }
+    if let Some(t) = trace {
+        t.finish()?;
     }
     let out = serde_json::json!({
         "scenario": loaded.scenario.name,
