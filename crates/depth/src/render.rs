@@ -4,8 +4,10 @@
 //!
 //! Every pixel is an exact ray cast through the pixel centre: capsules are
 //! intersected analytically, and only over the pixels of their projected
-//! bounding rectangle. The output is a `width × height` row-major image of
-//! `u16` depths in millimetres, 0 = no reading (the Kinect driver convention).
+//! bounding rectangle. The static scene (floor, boxes) is kept between frames
+//! and restored only where the last frame's capsules drew. The output is a
+//! `width × height` row-major image of `u16` depths in millimetres, 0 = no
+//! reading (the Kinect driver convention).
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -141,6 +143,28 @@ pub struct Renderer {
     zbuf: Vec<f64>,
     labels: Vec<u16>,
     normals: NormalSource,
+    /// the static scene (floor and boxes) of the last render, kept so that a
+    /// frame redraws only what moved (see [`Background`])
+    background: Background,
+}
+
+/// The z-buffer and labels of the floor and the boxes alone, and the pixel
+/// rectangles the capsules of the last render drew over them: the next
+/// render restores those rectangles instead of redrawing the whole frame
+/// (the camera, floor and boxes rarely change; the people and the arm do).
+#[derive(Debug, Clone)]
+struct Background {
+    /// what it was drawn from: pose, floor height, boxes, label of the first box
+    pose: Option<CameraPose>,
+    floor_z: Option<u64>,
+    boxes: Vec<Aabb>,
+    first_box_label: u16,
+    zbuf: Vec<f64>,
+    labels: Vec<u16>,
+    /// rectangles drawn over it since ...
+    dirty: Vec<PixelRect>,
+    /// ... unless more than `dirty` holds were: then the whole frame
+    all_dirty: bool,
 }
 
 impl Renderer {
@@ -162,6 +186,16 @@ impl Renderer {
             zbuf: vec![f64::INFINITY; n],
             labels: vec![LABEL_NONE; n],
             normals: NormalSource::new(options.seed),
+            background: Background {
+                pose: None,
+                floor_z: None,
+                boxes: Vec::new(),
+                first_box_label: 0,
+                zbuf: vec![f64::INFINITY; n],
+                labels: vec![LABEL_NONE; n],
+                dirty: Vec::with_capacity(64),
+                all_dirty: false,
+            },
         })
     }
 
@@ -199,7 +233,10 @@ impl Renderer {
 
     /// Renders `capsules` and `boxes` (base frame) and, if given, the floor plane
     /// `z = floor_z` \[m\] into `out` (`width × height` row-major, millimetres,
-    /// 0 = no reading). Allocates nothing.
+    /// 0 = no reading). The floor and boxes are drawn once and kept while they
+    /// and the camera stay the same; a frame restores them only where the last
+    /// frame's capsules were. Allocates nothing once it has seen as many
+    /// capsules and boxes.
     ///
     /// Errors if `out` has the wrong size or a primitive is not finite (or has a
     /// negative radius, or `min > max`).
@@ -285,27 +322,80 @@ impl Renderer {
                 });
             }
         }
-        // the floor (or nothing) first: it initialises the z-buffer
-        let floor_label = u16::try_from(1 + capsules.len() + boxes.len()).unwrap_or(u16::MAX);
-        self.clear_with_floor(floor_z, floor_label);
+        // the static scene (the floor, or nothing, then the boxes) from the
+        // background, redrawn only when it changed; then the capsules
+        let first_box_label = u16::try_from(1 + capsules.len()).unwrap_or(u16::MAX);
+        let bg = &self.background;
+        let same = bg.pose == Some(self.pose)
+            && bg.floor_z == floor_z.map(f64::to_bits)
+            && bg.first_box_label == first_box_label
+            && bg.boxes.as_slice() == boxes;
+        if same {
+            self.restore_background();
+        } else {
+            let floor_label = u16::try_from(1 + capsules.len() + boxes.len()).unwrap_or(u16::MAX);
+            self.clear_with_floor(floor_z, floor_label);
+            let mut label = first_box_label;
+            for b in boxes {
+                self.rasterize_box(b, label);
+                label = label.wrapping_add(1);
+            }
+            let bg = &mut self.background;
+            bg.zbuf.copy_from_slice(&self.zbuf);
+            bg.labels.copy_from_slice(&self.labels);
+            bg.pose = Some(self.pose);
+            bg.floor_z = floor_z.map(f64::to_bits);
+            bg.first_box_label = first_box_label;
+            bg.boxes.clear();
+            bg.boxes.extend_from_slice(boxes);
+            bg.dirty.clear();
+            bg.all_dirty = false;
+            if bg.dirty.capacity() < capsules.len() {
+                bg.dirty.reserve(capsules.len());
+            }
+        }
         let mut label = 1u16;
         for c in capsules {
-            self.rasterize_capsule(c, label);
-            label = label.wrapping_add(1);
-        }
-        for b in boxes {
-            self.rasterize_box(b, label);
+            if let Some(rect) = self.rasterize_capsule(c, label) {
+                let bg = &mut self.background;
+                // never grows past its capacity (no allocation): beyond it
+                // the next frame restores everything
+                if bg.dirty.len() < bg.dirty.capacity() {
+                    bg.dirty.push(rect);
+                } else {
+                    bg.all_dirty = true;
+                }
+            }
             label = label.wrapping_add(1);
         }
         Ok(())
     }
 
-    fn rasterize_capsule(&mut self, capsule: &Capsule, label: u16) {
+    /// Puts the background back where the last render's capsules drew.
+    fn restore_background(&mut self) {
+        let w = self.intrinsics.width as usize;
+        let bg = &mut self.background;
+        if bg.all_dirty {
+            self.zbuf.copy_from_slice(&bg.zbuf);
+            self.labels.copy_from_slice(&bg.labels);
+        } else {
+            for r in &bg.dirty {
+                for v in r.v0..=r.v1 {
+                    let span = v * w + r.u0..=v * w + r.u1;
+                    self.zbuf[span.clone()].copy_from_slice(&bg.zbuf[span.clone()]);
+                    self.labels[span.clone()].copy_from_slice(&bg.labels[span]);
+                }
+            }
+        }
+        bg.dirty.clear();
+        bg.all_dirty = false;
+    }
+
+    /// Draws `capsule` into the z-buffer; the pixel rectangle it covered.
+    fn rasterize_capsule(&mut self, capsule: &Capsule, label: u16) -> Option<PixelRect> {
         let rc = RayCapsule::new(capsule, &self.pose, 0.0);
         let (z_min, _) = rc.depth_range();
-        let Some(rect) = rc.pixel_rect(&self.intrinsics, NEAR_M) else {
-            return;
-        };
+        let rect = rc.pixel_rect(&self.intrinsics, NEAR_M)?;
         let w = self.intrinsics.width as usize;
         for v in rect.v0..=rect.v1 {
             let y = self.yn[v];
@@ -335,6 +425,7 @@ impl Renderer {
                 }
             }
         }
+        Some(rect)
     }
 
     fn rasterize_box(&mut self, aabb: &Aabb, label: u16) {

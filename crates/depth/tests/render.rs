@@ -435,3 +435,59 @@ fn bad_buffers_and_primitives_are_errors() {
         assert!(Renderer::new(K, front_camera(), bad).is_err());
     }
 }
+
+/// A renderer keeps the static scene (floor, boxes) between frames and
+/// redraws only where the last frame's capsules were: every frame must equal a
+/// fresh renderer's, whatever moved, appeared or vanished since, and when the
+/// boxes, the floor or the camera change.
+#[test]
+fn a_frame_leaves_no_trace_in_the_next() {
+    let pose = CameraPose::paper_default();
+    let s = common::scene();
+    let mut kept = ideal(pose);
+    let check = |kept: &mut Renderer,
+                 pose: CameraPose,
+                 caps: &[Capsule],
+                 boxes: &[Aabb],
+                 floor: Option<f64>| {
+        let mut fresh = ideal(pose);
+        let (mut a, mut b) = (frame(), frame());
+        let (mut la, mut lb) = (frame(), frame());
+        kept.render_labeled(caps, boxes, floor, &mut a, &mut la)
+            .unwrap();
+        fresh
+            .render_labeled(caps, boxes, floor, &mut b, &mut lb)
+            .unwrap();
+        assert_eq!(a, b);
+        assert_eq!(la, lb);
+        assert_eq!(kept.exact_depth(), fresh.exact_depth());
+    };
+    // the scene, then everything moved 0.2 m sideways, then the person gone
+    check(&mut kept, pose, &s.all, &s.boxes, s.floor_z);
+    let moved: Vec<Capsule> = s
+        .all
+        .iter()
+        .map(|c| {
+            Capsule::new(
+                c.a + Vector3::new(0.0, 0.2, 0.0),
+                c.b + Vector3::new(0.0, 0.2, 0.0),
+                c.radius,
+            )
+        })
+        .collect();
+    check(&mut kept, pose, &moved, &s.boxes, s.floor_z);
+    check(&mut kept, pose, &s.robot, &s.boxes, s.floor_z);
+    // no boxes, no floor, another floor, and back
+    check(&mut kept, pose, &s.all, &[], s.floor_z);
+    check(&mut kept, pose, &s.all, &s.boxes, None);
+    check(&mut kept, pose, &s.all, &s.boxes, Some(-0.5));
+    check(&mut kept, pose, &s.all, &s.boxes, s.floor_z);
+    // more capsules than the last frame had (labels of the boxes shift)
+    let mut more = s.all.clone();
+    more.extend(moved.iter().copied());
+    check(&mut kept, pose, &more, &s.boxes, s.floor_z);
+    // the camera moved
+    let other = front_camera();
+    kept.set_pose(other);
+    check(&mut kept, other, &s.all, &s.boxes, s.floor_z);
+}
