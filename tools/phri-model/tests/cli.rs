@@ -132,6 +132,7 @@ fn bad_input_is_one_line_and_exit_2() {
         err.contains("Usage: phri-model") && err.contains("inspect"),
         "{err}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
