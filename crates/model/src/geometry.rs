@@ -126,6 +126,19 @@ impl CollisionObject {
         (pose.apply(&-axis), pose.apply(&axis), radius)
     }
 
+    /// Signed distance \[m\] from `x` (base frame) to the surface of the
+    /// capsule of [`CollisionObject::capsule_segment`] (negative inside).
+    pub fn capsule_distance(&self, data: &Data, x: &Vector3<f64>) -> f64 {
+        let (a, b, radius) = self.capsule_segment(data);
+        let ab = b - a;
+        let len2 = ab.norm_squared();
+        let t = match len2 > 1e-12 {
+            true => ((x - a).dot(&ab) / len2).clamp(0.0, 1.0),
+            false => 0.0,
+        };
+        (x - (a + ab * t)).norm() - radius
+    }
+
     /// The parry3d shape and its base-frame pose (after [`crate::forward_kinematics`]).
     pub fn parry(&self, data: &Data) -> (SharedShape, Isometry3<f64>) {
         let (shape, local) = self.shape.to_parry();

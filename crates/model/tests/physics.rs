@@ -316,3 +316,42 @@ fn collision_shapes_convert_to_parry_with_urdf_axes() {
         assert!((shape.distance_to_point(&iso, &outside.into(), true) - 0.01).abs() < 1e-9);
     }
 }
+
+/// `capsule_distance` is parry3d's signed point distance to the LWR's
+/// collision capsules, at random joints and points inside and outside.
+#[test]
+fn capsule_distance_matches_parry_on_the_default_robot() {
+    let model = lwr4();
+    let mut d = Data::new(&model);
+    let mut r = rng(5);
+    for _ in 0..STATES {
+        let q = random_vec(&mut r, model.nv(), 2.0);
+        forward_kinematics(&model, &mut d, &q).unwrap();
+        for c in &model.collisions {
+            let Shape::Capsule { .. } = c.shape else {
+                continue;
+            };
+            let (shape, iso) = c.parry(&d);
+            let centre = c.pose(&d).apply(&Vector3::zeros());
+            for _ in 0..20 {
+                let x = centre + Vector3::from_vec(random_vec(&mut r, 3, 0.3));
+                let ours = c.capsule_distance(&d, &x);
+                let theirs = shape.distance_to_point(&iso, &x.into(), false);
+                let theirs = if shape.contains_point(&iso, &x.into()) {
+                    -shape
+                        .project_point(&iso, &x.into(), false)
+                        .point
+                        .coords
+                        .metric_distance(&x)
+                } else {
+                    theirs
+                };
+                assert!(
+                    (ours - theirs).abs() < 1e-9,
+                    "{}: {ours} vs {theirs}",
+                    c.link
+                );
+            }
+        }
+    }
+}

@@ -508,21 +508,11 @@ impl Collaboration {
     /// the joints of the last kinematics (∞: none).
     fn surface_distance(&self, x: &Vector3<f64>) -> f64 {
         let (model, data) = (self.forces.model(), self.forces.data());
-        let mut d = f64::INFINITY;
-        for o in self
-            .near_objects
+        self.near_objects
             .iter()
             .filter_map(|&i| model.collisions.get(i))
-        {
-            let (a, b, radius) = o.capsule_segment(data);
-            let ab = b - a;
-            let t = match ab.norm_squared() > 1e-12 {
-                true => ((x - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0),
-                false => 0.0,
-            };
-            d = d.min((x - (a + ab * t)).norm() - radius);
-        }
-        d
+            .map(|o| o.capsule_distance(data, x))
+            .fold(f64::INFINITY, f64::min)
     }
 
     fn update_rearm(&mut self, t: f64, residual: Option<&[f64]>) {
@@ -674,12 +664,12 @@ impl Collaboration {
                     velocity = (e.forces[0] + hold) * c.admittance;
                     // the wrist nearer the hand than the robot part: it takes
                     // the force F̂ does not see at the part; no closing in
-                    if self.near_gap < self.gap - WRIST_AHEAD_M {
-                        if let Some(h) = self.hand {
-                            if let Some(a) = (h - self.robot_point).try_normalize(1e-9) {
-                                velocity -= a * velocity.dot(&a).max(0.0);
-                            }
-                        }
+                    let toward_hand = self
+                        .hand
+                        .filter(|_| self.near_gap < self.gap - WRIST_AHEAD_M)
+                        .and_then(|h| (h - self.robot_point).try_normalize(1e-9));
+                    if let Some(a) = toward_hand {
+                        velocity -= a * velocity.dot(&a).max(0.0);
                     }
                     let v = velocity.norm();
                     if v > c.approach_speed {
