@@ -42,11 +42,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
+use crate::lanes::{self, Lanes};
 use crate::shapes::camera_box_rect;
-
-/// Pixels per run of the window scan that is skipped whole when none of
-/// them can be in range.
-const SKIP_RUN: usize = 16;
 
 /// Parameters of the repulsive profile (16) (REFERENCE §3: α = 6, ρ = 0.4 m,
 /// V_max = 0.21 m/s, labelled as the paper's values by a third party).
@@ -183,6 +180,8 @@ pub struct DepthSpaceDistance {
     xn: Vec<f64>,
     /// `(v − c_y)/f_y` per row
     yn: Vec<f64>,
+    /// the vector width of the scan this CPU runs
+    lanes: Lanes,
 }
 
 impl DepthSpaceDistance {
@@ -209,6 +208,7 @@ impl DepthSpaceDistance {
             depth_scale_m,
             xn: intrinsics.column_factors(),
             yn: intrinsics.row_factors(),
+            lanes: Lanes::detect(),
         })
     }
 
@@ -310,61 +310,40 @@ impl DepthSpaceDistance {
         let scale = self.depth_scale_m;
         let w = self.intrinsics.width as usize;
 
-        let mut sum = Vector3::<f64>::zeros();
-        let mut count = 0usize;
-        let mut best2 = f64::INFINITY;
-        let mut best = (0usize, 0usize, 0.0f64);
-        let xn = &self.xn[win.u0..=win.u1];
         // a run of pixels all invalid or beyond `d_far` by more than a unit
         // is skipped whole (one vectorised minimum per run): exactly the
-        // pixels the test below would skip, most of a window's background
+        // pixels the region test would skip, most of a window's background
         let raw_far = match d_far / scale + 1.0 {
             f if f >= 0.0 && f < f64::from(u16::MAX - 1) => f.floor() as u16 + 1,
             f if f < 0.0 => 0,
             _ => u16::MAX,
         };
-        for v in win.v0..=win.v1 {
-            let y = self.yn[v];
-            let row = &frame[v * w + win.u0..=v * w + win.u1];
-            for (c, (run, xs)) in row.chunks(SKIP_RUN).zip(xn.chunks(SKIP_RUN)).enumerate() {
-                if run.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1))) >= raw_far {
-                    continue;
-                }
-                for (k, (&raw, &x)) in run.iter().zip(xs).enumerate() {
-                    let du = c * SKIP_RUN + k;
-                    if raw == 0 {
-                        continue;
-                    }
-                    let mut d_o = f64::from(raw) * scale;
-                    if d_o > d_far {
-                        continue;
-                    }
-                    if d_o < d_p {
-                        d_o = d_p; // occlusion: worst case at P's depth
-                    }
-                    let dx = x * d_o - p.x;
-                    let dy = y * d_o - p.y;
-                    let dz = d_o - d_p;
-                    let n2 = dx * dx + dy * dy + dz * dz;
-                    if n2 > reach2 {
-                        continue;
-                    }
-                    count += 1;
-                    if n2 < best2 {
-                        best2 = n2;
-                        best = (win.u0 + du, v, d_o);
-                    }
-                    if n2 > 0.0 {
-                        let n = n2.sqrt();
-                        let s = (n - radius).max(0.0);
-                        let k = prm.magnitude(s) / n;
-                        sum.x -= k * dx;
-                        sum.y -= k * dy;
-                        sum.z -= k * dz;
-                    }
-                }
-            }
-        }
+        let lp = lanes::Point {
+            x: p.x,
+            y: p.y,
+            d_p,
+            d_far,
+            reach2,
+            radius,
+            scale,
+            v_max: prm.v_max,
+            two_over_rho: 2.0 / prm.rho,
+            alpha: prm.alpha,
+        };
+        let window = lanes::Window {
+            frame,
+            width: w,
+            u0: win.u0,
+            u1: win.u1,
+            v0: win.v0,
+            v1: win.v1,
+            xs: &self.xn[win.u0..=win.u1],
+            yn: &self.yn,
+            raw_far,
+        };
+        let mut sums = lanes::Sums::new();
+        lanes::scan(self.lanes, &lp, &window, &mut sums);
+        let (count, best2, best, sum) = (sums.count, sums.best2, sums.best, sums.total());
         if count == 0 {
             return Ok(Repulsion::NONE);
         }

@@ -22,6 +22,7 @@ pub mod camera;
 pub mod distance;
 pub mod error;
 pub mod flying;
+mod lanes;
 pub mod noise;
 pub mod png;
 pub mod render;

@@ -1,0 +1,382 @@
+//! The in-range work of the distance scan (eqs. 15-17) on a run of
+//! [`RUN`] pixels at once, written as branch-free lanes that the compiler
+//! turns into vector instructions: the occlusion rule, `‖D‖²`, the region
+//! test and every pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of
+//! its own ([`exp`]), where the scalar code called the C library's once per
+//! pixel. The same code is compiled three times: for the baseline x86-64
+//! target and, chosen at run time, with AVX2 and FMA or with AVX-512
+//! ([`Lanes::detect`]; 8 points of the timing test: 0.40 ms with AVX2,
+//! 0.24-0.33 ms with AVX-512, 0.58 ms before, scalar with the C library's
+//! exponential).
+
+use nalgebra::Vector3;
+
+/// Pixels per run.
+pub(crate) const RUN: usize = 16;
+
+/// `e^x` for a finite `x`, within 2 ulp of the exact value on
+/// `[−708, 708]` (checked against `f64::exp` in the tests); `x` beyond that
+/// is clamped, so the result never overflows to infinity nor underflows to
+/// zero. Branch-free: it vectorises.
+#[inline(always)]
+pub(crate) fn exp(x: f64) -> f64 {
+    const LOG2E: f64 = std::f64::consts::LOG2_E;
+    // ln 2 split so that k·LN2_HI is exact for |k| < 2^11
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // 1.5·2^52: adding it rounds to an integer held in the low mantissa bits
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    let x = x.clamp(-708.0, 708.0);
+    let t = x * LOG2E + SHIFT;
+    let k = t - SHIFT;
+    // r ∈ [−ln2/2, ln2/2]
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    // Taylor series to r^13: truncation below 5e-18 relative
+    let mut p = 1.0 / 6_227_020_800.0;
+    p = p * r + 1.0 / 479_001_600.0;
+    p = p * r + 1.0 / 39_916_800.0;
+    p = p * r + 1.0 / 3_628_800.0;
+    p = p * r + 1.0 / 362_880.0;
+    p = p * r + 1.0 / 40_320.0;
+    p = p * r + 1.0 / 5_040.0;
+    p = p * r + 1.0 / 720.0;
+    p = p * r + 1.0 / 120.0;
+    p = p * r + 1.0 / 24.0;
+    p = p * r + 1.0 / 6.0;
+    p = p * r + 0.5;
+    p = p * r + 1.0;
+    p = p * r + 1.0;
+    // 2^k from k's bits: t and SHIFT share their exponent, so their bit
+    // patterns differ by k exactly (|k| ≤ 1022)
+    let k_bits = t.to_bits().wrapping_sub(SHIFT.to_bits());
+    let two_k = f64::from_bits(k_bits.wrapping_add(1023) << 52);
+    p * two_k
+}
+
+/// What the scan of one point of interest needs, fixed for its window.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Point {
+    /// the point in camera coordinates \[m\]
+    pub x: f64,
+    pub y: f64,
+    pub d_p: f64,
+    /// `d_p + ρ + r` \[m\]: pixels deeper are out of range
+    pub d_far: f64,
+    /// `(ρ + r)²` \[m²\]
+    pub reach2: f64,
+    /// link radius `r` \[m\]
+    pub radius: f64,
+    /// metres per depth unit
+    pub scale: f64,
+    /// eq. (16): `V_max`, `2/ρ` and `α`
+    pub v_max: f64,
+    pub two_over_rho: f64,
+    pub alpha: f64,
+}
+
+/// Running sums of one point's scan.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sums {
+    /// Σ of `−D k` per lane (eq. 17's sum before its direction is taken)
+    pub x: [f64; RUN],
+    pub y: [f64; RUN],
+    pub z: [f64; RUN],
+    /// pixels in the region
+    pub count: usize,
+    /// smallest `‖D‖²` so far, and its pixel (column, row) and depth `d_o`
+    pub best2: f64,
+    pub best: (usize, usize, f64),
+}
+
+impl Sums {
+    pub fn new() -> Self {
+        Sums {
+            x: [0.0; RUN],
+            y: [0.0; RUN],
+            z: [0.0; RUN],
+            count: 0,
+            best2: f64::INFINITY,
+            best: (0, 0, 0.0),
+        }
+    }
+
+    /// The sum of eq. (17), camera frame.
+    pub fn total(&self) -> Vector3<f64> {
+        Vector3::new(
+            self.x.iter().sum(),
+            self.y.iter().sum(),
+            self.z.iter().sum(),
+        )
+    }
+}
+
+/// One full run: depths `raw` (units), column factors `xs` (`(u − c_x)/f_x`),
+/// row factor `y`; `u` is the run's first column, `v` its row.
+#[inline(always)]
+pub(crate) fn run(
+    p: &Point,
+    raw: &[u16; RUN],
+    xs: &[f64; RUN],
+    y: f64,
+    u: usize,
+    v: usize,
+    s: &mut Sums,
+) {
+    let mut n2 = [0.0f64; RUN];
+    let mut dx = [0.0f64; RUN];
+    let mut dy = [0.0f64; RUN];
+    let mut dz = [0.0f64; RUN];
+    let mut d_o = [0.0f64; RUN];
+    let mut inside = [false; RUN];
+    for i in 0..RUN {
+        let d = f64::from(raw[i]) * p.scale;
+        // occlusion: worst case at P's depth
+        let d_used = if d < p.d_p { p.d_p } else { d };
+        let ex = xs[i] * d_used - p.x;
+        let ey = y * d_used - p.y;
+        let ez = d_used - p.d_p;
+        let m = ex * ex + ey * ey + ez * ez;
+        inside[i] = (raw[i] != 0) & (d <= p.d_far) & (m <= p.reach2);
+        n2[i] = m;
+        dx[i] = ex;
+        dy[i] = ey;
+        dz[i] = ez;
+        d_o[i] = d_used;
+    }
+    let mut count = 0usize;
+    let mut lowest = f64::INFINITY;
+    for i in 0..RUN {
+        count += usize::from(inside[i]);
+        lowest = lowest.min(if inside[i] { n2[i] } else { f64::INFINITY });
+    }
+    if count == 0 {
+        return;
+    }
+    s.count += count;
+    if lowest < s.best2 {
+        // the first pixel of the scan order at the smallest distance
+        for i in 0..RUN {
+            if inside[i] && n2[i] == lowest {
+                s.best2 = lowest;
+                s.best = (u + i, v, d_o[i]);
+                break;
+            }
+        }
+    }
+    for i in 0..RUN {
+        let n = n2[i].sqrt();
+        let clearance = (n - p.radius).max(0.0);
+        let e = exp((clearance * p.two_over_rho - 1.0) * p.alpha);
+        let k = p.v_max / ((1.0 + e) * n);
+        let k = if inside[i] & (n2[i] > 0.0) { k } else { 0.0 };
+        s.x[i] -= k * dx[i];
+        s.y[i] -= k * dy[i];
+        s.z[i] -= k * dz[i];
+    }
+}
+
+/// Which compilation of the scan a machine runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lanes {
+    /// the x86-64 baseline (SSE2), or any other architecture
+    Baseline,
+    /// AVX2 and FMA, detected at run time
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    /// AVX-512 (F and BW), detected at run time
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl Lanes {
+    /// The widest this CPU runs.
+    pub fn detect() -> Lanes {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw") {
+            return Lanes::Avx512;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            return Lanes::Avx2;
+        }
+        Lanes::Baseline
+    }
+}
+
+impl Lanes {
+    /// Every compilation this CPU can run (the tests compare them).
+    #[cfg(test)]
+    pub fn available() -> Vec<Lanes> {
+        let mut all = vec![Lanes::Baseline];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+                all.push(Lanes::Avx2);
+            }
+            if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw") {
+                all.push(Lanes::Avx512);
+            }
+        }
+        all
+    }
+}
+
+/// The rows `v0..=v1` of a window whose columns start at `u0`: `rows[j]` is
+/// row `v0 + j` (the window's width), `xs` its column factors, `yn` every
+/// row's factor; `raw_far` the smallest raw value beyond range.
+pub(crate) struct Window<'a> {
+    pub frame: &'a [u16],
+    pub width: usize,
+    pub u0: usize,
+    pub u1: usize,
+    pub v0: usize,
+    pub v1: usize,
+    pub xs: &'a [f64],
+    pub yn: &'a [f64],
+    pub raw_far: u16,
+}
+
+/// The whole window's scan with `lanes`.
+pub(crate) fn scan(lanes: Lanes, p: &Point, w: &Window<'_>, s: &mut Sums) {
+    match lanes {
+        Lanes::Baseline => scan_any(p, w, s),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Lanes::Avx2` is only made when the CPU has AVX2 and FMA
+        Lanes::Avx2 => unsafe { scan_avx2(p, w, s) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Lanes::Avx512` is only made when the CPU has AVX-512 F and BW
+        Lanes::Avx512 => unsafe { scan_avx512(p, w, s) },
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn scan_avx2(p: &Point, w: &Window<'_>, s: &mut Sums) {
+    scan_any(p, w, s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx2,fma")]
+unsafe fn scan_avx512(p: &Point, w: &Window<'_>, s: &mut Sums) {
+    scan_any(p, w, s)
+}
+
+#[inline(always)]
+fn scan_any(p: &Point, w: &Window<'_>, s: &mut Sums) {
+    let cols = w.u1 + 1 - w.u0;
+    for v in w.v0..=w.v1 {
+        let y = w.yn[v];
+        let row = &w.frame[v * w.width + w.u0..v * w.width + w.u0 + cols];
+        let mut c = 0;
+        while c < cols {
+            let len = RUN.min(cols - c);
+            let chunk = &row[c..c + len];
+            // a run all invalid or beyond range by more than a unit is
+            // skipped whole: most of a window's background
+            if chunk.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1))) < w.raw_far {
+                let mut raw = [0u16; RUN];
+                let mut xs = [0.0f64; RUN];
+                raw[..len].copy_from_slice(chunk);
+                xs[..len].copy_from_slice(&w.xs[c..c + len]);
+                // a short last run is padded with invalid pixels (raw 0)
+                run(p, &raw, &xs, y, w.u0 + c, v, s);
+            }
+            c += len;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ulps(a: f64, b: f64) -> u64 {
+        (a.to_bits() as i64).abs_diff(b.to_bits() as i64)
+    }
+
+    /// Every compilation this CPU runs gives the same scan: the same pixels,
+    /// the same nearest one, the same sum but for rounding.
+    #[test]
+    fn every_vector_width_scans_alike() {
+        let all = Lanes::available();
+        let (width, height) = (101usize, 37usize);
+        // a deterministic scene: a slanted surface with holes, steps and spikes
+        let mut state = 12_345u64;
+        let mut next = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (state >> 33) as u32
+        };
+        let frame: Vec<u16> = (0..width * height)
+            .map(|i| match next() % 10 {
+                0 => 0,
+                1 => 400 + (next() % 3000) as u16,
+                _ => 1500 + (i % width) as u16 * 3 + (i / width) as u16 * 5,
+            })
+            .collect();
+        let xs: Vec<f64> = (0..width).map(|u| (u as f64 - 50.0) / 80.0).collect();
+        let yn: Vec<f64> = (0..height).map(|v| (v as f64 - 18.0) / 80.0).collect();
+        let mut seen = 0;
+        for (px, py, d_p, radius) in [(0.0, 0.0, 1.8, 0.0), (0.1, -0.05, 1.6, 0.07), (-0.2, 0.1, 2.2, 0.03)] {
+            let reach = 0.4 + radius;
+            let p = Point {
+                x: px,
+                y: py,
+                d_p,
+                d_far: d_p + reach,
+                reach2: reach * reach,
+                radius,
+                scale: 0.001,
+                v_max: 0.21,
+                two_over_rho: 2.0 / 0.4,
+                alpha: 6.0,
+            };
+            let window = Window {
+                frame: &frame,
+                width,
+                u0: 3,
+                u1: 97,
+                v0: 1,
+                v1: 35,
+                xs: &xs[3..=97],
+                yn: &yn,
+                raw_far: ((d_p + reach) / 0.001 + 1.0).floor() as u16 + 1,
+            };
+            let sums: Vec<Sums> = all
+                .iter()
+                .map(|&l| {
+                    let mut s = Sums::new();
+                    scan(l, &p, &window, &mut s);
+                    s
+                })
+                .collect();
+            assert!(sums[0].count > 100, "{}", sums[0].count);
+            seen += sums[0].count;
+            for s in &sums[1..] {
+                assert_eq!(s.count, sums[0].count);
+                assert_eq!(s.best2, sums[0].best2);
+                assert_eq!(s.best, sums[0].best);
+                let (a, b) = (s.total(), sums[0].total());
+                assert!((a - b).norm() <= 1e-12 * b.norm(), "{a} {b}");
+            }
+        }
+        assert!(seen > 0 && !all.is_empty());
+    }
+
+    #[test]
+    fn exp_is_within_two_ulp_of_the_library_s() {
+        let mut worst = 0;
+        let mut x = -708.0;
+        while x <= 708.0 {
+            worst = worst.max(ulps(exp(x), x.exp()));
+            x += 0.000_731;
+        }
+        for x in [-6.0, -1.0, -0.5, 0.0, 1e-300, 0.5, 1.0, 6.0, 0.346_573_590_279_972_6] {
+            worst = worst.max(ulps(exp(x), x.exp()));
+        }
+        assert!(worst <= 2, "{worst} ulp");
+        assert_eq!(exp(0.0), 1.0);
+        // clamped, finite
+        assert!(exp(1e6).is_finite() && exp(1e6) > 1e307);
+        assert!(exp(-1e6) > 0.0 && exp(-1e6) < 1e-307);
+    }
+}
