@@ -628,7 +628,8 @@ fn body() -> Result<(), SupervisorError> {
             roster.heard(CAMERA_DEPTH.name, now);
         }
         let mut filtered = 0;
-        while ports.filtered.receive()?.is_some() {
+        while let Some(f) = ports.filtered.receive()? {
+            eval.on_filtered(f.user_header());
             filtered += 1;
         }
         if filtered > 0 {

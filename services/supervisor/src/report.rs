@@ -10,6 +10,25 @@ use phri_ipc::{
 };
 use serde::Serialize;
 
+
+/// A camera frame some repulsion worker answered, and not every one yet.
+#[derive(Clone, Copy, Debug)]
+struct FrameInFlight {
+    /// the frame's sequence number
+    seq: u64,
+    /// its capture time [ns, CLOCK_MONOTONIC]
+    capture_ns: u64,
+    /// bit i: worker i answered
+    answered: u32,
+    /// the latest answer's publication [ns]
+    last_ns: u64,
+    /// its earliest arrival at ingestion as the answers tell it [ns]
+    /// (`u64::MAX` before the first; `None` once an answer did not carry it)
+    arrival_ns: Option<u64>,
+    /// the answers' compute times, summed [ns]
+    compute_ns: u64,
+}
+
 /// `torque_loop.latency_us`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Percentiles {
@@ -104,6 +123,12 @@ pub struct PerceptionReport {
     /// the frame's arrival at ingestion → the last worker's result [ms]
     /// (frames whose results all carry the arrival)
     pub arrival_to_repulsion_ms: Percentiles,
+    /// ingestion's own time: the frame's arrival → its publication on
+    /// `perception/depth` [ms] (frames seen with the arrival)
+    pub ingest_ms: Percentiles,
+    /// the distance computation of a frame: the sum over every worker of its
+    /// compute time [ms] (complete frames)
+    pub repulsion_compute_ms: Percentiles,
 }
 
 /// `--report` JSON.
@@ -226,12 +251,14 @@ pub struct Evaluator {
     /// camera frames: (seq, capture wall time) of the recent ones, and the count
     frames_seen: u64,
     last_frame_seq: Option<u64>,
-    /// per frame in flight: (frame seq, capture wall ns, workers answered bitmask, workers, last
-    /// publish ns, earliest arrival at ingestion ns: `None` once a result did not carry it)
-    in_flight: Vec<(u64, u64, u32, u32, u64, Option<u64>)>,
+    /// the frames some repulsion worker answered and not all yet
+    in_flight: Vec<FrameInFlight>,
     complete_frames: u64,
     frame_latency_ms: Vec<f64>,
     arrival_latency_ms: Vec<f64>,
+    ingest_ms: Vec<f64>,
+    last_filtered_seq: Option<u64>,
+    compute_ms: Vec<f64>,
     /// why the run was degraded (see [`Report::degraded`])
     degraded: Vec<String>,
     /// CLOCK_MONOTONIC − robot clock [ns], from the newest controller status
@@ -283,6 +310,9 @@ impl Evaluator {
             complete_frames: 0,
             frame_latency_ms: Vec::new(),
             arrival_latency_ms: Vec::new(),
+            ingest_ms: Vec::new(),
+            last_filtered_seq: None,
+            compute_ms: Vec::new(),
             degraded: Vec::new(),
             robot_to_mono_ns: 0,
             truth_lost: 0,
@@ -598,7 +628,16 @@ impl Evaluator {
         if self.last_frame_seq != Some(h.seq) {
             self.frames_seen += 1;
             self.last_frame_seq = Some(h.seq);
+
         }
+    }
+
+    /// Ingestion published a frame on `perception/depth`.
+    pub fn on_filtered(&mut self, h: &FrameHeader) {
+        if self.last_filtered_seq != Some(h.seq) && h.ingest_ns > 0 {
+            self.ingest_ms.push(f64::from(h.ingest_ns) * 1e-6);
+        }
+        self.last_filtered_seq = Some(h.seq);
     }
 
     /// A repulsion worker answered a frame.
@@ -609,39 +648,41 @@ impl Evaluator {
         } else {
             (1u32 << m.workers) - 1
         };
-        let idx = match self.in_flight.iter().position(|f| f.0 == m.frame_seq) {
+        let idx = match self.in_flight.iter().position(|f| f.seq == m.frame_seq) {
             Some(i) => i,
             None => {
                 // frames older than a second that never completed are dropped
                 self.in_flight
-                    .retain(|f| m.published_ns.saturating_sub(f.4) < 1_000_000_000);
-                self.in_flight.push((
-                    m.frame_seq,
-                    m.frame_capture_wall_ns,
-                    0,
-                    m.workers,
-                    m.published_ns,
-                    Some(u64::MAX),
-                ));
+                    .retain(|f| m.published_ns.saturating_sub(f.last_ns) < 1_000_000_000);
+                self.in_flight.push(FrameInFlight {
+                    seq: m.frame_seq,
+                    capture_ns: m.frame_capture_wall_ns,
+                    answered: 0,
+                    last_ns: m.published_ns,
+                    arrival_ns: Some(u64::MAX),
+                    compute_ns: 0,
+                });
                 self.in_flight.len() - 1
             }
         };
         let f = &mut self.in_flight[idx];
-        f.2 |= bit;
-        f.4 = f.4.max(m.published_ns);
+        f.answered |= bit;
+        f.last_ns = f.last_ns.max(m.published_ns);
+        f.compute_ns = f.compute_ns.saturating_add(m.compute_ns);
         // the frame's arrival at ingestion, as each result tells it
-        f.5 = match (f.5, m.since_arrival_ns) {
+        f.arrival_ns = match (f.arrival_ns, m.since_arrival_ns) {
             (Some(a), d) if d > 0 => Some(a.min(m.published_ns.saturating_sub(u64::from(d)))),
             _ => None,
         };
-        if f.2 & all == all {
+        if f.answered & all == all {
             self.complete_frames += 1;
             self.frame_latency_ms
-                .push(f.4.saturating_sub(f.1) as f64 * 1e-6);
-            if let Some(a) = f.5.filter(|a| *a != u64::MAX) {
+                .push(f.last_ns.saturating_sub(f.capture_ns) as f64 * 1e-6);
+            if let Some(a) = f.arrival_ns.filter(|a| *a != u64::MAX) {
                 self.arrival_latency_ms
-                    .push(f.4.saturating_sub(a) as f64 * 1e-6);
+                    .push(f.last_ns.saturating_sub(a) as f64 * 1e-6);
             }
+            self.compute_ms.push(f.compute_ns as f64 * 1e-6);
             self.in_flight.swap_remove(idx);
         }
     }
@@ -676,6 +717,8 @@ impl Evaluator {
             dropped_frames: dropped,
             frame_to_repulsion_ms: percentiles(&self.frame_latency_ms),
             arrival_to_repulsion_ms: percentiles(&self.arrival_latency_ms),
+            ingest_ms: percentiles(&self.ingest_ms),
+            repulsion_compute_ms: percentiles(&self.compute_ms),
         })
     }
 
