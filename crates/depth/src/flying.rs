@@ -209,25 +209,29 @@ fn interior_any(
     let mut x = 0;
     while x < n {
         let len = RUN.min(n - x);
-        // neighbours of out[x + i] (pixel x + i + 1 of the row): columns x + i ..= x + i + 2
-        let mut nb = [[0u16; RUN]; 8];
-        let mut z = [0u16; RUN];
-        z[..len].copy_from_slice(&row[x + 1..x + 1 + len]);
-        for (k, (src, off)) in [
-            (row, 0),
-            (row, 2),
-            (up, 0),
-            (up, 1),
-            (up, 2),
-            (down, 0),
-            (down, 1),
-            (down, 2),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            nb[k][..len].copy_from_slice(&src[x + off..x + off + len]);
-        }
+        // the run's pixels and their 8 neighbours: out[x + i] is pixel
+        // x + i + 1 of the row, its neighbours columns x + i ..= x + i + 2
+        // (a short last run is padded with no reading)
+        let take = |src: &[u16], off: usize| -> [u16; RUN] {
+            let mut a = [0u16; RUN];
+            if len == RUN {
+                a.copy_from_slice(&src[x + off..x + off + RUN]);
+            } else {
+                a[..len].copy_from_slice(&src[x + off..x + off + len]);
+            }
+            a
+        };
+        let z = take(row, 1);
+        let nb = [
+            take(row, 0),
+            take(row, 2),
+            take(up, 0),
+            take(up, 1),
+            take(up, 2),
+            take(down, 0),
+            take(down, 1),
+            take(down, 2),
+        ];
         let mut tol = [0u16; RUN];
         for i in 0..RUN {
             tol[i] = tolerance_mm[(z[i] >> BUCKET_BITS) as usize];
@@ -238,14 +242,18 @@ fn interior_any(
             let shift = tol[i].wrapping_sub(z[i]);
             let span = 2 * tol[i];
             let mut support = 0u16;
-            for k in 0..8 {
-                support += u16::from(nb[k][i].wrapping_add(shift) <= span);
+            for n in &nb {
+                support += u16::from(n[i].wrapping_add(shift) <= span);
             }
             let keep = (z[i] != 0) & (support >= MIN_SUPPORT as u16);
             kept[i] = if keep { z[i] } else { 0 };
             gone += u16::from((z[i] != 0) & !keep);
         }
-        out[x..x + len].copy_from_slice(&kept[..len]);
+        if len == RUN {
+            out[x..x + RUN].copy_from_slice(&kept);
+        } else {
+            out[x..x + len].copy_from_slice(&kept[..len]);
+        }
         removed += usize::from(gone);
         x += len;
     }

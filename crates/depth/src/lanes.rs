@@ -276,8 +276,13 @@ fn scan_any(p: &Point, w: &Window<'_>, s: &mut Sums) {
             if chunk.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1))) < w.raw_far {
                 let mut raw = [0u16; RUN];
                 let mut xs = [0.0f64; RUN];
-                raw[..len].copy_from_slice(chunk);
-                xs[..len].copy_from_slice(&w.xs[c..c + len]);
+                if len == RUN {
+                    raw.copy_from_slice(&chunk[..RUN]);
+                    xs.copy_from_slice(&w.xs[c..c + RUN]);
+                } else {
+                    raw[..len].copy_from_slice(chunk);
+                    xs[..len].copy_from_slice(&w.xs[c..c + len]);
+                }
                 // a short last run is padded with invalid pixels (raw 0)
                 run(p, &raw, &xs, y, w.u0 + c, v, s);
             }

@@ -349,6 +349,56 @@ impl RayCapsule {
         self.sphere_a(q, x, y).map(|(t0, _)| t0)
     }
 
+    /// [`RayCapsule::interval`] written without branches, so that a run of
+    /// pixels vectorises: `(t_in, t_out)` of the same arithmetic when the ray
+    /// hits, `t_in > t_out` (or NaN) when it misses.
+    #[inline(always)]
+    pub fn interval_lanes(&self, x: f64, y: f64) -> (f64, f64) {
+        let q = x * x + y * y + 1.0;
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        // sphere a
+        let m = self.a.x * x + self.a.y * y + self.a.z;
+        let disc = m * m - q * self.sa_c;
+        let s = disc.sqrt();
+        let hit = !(disc < 0.0);
+        lo = if hit { lo.min((m - s) / q) } else { lo };
+        hi = if hit { hi.max((m + s) / q) } else { hi };
+        if self.k > 0.0 {
+            // sphere b
+            let m = self.b.x * x + self.b.y * y + self.b.z;
+            let disc = m * m - q * self.sb_c;
+            let s = disc.sqrt();
+            let hit = !(disc < 0.0);
+            lo = if hit { lo.min((m - s) / q) } else { lo };
+            hi = if hit { hi.max((m + s) / q) } else { hi };
+            // the finite cylinder: the infinite one within the slab
+            let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
+            let ard = self.a.x * x + self.a.y * y + self.a.z;
+            let qa = self.k * q - bard * bard;
+            let slanted = qa > 1e-12 * self.k * q;
+            let half_b = -self.k * ard + bard * self.aba;
+            let h = half_b * half_b - qa * self.cyl_c;
+            let sh = h.sqrt();
+            let c0 = if slanted { (-half_b - sh) / qa } else { f64::NEG_INFINITY };
+            let c1 = if slanted { (-half_b + sh) / qa } else { f64::INFINITY };
+            let cyl = if slanted { !(h < 0.0) } else { self.cyl_c <= 0.0 };
+            let crossing = bard.abs() > 1e-300;
+            let t0 = self.aba / bard;
+            let t1 = (self.k + self.aba) / bard;
+            let ordered = t0 <= t1;
+            let s0 = if crossing { if ordered { t0 } else { t1 } } else { f64::NEG_INFINITY };
+            let s1 = if crossing { if ordered { t1 } else { t0 } } else { f64::INFINITY };
+            let slab = crossing | (-self.aba >= 0.0 && -self.aba <= self.k);
+            let l = c0.max(s0);
+            let u = c1.min(s1);
+            let hit = cyl & slab & (l <= u);
+            lo = if hit { lo.min(l) } else { lo };
+            hi = if hit { hi.max(u) } else { hi };
+        }
+        (lo, hi)
+    }
+
     /// Entry and exit depths `[t_in, t_out]` of the ray `t (x, y, 1)` through the
     /// capsule (it is convex, so the union of the pieces' intervals is one
     /// interval), or `None` if it misses.
