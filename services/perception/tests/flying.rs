@@ -22,11 +22,15 @@ fn model() -> Model {
     phri_config::Loaded::defaults().model().unwrap()
 }
 
-/// Every control point in one worker.
+/// The default's first 8 control points in one worker.
 fn repulsion_config() -> RepulsionConfig {
+    let d = Config::defaults().repulsion;
+    // one worker holds at most 8 points (the message's size): the default's
+    // first 8 (deploy/points-8.toml), the end effector first
     RepulsionConfig {
         workers: 1,
-        ..Config::defaults().repulsion
+        points: d.points[..8].to_vec(),
+        ..d
     }
 }
 

@@ -389,13 +389,13 @@ fn safe_collaboration_elbow_keeps_the_crossing_arm_off_the_elbow_and_reaches_the
     // 10.0 s) while the end effector reaches the right hand
     let l = common::loaded("safe-collaboration-elbow", &[]);
     let r = elbow_run(&l);
-    // the same run with the elbow's control points (links 3-4) removed: no
-    // velocity bounds at the elbow, the rest unchanged
+    // the same run with the elbow's control points removed (links 3-4, and
+    // the forearm's within 12 cm of the elbow: link 5's origin is the elbow
+    // joint): no velocity bounds at the elbow, the rest unchanged
     let mut bare = l.clone();
-    bare.config
-        .repulsion
-        .points
-        .retain(|p| !ELBOW.contains(&p.link.as_str()));
+    bare.config.repulsion.points.retain(|p| {
+        !ELBOW.contains(&p.link.as_str()) && !(p.link == "lwr_link_5" && p.xyz[2] <= 0.12)
+    });
     assert!(bare.config.repulsion.points.len() < l.config.repulsion.points.len());
     let b = elbow_run(&bare);
     let seen_less_true = median(&r.seen_less_true);
