@@ -170,29 +170,20 @@ fn syntax_errors_name_the_file() {
     assert!(e.to_string().contains("/nonexistent/phri.toml"), "{e}");
 }
 
-/// The default control points (issue 14): 16 along links 3-7 and the end
-/// effector, each link known to the robot, 4 per worker, the end effector
-/// first. `deploy/points-16.toml` repeats them (it changes nothing), and
-/// `deploy/points-8.toml` keeps the first 8 alone, as earlier versions had.
+/// `deploy/points-16.toml` (issue 14's comparison): merged over the
+/// defaults, its 16 control points replace the default 8, each link known to
+/// the robot, 4 per worker; everything else stays the default.
 #[test]
-fn sixteen_control_points_by_default_and_the_eight_for_comparison() {
-    let d = Config::defaults();
-    let r = &d.repulsion;
+fn the_sixteen_point_comparison_replaces_the_control_points() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/points-16.toml");
+    let l = Loaded::load(&file, None, &[]).unwrap();
+    let r = &l.config.repulsion;
     assert_eq!(r.points.len(), 16);
     assert_eq!(r.workers, 4);
     assert!((0..4).all(|w| r.points_of(w).len() == 4));
-    assert_eq!(r.points[0].link, "lwr_link_7");
-    let model = Loaded::load_text("", &deploy(), None, &[]).unwrap().model().unwrap();
+    let model = l.model().unwrap();
     assert!(r.points.iter().all(|p| model.frame_id(&p.link).is_ok()));
-    let mut links: Vec<&str> = r.points.iter().map(|p| p.link.as_str()).collect();
-    links.sort();
-    links.dedup();
-    assert_eq!(links, ["lwr_link_3", "lwr_link_4", "lwr_link_5", "lwr_link_6", "lwr_link_7"]);
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy");
-    let sixteen = Loaded::load(&dir.join("points-16.toml"), None, &[]).unwrap();
-    assert_eq!(sixteen.config.repulsion, d.repulsion);
-    let eight = Loaded::load(&dir.join("points-8.toml"), None, &[]).unwrap();
-    assert_eq!(eight.config.repulsion.points[..], r.points[..8]);
-    assert_eq!(eight.config.repulsion.workers, 4);
-    assert_eq!(eight.config.control, d.control);
+    let d = Config::defaults();
+    assert_eq!(r.points[..8], d.repulsion.points[..]);
+    assert_eq!(l.config.control, d.control);
 }
