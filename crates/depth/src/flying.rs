@@ -11,7 +11,7 @@
 
 use crate::camera::Intrinsics;
 use crate::error::{check_frame, DepthError};
-use crate::lanes::Lanes;
+use crate::lanes::{by_lanes, Lanes};
 use crate::noise::sigma_z;
 
 /// Neighbours (of 8) that must agree with a reading for it to stay: 2 keeps
@@ -128,15 +128,7 @@ impl FlyingPixels {
     /// that it vectorises ([`Lanes`]): the same decisions as counting the two
     /// row neighbours first and the six others only when needed.
     fn interior(&self, up: &[u16], row: &[u16], down: &[u16], out: &mut [u16]) -> usize {
-        match self.lanes {
-            Lanes::Baseline => interior_any(&self.tolerance_mm, up, row, down, out),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Lanes::Avx2` is only made when the CPU has AVX2 and FMA
-            Lanes::Avx2 => unsafe { interior_avx2(&self.tolerance_mm, up, row, down, out) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Lanes::Avx512` is only made when the CPU has AVX-512 F and BW
-            Lanes::Avx512 => unsafe { interior_avx512(&self.tolerance_mm, up, row, down, out) },
-        }
+        interior(self.lanes, &self.tolerance_mm, up, row, down, out)
     }
 
     #[inline]
@@ -171,28 +163,14 @@ impl FlyingPixels {
 /// Pixels per run of [`interior_any`].
 const RUN: usize = 32;
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn interior_avx2(
-    tolerance_mm: &[u16; BUCKETS],
-    up: &[u16],
-    row: &[u16],
-    down: &[u16],
-    out: &mut [u16],
-) -> usize {
-    interior_any(tolerance_mm, up, row, down, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx2,fma")]
-unsafe fn interior_avx512(
-    tolerance_mm: &[u16; BUCKETS],
-    up: &[u16],
-    row: &[u16],
-    down: &[u16],
-    out: &mut [u16],
-) -> usize {
-    interior_any(tolerance_mm, up, row, down, out)
+by_lanes! {
+    fn interior(
+        tolerance_mm: &[u16; BUCKETS],
+        up: &[u16],
+        row: &[u16],
+        down: &[u16],
+        out: &mut [u16],
+    ) -> usize = interior_any;
 }
 
 /// See [`FlyingPixels::interior`].

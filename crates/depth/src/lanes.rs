@@ -175,6 +175,37 @@ pub(crate) fn run(
     }
 }
 
+/// `$vis fn $name(lanes: Lanes, args…) -> T`: calls `$body(args…)` as
+/// compiled for the width `lanes` names (the body is `#[inline(always)]`,
+/// so each compilation inlines it with that width's instructions).
+macro_rules! by_lanes {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty = $body:ident;) => {
+        $(#[$meta])*
+        $vis fn $name(lanes: $crate::lanes::Lanes, $($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2,fma")]
+            unsafe fn avx2($($arg: $ty),*) -> $ret {
+                $body($($arg),*)
+            }
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f,avx512bw,avx2,fma")]
+            unsafe fn avx512($($arg: $ty),*) -> $ret {
+                $body($($arg),*)
+            }
+            match lanes {
+                $crate::lanes::Lanes::Baseline => $body($($arg),*),
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `Lanes::Avx2` is only made when the CPU has AVX2 and FMA
+                $crate::lanes::Lanes::Avx2 => unsafe { avx2($($arg),*) },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `Lanes::Avx512` is only made when the CPU has AVX-512 F and BW
+                $crate::lanes::Lanes::Avx512 => unsafe { avx512($($arg),*) },
+            }
+        }
+    };
+}
+pub(crate) use by_lanes;
+
 /// Which compilation of the scan a machine runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Lanes {
@@ -236,29 +267,9 @@ pub(crate) struct Window<'a> {
     pub raw_far: u16,
 }
 
-/// The whole window's scan with `lanes`.
-pub(crate) fn scan(lanes: Lanes, p: &Point, w: &Window<'_>, s: &mut Sums) {
-    match lanes {
-        Lanes::Baseline => scan_any(p, w, s),
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Lanes::Avx2` is only made when the CPU has AVX2 and FMA
-        Lanes::Avx2 => unsafe { scan_avx2(p, w, s) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Lanes::Avx512` is only made when the CPU has AVX-512 F and BW
-        Lanes::Avx512 => unsafe { scan_avx512(p, w, s) },
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn scan_avx2(p: &Point, w: &Window<'_>, s: &mut Sums) {
-    scan_any(p, w, s)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx2,fma")]
-unsafe fn scan_avx512(p: &Point, w: &Window<'_>, s: &mut Sums) {
-    scan_any(p, w, s)
+by_lanes! {
+    /// The whole window's scan with `lanes`.
+    pub(crate) fn scan(p: &Point, w: &Window<'_>, s: &mut Sums) -> () = scan_any;
 }
 
 #[inline(always)]

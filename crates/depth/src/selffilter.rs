@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
-use crate::lanes::Lanes;
+use crate::lanes::{by_lanes, Lanes};
 use crate::noise::sigma_z;
 use crate::render::NEAR_M;
 use crate::shapes::{Capsule, RayCapsule};
@@ -155,15 +155,7 @@ impl SelfFilter {
                 v0: rect.v0,
                 v1: rect.v1,
             };
-            removed += match self.lanes {
-                Lanes::Baseline => remove_any(&region, frame),
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `Lanes::Avx2` is only made when the CPU has AVX2 and FMA
-                Lanes::Avx2 => unsafe { remove_avx2(&region, frame) },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `Lanes::Avx512` is only made when the CPU has AVX-512 F and BW
-                Lanes::Avx512 => unsafe { remove_avx512(&region, frame) },
-            };
+            removed += remove(self.lanes, &region, frame);
         }
         Ok(removed)
     }
@@ -185,16 +177,8 @@ struct Region<'a> {
     v1: usize,
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn remove_avx2(region: &Region<'_>, frame: &mut [u16]) -> usize {
-    remove_any(region, frame)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx2,fma")]
-unsafe fn remove_avx512(region: &Region<'_>, frame: &mut [u16]) -> usize {
-    remove_any(region, frame)
+by_lanes! {
+    fn remove(region: &Region<'_>, frame: &mut [u16]) -> usize = remove_any;
 }
 
 /// Removes the pixels of one capsule's rectangle that lie on it, in runs of

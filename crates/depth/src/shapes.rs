@@ -245,6 +245,16 @@ fn sphere_roots(q: f64, m: f64, c: f64) -> Option<(f64, f64)> {
     Some(((m - s) / q, (m + s) / q))
 }
 
+/// [`sphere_roots`] without branches, its interval joined to `[lo, hi]`.
+#[inline(always)]
+fn sphere_lanes(q: f64, m: f64, c: f64, lo: &mut f64, hi: &mut f64) {
+    let disc = m * m - q * c;
+    let s = disc.sqrt();
+    let hit = !(disc < 0.0);
+    *lo = if hit { lo.min((m - s) / q) } else { *lo };
+    *hi = if hit { hi.max((m + s) / q) } else { *hi };
+}
+
 impl RayCapsule {
     /// `capsule` (base frame) seen from `pose`, radius grown by `margin` \[m\].
     pub fn new(capsule: &Capsule, pose: &CameraPose, margin: f64) -> Self {
@@ -357,21 +367,11 @@ impl RayCapsule {
         let q = x * x + y * y + 1.0;
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
-        // sphere a
-        let m = self.a.x * x + self.a.y * y + self.a.z;
-        let disc = m * m - q * self.sa_c;
-        let s = disc.sqrt();
-        let hit = !(disc < 0.0);
-        lo = if hit { lo.min((m - s) / q) } else { lo };
-        hi = if hit { hi.max((m + s) / q) } else { hi };
+        let ma = self.a.x * x + self.a.y * y + self.a.z;
+        sphere_lanes(q, ma, self.sa_c, &mut lo, &mut hi);
         if self.k > 0.0 {
-            // sphere b
-            let m = self.b.x * x + self.b.y * y + self.b.z;
-            let disc = m * m - q * self.sb_c;
-            let s = disc.sqrt();
-            let hit = !(disc < 0.0);
-            lo = if hit { lo.min((m - s) / q) } else { lo };
-            hi = if hit { hi.max((m + s) / q) } else { hi };
+            let mb = self.b.x * x + self.b.y * y + self.b.z;
+            sphere_lanes(q, mb, self.sb_c, &mut lo, &mut hi);
             // the finite cylinder: the infinite one within the slab
             let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
             let ard = self.a.x * x + self.a.y * y + self.a.z;
