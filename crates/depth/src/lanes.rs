@@ -1,13 +1,15 @@
-//! The in-range work of the distance scan (eqs. 15-17) on a run of
-//! [`RUN`] pixels at once, written as branch-free lanes that the compiler
-//! turns into vector instructions: the occlusion rule, `‖D‖²`, the region
-//! test and every pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of
-//! its own ([`exp`]), where the scalar code called the C library's once per
-//! pixel. The same code is compiled three times: for the baseline x86-64
-//! target and, chosen at run time, with AVX2 and FMA or with AVX-512
-//! ([`Lanes::detect`]; 8 points of the timing test: 0.40 ms with AVX2,
-//! 0.24-0.33 ms with AVX-512, 0.58 ms before, scalar with the C library's
-//! exponential).
+//! Vector lanes for the per-pixel passes: [`by_lanes!`] compiles a pass for
+//! the x86-64 baseline, AVX2 + FMA and AVX-512 and calls the one the CPU
+//! runs ([`Lanes::detect`]); the flying-pixel filter and the self-filter use
+//! it, and so does the distance scan here.
+//!
+//! The distance scan's in-range work (eqs. 15-17) on a run of [`RUN`]
+//! pixels at once, written as branch-free lanes that the compiler turns into
+//! vector instructions: the occlusion rule, `‖D‖²`, the region test and every
+//! pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of its own ([`exp`]),
+//! where the scalar code called the C library's once per pixel (8 points of
+//! the timing test: 0.40 ms with AVX2, 0.23-0.33 ms with AVX-512, 0.58 ms
+//! before).
 
 use nalgebra::Vector3;
 
