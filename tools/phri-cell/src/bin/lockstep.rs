@@ -52,7 +52,7 @@ struct Cli {
     /// Offsets FROM, FROM+STEP, … up to TO [s], one run each (after the --offset runs), e.g. `--sweep -4,0,0.5`
     #[arg(long, value_name = "FROM,TO,STEP", allow_hyphen_values = true)]
     sweep: Option<String>,
-    /// Capture → repulsion results at the controller [ms] (default 6.5: the multi-process cell's p99)
+    /// Capture → repulsion results at the controller [ms] (default 6.5: the multi-process cell's p99 before the vector lanes; 4.3-4.5 ms since, so the default errs late)
     #[arg(long = "latency-ms", value_name = "MS", allow_negative_numbers = true)]
     latency_ms: Option<f64>,
     /// A service outage in simulated time [s], `perception|dynamics|control:FROM:TO` (repeatable)
