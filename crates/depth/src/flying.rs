@@ -66,7 +66,8 @@ impl FlyingPixels {
                 // holds above its deepest, so that no reading (0) ever agrees
                 // (`n + tol − z` wraps around neither end)
                 let shallowest = (b << BUCKET_BITS).max(1) as f64 - 1.0;
-                let headroom = f64::from(u16::MAX) - (((b << BUCKET_BITS) + (1 << BUCKET_BITS) - 1) as f64);
+                let headroom =
+                    f64::from(u16::MAX) - (((b << BUCKET_BITS) + (1 << BUCKET_BITS) - 1) as f64);
                 (tol * 1e3)
                     .ceil()
                     .min(shallowest)
@@ -289,7 +290,9 @@ mod tests {
     fn every_vector_width_removes_what_the_rule_says() {
         let mut state = 99u64;
         let mut next = move || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1442695040888963407);
             (state >> 33) as u32
         };
         let mut removed_any = 0;

@@ -246,7 +246,8 @@ impl Lanes {
             if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
                 all.push(Lanes::Avx2);
             }
-            if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw") {
+            if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw")
+            {
                 all.push(Lanes::Avx512);
             }
         }
@@ -286,7 +287,11 @@ fn scan_any(p: &Point, w: &Window<'_>, s: &mut Sums) {
             let chunk = &row[c..c + len];
             // a run all invalid or beyond range by more than a unit is
             // skipped whole: most of a window's background
-            if chunk.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1))) < w.raw_far {
+            if chunk
+                .iter()
+                .fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1)))
+                < w.raw_far
+            {
                 let mut raw = [0u16; RUN];
                 let mut xs = [0.0f64; RUN];
                 if len == RUN {
@@ -321,7 +326,9 @@ mod tests {
         // a deterministic scene: a slanted surface with holes, steps and spikes
         let mut state = 12_345u64;
         let mut next = move || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
             (state >> 33) as u32
         };
         let frame: Vec<u16> = (0..width * height)
@@ -334,7 +341,11 @@ mod tests {
         let xs: Vec<f64> = (0..width).map(|u| (u as f64 - 50.0) / 80.0).collect();
         let yn: Vec<f64> = (0..height).map(|v| (v as f64 - 18.0) / 80.0).collect();
         let mut seen = 0;
-        for (px, py, d_p, radius) in [(0.0, 0.0, 1.8, 0.0), (0.1, -0.05, 1.6, 0.07), (-0.2, 0.1, 2.2, 0.03)] {
+        for (px, py, d_p, radius) in [
+            (0.0, 0.0, 1.8, 0.0),
+            (0.1, -0.05, 1.6, 0.07),
+            (-0.2, 0.1, 2.2, 0.03),
+        ] {
             let reach = 0.4 + radius;
             let p = Point {
                 x: px,
@@ -388,7 +399,17 @@ mod tests {
             worst = worst.max(ulps(exp(x), x.exp()));
             x += 0.000_731;
         }
-        for x in [-6.0, -1.0, -0.5, 0.0, 1e-300, 0.5, 1.0, 6.0, 0.346_573_590_279_972_6] {
+        for x in [
+            -6.0,
+            -1.0,
+            -0.5,
+            0.0,
+            1e-300,
+            0.5,
+            1.0,
+            6.0,
+            0.346_573_590_279_972_6,
+        ] {
             worst = worst.max(ulps(exp(x), x.exp()));
         }
         assert!(worst <= 2, "{worst} ulp");

@@ -10,7 +10,6 @@ use phri_ipc::{
 };
 use serde::Serialize;
 
-
 /// A camera frame some repulsion worker answered, and not every one yet.
 #[derive(Clone, Copy, Debug)]
 struct FrameInFlight {
@@ -628,7 +627,6 @@ impl Evaluator {
         if self.last_frame_seq != Some(h.seq) {
             self.frames_seen += 1;
             self.last_frame_seq = Some(h.seq);
-
         }
     }
 

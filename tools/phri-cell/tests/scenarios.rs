@@ -394,8 +394,8 @@ fn safe_collaboration_elbow_keeps_the_crossing_arm_off_the_elbow_and_reaches_the
     // joint): no velocity bounds at the elbow, the rest unchanged
     let mut bare = l.clone();
     bare.config.repulsion.points.retain(|p| {
-        let near_elbow = ELBOW.contains(&p.link.as_str())
-            || (p.link == "lwr_link_5" && p.xyz[2] <= 0.12);
+        let near_elbow =
+            ELBOW.contains(&p.link.as_str()) || (p.link == "lwr_link_5" && p.xyz[2] <= 0.12);
         !near_elbow
     });
     assert!(bare.config.repulsion.points.len() < l.config.repulsion.points.len());
