@@ -334,7 +334,6 @@ impl DepthSpaceDistance {
             frame,
             width: w,
             u0: win.u0,
-            u1: win.u1,
             v0: win.v0,
             v1: win.v1,
             xs: &self.xn[win.u0..=win.u1],

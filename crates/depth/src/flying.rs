@@ -11,7 +11,7 @@
 
 use crate::camera::Intrinsics;
 use crate::error::{check_frame, DepthError};
-use crate::lanes::{by_lanes, Lanes};
+use crate::lanes::{by_lanes, load, store, Lanes};
 use crate::noise::sigma_z;
 
 /// Neighbours (of 8) that must agree with a reading for it to stay: 2 keeps
@@ -120,8 +120,6 @@ impl FlyingPixels {
         Ok(removed)
     }
 
-    /// The depths `n` \[mm\] that agree with `z`: `n + shift ≤ span` in
-    /// wrapping 16-bit arithmetic (`shift = tol − z`, `span = 2 tol`).
     /// The interior pixels `1..w − 1` of a row (`up`, `row`, `down`: the three
     /// rows, full width) into `out` (`w − 2` pixels); returns how many it
     /// removed. A reading stays when at least [`MIN_SUPPORT`] of its 8
@@ -132,6 +130,8 @@ impl FlyingPixels {
         interior(self.lanes, &self.tolerance_mm, up, row, down, out)
     }
 
+    /// The depths `n` \[mm\] that agree with `z`: `n + shift ≤ span` in
+    /// wrapping 16-bit arithmetic (`shift = tol − z`, `span = 2 tol`).
     #[inline]
     fn window(&self, z: u16) -> (u16, u16) {
         let tol = self.tolerance_mm(z);
@@ -191,15 +191,8 @@ fn interior_any(
         // the run's pixels and their 8 neighbours: out[x + i] is pixel
         // x + i + 1 of the row, its neighbours columns x + i ..= x + i + 2
         // (a short last run is padded with no reading)
-        let take = |src: &[u16], off: usize| -> [u16; RUN] {
-            let mut a = [0u16; RUN];
-            if len == RUN {
-                a.copy_from_slice(&src[x + off..x + off + RUN]);
-            } else {
-                a[..len].copy_from_slice(&src[x + off..x + off + len]);
-            }
-            a
-        };
+        let take =
+            |src: &[u16], off: usize| -> [u16; RUN] { load(&src[x + off..x + off + len], 0) };
         let z = take(row, 1);
         let nb = [
             take(row, 0),
@@ -228,11 +221,7 @@ fn interior_any(
             kept[i] = if keep { z[i] } else { 0 };
             gone += u16::from((z[i] != 0) & !keep);
         }
-        if len == RUN {
-            out[x..x + RUN].copy_from_slice(&kept);
-        } else {
-            out[x..x + len].copy_from_slice(&kept[..len]);
-        }
+        store(out, x, &kept);
         removed += usize::from(gone);
         x += len;
     }

@@ -21,7 +21,7 @@ pub(crate) const RUN: usize = 16;
 /// is clamped, so the result never overflows to infinity nor underflows to
 /// zero. Branch-free: it vectorises.
 #[inline(always)]
-pub(crate) fn exp(x: f64) -> f64 {
+fn exp(x: f64) -> f64 {
     const LOG2E: f64 = std::f64::consts::LOG2_E;
     // ln 2 split so that k·LN2_HI is exact for |k| < 2^11
     const LN2_HI: f64 = 6.931_471_803_691_238e-1;
@@ -115,15 +115,7 @@ impl Sums {
 /// One full run: depths `raw` (units), column factors `xs` (`(u − c_x)/f_x`),
 /// row factor `y`; `u` is the run's first column, `v` its row.
 #[inline(always)]
-pub(crate) fn run(
-    p: &Point,
-    raw: &[u16; RUN],
-    xs: &[f64; RUN],
-    y: f64,
-    u: usize,
-    v: usize,
-    s: &mut Sums,
-) {
+fn run(p: &Point, raw: &[u16; RUN], xs: &[f64; RUN], y: f64, u: usize, v: usize, s: &mut Sums) {
     let mut n2 = [0.0f64; RUN];
     let mut dx = [0.0f64; RUN];
     let mut dy = [0.0f64; RUN];
@@ -222,47 +214,86 @@ pub(crate) enum Lanes {
 }
 
 impl Lanes {
+    /// Every compilation, narrowest first.
+    const ALL: &'static [Lanes] = &[
+        Lanes::Baseline,
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx2,
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx512,
+    ];
+
+    /// Whether this CPU has the instructions of `self`.
+    fn runs_here(self) -> bool {
+        match self {
+            Lanes::Baseline => true,
+            #[cfg(target_arch = "x86_64")]
+            Lanes::Avx2 => {
+                std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Lanes::Avx512 => {
+                std::is_x86_feature_detected!("avx512f")
+                    && std::is_x86_feature_detected!("avx512bw")
+            }
+        }
+    }
+
     /// The widest this CPU runs.
     pub fn detect() -> Lanes {
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw") {
-            return Lanes::Avx512;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            return Lanes::Avx2;
-        }
-        Lanes::Baseline
+        Self::ALL
+            .iter()
+            .rev()
+            .copied()
+            .find(|l| l.runs_here())
+            .unwrap_or(Lanes::Baseline)
     }
-}
 
-impl Lanes {
     /// Every compilation this CPU can run (the tests compare them).
     #[cfg(test)]
     pub fn available() -> Vec<Lanes> {
-        let mut all = vec![Lanes::Baseline];
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-                all.push(Lanes::Avx2);
-            }
-            if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512bw")
-            {
-                all.push(Lanes::Avx512);
-            }
-        }
-        all
+        Self::ALL
+            .iter()
+            .copied()
+            .filter(|l| l.runs_here())
+            .collect()
     }
 }
 
-/// The rows `v0..=v1` of a window whose columns start at `u0`: `rows[j]` is
-/// row `v0 + j` (the window's width), `xs` its column factors, `yn` every
-/// row's factor; `raw_far` the smallest raw value beyond range.
+/// The `N` values of `src` from `at` on, padded with `T::default()` where
+/// `src` ends first: a run of pixels as a fixed-size array (a full run is
+/// copied at a length known to the compiler, without a call).
+#[inline(always)]
+pub(crate) fn load<T: Copy + Default, const N: usize>(src: &[T], at: usize) -> [T; N] {
+    let mut a = [T::default(); N];
+    let len = N.min(src.len().saturating_sub(at));
+    if len == N {
+        a.copy_from_slice(&src[at..at + N]);
+    } else {
+        a[..len].copy_from_slice(&src[at..at + len]);
+    }
+    a
+}
+
+/// Writes the first `dst.len() − at` (at most `N`) values of `run` to
+/// `dst[at..]`: the inverse of [`load`].
+#[inline(always)]
+pub(crate) fn store<T: Copy, const N: usize>(dst: &mut [T], at: usize, run: &[T; N]) {
+    let len = N.min(dst.len().saturating_sub(at));
+    if len == N {
+        dst[at..at + N].copy_from_slice(run);
+    } else {
+        dst[at..at + len].copy_from_slice(&run[..len]);
+    }
+}
+
+/// A point's pixel window in a frame `width` pixels wide: rows `v0..=v1`,
+/// columns from `u0` on, as many as `xs` (their factors `(u − c_x)/f_x`);
+/// `yn` every row's factor; `raw_far` the smallest raw value beyond range.
 pub(crate) struct Window<'a> {
     pub frame: &'a [u16],
     pub width: usize,
     pub u0: usize,
-    pub u1: usize,
     pub v0: usize,
     pub v1: usize,
     pub xs: &'a [f64],
@@ -277,34 +308,19 @@ by_lanes! {
 
 #[inline(always)]
 fn scan_any(p: &Point, w: &Window<'_>, s: &mut Sums) {
-    let cols = w.u1 + 1 - w.u0;
+    let cols = w.xs.len();
     for v in w.v0..=w.v1 {
         let y = w.yn[v];
         let row = &w.frame[v * w.width + w.u0..v * w.width + w.u0 + cols];
-        let mut c = 0;
-        while c < cols {
-            let len = RUN.min(cols - c);
-            let chunk = &row[c..c + len];
+        for c in (0..cols).step_by(RUN) {
             // a run all invalid or beyond range by more than a unit is
-            // skipped whole: most of a window's background
-            if chunk
-                .iter()
-                .fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1)))
-                < w.raw_far
-            {
-                let mut raw = [0u16; RUN];
-                let mut xs = [0.0f64; RUN];
-                if len == RUN {
-                    raw.copy_from_slice(&chunk[..RUN]);
-                    xs.copy_from_slice(&w.xs[c..c + RUN]);
-                } else {
-                    raw[..len].copy_from_slice(chunk);
-                    xs[..len].copy_from_slice(&w.xs[c..c + len]);
-                }
-                // a short last run is padded with invalid pixels (raw 0)
-                run(p, &raw, &xs, y, w.u0 + c, v, s);
+            // skipped whole: most of a window's background (a short last
+            // run is padded with no reading, which is skipped too)
+            let raw: [u16; RUN] = load(row, c);
+            let nearest = raw.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1)));
+            if nearest < w.raw_far {
+                run(p, &raw, &load(w.xs, c), y, w.u0 + c, v, s);
             }
-            c += len;
         }
     }
 }
@@ -363,7 +379,6 @@ mod tests {
                 frame: &frame,
                 width,
                 u0: 3,
-                u1: 97,
                 v0: 1,
                 v1: 35,
                 xs: &xs[3..=97],

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
-use crate::lanes::{by_lanes, Lanes};
+use crate::lanes::{by_lanes, load, store, Lanes};
 use crate::noise::sigma_z;
 use crate::render::NEAR_M;
 use crate::shapes::{Capsule, RayCapsule};
@@ -196,19 +196,10 @@ fn remove_any(region: &Region<'_>, frame: &mut [u16]) -> usize {
         let y = region.yn[v];
         let start = v * region.width + region.u0;
         let row = &mut frame[start..start + cols];
-        let mut c = 0;
-        while c < cols {
-            let len = RUN.min(cols - c);
+        for c in (0..cols).step_by(RUN) {
             // a short last run is padded with no reading
-            let mut raw = [0u16; RUN];
-            let mut xs = [0.0f64; RUN];
-            if len == RUN {
-                raw.copy_from_slice(&row[c..c + RUN]);
-                xs.copy_from_slice(&region.xn[c..c + RUN]);
-            } else {
-                raw[..len].copy_from_slice(&row[c..c + len]);
-                xs[..len].copy_from_slice(&region.xn[c..c + len]);
-            }
+            let mut raw: [u16; RUN] = load(row, c);
+            let xs: [f64; RUN] = load(region.xn, c);
             let mut d = [0.0f64; RUN];
             let mut tol = [0.0f64; RUN];
             let mut near = [false; RUN];
@@ -225,14 +216,9 @@ fn remove_any(region: &Region<'_>, frame: &mut [u16]) -> usize {
                     raw[i] = if on { 0 } else { raw[i] };
                     gone += usize::from(on);
                 }
-                if len == RUN {
-                    row[c..c + RUN].copy_from_slice(&raw);
-                } else {
-                    row[c..c + len].copy_from_slice(&raw[..len]);
-                }
+                store(row, c, &raw);
                 removed += gone;
             }
-            c += len;
         }
     }
     removed

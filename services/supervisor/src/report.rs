@@ -892,6 +892,47 @@ mod tests {
         r
     }
 
+    /// The perception figures of one frame answered by two workers: capture
+    /// → the last result, arrival → the last result, ingestion's own time
+    /// (counted once per frame), and the workers' compute times summed.
+    #[test]
+    fn a_frame_s_latencies_from_capture_and_arrival_and_its_compute() {
+        let mut e = eval();
+        let ms = 1_000_000u64;
+        let mut cam = FrameHeader::zeroed();
+        cam.seq = 7;
+        e.on_frame(&cam);
+        let mut filtered = FrameHeader::zeroed();
+        filtered.seq = 7;
+        filtered.ingest_ns = (ms / 2) as u32;
+        e.on_filtered(&filtered);
+        // the same frame seen again (another header's value) is not counted
+        filtered.ingest_ns = ms as u32;
+        e.on_filtered(&filtered);
+        // captured at 100 ms, arrived at ingestion at 102 ms
+        let answer = |worker: u32, published_ms: u64, compute_ms: u64| {
+            let mut m = RepulsionResult::zeroed();
+            m.frame_seq = 7;
+            m.frame_capture_wall_ns = 100 * ms;
+            m.worker = worker;
+            m.workers = 2;
+            m.published_ns = published_ms * ms;
+            m.since_arrival_ns = ((published_ms - 102) * ms) as u32;
+            m.compute_ns = compute_ms * ms / 10;
+            m
+        };
+        e.on_repulsion(&answer(0, 103, 3));
+        assert!(e.perception().unwrap().frame_to_repulsion_ms.max == 0.0);
+        e.on_repulsion(&answer(1, 104, 4));
+        let p = e.perception().unwrap();
+        assert_eq!(p.frames, 1);
+        assert!((p.frame_to_repulsion_ms.p50 - 4.0).abs() < 1e-9, "{p:?}");
+        assert!((p.arrival_to_repulsion_ms.p50 - 2.0).abs() < 1e-9, "{p:?}");
+        assert!((p.ingest_ms.p50 - 0.5).abs() < 1e-9, "{p:?}");
+        assert!((p.ingest_ms.max - 0.5).abs() < 1e-9, "{p:?}");
+        assert!((p.repulsion_compute_ms.p50 - 0.7).abs() < 1e-9, "{p:?}");
+    }
+
     #[test]
     fn contact_episode_detection_delay_and_false_detections() {
         let mut e = eval();
