@@ -342,7 +342,8 @@ impl DepthSpaceDistance {
         };
         let mut sums = lanes::Sums::new();
         lanes::scan(self.lanes, &lp, &window, &mut sums);
-        let (count, best2, best, sum) = (sums.count, sums.best2, sums.best, sums.total());
+        let lanes::Nearest { count, best2, best } = sums.nearest();
+        let sum = sums.total();
         if count == 0 {
             return Ok(Repulsion::NONE);
         }

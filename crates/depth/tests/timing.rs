@@ -107,3 +107,35 @@ fn timing_of_render_selffilter_and_distance() {
         "both robot and human visible"
     );
 }
+
+#[test]
+fn timing_of_distance_on_a_crowded_frame() {
+    // the worst case of eq. 15's occlusion rule: something 1 m from the
+    // camera in every pixel, in front of every point, so that every pixel of
+    // every point's window is in its region
+    let k = Intrinsics::default();
+    let pose = CameraPose::paper_default();
+    let dist = DepthSpaceDistance::new(k, pose, RepulsionParams::default(), 0.001).unwrap();
+    let points: Vec<PointOfInterest> = common::lwr_points_of_interest(&common::Q_REACH)
+        .into_iter()
+        .map(|(p, r)| PointOfInterest::new(p, r))
+        .collect();
+    let frame = vec![1000u16; k.pixel_count()];
+    let mut out = vec![Repulsion::NONE; points.len()];
+    let mut t = vec![];
+    for i in 0..43 {
+        let t0 = Instant::now();
+        dist.repulsions(&frame, &points, &mut out).unwrap();
+        if i >= 3 {
+            t.push(t0.elapsed());
+        }
+    }
+    let considered = out.iter().map(|r| r.pixels_considered).sum::<usize>();
+    let (d50, d90, dmax) = stats(t);
+    eprintln!(
+        "distance on a crowded frame, {} points: median {d50:.2} ms, p90 {d90:.2} ms, max {dmax:.2} ms ({considered} pixels in regions, {:.2} ns each)",
+        points.len(),
+        d50 * 1e6 / considered as f64
+    );
+    assert!(out.iter().all(|r| r.pixels_considered > 1000));
+}
