@@ -13,11 +13,10 @@ pub fn sigma_z(z: f64) -> f64 {
     0.0012 + 0.0019 * e * e
 }
 
-/// The normal table has `2^TABLE_BITS` entries; one 64-bit draw gives 5 indices.
+/// The normal table has `2^TABLE_BITS` entries.
 const TABLE_BITS: u32 = 12;
 const TABLE_SIZE: usize = 1 << TABLE_BITS;
 const TABLE_MASK: u64 = (1 << TABLE_BITS) - 1;
-const DRAWS_PER_U64: u32 = 64 / TABLE_BITS;
 
 /// Inverse of the standard normal CDF (Acklam's rational approximation,
 /// relative error below 1.2e-9) for `p` in (0, 1).
@@ -68,63 +67,71 @@ pub(crate) fn inverse_normal_cdf(p: f64) -> f64 {
     }
 }
 
-/// Seeded generator of standard-normal samples for per-pixel noise: a table of
+/// Seeded source of standard-normal samples for per-pixel noise: a table of
 /// the 4096 quantiles `Φ⁻¹((i + ½)/4096)` of N(0, 1) (small enough to stay in
-/// the L1 cache; tails truncated at ±3.5σ), indexed by 12-bit slices of a fast
-/// PRNG. Deterministic for a seed; five samples per 64-bit draw; no allocation
+/// the L1 cache; tails truncated at ±3.67σ), indexed by [`pixel_bits`] of a
+/// key per frame from a fast PRNG. Deterministic for a seed; no allocation
 /// after construction.
 #[derive(Debug, Clone)]
 pub(crate) struct NormalSource {
-    table: Vec<f32>,
+    table: Box<[f32; TABLE_SIZE]>,
     rng: SmallRng,
-    bits: u64,
-    left: u32,
 }
 
 impl NormalSource {
     pub fn new(seed: u64) -> Self {
-        let table = (0..TABLE_SIZE)
-            .map(|i| inverse_normal_cdf((i as f64 + 0.5) / TABLE_SIZE as f64) as f32)
-            .collect();
+        let mut table = Box::new([0.0f32; TABLE_SIZE]);
+        for (i, t) in table.iter_mut().enumerate() {
+            *t = inverse_normal_cdf((i as f64 + 0.5) / TABLE_SIZE as f64) as f32;
+        }
         Self {
             table,
             rng: SmallRng::seed_from_u64(seed),
-            bits: 0,
-            left: 0,
         }
     }
 
     /// Restarts the sequence from `seed`.
     pub fn reseed(&mut self, seed: u64) {
         self.rng = SmallRng::seed_from_u64(seed);
-        self.left = 0;
     }
 
-    /// `TABLE_BITS` fresh random bits.
-    #[inline(always)]
-    fn next_index(&mut self) -> usize {
-        if self.left == 0 {
-            self.bits = self.rng.next_u64();
-            self.left = DRAWS_PER_U64;
-        }
-        let i = (self.bits & TABLE_MASK) as usize;
-        self.bits >>= TABLE_BITS;
-        self.left -= 1;
-        i
+    /// A fresh key for one frame's [`pixel_bits`].
+    pub fn frame_key(&mut self) -> u32 {
+        self.rng.next_u32()
     }
 
-    /// One standard-normal sample.
-    #[inline(always)]
-    pub fn normal(&mut self) -> f64 {
-        let i = self.next_index();
-        f64::from(self.table[i & (TABLE_SIZE - 1)])
+    /// The quantiles: `table()[i]` is `Φ⁻¹((i + ½)/4096)`.
+    pub fn table(&self) -> &[f32; TABLE_SIZE] {
+        &self.table
     }
+}
 
-    /// `true` with probability `p`, rounded to a multiple of 1/4096.
-    #[inline(always)]
-    pub fn bernoulli(&mut self, p: f64) -> bool {
-        (self.next_index() as f64) < p * TABLE_SIZE as f64
-    }
+/// Random bits of pixel `index` of the frame whose key is `key`: a
+/// bijective 32-bit mix (MurmurHash3's finaliser), so that every pixel draws
+/// its own noise independently of the others (in vector lanes, unlike a
+/// sequential generator). The low [`TABLE_BITS`] index the normal table
+/// ([`NormalSource::table`]), the next [`TABLE_BITS`] a drop-out.
+#[inline(always)]
+pub(crate) fn pixel_bits(key: u32, index: u32) -> u32 {
+    let mut x = index ^ key;
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x85eb_ca6b);
+    x ^= x >> 13;
+    x = x.wrapping_mul(0xc2b2_ae35);
+    x ^ (x >> 16)
+}
+
+/// The table index in [`pixel_bits`]' bits.
+#[inline(always)]
+pub(crate) fn normal_index(bits: u32) -> usize {
+    (bits & TABLE_MASK as u32) as usize
+}
+
+/// Whether [`pixel_bits`]' bits draw an event of probability `p` (rounded
+/// to a multiple of 1/4096).
+#[inline(always)]
+pub(crate) fn draws(bits: u32, p: f64) -> bool {
+    f64::from((bits >> TABLE_BITS) & TABLE_MASK as u32) < p * TABLE_SIZE as f64
 }
 
 #[cfg(test)]
@@ -133,18 +140,43 @@ mod tests {
 
     #[test]
     fn table_is_standard_normal() {
-        let mut n = NormalSource::new(1);
-        let count = 200_000;
-        let (mut s, mut s2) = (0.0, 0.0);
-        for _ in 0..count {
-            let x = n.normal();
+        let n = NormalSource::new(1);
+        let c = TABLE_SIZE as f64;
+        let s: f64 = n.table().iter().map(|&x| f64::from(x)).sum();
+        let s2: f64 = n.table().iter().map(|&x| f64::from(x).powi(2)).sum();
+        let (mean, var) = (s / c, s2 / c - (s / c).powi(2));
+        assert!(mean.abs() < 1e-6, "mean {mean}");
+        assert!((var - 1.0).abs() < 0.01, "variance {var}");
+        // truncated at the outermost quantiles, ±3.67σ
+        let most = n.table().iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        assert!((3.6..3.7).contains(&most), "{most}");
+    }
+
+    #[test]
+    fn pixel_bits_draw_standard_normals_and_events_independently() {
+        let n = NormalSource::new(3);
+        let (key_a, key_b) = (0x1234_5678, 0x9abc_def0);
+        let count = 307_200u32;
+        let (mut s, mut s2, mut cross, mut events, mut same) = (0.0, 0.0, 0.0, 0u32, 0u32);
+        for i in 0..count {
+            let a = pixel_bits(key_a, i);
+            let b = pixel_bits(key_b, i);
+            let x = f64::from(n.table()[normal_index(a)]);
+            let y = f64::from(n.table()[normal_index(b)]);
+            let next = f64::from(n.table()[normal_index(pixel_bits(key_a, i + 1))]);
             s += x;
             s2 += x * x;
+            cross += x * next + x * y;
+            events += u32::from(draws(a, 0.5));
+            same += u32::from(normal_index(a) == normal_index(b));
         }
-        let mean = s / count as f64;
-        let var = s2 / count as f64 - mean * mean;
-        assert!(mean.abs() < 0.02, "mean {mean}");
-        assert!((var - 1.0).abs() < 0.03, "variance {var}");
+        let c = f64::from(count);
+        assert!((s / c).abs() < 0.01, "mean {}", s / c);
+        assert!((s2 / c - 1.0).abs() < 0.02, "variance {}", s2 / c);
+        // neighbours and the frames' keys uncorrelated
+        assert!((cross / c).abs() < 0.02, "correlation {}", cross / c);
+        assert!((f64::from(events) / c - 0.5).abs() < 0.005);
+        assert!(f64::from(same) / c < 2.0 / 4096.0);
     }
 
     #[test]
@@ -152,10 +184,10 @@ mod tests {
         let mut a = NormalSource::new(7);
         let mut b = NormalSource::new(7);
         for _ in 0..100 {
-            assert_eq!(a.normal(), b.normal());
+            assert_eq!(a.frame_key(), b.frame_key());
         }
         b.reseed(8);
-        let differs = (0..100).any(|_| a.normal() != b.normal());
+        let differs = (0..100).any(|_| a.frame_key() != b.frame_key());
         assert!(differs);
     }
 
@@ -167,10 +199,13 @@ mod tests {
     }
 
     #[test]
-    fn bernoulli_rate() {
-        let mut n = NormalSource::new(3);
-        let hits = (0..100_000).filter(|_| n.bernoulli(0.25)).count();
+    fn draw_rate() {
+        let hits = (0..100_000u32)
+            .filter(|&i| draws(pixel_bits(0x5eed, i), 0.25))
+            .count();
         assert!((hits as f64 / 1e5 - 0.25).abs() < 0.01, "{hits}");
+        assert!(!(0..10_000u32).any(|i| draws(pixel_bits(1, i), 0.0)));
+        assert!((0..10_000u32).all(|i| draws(pixel_bits(1, i), 1.0)));
     }
 
     #[test]
