@@ -170,20 +170,26 @@ fn syntax_errors_name_the_file() {
     assert!(e.to_string().contains("/nonexistent/phri.toml"), "{e}");
 }
 
-/// `deploy/points-16.toml` (issue 14's comparison): merged over the
-/// defaults, its 16 control points replace the default 8, each link known to
-/// the robot, 4 per worker; everything else stays the default.
+/// `deploy/points-8.toml` (issue 14's comparison): merged over the
+/// defaults, the first 8 of the default 16 control points, 2 per worker;
+/// everything else stays the default.
 #[test]
-fn the_sixteen_point_comparison_replaces_the_control_points() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/points-16.toml");
+fn the_eight_point_comparison_keeps_the_first_eight_points() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/points-8.toml");
     let l = Loaded::load(&file, None, &[]).unwrap();
     let r = &l.config.repulsion;
-    assert_eq!(r.points.len(), 16);
-    assert_eq!(r.workers, 4);
-    assert!((0..4).all(|w| r.points_of(w).len() == 4));
-    let model = l.model().unwrap();
-    assert!(r.points.iter().all(|p| model.frame_id(&p.link).is_ok()));
     let d = Config::defaults();
-    assert_eq!(r.points[..8], d.repulsion.points[..]);
+    assert_eq!(d.repulsion.points.len(), 16);
+    assert!((0..4).all(|w| d.repulsion.points_of(w).len() == 4));
+    let model = l.model().unwrap();
+    assert!(d
+        .repulsion
+        .points
+        .iter()
+        .all(|p| model.frame_id(&p.link).is_ok()));
+    assert_eq!(r.points.len(), 8);
+    assert_eq!(r.workers, 4);
+    assert!((0..4).all(|w| r.points_of(w).len() == 2));
+    assert_eq!(r.points[..], d.repulsion.points[..8]);
     assert_eq!(l.config.control, d.control);
 }
