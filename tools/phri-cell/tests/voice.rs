@@ -77,8 +77,8 @@ fn voice_starts_and_ends_the_collaboration_and_the_rest_is_refused() {
     // the collaboration's force limit (0.5 × 140 N) where F̂ is estimated,
     // on link 7; on the wrist, which this hand, still coming in at 0.3 m/s
     // when the approach starts, meets first, F̂ sees the force late (known,
-    // BENCHMARKS.md: over 70 N in 6 of the 9 phases of the sweep; 66 N at
-    // this one, 121 N with deploy/points-16.toml): there ISO/TS 15066's
+    // BENCHMARKS.md: over 70 N in 6 of the 9 phases of the sweep; 102 N
+    // at this one, 115 N with deploy/points-8.toml): there ISO/TS 15066's
     // quasi-static hand limit itself, as tests/system.rs bounds it
     for c in &s.contacts {
         let limit = if c.link == "lwr_link_7" { 70.0 } else { 140.0 };
