@@ -277,13 +277,8 @@ mod tests {
     /// (widths around the run length, so that short runs are met).
     #[test]
     fn every_vector_width_removes_what_the_rule_says() {
-        let mut state = 99u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as u32
-        };
+        let mut lcg = crate::lanes::test_sequence(99);
+        let mut next = move || (lcg() >> 33) as u32;
         let mut removed_any = 0;
         for (w, h) in [(3u32, 3u32), (33, 5), (34, 7), (640, 24), (65, 4)] {
             let mut f = filter(w, h);

@@ -400,6 +400,19 @@ fn scan_any<const FMA: bool>(p: &Point, w: &Window<'_>, sums: &mut Sums) {
     *sums = acc;
 }
 
+/// A deterministic sequence for the tests' scenes: the states of Knuth's
+/// MMIX linear congruential generator from `seed` (use the high bits).
+#[cfg(test)]
+pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> u64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -415,13 +428,8 @@ mod tests {
         let all = Lanes::available();
         let (width, height) = (101usize, 37usize);
         // a deterministic scene: a slanted surface with holes, steps and spikes
-        let mut state = 12_345u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 33) as u32
-        };
+        let mut lcg = test_sequence(12_345);
+        let mut next = move || (lcg() >> 33) as u32;
         let frame: Vec<u16> = (0..width * height)
             .map(|i| match next() % 10 {
                 0 => 0,

@@ -654,13 +654,8 @@ mod tests {
     #[test]
     fn every_vector_width_senses_as_the_rule() {
         let (w, h) = (77usize, 13usize);
-        let mut state = 99u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 33) as u32
-        };
+        let mut lcg = crate::lanes::test_sequence(99);
+        let mut next = move || (lcg() >> 33) as u32;
         let zbuf: Vec<f64> = (0..w * h)
             .map(|i| match next() % 12 {
                 0 => f64::INFINITY,

@@ -273,13 +273,8 @@ mod tests {
         let k = Intrinsics::default();
         let pose = CameraPose::paper_default();
         let mut f = SelfFilter::new(k, pose, SelfFilterParams::default()).unwrap();
-        let mut state = 7u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut lcg = crate::lanes::test_sequence(7);
+        let mut next = move || (lcg() >> 11) as f64 / (1u64 << 53) as f64;
         let mut total = 0;
         for trial in 0..12 {
             let mut capsules = Vec::new();
