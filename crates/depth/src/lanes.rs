@@ -161,9 +161,6 @@ impl Sums {
                 n.best = (here.1 as usize, here.0 as usize, self.low_d[i]);
             }
         }
-        if n.best2 == f64::INFINITY {
-            n.best = (0, 0, 0.0);
-        }
         n
     }
 }

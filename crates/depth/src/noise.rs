@@ -15,7 +15,7 @@ pub fn sigma_z(z: f64) -> f64 {
 
 /// The normal table has `2^TABLE_BITS` entries.
 const TABLE_BITS: u32 = 12;
-const TABLE_SIZE: usize = 1 << TABLE_BITS;
+pub(crate) const TABLE_SIZE: usize = 1 << TABLE_BITS;
 const TABLE_MASK: u64 = (1 << TABLE_BITS) - 1;
 
 /// Inverse of the standard normal CDF (Acklam's rational approximation,

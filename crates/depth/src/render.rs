@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
 use crate::lanes::{self, by_lanes, Lanes, RUN};
-use crate::noise::{draws, normal_index, pixel_bits, sigma_z, NormalSource};
+use crate::noise::{draws, normal_index, pixel_bits, sigma_z, NormalSource, TABLE_SIZE};
 use crate::shapes::{camera_box_bounds, Aabb, Capsule, PixelRect, RayCapsule};
 
 /// Surfaces nearer than this \[m\] block the view but give no reading.
@@ -548,7 +548,7 @@ impl Renderer {
 struct Sense<'a> {
     options: RenderOptions,
     /// the normal quantiles the noise draws from
-    table: &'a [f32; 4096],
+    table: &'a [f32; TABLE_SIZE],
     /// this frame's key of [`pixel_bits`]
     key: u32,
     width: usize,
@@ -556,8 +556,8 @@ struct Sense<'a> {
 }
 
 /// One pixel's reading \[mm\] (0: none) of exact depth `z` \[m\] with the
-/// neighbours `left`, `right`, `up`, `down` (a missing one is `z` itself)
-/// and the random `bits` of [`pixel_bits`]: range limits, a drop-out with
+/// exact depths `near` of its four neighbours (left, right, up, down; a
+/// missing one is `z` itself) and the random `bits` of [`pixel_bits`]: range limits, a drop-out with
 /// probability `edge_dropout` where a neighbour jumps by more than
 /// `edge_jump_m + edge_jump_sigmas σ_z`, axial noise `σ_z(z) N(0, 1)`,
 /// rounded half up to the millimetre. Branch-free: it vectorises.
