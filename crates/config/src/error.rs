@@ -56,8 +56,13 @@ pub enum ConfigError {
     },
     #[error(transparent)]
     Scenario(#[from] crate::scenario::ScenarioError),
-    #[error("--scenario: '{name}' is neither a file nor a scenario in {dir}")]
-    NoScenario { name: String, dir: String },
+    #[error("--scenario: '{name}' is neither a file nor a scenario in {dir} (known: {known})")]
+    NoScenario {
+        name: String,
+        dir: String,
+        /// the scenarios there, by name
+        known: String,
+    },
     #[error("{}", model_message(path, source))]
     Model {
         path: PathBuf,

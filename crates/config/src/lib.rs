@@ -345,13 +345,28 @@ pub fn find_scenario(name: &str, config_path: &Path) -> Result<PathBuf, ConfigEr
             .join("scenarios")
             .join(format!("{name}.toml")),
     ];
-    candidates
-        .into_iter()
-        .find(|p| p.is_file())
-        .ok_or_else(|| ConfigError::NoScenario {
+    candidates.into_iter().find(|p| p.is_file()).ok_or_else(|| {
+        let mut known: Vec<String> = [dir.clone(), Path::new(DEFAULT_DEPLOY_DIR).join("scenarios")]
+            .iter()
+            .filter_map(|d| std::fs::read_dir(d).ok())
+            .flat_map(|entries| entries.flatten())
+            .filter_map(|e| {
+                let p = e.path();
+                (p.extension()? == "toml").then(|| p.file_stem()?.to_str().map(String::from))?
+            })
+            .collect();
+        known.sort();
+        known.dedup();
+        ConfigError::NoScenario {
             name: name.to_string(),
             dir: dir.display().to_string(),
-        })
+            known: if known.is_empty() {
+                "none".into()
+            } else {
+                known.join(", ")
+            },
+        }
+    })
 }
 
 impl Loaded {
@@ -397,9 +412,23 @@ impl Loaded {
         }
         // relative paths anchored at the file that gave them
         absolute_urdf(&mut table, path);
-        let config = Config::from_table(&table, &origin)?;
+        // an error about a key a --set gave names that flag, not the file
+        let blame = |key: &str| merge::set_giving(sets, key).unwrap_or_else(|| origin.clone());
+        let config = Config::from_table(&table, &origin).map_err(|e| match e {
+            ConfigError::Key { key, message, .. } => ConfigError::Key {
+                origin: blame(&key),
+                key,
+                message,
+            },
+            ConfigError::UnknownSection { section, known, .. } => ConfigError::UnknownSection {
+                origin: blame(&section),
+                section,
+                known,
+            },
+            e => e,
+        })?;
         config.validate().map_err(|invalid| ConfigError::Invalid {
-            origin: origin.clone(),
+            origin: blame(&invalid.key),
             invalid,
         })?;
         let scenario = match scen {

@@ -47,6 +47,19 @@ pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
     Ok(())
 }
 
+/// The `--set` of `sets` (the last one) that gave `key` (`section.key`,
+/// a table above it or a key below it), as the flag a user typed: an error
+/// about that key names the flag, not the file it was merged over.
+pub fn set_giving(sets: &[&str], key: &str) -> Option<String> {
+    sets.iter().rev().find_map(|s| {
+        let k = s.split_once('=').map_or(*s, |(k, _)| k).trim();
+        let hit = k == key
+            || key.strip_prefix(k).is_some_and(|r| r.starts_with('.'))
+            || k.strip_prefix(key).is_some_and(|r| r.starts_with('.'));
+        hit.then(|| format!("--set {s}"))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

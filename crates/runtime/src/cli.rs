@@ -29,7 +29,7 @@ pub struct ServiceFlags {
     /// SCHED_FIFO priority of the service's real-time thread (0: the normal scheduler)
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub rt_priority: i32,
-    /// Override one configuration value, e.g. `--set control.kv=12` (repeatable)
+    /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
     /// Service name as the supervisor knows it (iceoryx2 node name)

@@ -43,7 +43,7 @@ struct Cli {
     /// Cell configuration (TOML)
     #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
     config: PathBuf,
-    /// Override one configuration value, e.g. `--set control.kv=12` (repeatable)
+    /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
     /// Offset of the person's script against the robot's cycle [s] (repeatable: one run each)
