@@ -194,6 +194,10 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
         }
     }
     latencies.sort_by(f64::total_cmp);
+    if listener.audio_s <= 0.0 {
+        tracing::info!("no speech heard; {lost} audio chunk(s) lost, {refused} refused");
+        return Ok(());
+    }
     tracing::info!(
         "decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost, {refused} refused",
         listener.decode_s / listener.audio_s.max(1e-9),

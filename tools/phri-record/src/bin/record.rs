@@ -97,7 +97,12 @@ fn main() -> ExitCode {
         phri_runtime::cli::completions::<Cli>(BIN, shell);
         return ExitCode::SUCCESS;
     }
-    phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()))
+    let prefix = phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
+    let code = phri_runtime::service::run(BIN, || body(cli).map_err(|e| e.to_string()));
+    // the last node out of the prefix (the cell stopped first) takes back
+    // what iceoryx2 left in shared memory; nothing while any node lives
+    let _ = phri_ipc::remove_leftovers(&prefix);
+    code
 }
 
 /// The 3-D scene of the recording: phri-viz's pipeline and what it made last.
