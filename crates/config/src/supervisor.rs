@@ -35,6 +35,10 @@ pub struct SupervisorConfig {
     /// service that exits before then fails the start (everything started is
     /// stopped, the supervisor exits non-zero) instead of being restarted
     pub startup_s: f64,
+    /// refuse to start when SCHED_FIFO at the services' priorities, or their
+    /// CPU pinning, is not permitted (`--require-rt`); otherwise the cell
+    /// runs under the normal scheduler and its report says it was degraded
+    pub require_rt: bool,
 }
 
 impl SupervisorConfig {

@@ -68,13 +68,14 @@ pub fn prefix_or_default(given: Option<&str>) -> String {
         .unwrap_or_else(|| DEFAULT_PREFIX.to_string())
 }
 
-/// How a user attaches a tool to the cell of `prefix` (`phri-monitor top`,
-/// with `PHRI_PREFIX=…` in front unless it is the default).
-pub fn attach_hint(prefix: &str) -> String {
+/// How a user attaches the monitor (`monitor`: the command that runs
+/// `phri-monitor`, e.g. its path) to the cell of `prefix`: `MONITOR top`,
+/// with `PHRI_PREFIX=…` in front unless it is the default.
+pub fn attach_hint(prefix: &str, monitor: &str) -> String {
     if prefix == DEFAULT_PREFIX {
-        "phri-monitor top".to_string()
+        format!("{monitor} top")
     } else {
-        format!("PHRI_PREFIX={prefix} phri-monitor top")
+        format!("PHRI_PREFIX={prefix} {monitor} top")
     }
 }
 
@@ -238,11 +239,17 @@ impl ServiceContext {
         mailbox
     }
 
-    /// Switch to SCHED_FIFO if configured and permitted; say what happened on stderr.
+    /// Switch to SCHED_FIFO if configured and permitted; say what happened
+    /// on stderr. Supervised, the supervisor says it once for the cell (and
+    /// reports the run degraded): the service's own line is a debug line.
     pub fn go_realtime(&self) {
         if self.rt_priority > 0 {
             if let Err(e) = crate::rt::make_realtime(self.rt_priority) {
-                tracing::warn!("{e}; running under {}", crate::rt::policy());
+                if std::env::var_os(SUPERVISED_ENV).is_some() {
+                    tracing::debug!("{e}; running under {}", crate::rt::policy());
+                } else {
+                    tracing::warn!("{e}; running under {}", crate::rt::policy());
+                }
             }
         }
     }

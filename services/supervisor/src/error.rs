@@ -64,6 +64,10 @@ pub enum SupervisorError {
     /// iceoryx2's node counter of the prefix is foreign or altered
     #[error(transparent)]
     SharedMemory(#[from] crate::shm::ShmError),
+    /// `--require-rt` (or `supervisor.require_rt`) and real-time scheduling
+    /// is refused here
+    #[error("--require-rt: {0}; nothing was started (README: Real-time scheduling)")]
+    RealtimeRequired(String),
     /// the cell did not start whole: everything started was stopped
     #[error("start-up failed: {0}; everything started was stopped")]
     StartFailed(String),

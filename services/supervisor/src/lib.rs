@@ -4,7 +4,8 @@
 //! verdict ([`roster`], [`restart`]), and who starves whom ([`cpu`]); the
 //! state files ([`state`]); the run report built from what flowed on the
 //! channels ([`report`]); how services are started and recognised
-//! ([`process`]); iceoryx2's node counter, checked and closed ([`shm`]). `main.rs` does the I/O: it
+//! ([`process`]); real-time scheduling as the services got it
+//! ([`realtime`]); iceoryx2's node counter, checked and closed ([`shm`]). `main.rs` does the I/O: it
 //! spawns, signals and reaps the processes, reads the channels, publishes
 //! the health, writes the files, every 10 ms.
 
@@ -13,6 +14,7 @@ pub mod cpu;
 pub mod error;
 pub mod plan;
 pub mod process;
+pub mod realtime;
 pub mod report;
 pub mod restart;
 pub mod roster;

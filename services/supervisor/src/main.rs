@@ -31,6 +31,7 @@ use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
 use phri_supervisor::cpu::{self, CpuUse};
 use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
+use phri_supervisor::realtime::{self, RealtimeWatch};
 use phri_supervisor::shm::{self, SHM_DIR};
 use phri_supervisor::state::{StateJson, STATE_FILE};
 use phri_supervisor::{Plan, Roster, SupervisorError, SupervisorState};
@@ -55,9 +56,13 @@ struct Cli {
     /// Write the run's report (JSON) to this file
     #[arg(long, value_name = "FILE")]
     report: Option<String>,
-    /// Override one configuration value, e.g. `--set control.kv=12` (repeatable)
+    /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Refuse to start unless real-time scheduling (SCHED_FIFO at the
+    /// services' priorities) and CPU pinning are permitted (also: `supervisor.require_rt`)
+    #[arg(long)]
+    require_rt: bool,
     /// iceoryx2 prefix of the cell [default: phri_]
     #[arg(long, value_name = "PREFIX", env = phri_runtime::PREFIX_ENV)]
     prefix: Option<String>,
@@ -256,6 +261,29 @@ impl Cell {
     }
 }
 
+/// A service's real-time process is judged no earlier than this after its
+/// (re)start: it opens its ports before it asks for SCHED_FIFO [ns].
+const RT_SETTLE_NS: u64 = 200_000_000;
+
+/// What `[services.*]` asks for a service: its priority and its CPUs.
+fn wanted_of(spec: &phri_config::ServiceSpec) -> realtime::Wanted {
+    realtime::Wanted {
+        priority: spec.rt_priority,
+        cpus: spec.cpus.clone(),
+    }
+}
+
+/// How a user attaches the monitor from another terminal: the binary's
+/// path (it is not on the PATH), with the prefix when not the default.
+fn attach_hint(bin_dir: &Path, prefix: &str) -> String {
+    let bin = bin_dir.join("phri-monitor");
+    let shown = std::env::current_dir()
+        .ok()
+        .and_then(|d| bin.strip_prefix(d).ok().map(Path::to_path_buf))
+        .unwrap_or(bin);
+    phri_runtime::attach_hint(prefix, &shown.display().to_string())
+}
+
 /// Drop the supervisor's node and remove what the run left in shared memory.
 fn close_ipc(node: IpcNode, ports: Option<Ports>, prefix: &str) {
     let _ = node.try_cleanup_dead_nodes();
@@ -412,6 +440,25 @@ fn body() -> Result<(), SupervisorError> {
         .map(Path::to_path_buf)
         .unwrap_or_default();
     plan.check_binaries(&bin_dir)?;
+    // real-time scheduling: permitted here, or the run is degraded (or refused)
+    let require_rt = args.require_rt || plan.loaded.config.supervisor.require_rt;
+    let online = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let wanted: Vec<(String, realtime::Wanted)> = plan
+        .services
+        .iter()
+        .map(|(name, spec)| (name.clone(), wanted_of(spec)))
+        .collect();
+    let rt_refusal =
+        realtime::probe_services(wanted.iter().map(|(n, w)| (n.as_str(), w)), online).err();
+    if let Some(why) = &rt_refusal {
+        if require_rt {
+            return Err(SupervisorError::RealtimeRequired(why.clone()));
+        }
+        tracing::warn!(
+            "real-time scheduling refused ({why}): the cell runs under the normal scheduler and the run will be reported degraded; README \"Real-time scheduling\" says how to grant it, --require-rt refuses instead"
+        );
+    }
+    let mut rt_watch = RealtimeWatch::new(rt_refusal);
     // one namespace by default (PHRI_PREFIX, else phri_): tools in another
     // terminal find the cell without flags; a second cell there is refused
     let prefix = phri_runtime::prefix_or_default(args.prefix.as_deref().filter(|p| !p.is_empty()));
@@ -489,7 +536,7 @@ fn body() -> Result<(), SupervisorError> {
     tracing::info!("cell {prefix}, run directory {}", run_dir.display());
     tracing::info!(
         "attach from another terminal: {}",
-        phri_runtime::attach_hint(&prefix)
+        attach_hint(&launch.bin_dir, &prefix)
     );
 
     let t0 = now_ns();
@@ -676,6 +723,40 @@ fn body() -> Result<(), SupervisorError> {
                     ROBOT_COMMAND.name
                 );
                 eval.event(now, "intruder", "supervisor", reason.clone());
+                eval.degrade(reason.clone());
+                stop_reason = Some(reason);
+            }
+        }
+
+        // what each real-time service got, once per process, when it has
+        // run its loop (heard) or had the start-up's time to get there
+        for (i, (name, want)) in wanted.iter().enumerate() {
+            let sv = cell.roster.get(i);
+            let Some(pid) = sv
+                .pid
+                .filter(|&p| want.priority > 0 && rt_watch.due(name, p))
+            else {
+                continue;
+            };
+            let ready = sv.heard_since_start
+                || now.saturating_sub(sv.started_ns) > (sup.startup_s * 1e9) as u64;
+            if !ready || now.saturating_sub(sv.started_ns) < RT_SETTLE_NS {
+                continue;
+            }
+            let Some(got) = realtime::observe(pid) else {
+                continue;
+            };
+            let short = rt_watch.record(name, pid, want, &got, online);
+            if short.is_empty() {
+                continue;
+            }
+            let what: Vec<String> = short.iter().map(ToString::to_string).collect();
+            tracing::warn!("{name} (pid {pid}): {}", what.join("; "));
+            if require_rt {
+                let reason = format!(
+                    "--require-rt: {name} did not get real-time scheduling ({})",
+                    what.join("; ")
+                );
                 eval.degrade(reason.clone());
                 stop_reason = Some(reason);
             }
@@ -870,6 +951,7 @@ fn body() -> Result<(), SupervisorError> {
     cell.stop();
     // what the services said last (the simulator's contacts as it braked)
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
+    eval.set_realtime(rt_watch.report());
     let mut report = eval.report(end, plan.scenario_name(), services_report);
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
@@ -882,20 +964,17 @@ fn body() -> Result<(), SupervisorError> {
         })?;
         file.write(&json)?;
     }
-    let mut verdict = if report.clean {
-        "clean".to_string()
-    } else {
-        format!("NOT clean: {}", report.degraded.join("; "))
-    };
-    if report.evaluation.truth_samples_lost > 0 {
-        verdict.push_str(&format!(
-            " ({} ground-truth samples lost: contact timing coarser, no contact missing)",
-            report.evaluation.truth_samples_lost
-        ));
-    }
+    let intended = report.contacts.iter().filter(|c| c.intended).count();
     tracing::info!(
-        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} contacts, {} false detections; {verdict}",
-        report.scenario, report.duration_s, report.torque_loop.cycles, report.torque_loop.missed_deadlines, report.torque_loop.latency_us.p99, report.contacts.len(), report.false_detections
+        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} unintended contacts, {intended} intended, {} false detections; {}",
+        report.scenario,
+        report.duration_s,
+        report.torque_loop.cycles,
+        report.torque_loop.missed_deadlines,
+        report.torque_loop.latency_us.p99,
+        report.contacts.len() - intended,
+        report.false_detections,
+        report.summary
     );
     match stop_reason {
         Some(reason) => Err(SupervisorError::Degraded(reason)),

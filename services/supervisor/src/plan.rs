@@ -10,7 +10,7 @@ use phri_config::{Loaded, ServiceSpec};
 use phri_ipc::Reaction;
 
 use crate::error::SupervisorError;
-use crate::report::{DetectorInfo, Evaluator};
+use crate::report::{DetectorInfo, Evaluator, StaleBounds};
 use crate::spec::in_start_order;
 
 /// A run, validated.
@@ -104,7 +104,14 @@ impl Plan {
     }
 
     pub fn evaluator(&self, t0_ns: u64) -> Evaluator {
-        Evaluator::new(t0_ns, self.detector.clone(), self.link_names.clone())
+        // the controller's perception comes from the repulsion workers
+        let perception = self
+            .services
+            .iter()
+            .any(|(_, s)| s.binary == "phri-repulsion");
+        Evaluator::new(t0_ns, self.detector.clone(), self.link_names.clone()).with_stale_bounds(
+            StaleBounds::from_config(&self.loaded.config.control, perception),
+        )
     }
 
     /// Every service's binary is an executable file in `bin_dir`.

@@ -10,6 +10,8 @@ use phri_ipc::{
 };
 use serde::Serialize;
 
+use crate::realtime::RealtimeReport;
+
 /// A camera frame some repulsion worker answered, and not every one yet.
 #[derive(Clone, Copy, Debug)]
 struct FrameInFlight {
@@ -161,6 +163,87 @@ pub struct Report {
     pub perception: Option<PerceptionReport>,
     /// the collaboration layer (empty lists when nothing happened)
     pub collaboration: crate::collab_report::CollabReport,
+    /// real-time scheduling as the services got it
+    pub realtime: RealtimeReport,
+    /// protective stops by cause: `stale_residual`, `stale_perception`
+    /// (a service's input was late: the run is not clean), `request` (a
+    /// `stop` request: the person's word, not a fault)
+    pub protective_stop_causes: BTreeMap<String, u64>,
+    /// the run in one line, as the supervisor prints it last: `clean`, or
+    /// `degraded (…)` naming what a user must know about
+    pub summary: String,
+}
+
+/// The bounds past which the controller's safety inputs are stale
+/// (`[control] residual_max_age_ms`, `perception_max_age_ms`): a protective
+/// stop entered with an input older than its bound was caused by that
+/// input's service; one entered with both fresh, by a `stop` request.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StaleBounds {
+    /// [ns]
+    pub residual_ns: u64,
+    /// [ns]; `None`: the cell has no perception
+    pub perception_ns: Option<u64>,
+}
+
+impl StaleBounds {
+    /// The bounds of `[control]`, for a cell with or without perception.
+    pub fn from_config(control: &phri_config::ControlConfig, perception: bool) -> StaleBounds {
+        StaleBounds {
+            residual_ns: (control.residual_max_age_ms * 1e6) as u64,
+            perception_ns: perception.then_some((control.perception_max_age_ms * 1e6) as u64),
+        }
+    }
+
+    /// Why a protective stop entered with `status` began.
+    pub fn cause(&self, status: &ControlStatus) -> StopCause {
+        // u64::MAX: no residual (or no perception result) at all
+        if status.residual_age_ns > self.residual_ns {
+            StopCause::StaleResidual
+        } else if self
+            .perception_ns
+            .is_some_and(|b| status.perception_age_ns > b)
+        {
+            StopCause::StalePerception
+        } else {
+            StopCause::Request
+        }
+    }
+}
+
+/// Why a protective stop began (see [`StaleBounds::cause`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopCause {
+    StaleResidual,
+    StalePerception,
+    Request,
+}
+
+impl StopCause {
+    /// its key in `protective_stop_causes`
+    pub fn key(self) -> &'static str {
+        match self {
+            StopCause::StaleResidual => "stale_residual",
+            StopCause::StalePerception => "stale_perception",
+            StopCause::Request => "request",
+        }
+    }
+
+    /// the event's words
+    pub fn detail(self) -> &'static str {
+        match self {
+            StopCause::StaleResidual => "the residual is stale (dynamics late or down)",
+            StopCause::StalePerception => {
+                "perception is stale with a person near (camera, ingestion or a worker late or down)"
+            }
+            StopCause::Request => "a stop request",
+        }
+    }
+
+    /// caused by a service rather than a person's word
+    pub fn by_service(self) -> bool {
+        self != StopCause::Request
+    }
 }
 
 /// `evaluation` in the report: samples that never reached the evaluator.
@@ -271,6 +354,21 @@ pub struct Evaluator {
     last_event_seq: u64,
     /// contact episodes come from `sim/contacts` (then truth only refines them)
     events_seen: bool,
+    /// how the causes of protective stops are told apart (`None`: not told)
+    stale: Option<StaleBounds>,
+    /// protective stops by cause
+    stop_causes: BTreeMap<String, u64>,
+    /// real-time scheduling as the services got it
+    realtime: RealtimeReport,
+}
+
+/// `n` and `what`, in the plural unless `n` is 1.
+fn plural(n: u64, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
 }
 
 /// Episodes end after this long without the contact [s].
@@ -318,7 +416,25 @@ impl Evaluator {
             events_lost: 0,
             last_event_seq: 0,
             events_seen: false,
+            stale: None,
+            stop_causes: BTreeMap::new(),
+            realtime: RealtimeReport {
+                permitted: true,
+                ..Default::default()
+            },
         }
+    }
+
+    /// Tell protective stops apart by cause with these bounds.
+    pub fn with_stale_bounds(mut self, bounds: StaleBounds) -> Evaluator {
+        self.stale = Some(bounds);
+        self
+    }
+
+    /// Real-time scheduling as the services got it (the run is degraded
+    /// when any lacked something).
+    pub fn set_realtime(&mut self, realtime: RealtimeReport) {
+        self.realtime = realtime;
     }
 
     /// A robot-clock stamp [ns] on the report's time base [s since t0].
@@ -552,12 +668,21 @@ impl Evaluator {
                     service: "control".into(),
                     detail: reaction_name.into(),
                 }),
-                Ok(ControlMode::ProtectiveStop) => self.events.push(Event {
-                    t_s: t,
-                    kind: "protective_stop".into(),
-                    service: "control".into(),
-                    detail: "a safety input (residual or perception) is stale".into(),
-                }),
+                Ok(ControlMode::ProtectiveStop) => {
+                    let detail = match self.stale.map(|b| b.cause(m)) {
+                        Some(cause) => {
+                            *self.stop_causes.entry(cause.key().into()).or_default() += 1;
+                            cause.detail()
+                        }
+                        None => "a safety input is stale, or a stop was requested",
+                    };
+                    self.events.push(Event {
+                        t_s: t,
+                        kind: "protective_stop".into(),
+                        service: "control".into(),
+                        detail: detail.into(),
+                    })
+                }
                 Ok(ControlMode::Slow) => self.events.push(Event {
                     t_s: t,
                     kind: "slow".into(),
@@ -737,6 +862,87 @@ impl Evaluator {
         hist.len() as f64
     }
 
+    /// What a user must know about the run: the report's `degraded` lines
+    /// (the reasons given to [`Evaluator::degrade`] first, then refused
+    /// real-time scheduling, missed deadlines, protective stops a service
+    /// caused, restarts, lost evaluation samples) and the summary line
+    /// (`clean`, or `degraded (…)` with each in a few words).
+    fn verdict(
+        &self,
+        missed_deadlines: u64,
+        services: &BTreeMap<String, ServiceReport>,
+    ) -> (Vec<String>, String) {
+        let mut lines = self.degraded.clone();
+        let mut words: Vec<String> = Vec::new();
+        words.extend(self.realtime.kinds().into_iter().map(String::from));
+        lines.extend(self.realtime.degraded());
+        if !self.realtime.permitted {
+            if let Some(why) = &self.realtime.refusal {
+                lines.push(format!("real-time: {why}"));
+            }
+        }
+        if missed_deadlines > 0 {
+            let w = plural(missed_deadlines, "missed deadline");
+            lines.push(format!("torque loop: {w}"));
+            words.push(w);
+        }
+        let by_service: Vec<(&String, &u64)> = self
+            .stop_causes
+            .iter()
+            .filter(|(k, _)| k.as_str() != StopCause::Request.key())
+            .collect();
+        let stops: u64 = by_service.iter().map(|(_, n)| **n).sum();
+        if stops > 0 {
+            let each: Vec<String> = by_service.iter().map(|(k, n)| format!("{k} {n}")).collect();
+            lines.push(format!(
+                "{} on a stale safety input ({})",
+                plural(stops, "protective stop"),
+                each.join(", ")
+            ));
+            words.push(format!(
+                "{} on a stale input",
+                plural(stops, "protective stop")
+            ));
+        }
+        let restarted: Vec<String> = services
+            .iter()
+            .filter(|(_, r)| r.restarts > 0)
+            .map(|(n, r)| format!("{n} {}", r.restarts))
+            .collect();
+        if !restarted.is_empty() {
+            lines.push(format!("restarts: {}", restarted.join(", ")));
+            words.push(format!("restarts: {}", restarted.join(", ")));
+        }
+        if self.events_lost > 0 {
+            lines.push(format!(
+                "the evaluation lost {} contact events of sim/contacts: contacts may be missing",
+                self.events_lost
+            ));
+            words.push(format!(
+                "{} lost",
+                plural(self.events_lost, "contact event")
+            ));
+        }
+        if self.truth_lost > 0 {
+            lines.push(format!(
+                "the evaluation lost {} ground-truth samples of sim/truth: contact timing coarser",
+                self.truth_lost
+            ));
+            words.push(format!(
+                "{} lost",
+                plural(self.truth_lost, "ground-truth sample")
+            ));
+        }
+        // the reasons given by the supervisor, in their own words, last
+        words.extend(self.degraded.iter().cloned());
+        let summary = if lines.is_empty() {
+            "clean".to_string()
+        } else {
+            format!("degraded ({})", words.join("; "))
+        };
+        (lines, summary)
+    }
+
     /// The report at the end of the run.
     pub fn report(
         &self,
@@ -805,16 +1011,14 @@ impl Evaluator {
         );
         let mut events = self.events.clone();
         events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
-        let mut degraded = self.degraded.clone();
-        if self.events_lost > 0 {
-            degraded.push(format!(
-                "the evaluation lost {} contact events of sim/contacts: contacts may be missing",
-                self.events_lost
-            ));
-        }
+        let missed = s.1 + b.1;
+        let (degraded, summary) = self.verdict(missed, &services);
         Report {
             clean: degraded.is_empty(),
             degraded,
+            realtime: self.realtime.clone(),
+            protective_stop_causes: self.stop_causes.clone(),
+            summary,
             evaluation: Evaluation {
                 truth_samples_lost: self.truth_lost,
                 contact_events_lost: self.events_lost,
@@ -823,7 +1027,7 @@ impl Evaluator {
             scenario: scenario.to_string(),
             torque_loop: TorqueLoop {
                 cycles: s.0 + b.0,
-                missed_deadlines: s.1 + b.1,
+                missed_deadlines: missed,
                 latency_us: Percentiles {
                     p50: Self::percentile(&hist, 0.5),
                     p99: Self::percentile(&hist, 0.99),
@@ -1136,5 +1340,131 @@ mod tests {
             r.contacts[0].t_start_s
         );
         assert!((r.events[0].t_s - 10.3).abs() < 1e-9, "{:?}", r.events);
+    }
+
+    /// `clean` means nothing a user must know about happened: each of
+    /// these makes the run degraded, and the summary line says which.
+    #[test]
+    fn clean_means_nothing_a_user_must_know_about_happened() {
+        let services = |restarts: u32| {
+            let mut m = BTreeMap::new();
+            m.insert(
+                "control".to_string(),
+                ServiceReport {
+                    restarts,
+                    alive_at_end: true,
+                },
+            );
+            m
+        };
+        // nothing happened
+        let r = eval().report(1_000_000_000, "x", services(0));
+        assert!(r.clean && r.degraded.is_empty(), "{:?}", r.degraded);
+        assert_eq!(r.summary, "clean");
+        // a missed deadline
+        let mut e = eval();
+        let mut s = RobotStats::zeroed();
+        s.seq = 1;
+        s.cycles = 1000;
+        s.missed_deadlines = 3;
+        e.on_stats(&s);
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (3 missed deadlines)");
+        // a restart
+        let r = eval().report(1_000_000_000, "x", services(1));
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (restarts: control 1)");
+        // lost ground truth
+        let mut e = eval();
+        let mut first = truth(1, 0.0, 0.0);
+        first.seq = 1;
+        e.on_truth(&first);
+        let mut later = truth(10, 0.0, 0.0);
+        later.seq = 10;
+        e.on_truth(&later);
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (8 ground-truth samples lost)");
+        // refused real-time scheduling
+        let mut e = eval();
+        e.set_realtime(
+            crate::realtime::RealtimeWatch::new(Some("SCHED_FIFO 80 refused".into())).report(),
+        );
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (no real-time scheduling)");
+        assert!(r
+            .degraded
+            .iter()
+            .any(|l| l.contains("SCHED_FIFO 80 refused")));
+        // the supervisor's own reasons come first in `degraded`, and in its words
+        let mut e = eval();
+        e.degrade("dier ended 3 times");
+        let r = e.report(1_000_000_000, "x", services(3));
+        assert_eq!(r.degraded[0], "dier ended 3 times");
+        assert_eq!(
+            r.summary,
+            "degraded (restarts: control 3; dier ended 3 times)"
+        );
+    }
+
+    /// A protective stop a service caused (its input went stale) degrades
+    /// the run; one a `stop` request caused is the person's word: clean.
+    #[test]
+    fn protective_stops_are_told_apart_by_cause() {
+        let bounds = StaleBounds {
+            residual_ns: 5_000_000,
+            perception_ns: Some(100_000_000),
+        };
+        let status = |seq: u64, mode: ControlMode, residual_ms: u64, perception_ms: u64| {
+            let mut m = ControlStatus::zeroed();
+            m.seq = seq;
+            m.state_stamp_ns = seq * 1_000_000;
+            m.stamp_ns = m.state_stamp_ns + 50_000;
+            m.mode = mode as u32;
+            m.residual_age_ns = residual_ms * 1_000_000;
+            m.perception_age_ns = perception_ms * 1_000_000;
+            m
+        };
+        let run = |stop: ControlStatus| {
+            let mut e = eval().with_stale_bounds(bounds);
+            e.on_status(&status(1, ControlMode::Task, 1, 30), "reflex");
+            e.on_status(&stop, "reflex");
+            e.report(1_000_000_000, "x", BTreeMap::new())
+        };
+        // a stop request: both inputs fresh
+        let r = run(status(2, ControlMode::ProtectiveStop, 1, 30));
+        assert!(r.clean, "{:?}", r.degraded);
+        assert_eq!(r.protective_stop_causes["request"], 1);
+        let ev = r
+            .events
+            .iter()
+            .find(|e| e.kind == "protective_stop")
+            .unwrap();
+        assert_eq!(ev.detail, "a stop request");
+        // the residual stale (dynamics killed)
+        let r = run(status(2, ControlMode::ProtectiveStop, 12, 30));
+        assert!(!r.clean);
+        assert_eq!(r.protective_stop_causes["stale_residual"], 1);
+        assert_eq!(r.summary, "degraded (1 protective stop on a stale input)");
+        // no residual at all
+        let mut m = status(2, ControlMode::ProtectiveStop, 1, 30);
+        m.residual_age_ns = u64::MAX;
+        assert_eq!(run(m).protective_stop_causes["stale_residual"], 1);
+        // perception stale (a camera killed)
+        let r = run(status(2, ControlMode::ProtectiveStop, 1, 250));
+        assert!(!r.clean);
+        assert_eq!(r.protective_stop_causes["stale_perception"], 1);
+        // a cell without perception: its age says nothing
+        let mut e = eval().with_stale_bounds(StaleBounds {
+            perception_ns: None,
+            ..bounds
+        });
+        let mut m = status(2, ControlMode::ProtectiveStop, 1, 0);
+        m.perception_age_ns = u64::MAX;
+        e.on_status(&m, "reflex");
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert!(r.clean && r.protective_stop_causes["request"] == 1);
     }
 }
