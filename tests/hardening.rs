@@ -434,7 +434,11 @@ fn run_state_is_private_and_tampered_state_is_never_trusted() {
     assert_eq!(code, 0, "{err}");
     // the one kill that was the cell's own: its restart is said, nothing else
     // of the refused attempts
-    let last = err.lines().rev().find(|l| l.contains(" done after ")).unwrap_or("");
+    let last = err
+        .lines()
+        .rev()
+        .find(|l| l.contains(" done after "))
+        .unwrap_or("");
     assert!(
         last.contains("degraded (") && last.contains("restarts: control 1)"),
         "{last}"

@@ -80,6 +80,34 @@ fn scenarios_are_found_by_name_beside_the_configuration() {
     assert!(l.scenario.human.is_some());
     let e = Loaded::load(&deploy(), Some("no-such-scenario"), &[]).unwrap_err();
     assert!(e.to_string().contains("no-such-scenario"), "{e}");
+    // a misspelling is answered with the scenarios there are
+    let e = Loaded::load(&deploy(), Some("colision"), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("known: ") && e.contains("collision") && e.contains("coexistence"),
+        "{e}"
+    );
+}
+
+/// An error about a key a `--set` gave names that flag, as typed; one about
+/// a key of the file names the file.
+#[test]
+fn errors_name_the_set_that_gave_the_key() {
+    let e = err(&["control.kv=12"]);
+    assert!(e.starts_with("--set control.kv=12: control.kv"), "{e}");
+    let e = err(&["control.avoidance=true", "control.kp=-1"]);
+    assert!(e.starts_with("--set control.kp=-1: "), "{e}");
+    let e = err(&["contrl.kp=1"]);
+    assert!(
+        e.starts_with("--set contrl.kp=1: unknown section [contrl]"),
+        "{e}"
+    );
+    // the same key from the file: the file is named
+    let e = Loaded::load_text("[control]\nkp = -1.0\n", &deploy(), None, &["control.kd=3"])
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with(&deploy().display().to_string()), "{e}");
 }
 
 #[test]
