@@ -1253,3 +1253,175 @@ fn realtime_refused_here() -> bool {
     .join()
     .unwrap_or(true)
 }
+
+/// Issue: one forged message must not switch off avoidance. During
+/// `coexistence`, a process the supervisor did not start publishes one
+/// "nothing near" result per worker with a capture time 2^63 ns (which the
+/// controller once latched as its newest, making every genuine result look
+/// old), and a result of worker 0 for worker 1's point. The controller
+/// refuses them all (they are not from a worker it knows), the supervisor
+/// names the intruder, the run is not clean, and the person is avoided.
+#[test]
+fn forged_repulsion_results_are_refused_and_reported() {
+    let _g = serial();
+    let p = prefix("forge");
+    let d = scratch("forge");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&d.join("rd")),
+            &[
+                "--scenario",
+                "coexistence",
+                "--duration",
+                "18",
+                "--report",
+                &report_path.to_string_lossy(),
+            ],
+        ),
+        &p,
+        &d,
+    );
+    cell.state(&d.join("rd"));
+    wait(4.5);
+    let node = phri_ipc::node("forger", &p).unwrap();
+    let publisher = phri_ipc::PERCEPTION_REPULSION.publisher(&node).unwrap();
+    for worker in 0..4u32 {
+        let mut m = <phri_ipc::RepulsionResult as phri_ipc::Zeroed>::zeroed();
+        m.seq = 1;
+        m.worker = worker;
+        m.workers = 4;
+        m.capture_ns = 1 << 63;
+        m.n_points = 4;
+        for (k, slot) in m.points.iter_mut().take(4).enumerate() {
+            slot.point = worker + 4 * k as u32;
+            slot.min_distance = f64::INFINITY;
+        }
+        publisher.publish(&m).unwrap();
+    }
+    // a plausible time, but worker 0 speaking for worker 1's point
+    let mut m = <phri_ipc::RepulsionResult as phri_ipc::Zeroed>::zeroed();
+    m.worker = 0;
+    m.workers = 4;
+    m.capture_ns = 1;
+    m.n_points = 1;
+    m.points[0].point = 1;
+    m.points[0].min_distance = f64::INFINITY;
+    publisher.publish(&m).unwrap();
+    // stays attached until the supervisor has seen it
+    wait(1.0);
+    drop(publisher);
+    drop(node);
+    let me = std::process::id();
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    let r = report(&report_path);
+    assert_eq!(r["clean"], false, "{}", r["degraded"]);
+    let intruders = events(&r, "intruder", "supervisor");
+    assert!(
+        intruders.iter().any(|e| {
+            let d = e["detail"].as_str().unwrap_or("");
+            d.contains(&format!("pid {me}")) && d.contains("perception/repulsion")
+        }),
+        "{}",
+        r["events"]
+    );
+    let refused = &r["inputs"]["control"]["perception/repulsion"];
+    assert!(
+        refused["stranger"].as_u64().unwrap_or(0) >= 5,
+        "{}",
+        r["inputs"]
+    );
+    assert_eq!(refused["stranger_pid"], me, "{}", r["inputs"]);
+    let unintended = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["intended"] == false)
+        .count();
+    assert_eq!(unintended, 0, "{}", r["contacts"]);
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue: after the dead-man stopped the cell (the supervisor was stopped
+/// longer than `deadman_s`), the cell must not restart itself when the
+/// supervisor comes back: it stays stopped, the robot braked, until an
+/// operator resumes it (`phri-hri resume`); the report says dead-man.
+#[test]
+fn a_dead_man_stop_stays_stopped_until_an_operator_resumes() {
+    let _g = serial();
+    let p = prefix("dm");
+    let d = scratch("dm");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "40",
+                "--set",
+                "supervisor.deadman_s=2",
+                "--report",
+                &report_path.to_string_lossy(),
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let st = cell.state(&rd);
+    let sim = st["services"]["sim"]["pid"].as_i64().unwrap() as i32;
+    wait(3.0);
+    cell.signal(libc::SIGSTOP);
+    wait(3.5);
+    // every service stopped itself (the robot braked as it exited)
+    wait_until("the services' dead-man", 10.0, || !alive(sim));
+    cell.signal(libc::SIGCONT);
+    wait(2.0);
+    let procs = processes_of(&p);
+    assert!(
+        procs.iter().all(|l| l.contains("phri-supervisor")),
+        "restarted without an operator: {procs:?}"
+    );
+    let out = Command::new(bin("phri-hri"))
+        .args(["--prefix", &p, "resume", "--wait", "15"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let st = cell.state(&rd);
+    assert_ne!(st["services"]["sim"]["pid"].as_i64().unwrap() as i32, sim);
+    wait(1.0);
+    cell.signal(libc::SIGINT);
+    let (code, err) = cell.finish();
+    assert_eq!(code, 0, "{err}");
+    let r = report(&report_path);
+    assert_eq!(r["clean"], false);
+    assert!(
+        r["degraded"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l.as_str().unwrap_or("").starts_with("dead-man")),
+        "{}",
+        r["degraded"]
+    );
+    assert!(!events(&r, "deadman", "").is_empty(), "{}", r["events"]);
+    assert_eq!(
+        events(&r, "resume", "supervisor").len(),
+        1,
+        "{}",
+        r["events"]
+    );
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}

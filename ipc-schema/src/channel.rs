@@ -253,6 +253,12 @@ pub trait Message:
     fn published_ns(&self) -> Option<u64>;
 }
 
+/// The process id of the node that sent a sample (0: not decodable).
+fn sender_pid(h: &iceoryx2::service::header::publish_subscribe::Header) -> i32 {
+    use iceoryx2::service::header::payload_header::PayloadHeader as _;
+    h.node_id().pid::<ipc::Service>().map_or(0, |p| p.value())
+}
+
 type RawPub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>;
 type RawSub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
 
@@ -391,6 +397,33 @@ impl<T: Message> Subscriber<T> {
         Ok(out)
     }
 
+    /// The next queued sample and its sender's process id (see
+    /// [`Subscriber::drain_from`]), copied out.
+    pub fn receive_from(&self) -> Result<Option<(i32, T)>, IpcError> {
+        Ok(self
+            .port
+            .receive()
+            .map_err(|e| IpcError::receive(self.channel, e))?
+            .map(|s| (sender_pid(s.header()), *s)))
+    }
+
+    /// Hand every queued sample to `f` with the process id of its sender
+    /// (0: unknown), oldest first; returns how many. The sender's pid is
+    /// read from the sample's header (iceoryx2's node id encodes it):
+    /// nothing is allocated or looked up.
+    pub fn drain_from(&self, mut f: impl FnMut(i32, &T)) -> Result<usize, IpcError> {
+        let mut n = 0;
+        while let Some(s) = self
+            .port
+            .receive()
+            .map_err(|e| IpcError::receive(self.channel, e))?
+        {
+            f(sender_pid(s.header()), &s);
+            n += 1;
+        }
+        Ok(n)
+    }
+
     /// Hand every queued sample to `f`, oldest first; returns how many.
     pub fn drain(&self, mut f: impl FnMut(&T)) -> Result<usize, IpcError> {
         let mut n = 0;
@@ -439,6 +472,25 @@ impl<T: Message> LatestReader<T> {
             }
             None => Ok(false),
         }
+    }
+
+    /// Take the newest of the queued samples that `accept` passes, given its
+    /// sender's pid (see [`Subscriber::drain_from`]): a refused sample that
+    /// came last does not hide an accepted one before it. `true` when the
+    /// value changed.
+    pub fn update_from(
+        &mut self,
+        mut accept: impl FnMut(i32, &T) -> bool,
+    ) -> Result<bool, IpcError> {
+        let mut changed = false;
+        let value = &mut self.value;
+        self.sub.drain_from(|pid, v| {
+            if accept(pid, v) {
+                *value = Some(*v);
+                changed = true;
+            }
+        })?;
+        Ok(changed)
     }
 
     /// Like [`LatestReader::update`], keeping only samples that pass `accept`.

@@ -55,6 +55,9 @@ pub const COLLAB_STATE: Channel<CollabState> =
 pub const AUDIO_MIC: Channel<AudioChunk> = Channel::new("audio/mic", Qos::AUDIO, true);
 /// [`Utterance`]s from `phri-voice`: every utterance heard, and its verdict.
 pub const VOICE_UTTERANCE: Channel<Utterance> = Channel::new("voice/utterance", Qos::EVENTS, false);
+/// [`InputAudit`]s: what each reader of the owned channels (controller,
+/// residual, voice recogniser) refused, 2 Hz, one publisher per reader.
+pub const INPUT_AUDIT: Channel<InputAudit> = Channel::new("audit/inputs", Qos::WORKERS, false);
 /// [`DepthFault`] from `phri-fault` to the simulated camera: frames to corrupt or delay (testing only).
 pub const FAULT_DEPTH: Channel<DepthFault> = Channel::new("fault/depth", Qos::INJECTION, false);
 
@@ -68,6 +71,7 @@ const _: () = {
     assert!(ROBOT_STATE.wakes && ROBOT_COMMAND.wakes && DYNAMICS_RESIDUAL.wakes);
     assert!(CAMERA_DEPTH.wakes && PERCEPTION_DEPTH.wakes && !SIM_TRUTH.wakes);
     assert!(AUDIO_MIC.qos.max_publishers == 1 && AUDIO_MIC.wakes);
+    assert!(crate::owners::PUBLISHERS.len() <= crate::messages::AUDIT_CHANNELS);
 };
 
 /// Every publish-subscribe channel of the cell, by name, for tools that list or record them.
@@ -91,6 +95,7 @@ pub const ALL: &[&str] = &[
     COLLAB_STATE.name,
     AUDIO_MIC.name,
     VOICE_UTTERANCE.name,
+    INPUT_AUDIT.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -132,6 +137,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(COLLAB_STATE);
     v.message(AUDIO_MIC);
     v.message(VOICE_UTTERANCE);
+    v.message(INPUT_AUDIT);
 }
 
 /// Visit the channel called `name`; `false` when the cell has none of that name.

@@ -175,6 +175,9 @@ wire_enum! {
         Stop = 3 => "stop",
         /// collaborate with the part named: come to it and follow it
         Follow = 4 => "follow",
+        /// the operator resumes a cell its dead-man stopped (for the
+        /// supervisor: the controller ignores it)
+        Resume = 5 => "resume",
     }
 }
 

@@ -14,6 +14,7 @@ pub mod enums;
 pub mod error;
 pub mod json;
 pub mod messages;
+pub mod owners;
 pub mod qos;
 
 pub use channel::*;
@@ -22,4 +23,5 @@ pub use cleanup::*;
 pub use enums::*;
 pub use error::IpcError;
 pub use messages::*;
+pub use owners::{Owned, OwnerTable, Refusal, Sender, ServiceRole};
 pub use qos::*;

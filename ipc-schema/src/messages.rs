@@ -299,6 +299,40 @@ pub struct Health {
     pub services: [ServiceHealth; MAX_SERVICES],
 }
 
+/// Owned channels an [`InputAudit`] holds (at least `owners::PUBLISHERS`).
+pub const AUDIT_CHANNELS: usize = 8;
+
+/// What one reader refused on the owned channels it reads, 2 Hz
+/// ([`crate::INPUT_AUDIT`]): counts since the reader started, per owned
+/// channel (in `owners::PUBLISHERS` order) and per kind of refusal
+/// (stranger, future, stale, not its point: `owners::Refusal`).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::InputAudit")]
+pub struct InputAudit {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// the reader's service name, UTF-8, zero padded
+    #[serde(with = "crate::json::c_string")]
+    pub service: [u8; 32],
+    /// refusals per owned channel and kind
+    pub refused: [[u64; 4]; AUDIT_CHANNELS],
+    /// per owned channel: the newest stranger's process id (0: none)
+    pub stranger_pid: [i32; AUDIT_CHANNELS],
+}
+
+impl InputAudit {
+    pub fn service_str(&self) -> &str {
+        let end = self
+            .service
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(self.service.len());
+        std::str::from_utf8(&self.service[..end]).unwrap_or("?")
+    }
+}
+
 /// A zeroed value of a plain-data message (all fields are numbers).
 pub trait Zeroed: Sized + Copy {
     fn zeroed() -> Self {
@@ -315,6 +349,7 @@ impl Zeroed for ControlStatus {}
 impl Zeroed for Truth {}
 impl Zeroed for RobotStats {}
 impl Zeroed for Health {}
+impl Zeroed for InputAudit {}
 
 /// One capsule of the simulated world: segment `a`–`b` swept by `radius` [m], base frame.
 #[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
@@ -817,3 +852,4 @@ message!(HandObservation, published: |m| Some(m.published_ns));
 message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => pcm]);
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
+message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));

@@ -3,9 +3,11 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use phri_config::{Config, ConfigError, Loaded, Scenario};
-use phri_ipc::{IpcError, IpcNode};
+use phri_ipc::{IpcError, IpcNode, Zeroed};
 
 use crate::cli::ServiceFlags;
 use crate::Shutdown;
@@ -36,6 +38,65 @@ pub struct ServiceContext {
     pub shutdown: Shutdown,
     /// the command line's shared flags
     pub flags: ServiceFlags,
+    /// who may publish the owned channels this service reads (filled from
+    /// `supervisor/health` by the supervision thread when supervised)
+    owners: Arc<phri_ipc::OwnerTable>,
+    /// publish what the owned channels refused (`audit/inputs`)
+    audit: AtomicBool,
+}
+
+/// Exit status of a service that stopped because no supervisor was heard
+/// for `[supervisor] deadman_s` (the dead-man): the supervisor does not
+/// restart it until an operator resumes the cell.
+pub const DEADMAN_EXIT: u8 = 3;
+
+/// Set once the dead-man has stopped this process.
+static DEADMAN_FIRED: AtomicBool = AtomicBool::new(false);
+
+/// How often the supervision thread reads `supervisor/health` (the owners
+/// of the owned channels follow restarts this fast) [ms].
+const SUPERVISION_POLL_MS: u64 = 20;
+
+/// How often the supervision thread publishes `audit/inputs` [ms].
+const AUDIT_PERIOD_MS: u64 = 500;
+
+/// The configured services as owners of channels: name, binary, worker number.
+fn roles(config: &Config) -> Vec<phri_ipc::ServiceRole> {
+    config
+        .services
+        .iter()
+        .filter(|(_, s)| s.enabled)
+        .map(|(name, s)| phri_ipc::ServiceRole {
+            name: name.clone(),
+            binary: s.binary.clone(),
+            worker: phri_ipc::owners::worker_of(&s.args),
+        })
+        .collect()
+}
+
+/// `pid` is a supervisor of the cell of `prefix`: the parent that started
+/// this service, or (after a takeover) a `phri-supervisor` of this prefix.
+fn is_supervisor(pid: i32, prefix: &str) -> bool {
+    if pid <= 0 {
+        return false;
+    }
+    // SAFETY: getppid cannot fail
+    if pid == unsafe { libc::getppid() } {
+        return true;
+    }
+    let Ok(raw) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+        return false;
+    };
+    let args: Vec<&[u8]> = raw.split(|&b| b == 0).collect();
+    let is_sup = args
+        .first()
+        .is_some_and(|a| a.ends_with(b"phri-supervisor"));
+    let ours = args
+        .windows(2)
+        .any(|w| w[0] == b"--prefix" && w[1] == prefix.as_bytes());
+    // without --prefix it runs the prefix of its environment (PHRI_PREFIX)
+    let unnamed = !args.iter().any(|a| *a == b"--prefix");
+    is_sup && (ours || unnamed)
 }
 
 /// Environment variable the supervisor sets for every service: when the cell
@@ -133,6 +194,8 @@ impl ServiceContext {
             .clone()
             .unwrap_or_else(|| default_name.to_string());
         crate::log::set_service(&name);
+        let supervised = std::env::var_os(SUPERVISED_ENV).is_some();
+        let owners = Arc::new(phri_ipc::OwnerTable::new(roles(&loaded.config), supervised));
         Ok(ServiceContext {
             name,
             loaded,
@@ -140,6 +203,8 @@ impl ServiceContext {
             rt_priority: flags.rt_priority,
             shutdown,
             flags,
+            owners,
+            audit: AtomicBool::new(false),
         })
     }
 
@@ -149,11 +214,24 @@ impl ServiceContext {
         self.flags.check
     }
 
-    /// Start the dead-man when supervised ([`SUPERVISED_ENV`]): a thread at
-    /// normal priority (call it before [`ServiceContext::go_realtime`]) that
-    /// requests shutdown once no supervisor of this cell has published
-    /// `supervisor/health` for `[supervisor] deadman_s` (a supervisor that
-    /// died and was not replaced). Unsupervised, it does nothing.
+    /// The owners of the channels a safety decision reads (see
+    /// [`phri_ipc::owners`]); this service publishes what its readers
+    /// refused on `audit/inputs` (call it before [`ServiceContext::start_deadman`]).
+    pub fn watch_inputs(&self) -> Arc<phri_ipc::OwnerTable> {
+        self.audit.store(true, Ordering::Relaxed);
+        Arc::clone(&self.owners)
+    }
+
+    /// Start the supervision thread when supervised ([`SUPERVISED_ENV`]), at
+    /// normal priority (call it before [`ServiceContext::go_realtime`]). It
+    /// reads `supervisor/health`, from the supervisor only (the parent that
+    /// started this service, or a supervisor of this prefix that took the
+    /// cell over): the pid of each service fills the owners of the owned
+    /// channels; when no supervisor has published for `[supervisor]
+    /// deadman_s` (one that died and was not replaced) it requests shutdown
+    /// and the process exits with [`DEADMAN_EXIT`] (the dead-man). It
+    /// publishes `audit/inputs` when [`ServiceContext::watch_inputs`] was
+    /// called. Unsupervised, it does nothing.
     pub fn start_deadman(&self) -> Result<(), IpcError> {
         if std::env::var_os(SUPERVISED_ENV).is_none() {
             return Ok(());
@@ -161,14 +239,22 @@ impl ServiceContext {
         let (node_name, prefix) = (format!("{}-deadman", self.name), self.prefix.clone());
         let limit_ns = (self.config().supervisor.deadman_s * 1e9) as u64;
         let shutdown = self.shutdown.clone();
+        let owners = Arc::clone(&self.owners);
+        let audit = self.audit.load(Ordering::Relaxed);
+        let service = self.name.clone();
         let (ready, started) = std::sync::mpsc::channel::<Result<(), IpcError>>();
         std::thread::spawn(move || {
             // the node and its port live on this thread (iceoryx2 ports are not Send)
             let opened = phri_ipc::node(&node_name, &prefix).and_then(|node| {
-                let sub = phri_ipc::SUPERVISOR_HEALTH.subscriber(&node, phri_ipc::Queue::Latest)?;
-                Ok((node, sub))
+                let sub = phri_ipc::SUPERVISOR_HEALTH.subscriber(&node, phri_ipc::Queue::Drain)?;
+                let audits = if audit {
+                    Some(phri_ipc::INPUT_AUDIT.publisher(&node)?)
+                } else {
+                    None
+                };
+                Ok((node, sub, audits))
             });
-            let (_node, health) = match opened {
+            let (_node, health, audits) = match opened {
                 Ok(x) => {
                     let _ = ready.send(Ok(()));
                     x
@@ -179,18 +265,58 @@ impl ServiceContext {
                 }
             };
             let mut last = crate::now_ns();
+            let mut trusted: Option<i32> = None;
+            let mut refused_pid = 0;
+            let mut report = phri_ipc::InputAudit::zeroed();
+            report.service = phri_ipc::json::to_c_str(&service);
+            let mut next_audit = last;
             while !shutdown.requested() {
-                std::thread::sleep(std::time::Duration::from_millis(100));
+                std::thread::sleep(std::time::Duration::from_millis(SUPERVISION_POLL_MS));
                 let now = crate::now_ns();
-                if matches!(health.latest(), Ok(Some(_))) {
+                let mut newest: Option<phri_ipc::Health> = None;
+                let _ = health.drain_from(|pid, h| {
+                    if trusted == Some(pid) || is_supervisor(pid, &prefix) {
+                        trusted = Some(pid);
+                        newest = Some(*h);
+                    } else if refused_pid != pid {
+                        refused_pid = pid;
+                        tracing::warn!(
+                            "supervisor/health from pid {pid}, not this cell's supervisor: ignored"
+                        );
+                    }
+                });
+                if let Some(h) = newest {
                     last = now;
+                    for s in h
+                        .services
+                        .iter()
+                        .take((h.count as usize).min(h.services.len()))
+                    {
+                        owners.set_pid(s.name_str(), if s.alive != 0 { s.pid } else { 0 });
+                    }
                 }
                 if now.saturating_sub(last) > limit_ns {
                     tracing::warn!(
                         "no supervisor has published supervisor/health for {:.1} s: stopping safely (dead-man)",
                         now.saturating_sub(last) as f64 * 1e-9
                     );
+                    DEADMAN_FIRED.store(true, Ordering::Relaxed);
                     shutdown.request();
+                }
+                if let Some(p) = &audits {
+                    if now >= next_audit {
+                        next_audit = now + AUDIT_PERIOD_MS * 1_000_000;
+                        report.seq += 1;
+                        report.stamp_ns = now;
+                        for (k, (name, _)) in phri_ipc::owners::PUBLISHERS.iter().enumerate() {
+                            if let Some(c) = phri_ipc::Owned::of(name) {
+                                let (counts, pid) = owners.refused(c);
+                                report.refused[k] = counts;
+                                report.stranger_pid[k] = pid;
+                            }
+                        }
+                        let _ = p.publish(&report);
+                    }
                 }
             }
         });
@@ -269,6 +395,7 @@ pub fn run<E: std::fmt::Display>(
     crate::rt::make_normal();
     drop(log);
     match result {
+        Ok(()) if DEADMAN_FIRED.load(Ordering::Relaxed) => ExitCode::from(DEADMAN_EXIT),
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let line = e.to_string().replace('\n', " ");

@@ -170,6 +170,8 @@ impl CollabMachine {
         };
         let named = CollabPart::try_from(req.part).unwrap_or(CollabPart::None);
         match kind {
+            // the supervisor's (a cell its dead-man stopped), not the controller's
+            RequestKind::Resume => refuse(CollabReason::None),
             RequestKind::Stop => {
                 if self.active() {
                     self.enter(CollabPhase::Idle, CollabReason::StopRequest, t);

@@ -5,8 +5,9 @@
 
 use phri_config::RepulsionConfig;
 use phri_ipc::{
-    residual_flags, JointState, PointRepulsion, RepulsionResult, Residual, DYNAMICS_RESIDUAL,
-    MAX_POINTS_PER_WORKER, ROBOT_STATE,
+    owners, residual_flags, HriRequest, JointState, Owned, OwnerTable, PointRepulsion, Refusal,
+    RepulsionResult, RequestSource, Residual, Sender, DYNAMICS_RESIDUAL, MAX_POINTS_PER_WORKER,
+    ROBOT_STATE,
 };
 
 use crate::error::InputError;
@@ -210,6 +211,161 @@ impl RepulsionInputs {
     }
 }
 
+/// The gate of the controller's inputs: a sample counts only when the
+/// service the supervisor started for its channel sent it ([`phri_ipc::owners`]),
+/// and only with a stamp that is neither from the future (later than now
+/// plus [`phri_ipc::owners::FUTURE_MARGIN_NS`]) nor older than its
+/// staleness bound. A repulsion result counts only for the points its
+/// worker owns (point i: worker i mod workers), and only from that worker;
+/// a request's source is its sender (the gesture or voice service; any
+/// other process of the cell's user is the operator's command line, `cli`),
+/// never its own field. What it refuses is counted in the owner table
+/// (published on `audit/inputs`). Allocates nothing.
+pub struct InputGate {
+    owners: std::sync::Arc<OwnerTable>,
+    /// the residual's staleness bound [ns]
+    residual_max_age_ns: u64,
+    /// the perception results' staleness bound [ns]
+    perception_max_age_ns: u64,
+    workers: u32,
+}
+
+impl InputGate {
+    /// The gate of `[control]`'s staleness bounds and `[repulsion]`'s workers.
+    pub fn new(
+        owners: std::sync::Arc<OwnerTable>,
+        control: &phri_config::ControlConfig,
+        repulsion: &RepulsionConfig,
+    ) -> InputGate {
+        InputGate {
+            owners,
+            residual_max_age_ns: (control.residual_max_age_ms * 1e6) as u64,
+            perception_max_age_ns: (control.perception_max_age_ms * 1e6) as u64,
+            workers: repulsion.workers.max(1),
+        }
+    }
+
+    /// A gate that takes every sender as it is (no supervisor), with the
+    /// time bounds of the configuration.
+    pub fn unchecked(
+        control: &phri_config::ControlConfig,
+        repulsion: &RepulsionConfig,
+    ) -> InputGate {
+        InputGate::new(
+            std::sync::Arc::new(OwnerTable::unchecked()),
+            control,
+            repulsion,
+        )
+    }
+
+    pub fn owners(&self) -> &OwnerTable {
+        &self.owners
+    }
+
+    /// `robot/state` from `pid`.
+    pub fn state(&self, pid: i32) -> bool {
+        self.owners.admit(Owned::ROBOT_STATE, pid).accepted()
+    }
+
+    /// Refuse `stamp_ns` on `channel` when from the future or older than
+    /// `max_age_ns` against `now_ns` (robot clock), counting it.
+    fn timely(
+        &self,
+        channel: Owned,
+        pid: i32,
+        stamp_ns: u64,
+        now_ns: u64,
+        max_age_ns: u64,
+    ) -> bool {
+        if owners::from_the_future(stamp_ns, now_ns) {
+            self.owners.refuse(channel, Refusal::Future, pid);
+            false
+        } else if now_ns.saturating_sub(stamp_ns) > max_age_ns {
+            self.owners.refuse(channel, Refusal::Stale, pid);
+            false
+        } else {
+            true
+        }
+    }
+
+    /// `dynamics/residual` from `pid`, at robot time `now_ns` (the state's stamp).
+    pub fn residual(&self, pid: i32, r: &Residual, now_ns: u64) -> bool {
+        self.owners.admit(Owned::DYNAMICS_RESIDUAL, pid).accepted()
+            && self.timely(
+                Owned::DYNAMICS_RESIDUAL,
+                pid,
+                r.state_stamp_ns,
+                now_ns,
+                self.residual_max_age_ns,
+            )
+    }
+
+    /// `perception/repulsion` from `pid`, at robot time `now_ns`.
+    pub fn repulsion(&self, pid: i32, r: &RepulsionResult, now_ns: u64) -> bool {
+        let c = Owned::PERCEPTION_REPULSION;
+        let worker = match self.owners.admit(c, pid) {
+            Sender::Stranger => return false,
+            Sender::Owner { worker, .. } => worker,
+            Sender::Unchecked => None,
+        };
+        let n = (r.n_points as usize).min(r.points.len());
+        let its_own = worker.is_none_or(|w| w == r.worker)
+            && r.points[..n]
+                .iter()
+                .all(|p| p.point % self.workers == r.worker % self.workers);
+        if !its_own {
+            self.owners.refuse(c, Refusal::NotItsPoint, pid);
+            return false;
+        }
+        self.timely(c, pid, r.capture_ns, now_ns, self.perception_max_age_ns)
+    }
+
+    /// `perception/skeleton` from `pid`, at robot time `now_ns` (its age is
+    /// judged by the collaboration).
+    pub fn skeleton(&self, pid: i32, s: &phri_ipc::Skeleton, now_ns: u64) -> bool {
+        self.owned_and_not_ahead(Owned::PERCEPTION_SKELETON, pid, s.capture_ns, now_ns)
+    }
+
+    /// `perception/hand` from `pid`, at robot time `now_ns`.
+    pub fn hand(&self, pid: i32, h: &phri_ipc::HandObservation, now_ns: u64) -> bool {
+        self.owned_and_not_ahead(Owned::PERCEPTION_HAND, pid, h.capture_ns, now_ns)
+    }
+
+    fn owned_and_not_ahead(&self, c: Owned, pid: i32, stamp_ns: u64, now_ns: u64) -> bool {
+        if !self.owners.admit(c, pid).accepted() {
+            return false;
+        }
+        if owners::from_the_future(stamp_ns, now_ns) {
+            self.owners.refuse(c, Refusal::Future, pid);
+            return false;
+        }
+        true
+    }
+
+    /// `hri/request` from `pid` at `mono_now_ns` [CLOCK_MONOTONIC]: refused
+    /// from the future; its `source` set from its sender.
+    pub fn request(&self, pid: i32, r: &mut HriRequest, mono_now_ns: u64) -> bool {
+        let c = Owned::HRI_REQUEST;
+        if owners::from_the_future(r.stamp_ns, mono_now_ns) {
+            self.owners.refuse(c, Refusal::Future, pid);
+            return false;
+        }
+        match self.owners.sender(c, pid) {
+            Sender::Unchecked => {}
+            Sender::Owner { slot, .. } => {
+                r.source = match self.owners.binary(slot) {
+                    "phri-gesture" => RequestSource::Gesture as u32,
+                    "phri-voice" => RequestSource::Voice as u32,
+                    _ => RequestSource::Cli as u32,
+                }
+            }
+            // the operator's command line (phri-hri, a script of the cell's user)
+            Sender::Stranger => r.source = RequestSource::Cli as u32,
+        }
+        true
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -364,5 +520,76 @@ mod tests {
         state.dof = 3;
         let e = ControlInput::from_messages(&state, None, None, 7).unwrap_err();
         assert!(e.to_string().starts_with("robot/state"));
+    }
+
+    /// The gate: only the owner of a channel, no stamp from the future or
+    /// past its bound, a worker only for its own points, a request's source
+    /// from its sender; each refusal counted on its channel.
+    #[test]
+    fn the_gate_takes_only_owners_in_time_and_counts_the_rest() {
+        use phri_ipc::{ServiceRole, Zeroed};
+        let cfg = phri_config::Config::defaults();
+        let role = |name: &str, binary: &str, worker| ServiceRole {
+            name: name.into(),
+            binary: binary.into(),
+            worker,
+        };
+        let owners = std::sync::Arc::new(OwnerTable::new(
+            vec![
+                role("dynamics", "phri-dynamics", None),
+                role("repulsion0", "phri-repulsion", Some(0)),
+                role("voice", "phri-voice", None),
+            ],
+            true,
+        ));
+        owners.set_pid("dynamics", 10);
+        owners.set_pid("repulsion0", 20);
+        owners.set_pid("voice", 30);
+        let mut rep_cfg = cfg.repulsion.clone();
+        rep_cfg.workers = 4;
+        let gate = InputGate::new(owners.clone(), &cfg.control, &rep_cfg);
+        let now = 50_000_000_000u64;
+        // the residual: its owner, fresh; a stranger; from the future; stale
+        let mut r = Residual::zeroed();
+        r.state_stamp_ns = now - 1_000_000;
+        assert!(gate.residual(10, &r, now));
+        assert!(!gate.residual(99, &r, now));
+        r.state_stamp_ns = 1 << 63;
+        assert!(!gate.residual(10, &r, now));
+        r.state_stamp_ns = now - 50_000_000;
+        assert!(!gate.residual(10, &r, now));
+        let (c, pid) = owners.refused(Owned::DYNAMICS_RESIDUAL);
+        assert_eq!((c, pid), ([1, 1, 1, 0], 99));
+        // repulsion: worker 0's own points only, and only from worker 0
+        let mut m = result(0, now - 5_000_000, &[0, 4]);
+        m.workers = 4;
+        assert!(gate.repulsion(20, &m, now));
+        let mut theirs = result(0, now - 5_000_000, &[1]);
+        theirs.workers = 4;
+        assert!(!gate.repulsion(20, &theirs, now));
+        let mut claims_another = result(1, now - 5_000_000, &[1]);
+        claims_another.workers = 4;
+        assert!(!gate.repulsion(20, &claims_another, now));
+        m.capture_ns = 1 << 63;
+        assert!(!gate.repulsion(20, &m, now));
+        let (c, _) = owners.refused(Owned::PERCEPTION_REPULSION);
+        assert_eq!(c, [0, 1, 0, 2]);
+        // a request's source is its sender, not its field
+        let mut q = HriRequest::zeroed();
+        q.stamp_ns = 1;
+        q.source = RequestSource::Voice as u32;
+        assert!(gate.request(77, &mut q, now));
+        assert_eq!(q.source, RequestSource::Cli as u32);
+        q.source = RequestSource::Gesture as u32;
+        assert!(gate.request(30, &mut q, now));
+        assert_eq!(q.source, RequestSource::Voice as u32);
+        q.stamp_ns = 1 << 63;
+        assert!(!gate.request(30, &mut q, now));
+        // without a supervisor every sender counts, the clock still does not lie
+        let open = InputGate::unchecked(&cfg.control, &rep_cfg);
+        r.state_stamp_ns = now;
+        assert!(open.residual(99, &r, now));
+        r.state_stamp_ns = 1 << 63;
+        assert!(!open.residual(99, &r, now));
     }
 }

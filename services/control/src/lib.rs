@@ -43,7 +43,9 @@ pub mod terms;
 
 pub use controller::{ControlCounters, ControlOutput, Controller, ControllerParams};
 pub use error::{ControlError, InputError};
-pub use inputs::{CollabInput, ControlInput, PerceptionView, RepulsionInputs, ResidualView};
+pub use inputs::{
+    CollabInput, ControlInput, InputGate, PerceptionView, RepulsionInputs, ResidualView,
+};
 pub use outputs::{write_collab_state, write_messages, Stamps};
 pub use phri_config::{AvoidanceParams, ControlConfig};
 pub use phri_ipc::{ControlMode, Reaction};

@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_control::{
-    write_collab_state, write_messages, CollabInput, ControlInput, Controller, RepulsionInputs,
-    Stamps,
+    write_collab_state, write_messages, CollabInput, ControlInput, Controller, InputGate,
+    RepulsionInputs, Stamps,
 };
 use phri_ipc::{
     CollabState, ControlStatus, HriRequest, Queue, TorqueCommand, Zeroed, COLLAB_STATE,
@@ -65,6 +65,9 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
     let mut hands = PERCEPTION_HAND.latest_reader(&node)?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
+    // only the services the supervisor started for a channel, and no stamp
+    // from the future or past its bound (counted on audit/inputs)
+    let gate = InputGate::new(ctx.watch_inputs(), &cfg.control, &cfg.repulsion);
     ctx.start_deadman()?;
     // refused inputs are logged by a thread at normal priority
     let log = ctx.deferred_log::<Refused>();
@@ -78,15 +81,24 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
         let _ = states.wait(Duration::from_millis(50));
-        let Some(state) = states.latest()? else {
+        let mut latest = None;
+        states.drain_from(|pid, s| {
+            if gate.state(pid) {
+                latest = Some(*s);
+            }
+        })?;
+        let Some(state) = latest else {
             continue;
         };
         let woke_ns = now_ns();
+        let now = state.stamp_ns;
         // the newest residual of this robot's dof; an older one stays until then
-        residuals.update_if(|r| r.dof as usize == n)?;
+        residuals.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
         // refused results are counted by the accumulator (perception then turns stale)
-        results.drain(|r| {
-            let _ = repulsion.push(r);
+        results.drain_from(|pid, r| {
+            if gate.repulsion(pid, r, now) {
+                let _ = repulsion.push(r);
+            }
         })?;
         let perception = avoidance.then_some(&repulsion);
         let mut input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
@@ -104,17 +116,20 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         };
         if collaborating {
             let mut k = 0;
+            let mono = now_ns();
             while k < MAX_REQUESTS {
-                match requests.receive()? {
-                    Some(r) => {
-                        pending[k] = r;
-                        k += 1;
+                match requests.receive_from()? {
+                    Some((pid, mut r)) => {
+                        if gate.request(pid, &mut r, mono) {
+                            pending[k] = r;
+                            k += 1;
+                        }
                     }
                     None => break,
                 }
             }
-            skeletons.update()?;
-            hands.update()?;
+            skeletons.update_from(|pid, s| gate.skeleton(pid, s, now))?;
+            hands.update_from(|pid, h| gate.hand(pid, h, now))?;
             input.collab = CollabInput {
                 requests: &pending[..k],
                 skeleton: skeletons.get(),

@@ -42,6 +42,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let node = ctx.node()?;
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
     let residuals = DYNAMICS_RESIDUAL.publisher(&node)?;
+    // states only from the robot the supervisor started (counted on audit/inputs)
+    let owners = ctx.watch_inputs();
     ctx.start_deadman()?;
     // bad samples are logged by a thread at normal priority
     let log = ctx.deferred_log::<BadSample>();
@@ -52,7 +54,10 @@ fn body() -> Result<(), Box<dyn Error>> {
         // a wake-up without a sample (timeout, signal) just loops
         let _ = states.wait(Duration::from_millis(50));
         let mut fresh = None;
-        states.drain(|s| {
+        states.drain_from(|pid, s| {
+            if !owners.admit(phri_ipc::Owned::ROBOT_STATE, pid).accepted() {
+                return;
+            }
             let t0 = now_ns();
             match step.step(s) {
                 Ok(_) => fresh = Some(now_ns() - t0),

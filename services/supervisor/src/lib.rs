@@ -12,6 +12,7 @@
 pub mod collab_report;
 pub mod cpu;
 pub mod error;
+pub mod owned;
 pub mod plan;
 pub mod process;
 pub mod realtime;

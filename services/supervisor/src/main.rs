@@ -30,7 +30,8 @@ use phri_ipc::{
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
 use phri_supervisor::cpu::{self, CpuUse};
-use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
+use phri_supervisor::owned::{self, AuditLog};
+use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc, DEADMAN_TEXT};
 use phri_supervisor::realtime::{self, RealtimeWatch};
 use phri_supervisor::shm::{self, SHM_DIR};
 use phri_supervisor::state::{StateJson, STATE_FILE};
@@ -103,6 +104,7 @@ struct Ports {
     requests: Subscriber<phri_ipc::HriRequest>,
     utterances: Subscriber<phri_ipc::Utterance>,
     audio: Subscriber<phri_ipc::AudioChunk>,
+    audits: Subscriber<phri_ipc::InputAudit>,
 }
 
 impl Ports {
@@ -121,6 +123,7 @@ impl Ports {
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
             audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
+            audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
         })
     }
 }
@@ -264,6 +267,21 @@ impl Cell {
 /// A service's real-time process is judged no earlier than this after its
 /// (re)start: it opens its ports before it asks for SCHED_FIFO [ns].
 const RT_SETTLE_NS: u64 = 200_000_000;
+
+/// The publishers' pids of owned channel `name` (`None`: no such channel yet).
+fn owned_publishers(ipc_node: &IpcNode, name: &str) -> Result<Option<Vec<i32>>, IpcError> {
+    use phri_ipc::*;
+    match name {
+        n if n == ROBOT_STATE.name => ROBOT_STATE.publisher_pids(ipc_node),
+        n if n == DYNAMICS_RESIDUAL.name => DYNAMICS_RESIDUAL.publisher_pids(ipc_node),
+        n if n == PERCEPTION_REPULSION.name => PERCEPTION_REPULSION.publisher_pids(ipc_node),
+        n if n == PERCEPTION_SKELETON.name => PERCEPTION_SKELETON.publisher_pids(ipc_node),
+        n if n == PERCEPTION_HAND.name => PERCEPTION_HAND.publisher_pids(ipc_node),
+        n if n == HRI_REQUEST.name => HRI_REQUEST.publisher_pids(ipc_node),
+        n if n == AUDIO_MIC.name => AUDIO_MIC.publisher_pids(ipc_node),
+        _ => Ok(None),
+    }
+}
 
 /// What `[services.*]` asks for a service: its priority and its CPUs.
 fn wanted_of(spec: &phri_config::ServiceSpec) -> realtime::Wanted {
@@ -544,6 +562,10 @@ fn body() -> Result<(), SupervisorError> {
     let cell_start_ns = SupervisorState::cell_start_ns(previous.as_ref(), t0);
     launch.cell_start_ns = cell_start_ns;
     let mut eval = plan.evaluator(cell_start_ns);
+    let mut audits = AuditLog::default();
+    // (owned channel, pid) of every stranger reported, each once
+    let mut strangers_seen: Vec<(&'static str, i32)> = Vec::new();
+    let deadman_ns = (plan.loaded.config.supervisor.deadman_s * 1e9) as u64;
     let mut collab_eval = plan.collab_evaluator(cell_start_ns);
     let reaction = plan.reaction().name();
     let mut cell = Cell {
@@ -651,7 +673,21 @@ fn body() -> Result<(), SupervisorError> {
         }
         ports.contacts.drain(|m| eval.on_contact_event(m))?;
         ports.collab.drain(|m| collab_eval.on_state(m))?;
-        ports.requests.drain(|m| collab_eval.on_request(m))?;
+        let mut resume = false;
+        ports.requests.drain(|m| {
+            resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
+            collab_eval.on_request(m);
+        })?;
+        ports.audits.drain(|m| audits.on_audit(m))?;
+        if resume && roster.resume(now) {
+            tracing::warn!("resumed by the operator: starting the services the dead-man stopped");
+            eval.event(
+                now,
+                "resume",
+                "supervisor",
+                "the operator resumed the cell the dead-man stopped",
+            );
+        }
         ports.utterances.drain(|m| collab_eval.on_utterance(m))?;
         if ports.truth.drain(|m| {
             eval.on_truth(m);
@@ -696,6 +732,18 @@ fn body() -> Result<(), SupervisorError> {
                 stalled_ns / 1_000_000
             );
             roster.judge_afresh(now);
+            if stalled_ns > deadman_ns && !roster.held() {
+                // the services heard no supervisor for their dead-man's time:
+                // they stopped the cell (the robot braked); it stays stopped
+                let reason = format!(
+                    "dead-man: no supervisor for {:.1} s (this supervisor was stalled); the cell stopped itself and stays stopped until an operator resumes it (phri-hri resume)",
+                    stalled_ns as f64 * 1e-9
+                );
+                tracing::warn!("{reason}");
+                eval.event(now, "deadman", "supervisor", reason.clone());
+                eval.degrade(reason);
+                roster.hold();
+            }
         }
 
         // who uses the CPUs, and who commands the robot
@@ -725,6 +773,24 @@ fn body() -> Result<(), SupervisorError> {
                 eval.event(now, "intruder", "supervisor", reason.clone());
                 eval.degrade(reason.clone());
                 stop_reason = Some(reason);
+            }
+            // the owned channels: a stranger's messages are refused by their
+            // readers; it is reported here, once per channel and process
+            for (channel, _) in phri_ipc::owners::PUBLISHERS {
+                let pids = owned_publishers(&node, channel)?.unwrap_or_default();
+                for pid in owned::strangers(channel, &pids, roster, me as i32) {
+                    if strangers_seen.contains(&(*channel, pid)) || !alive(pid) {
+                        continue;
+                    }
+                    strangers_seen.push((*channel, pid));
+                    let reason = format!(
+                        "pid {pid} ({}) published on {channel}, not a service this supervisor started for it: its messages are refused",
+                        cmdline_of(pid)
+                    );
+                    tracing::warn!("{reason}");
+                    eval.event(now, "intruder", "supervisor", reason.clone());
+                    eval.degrade(reason);
+                }
             }
         }
 
@@ -773,6 +839,23 @@ fn body() -> Result<(), SupervisorError> {
             let _ = node.try_cleanup_dead_nodes();
             let name = cell.roster.get(i).name.clone();
             eval.event(now, "exit", &name, detail.clone());
+            if detail.starts_with(DEADMAN_TEXT) {
+                // stopped itself for want of a supervisor: not a crash, and
+                // the cell stays stopped until an operator resumes it
+                cell.roster.stopped_by_deadman(i);
+                cpu_use.restarted(i);
+                if !cell.roster.held() {
+                    let reason = format!(
+                        "dead-man: {name} heard no supervisor for {} s and stopped the cell; it stays stopped until an operator resumes it (phri-hri resume)",
+                        sup.deadman_s
+                    );
+                    tracing::warn!("{reason}");
+                    eval.event(now, "deadman", &name, reason.clone());
+                    eval.degrade(reason);
+                    cell.roster.hold();
+                }
+                continue;
+            }
             if starting_until.is_some() {
                 start_error = Some(format!("{name} {detail} during start-up"));
                 break;
@@ -912,6 +995,9 @@ fn body() -> Result<(), SupervisorError> {
         }
         if changed {
             cell.write_state();
+            // the services learn the new pids (the owners of their inputs) at once
+            cell.roster.fill_health(&mut health, now);
+            let _ = ports.health.publish(&health);
             // a restart opened a node: the node counter must still be ours alone
             if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &prefix) {
                 let reason = e.to_string();
@@ -952,7 +1038,13 @@ fn body() -> Result<(), SupervisorError> {
     // what the services said last (the simulator's contacts as it braked)
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     eval.set_realtime(rt_watch.report());
+    let _ = ports.audits.drain(|m| audits.on_audit(m));
+    let inputs = audits.report();
+    for line in inputs.degraded() {
+        eval.degrade(line);
+    }
     let mut report = eval.report(end, plan.scenario_name(), services_report);
+    report.inputs = inputs;
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
     close_ipc(node, Some(ports), &prefix);

@@ -258,9 +258,15 @@ impl Proc {
     }
 }
 
+/// How [`status_text`] begins for a service its dead-man stopped.
+pub const DEADMAN_TEXT: &str = "stopped by its dead-man";
+
 pub fn status_text(st: std::process::ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (st.code(), st.signal()) {
+        (Some(c), _) if c == i32::from(phri_runtime::service::DEADMAN_EXIT) => {
+            format!("{DEADMAN_TEXT} (no supervisor heard; status {c})")
+        }
         (Some(c), _) => format!("exited with status {c}"),
         (_, Some(s)) => format!("killed by signal {s}"),
         _ => "ended".into(),

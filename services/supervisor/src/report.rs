@@ -172,6 +172,9 @@ pub struct Report {
     /// the run in one line, as the supervisor prints it last: `clean`, or
     /// `degraded (…)` naming what a user must know about
     pub summary: String,
+    /// what the readers of the owned channels refused (strangers, stamps
+    /// from the future or past their bound), per reader and channel
+    pub inputs: crate::owned::InputsReport,
 }
 
 /// The bounds past which the controller's safety inputs are stale
@@ -1019,6 +1022,7 @@ impl Evaluator {
             realtime: self.realtime.clone(),
             protective_stop_causes: self.stop_causes.clone(),
             summary,
+            inputs: Default::default(),
             evaluation: Evaluation {
                 truth_samples_lost: self.truth_lost,
                 contact_events_lost: self.events_lost,

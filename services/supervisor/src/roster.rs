@@ -66,6 +66,9 @@ pub struct Roster {
     services: Vec<Supervised>,
     /// per service: silent beyond its heartbeat timeout (scratch of [`Roster::frozen`])
     silent: Vec<bool>,
+    /// the dead-man stopped the cell: nothing is restarted until an
+    /// operator resumes it ([`Roster::resume`])
+    held: bool,
 }
 
 impl Roster {
@@ -89,7 +92,46 @@ impl Roster {
             sup,
             silent: vec![false; services.len()],
             services,
+            held: false,
         }
+    }
+
+    /// The dead-man stopped the cell (the services stopped themselves when
+    /// no supervisor was heard): hold it stopped, restarting nothing, until
+    /// [`Roster::resume`].
+    pub fn hold(&mut self) {
+        self.held = true;
+        for s in &mut self.services {
+            s.restart_at = None;
+        }
+    }
+
+    /// Held stopped by the dead-man.
+    pub fn held(&self) -> bool {
+        self.held
+    }
+
+    /// An operator resumed a held cell at `now_ns`: every service that is
+    /// down (and restarts) starts again now. `false`: it was not held.
+    pub fn resume(&mut self, now_ns: u64) -> bool {
+        if !self.held {
+            return false;
+        }
+        self.held = false;
+        for s in &mut self.services {
+            if s.pid.is_none() && s.spec.restart {
+                s.restart_at = Some(now_ns);
+            }
+        }
+        true
+    }
+
+    /// Service `index` stopped by its dead-man at `now_ns`: down, not a
+    /// crash (no back-off, no crash-loop count), restarted only on resume.
+    pub fn stopped_by_deadman(&mut self, index: usize) {
+        let s = &mut self.services[index];
+        s.pid = None;
+        s.restart_at = None;
     }
 
     pub fn len(&self) -> usize {
@@ -177,6 +219,9 @@ impl Roster {
     /// Whether service `index` is to be started now; the pending restart is
     /// taken (a failed start is [`Roster::restart_failed`]).
     pub fn restart_due(&mut self, index: usize, now_ns: u64) -> bool {
+        if self.held {
+            return false;
+        }
         let s = &mut self.services[index];
         if s.restart_at.is_some_and(|at| now_ns >= at) {
             s.restart_at = None;

@@ -78,6 +78,19 @@ enum Cmd {
         )]
         wait: f64,
     },
+    /// Resume a cell its dead-man stopped (no supervisor was heard): the
+    /// supervisor starts its services again; waits until every one runs
+    Resume {
+        /// How long to wait for every service to run again [s]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 10.0,
+            allow_negative_numbers = true,
+            value_parser = seconds
+        )]
+        wait: f64,
+    },
     /// Print the collaboration state when it changes (Ctrl-C ends)
     Watch {
         /// Print the current state once and exit
@@ -129,6 +142,9 @@ enum Command {
         once: bool,
         seconds: Option<f64>,
     },
+    Resume {
+        wait_s: f64,
+    },
 }
 
 struct Args {
@@ -179,6 +195,12 @@ fn parse(argv: impl IntoIterator<Item = std::ffi::OsString>) -> Result<Parsed, S
                 Some(p) => format!("{} {}", kind.name(), p.name()),
             };
             let part = part.unwrap_or(CollabPart::None);
+            if kind == RequestKind::Resume {
+                return Err(
+                    "request resume: the supervisor's, not the controller's: use 'phri-hri resume'"
+                        .into(),
+                );
+            }
             if matches!(kind, RequestKind::End | RequestKind::Stop) && part != CollabPart::None {
                 return Err(format!("request {}: takes no part", kind.name()));
             }
@@ -195,6 +217,7 @@ fn parse(argv: impl IntoIterator<Item = std::ffi::OsString>) -> Result<Parsed, S
             }
         }
         Cmd::Watch { once, seconds } => Command::Watch { once, seconds },
+        Cmd::Resume { wait } => Command::Resume { wait_s: wait },
     };
     Ok(Parsed::Run(Args {
         prefix,
@@ -311,6 +334,41 @@ fn run(args: Args) -> Result<ExitCode, String> {
             Err(format!(
                 "{}: no answer to the request on {} within {wait_s} s",
                 HRI_REQUEST.name, COLLAB_STATE.name
+            ))
+        }
+        Command::Resume { wait_s } => {
+            let Some(health) = phri_ipc::SUPERVISOR_HEALTH
+                .subscriber_if_exists(&node, Queue::Latest)
+                .map_err(|e| e.to_string())?
+            else {
+                return Err(format!(
+                    "{}: not sent: no supervisor runs the cell of prefix {}",
+                    HRI_REQUEST.name, args.prefix
+                ));
+            };
+            let publisher = HRI_REQUEST.publisher(&node).map_err(|e| e.to_string())?;
+            publisher
+                .publish(&request(
+                    RequestKind::Resume,
+                    CollabPart::None,
+                    u32::MAX,
+                    "resume",
+                ))
+                .map_err(|e| e.to_string())?;
+            let t0 = Instant::now();
+            while t0.elapsed().as_secs_f64() < wait_s {
+                if let Some(h) = health.latest().map_err(|e| e.to_string())? {
+                    let n = (h.count as usize).min(h.services.len());
+                    if n > 0 && h.services[..n].iter().all(|s| s.alive != 0) {
+                        println!("resumed: {n} services run");
+                        return Ok(ExitCode::SUCCESS);
+                    }
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            Err(format!(
+                "{}: the services did not all run again within {wait_s} s",
+                phri_ipc::SUPERVISOR_HEALTH.name
             ))
         }
         Command::Watch { once, seconds } => {
