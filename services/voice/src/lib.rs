@@ -12,6 +12,7 @@
 //! lower score (`[voice] min_stop_score`): a protective stop, which
 //! complements and never replaces the robot's emergency stop.
 
+pub mod bursts;
 pub mod error;
 pub mod ffi;
 pub mod mic;
