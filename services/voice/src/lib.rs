@@ -18,6 +18,7 @@ pub mod ffi;
 pub mod mic;
 pub mod recognizer;
 pub mod segment;
+pub mod voicing;
 pub mod wav;
 
 use phri_config::VoiceConfig;
