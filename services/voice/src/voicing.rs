@@ -25,10 +25,11 @@
 //! for 2 (70 and 100 ms, clatters whose clicks happen to fall a pitch
 //! period apart).
 //!
-//! Cost: about 1 M multiply-adds per second of audio (under a millisecond),
-//! against the decoder's ~55 ms: nothing next to it, and what is refused is
-//! never decoded. The scratch buffer is allocated once, for the longest
-//! utterance.
+//! Cost: about 1 M multiply-adds per second of audio; on the fixtures
+//! 0.0012× real time, under 2 ms per utterance on a loaded machine where
+//! the decoder took 0.17× (under 1 % of the decode), and what is refused is
+//! never decoded. Its scratch buffer is allocated once, for the longest
+//! utterance: the check itself allocates nothing.
 
 use phri_ipc::AUDIO_RATE_HZ;
 
