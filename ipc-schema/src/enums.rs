@@ -274,6 +274,9 @@ wire_enum! {
         TooLong = 5 => "too_long",
         /// refused: `follow` for a hand the body tracker does not see
         HandNotTracked = 6 => "hand_not_tracked",
+        /// refused before decoding: no voicing (noise, a rattle, a clatter),
+        /// `[voice] min_voiced_s`
+        NotSpeech = 7 => "not_speech",
     }
 }
 

@@ -30,6 +30,10 @@ pub struct VoiceConfig {
     pub onset_frames: u32,
     /// this long below the threshold ends the utterance [s]
     pub hangover_s: f64,
+    /// an utterance needs a voiced stretch (periodic at a pitch of
+    /// 60-400 Hz) at least this long, else it is refused before decoding
+    /// (`not_speech`: noise, a rattle) [s]; 0 turns the check off
+    pub min_voiced_s: f64,
     /// audio kept before the onset and after the end, for the decoder [s]
     pub padding_s: f64,
     /// `follow` needs the named hand tracked at least this confidently (the gate)
@@ -66,6 +70,7 @@ impl VoiceConfig {
             return Err(Invalid::new("voice.onset_frames", "not in 1..=50"));
         }
         positive(S, "hangover_s", self.hangover_s)?;
+        within(S, "min_voiced_s", self.min_voiced_s, 0.0, 1.0)?;
         within(S, "padding_s", self.padding_s, 0.0, 2.0)?;
         within(S, "min_hand_confidence", self.min_hand_confidence, 0.0, 1.0)?;
         positive(S, "skeleton_max_age_ms", self.skeleton_max_age_ms)?;

@@ -4,7 +4,8 @@
 //! [`HriRequest`] out. `main.rs` wires the channels; `phri-voice --wav`
 //! runs the same segmenter and recogniser over files.
 //!
-//! The verdict, in order: speech too short or too long; no command in the
+//! The verdict, in order: speech too short or too long; no voicing (noise,
+//! a rattle: [`voicing`], refused before decoding); no command in the
 //! grammar; a command scoring below `[voice] min_score`; `follow` for a hand
 //! the body tracker does not see (the gate that blocks a closed grammar's
 //! false accepts: "follow the red band" is heard as "follow the right
@@ -12,11 +13,13 @@
 //! lower score (`[voice] min_stop_score`): a protective stop, which
 //! complements and never replaces the robot's emergency stop.
 
+pub mod bursts;
 pub mod error;
 pub mod ffi;
 pub mod mic;
 pub mod recognizer;
 pub mod segment;
+pub mod voicing;
 pub mod wav;
 
 use phri_config::VoiceConfig;
@@ -28,6 +31,7 @@ use phri_ipc::{
 pub use error::VoiceError;
 pub use recognizer::{Decoded, Recognizer};
 pub use segment::{Segment, SegmentKind, Segmenter};
+pub use voicing::{Voicing, VoicingMeter};
 
 /// The best-tracked person showing each hand.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -116,13 +120,18 @@ pub struct Heard {
     pub request: Option<HriRequest>,
 }
 
-/// The recogniser's step: segmenter, decoder, verdict.
+/// The recogniser's step: segmenter, voicing, decoder, verdict.
 pub struct Listener {
     cfg: VoiceConfig,
     segmenter: Segmenter,
+    voicing: VoicingMeter,
     recognizer: Recognizer,
     utterances: u64,
     requests: u64,
+    /// utterances refused as not speech (no voicing)
+    pub not_speech: u64,
+    /// the last utterance's voicing (none when it was not analysed)
+    pub last_voicing: Option<Voicing>,
     /// audio decoded and the time it took [s]
     pub audio_s: f64,
     pub decode_s: f64,
@@ -133,9 +142,12 @@ impl Listener {
         Ok(Listener {
             cfg: cfg.clone(),
             segmenter: Segmenter::new(cfg),
+            voicing: VoicingMeter::with_capacity(Segmenter::capacity(cfg)),
             recognizer: Recognizer::new(cfg)?,
             utterances: 0,
             requests: 0,
+            not_speech: 0,
+            last_voicing: None,
             audio_s: 0.0,
             decode_s: 0.0,
         })
@@ -187,16 +199,32 @@ impl Listener {
         u.seq = self.utterances;
         u.start_ns = seg.start_ns;
         u.end_ns = seg.end_ns;
+        self.last_voicing = None;
+        // the voicing analysis is on the way to a request: timed with the decode
+        let t0 = std::time::Instant::now();
         let verdict = match seg.kind {
             SegmentKind::TooShort => Some(VoiceVerdict::TooShort),
             SegmentKind::TooLong => Some(VoiceVerdict::TooLong),
+            SegmentKind::Speech if self.cfg.min_voiced_s > 0.0 => {
+                // noise is refused before the closed grammar can name it
+                let v = self.voicing.measure(self.segmenter.audio());
+                self.last_voicing = Some(v);
+                if v.is_speech(self.cfg.min_voiced_s) {
+                    None
+                } else {
+                    self.not_speech += 1;
+                    Some(VoiceVerdict::NotSpeech)
+                }
+            }
             SegmentKind::Speech => None,
         };
         let mut request = None;
         u.verdict = match verdict {
-            Some(v) => v as u32,
+            Some(v) => {
+                u.decode_ms = t0.elapsed().as_secs_f64() * 1e3;
+                v as u32
+            }
             None => {
-                let t0 = std::time::Instant::now();
                 let audio = self.segmenter.audio();
                 let audio_s = audio.len() as f64 / phri_ipc::AUDIO_RATE_HZ as f64;
                 let d = self.recognizer.decode(audio)?;

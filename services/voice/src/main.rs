@@ -23,8 +23,11 @@ Voice commands for the phri cell (pocketsphinx, offline).
 As a service: audio/mic → hri/request (source voice) and voice/utterance.
 With --wav FILE...: decode recordings (16 kHz mono 16-bit WAV) and print one
 JSON line per utterance: file, text (empty when refused), intent, score,
-start_s, end_s, verdict, decode_ms; then a summary on stderr (decoding cost
-against real time). The hand gate is off: no scene to look at.
+start_s, end_s, verdict (not_speech: no voicing, refused before decoding),
+voiced_s (the longest voiced stretch), decode_ms; a file where nothing was
+heard gets one line with verdict nothing_heard. Then a summary on stderr
+(decoding cost against real time, utterances refused as not speech). The
+hand gate is off: no scene to look at.
 
 The grammar: follow [the] (right | left) hand | begin collaboration |
 end collaboration | stop. Settings: [voice] in deploy/phri.toml.
@@ -73,10 +76,11 @@ fn wav_mode(
         let audio = wav::read(file)?;
         let mut chunk = AudioChunk::zeroed();
         chunk.rate_hz = AUDIO_RATE_HZ;
-        let mut emit = |h: phri_voice::Heard| {
+        let before = utterances;
+        let mut emit = |h: phri_voice::Heard, voicing: Option<phri_voice::Voicing>| {
             utterances += 1;
             latencies.push(h.utterance.decode_ms);
-            println!("{}", line(file, &h.utterance));
+            println!("{}", line(file, &h.utterance, voicing));
         };
         for (k, samples) in audio.chunks(AUDIO_CHUNK_SAMPLES).enumerate() {
             chunk.seq = k as u64 + 1;
@@ -85,11 +89,22 @@ fn wav_mode(
             chunk.samples = samples.len() as u32;
             chunk.pcm[..samples.len()].copy_from_slice(samples);
             if let Some(h) = listener.step(&chunk, &Hands::ANYONE, now_ns)? {
-                emit(h);
+                emit(h, listener.last_voicing);
             }
         }
         if let Some(h) = listener.finish(&Hands::ANYONE, now_ns)? {
-            emit(h);
+            emit(h, listener.last_voicing);
+        }
+        if utterances == before {
+            println!(
+                "{}",
+                serde_json::json!({
+                    "file": file.display().to_string(),
+                    "text": "",
+                    "intent": "none",
+                    "verdict": "nothing_heard",
+                })
+            );
         }
     }
     latencies.sort_by(f64::total_cmp);
@@ -100,8 +115,9 @@ fn wav_mode(
             .unwrap_or(0.0)
     };
     eprintln!(
-        "phri-voice: {} file(s), {utterances} utterance(s): decoded {:.1} s of audio in {:.3} s = {:.3}× real time; decode p50 {:.0} ms, max {:.0} ms",
+        "phri-voice: {} file(s), {utterances} utterance(s), {} refused as not speech: decoded {:.1} s of audio in {:.3} s = {:.3}× real time; decode p50 {:.0} ms, max {:.0} ms",
         files.len(),
+        listener.not_speech,
         listener.audio_s,
         listener.decode_s,
         listener.decode_s / listener.audio_s.max(1e-9),
@@ -111,7 +127,7 @@ fn wav_mode(
     Ok(())
 }
 
-fn line(file: &std::path::Path, u: &Utterance) -> String {
+fn line(file: &std::path::Path, u: &Utterance, voicing: Option<phri_voice::Voicing>) -> String {
     let verdict = VoiceVerdict::try_from(u.verdict).unwrap_or(VoiceVerdict::NoMatch);
     let text = if verdict == VoiceVerdict::Accepted || verdict == VoiceVerdict::HandNotTracked {
         phri_ipc::json::c_str(&u.text)
@@ -127,6 +143,7 @@ fn line(file: &std::path::Path, u: &Utterance) -> String {
         "start_s": (u.start_ns as f64 * 1e-6).round() / 1e3,
         "end_s": (u.end_ns as f64 * 1e-6).round() / 1e3,
         "verdict": verdict.name(),
+        "voiced_s": voicing.map(|v| (v.longest_s() * 100.0).round() / 100.0),
         "decode_ms": (u.decode_ms * 10.0).round() / 10.0,
     })
     .to_string()
@@ -194,12 +211,13 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
         }
     }
     latencies.sort_by(f64::total_cmp);
+    let not_speech = listener.not_speech;
     if listener.audio_s <= 0.0 {
-        tracing::info!("no speech heard; {lost} audio chunk(s) lost, {refused} refused");
+        tracing::info!("no speech heard ({not_speech} utterance(s) refused as not speech); {lost} audio chunk(s) lost, {refused} refused");
         return Ok(());
     }
     tracing::info!(
-        "decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {lost} audio chunk(s) lost, {refused} refused",
+        "decoding cost {:.3}× real time ({:.1} s of utterances in {:.2} s); utterance end → request p50 {:.0} ms, max {:.0} ms over {} request(s); {not_speech} utterance(s) refused as not speech; {lost} audio chunk(s) lost, {refused} refused",
         listener.decode_s / listener.audio_s.max(1e-9),
         listener.audio_s,
         listener.decode_s,
@@ -212,6 +230,12 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
 
 fn describe(u: &Utterance) -> String {
     let verdict = VoiceVerdict::name_of(u.verdict);
+    if u.verdict == VoiceVerdict::NotSpeech as u32 {
+        return format!(
+            "heard {:.2} s of sound without voicing (noise, a rattle): not decoded: {verdict}",
+            u.end_ns.saturating_sub(u.start_ns) as f64 * 1e-9
+        );
+    }
     let text = phri_ipc::json::c_str(&u.text);
     let what = match VoiceIntent::try_from(u.intent)
         .ok()

@@ -94,12 +94,18 @@ pub struct Segmenter {
 }
 
 impl Segmenter {
+    /// The longest utterance's audio [samples] (its buffers' size).
+    pub fn capacity(cfg: &VoiceConfig) -> usize {
+        let rate = AUDIO_RATE_HZ as f64;
+        let padding = (cfg.padding_s * rate) as usize;
+        ((cfg.max_utterance_s + cfg.hangover_s) * rate) as usize + 2 * padding + 4 * FRAME
+    }
+
     pub fn new(cfg: &VoiceConfig) -> Segmenter {
         let rate = AUDIO_RATE_HZ as f64;
         let padding = (cfg.padding_s * rate) as usize;
         let hangover_frames = ((cfg.hangover_s * rate) as usize).div_ceil(FRAME).max(1) as u32;
-        let capacity =
-            ((cfg.max_utterance_s + cfg.hangover_s) * rate) as usize + 2 * padding + 4 * FRAME;
+        let capacity = Segmenter::capacity(cfg);
         Segmenter {
             speech_db: cfg.speech_db,
             onset_frames: cfg.onset_frames.max(1),

@@ -42,6 +42,52 @@ fn wav_files_print_one_json_line_per_utterance_and_the_cost() {
     );
     assert!(s > 0.2 && s < 0.5 && e > s + 0.8 && e < 2.6, "{first}");
     assert!(stderr.contains("× real time"), "{stderr}");
+    assert!(first["voiced_s"].as_f64().unwrap() >= 0.1, "{first}");
+}
+
+fn write_wav(path: &Path, samples: &[i16]) {
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: 16_000,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(path, spec).unwrap();
+    for &s in samples {
+        w.write_sample(s).unwrap();
+    }
+    w.finalize().unwrap();
+}
+
+#[test]
+fn noise_is_not_speech_and_silence_is_nothing_heard_each_file_with_its_verdict() {
+    let dir = std::env::temp_dir().join(format!("phri-voice-noise-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let noise = dir.join("burst.wav");
+    write_wav(
+        &noise,
+        &phri_voice::bursts::recording(26, 1, -28.0, Some(-60.0), 0.3),
+    );
+    let silence = dir.join("silence.wav");
+    write_wav(&silence, &[0; 16_000]);
+    let out = voice(&["--wav", noise.to_str().unwrap(), silence.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a JSON line"))
+        .collect();
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert_eq!(lines[0]["verdict"], "not_speech", "{}", lines[0]);
+    assert_eq!(lines[0]["text"], "");
+    assert!(
+        lines[0]["voiced_s"].as_f64().unwrap() < 0.08,
+        "{}",
+        lines[0]
+    );
+    assert_eq!(lines[1]["verdict"], "nothing_heard", "{}", lines[1]);
+    assert!(stderr.contains("1 refused as not speech"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -77,6 +123,15 @@ fn bad_files_are_refused_naming_them() {
         err.contains("stereo.wav") && err.contains("16000 Hz mono"),
         "{err}"
     );
+    // a header that promises more audio than the file holds
+    let cut = dir.join("cut.wav");
+    let mut bytes = std::fs::read(fixture("stop_en-us_140.wav")).unwrap();
+    bytes.truncate(bytes.len() / 2 + 1);
+    std::fs::write(&cut, &bytes).unwrap();
+    let out = voice(&["--wav", cut.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("cut.wav") && err.lines().count() == 1, "{err}");
     let out = voice(&["--wav", dir.join("missing.wav").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.wav"));
