@@ -19,6 +19,7 @@
 pub mod cpu;
 pub mod depth;
 pub mod geometry;
+pub mod peer;
 pub mod pipeline;
 pub mod robot;
 pub mod scene;
