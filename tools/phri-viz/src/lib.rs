@@ -23,6 +23,8 @@ pub mod peer;
 pub mod pipeline;
 pub mod robot;
 pub mod scene;
+#[cfg(feature = "server")]
+pub mod server;
 pub mod status;
 pub mod topics;
 
