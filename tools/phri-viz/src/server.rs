@@ -142,8 +142,21 @@ pub enum ServeError {
 }
 
 impl Server {
-    /// Listen on `addr` and serve `topics` (channel id = position + 1).
+    /// Listen on `addr` and serve `topics` (channel id = position + 1) to
+    /// this process's user (and root).
     pub fn start(
+        addr: SocketAddr,
+        name: &str,
+        topics: &[Topic],
+        limits: Limits,
+    ) -> Result<Server, ServeError> {
+        Server::start_for(peer::own_uid(), addr, name, topics, limits)
+    }
+
+    /// As [`Server::start`], serving the user `owner` (and root): a root
+    /// process serving another user's cell, or a test.
+    pub fn start_for(
+        owner: u32,
         addr: SocketAddr,
         name: &str,
         topics: &[Topic],
@@ -174,7 +187,7 @@ impl Server {
         let local = listener.local_addr()?;
         let shared = Arc::new(Shared {
             limits,
-            own_uid: peer::own_uid(),
+            own_uid: owner,
             server_info: ServerInfo::new(name).with_session_id(session).to_string(),
             advertise: Advertise::new(channels).to_string(),
             subscribed: topics.iter().map(|_| AtomicUsize::new(0)).collect(),
@@ -321,7 +334,7 @@ fn wait_fd(fd: i32, write: bool, timeout: Duration) {
 }
 
 fn accept_loop(s: &Arc<Shared>, listener: &TcpListener) {
-    let mut warned_user = false;
+    let (mut warned_user, mut warned_full) = (false, false);
     while !s.stop.load(Ordering::SeqCst) {
         wait_fd(listener.as_raw_fd(), false, ACCEPT_WAKE);
         let (stream, peer) = match listener.accept() {
@@ -366,10 +379,16 @@ fn accept_loop(s: &Arc<Shared>, listener: &TcpListener) {
         }
         if s.slots.load(Ordering::SeqCst) >= s.limits.max_clients {
             s.refused_full.fetch_add(1, Ordering::Relaxed);
-            tracing::info!(
+            let msg = format!(
                 "refused {peer}: {} clients already (--max-clients)",
                 s.limits.max_clients
             );
+            if warned_full {
+                tracing::debug!("{msg}");
+            } else {
+                tracing::warn!("{msg}");
+                warned_full = true;
+            }
             refuse_full(stream, s.limits.max_clients);
             continue;
         }

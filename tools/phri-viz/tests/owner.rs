@@ -14,12 +14,13 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use common::*;
+use phri_viz::server::{Limits, Server};
 use serde_json::{json, Value};
 use tungstenite::Message;
 
 /// The probe's port: set, the ignored `probe` test is a client.
 const PROBE_PORT: &str = "PHRI_VIZ_PROBE_PORT";
-const NOBODY: &str = "65534";
+const NOBODY: u32 = 65534;
 
 fn is_root() -> bool {
     // SAFETY: geteuid(2) cannot fail.
@@ -76,20 +77,21 @@ fn probe() {
     );
 }
 
-/// Run the probe against `port`, as user nobody (`setpriv`) or as this user.
-fn run_probe(port: u16, as_nobody: bool) -> Value {
+/// Run the probe against `port`, as user `uid` (`setpriv`, as root) or as this user.
+fn run_probe(port: u16, uid: Option<u32>) -> Value {
     let exe = std::env::current_exe().expect("the test binary");
-    let mut cmd = if as_nobody {
-        let mut c = Command::new("setpriv");
-        c.args([
-            &format!("--reuid={NOBODY}"),
-            &format!("--regid={NOBODY}"),
-            "--clear-groups",
-        ])
-        .arg(&exe);
-        c
-    } else {
-        Command::new(&exe)
+    let mut cmd = match uid {
+        Some(uid) => {
+            let mut c = Command::new("setpriv");
+            c.args([
+                &format!("--reuid={uid}"),
+                &format!("--regid={uid}"),
+                "--clear-groups",
+            ])
+            .arg(&exe);
+            c
+        }
+        None => Command::new(&exe),
     };
     let out = cmd
         .args(["probe", "--exact", "--ignored", "--nocapture"])
@@ -107,7 +109,7 @@ fn run_probe(port: u16, as_nobody: bool) -> Value {
             )
         });
     let v: Value = serde_json::from_str(line).expect("the probe's JSON");
-    eprintln!("probe (nobody: {as_nobody}): {v}");
+    eprintln!("probe (uid {uid:?}): {v}");
     v
 }
 
@@ -160,8 +162,8 @@ fn another_users_client_gets_nothing_the_owners_gets_the_cell_and_a_stopped_cell
 
     // another user's client, then the owner's, while the viewer reads
     let probes = std::thread::spawn(move || {
-        let other = is_root().then(|| run_probe(port, true));
-        let own = run_probe(port, false);
+        let other = is_root().then(|| run_probe(port, Some(NOBODY)));
+        let own = run_probe(port, None);
         (other, own)
     });
     while !probes.is_finished() {
@@ -347,4 +349,43 @@ fn clients_past_the_limit_are_refused_and_a_cell_never_seen_is_stale() {
     ))
     .expect("the second client is still connected");
     assert!(viz.stop().success());
+}
+
+#[test]
+fn a_non_root_owner_is_served_and_another_non_root_user_is_not() {
+    if !is_root() {
+        eprintln!("not root: no other uid to run a client as (the uid check is unit-tested in phri_viz::peer)");
+        return;
+    }
+    // the server of a cell owned by uid 4242, in this process
+    const OWNER: u32 = 4242;
+    let server = Server::start_for(
+        OWNER,
+        "127.0.0.1:0".parse().expect("an address"),
+        "phri-viz",
+        &phri_viz::topics::all(),
+        Limits::default(),
+    )
+    .expect("the server starts");
+    let port = server.local_addr().port();
+    let probes =
+        std::thread::spawn(move || (run_probe(port, Some(NOBODY)), run_probe(port, Some(OWNER))));
+    let mut t = 0;
+    while !probes.is_finished() {
+        server.publish(phri_viz::topics::STATUS, t, br#"{"stale":true}"#);
+        t += 1;
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let (other, own) = probes.join().expect("the probes");
+    assert_eq!(
+        (other["uid"].as_u64(), other["bytes"].as_u64()),
+        (Some(65534), Some(0)),
+        "{other}"
+    );
+    assert_eq!(other["served"], false, "{other}");
+    assert_eq!(own["served"], true, "{own}");
+    assert!(own["topics"]["/viz/status"].as_u64() > Some(0), "{own}");
+    let counts = server.counts();
+    assert_eq!(counts.refused_user, 1, "{counts:?}");
+    server.stop();
 }
