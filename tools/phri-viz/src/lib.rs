@@ -11,7 +11,7 @@
 //! collaboration phase, the residual and its thresholds ([`status::Status`]).
 //!
 //! `phri-viz` (this crate's binary, feature `server`) serves them live over
-//! Foxglove's WebSocket protocol; `phri-record` writes the same messages on
+//! Foxglove's WebSocket protocol, to its owner only ([`peer`], `server`); `phri-record` writes the same messages on
 //! the same topics ([`topics::ALL`]) into its MCAP files, so a recording shows
 //! the same 3-D scene. Frames: `base` is the robot's base frame (the cell's
 //! world, z up, [m]); the camera's optical frame is `camera`.
@@ -19,9 +19,12 @@
 pub mod cpu;
 pub mod depth;
 pub mod geometry;
+pub mod peer;
 pub mod pipeline;
 pub mod robot;
 pub mod scene;
+#[cfg(feature = "server")]
+pub mod server;
 pub mod status;
 pub mod topics;
 

@@ -2,6 +2,12 @@
 //! protocol (open `ws://127.0.0.1:8765` in Foxglove, then the layout
 //! `deploy/foxglove/phri-layout.json`).
 //!
+//! For its owner only: a connection from another user's socket is closed
+//! before a byte flows, at most `--max-clients` are served, each with an
+//! outbox of `--client-buffer` MiB ([`phri_viz::server`]). When the robot's
+//! state stops for `--stale-after` ms, the scene is no longer sent as current:
+//! a status saying `stale` with the input's age is, until the cell returns.
+//!
 //! Read-only like the monitor: it subscribes to the cell's channels and never
 //! publishes on one, runs under the normal scheduler, and keeps off the CPUs
 //! the configuration pins the torque loop to (`[services.sim|dynamics|control]
@@ -13,14 +19,13 @@ use std::error::Error;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use foxglove::{PartialMetadata, RawChannel, WebSocketServer};
 use phri_ipc::*;
 use phri_runtime::cli::CompletionsCmd;
 use phri_runtime::{now_ns, Shutdown};
+use phri_viz::server::{Limits, Server};
 use phri_viz::{cpu, topics, Output, Pipeline, Rates};
 
 const BIN: &str = "phri-viz";
@@ -58,6 +63,15 @@ struct Cli {
     /// Keep every K-th depth pixel per axis in the point cloud
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     cloud_downsample: u32,
+    /// Clients served at once (another is answered 503); only this user's (and root's) are admitted
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    max_clients: u32,
+    /// Messages waiting for one client, at most [MiB]: a slower client loses the oldest
+    #[arg(long, value_name = "MIB", default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    client_buffer: u32,
+    /// No robot state for this long [ms]: the scene is stale (not sent; the status says stale and the age)
+    #[arg(long, value_name = "MS", default_value_t = 500, value_parser = clap::value_parser!(u32).range(10..=600_000))]
+    stale_after: u32,
     #[command(subcommand)]
     completions: Option<CompletionsCmd>,
 }
@@ -226,28 +240,18 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let loaded = phri_config::Loaded::load(&cli.config, None, &[])
         .map_err(|e| format!("--config {}: {e}", cli.config.display()))?;
     let mut pipeline = Pipeline::from_config(&loaded, rates)
-        .map_err(|e| format!("--config {}: {e}", cli.config.display()))?;
+        .map_err(|e| format!("--config {}: {e}", cli.config.display()))?
+        .with_stale_after(Some(Duration::from_millis(u64::from(cli.stale_after))));
     keep_off_the_loop(&loaded.config);
 
     let shutdown = Shutdown::install()?;
-    let ctx = foxglove::Context::new();
-    let mut channels: HashMap<&'static str, Arc<RawChannel>> = HashMap::new();
-    for t in topics::all() {
-        let ch = ctx
-            .channel_builder(t.name)
-            .schema(t.schema)
-            .message_encoding(t.encoding)
-            .build_raw()
-            .map_err(|e| format!("topic {}: {e}", t.name))?;
-        channels.insert(t.name, ch);
-    }
-    let server = WebSocketServer::new()
-        .name(BIN)
-        .bind(cli.addr.ip().to_string(), cli.addr.port())
-        .context(&ctx)
-        .start_blocking()
+    let limits = Limits {
+        max_clients: cli.max_clients as usize,
+        queue_bytes: cli.client_buffer as usize * (1 << 20),
+    };
+    let server = Server::start(cli.addr, BIN, &topics::all(), limits)
         .map_err(|e| format!("--addr {}: cannot serve: {e}", cli.addr))?;
-    let port = server.port();
+    let port = server.local_addr().port();
     // the line a script (or a test) waits for: the port actually bound
     eprintln!(
         "{BIN}: serving ws://{}:{port} (prefix '{prefix}')",
@@ -263,6 +267,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let mut sent: HashMap<&'static str, u64> = HashMap::new();
     let mut next_report = Instant::now() + Duration::from_secs(10);
     let mut reported_at = Instant::now();
+    let mut was_stale = false;
     while !shutdown.requested() {
         if Instant::now() >= next_attach {
             for (s, a) in sources.iter_mut().zip(attached.iter_mut()) {
@@ -273,19 +278,28 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
             }
             next_attach = Instant::now() + ATTACH_EVERY;
         }
-        let wanted = |topic: &str| channels.get(topic).is_some_and(|c| c.has_sinks());
+        let wanted = |topic: &str| server.wanted(topic);
         for s in sources.iter_mut() {
             s.poll(&mut pipeline, &wanted, &mut out)?;
         }
-        pipeline.tick(now_ns(), &wanted, &mut out);
+        let now = now_ns();
+        pipeline.tick(now, &wanted, &mut out);
+        if pipeline.is_stale() != was_stale {
+            was_stale = pipeline.is_stale();
+            match pipeline.input_age_ns(now) {
+                Some(age) if was_stale => tracing::warn!(
+                    "no robot state for {:.1} s: the scene is stale",
+                    age as f64 * 1e-9
+                ),
+                None => tracing::info!("no robot state yet: the scene is stale"),
+                Some(_) => tracing::info!("robot state again: the scene is live"),
+            }
+        }
         for o in out.drain(..) {
-            let Some(ch) = channels.get(o.topic) else {
-                continue;
-            };
             buf.clear();
             match o.message.encode(&mut buf) {
                 Ok(()) => {
-                    ch.log_with_meta(&buf, PartialMetadata::with_log_time(o.log_ns));
+                    server.publish(o.topic, o.log_ns, &buf);
                     *sent.entry(o.topic).or_default() += 1;
                 }
                 Err(e) => tracing::warn!("{}: {e}", o.topic),
@@ -301,13 +315,21 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
             if rates.is_empty() {
                 rates.push("nothing subscribed".into());
             }
-            tracing::info!("{} client(s); {}", server.client_count(), rates.join(", "));
+            let c = server.counts();
+            tracing::info!(
+                "{} client(s); {}; refused {} of another user, {} over --max-clients; {} dropped for slow clients",
+                c.clients,
+                rates.join(", "),
+                c.refused_user,
+                c.refused_full,
+                c.dropped
+            );
             sent.clear();
             reported_at = Instant::now();
             next_report += Duration::from_secs(10);
         }
         std::thread::sleep(POLL);
     }
-    server.stop().wait_blocking();
+    server.stop();
     Ok(())
 }

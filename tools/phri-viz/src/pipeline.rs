@@ -2,7 +2,13 @@
 //! of each channel is kept; each joint state may give a `foxglove.JointStates`
 //! and a status (at most at the joint rate, by the robot's clock); a tick
 //! gives the scene and the frames (at the scene rate) and the newest depth
-//! frame as a point cloud and an image (at most at the scene rate). No I/O:
+//! frame as a point cloud and an image (at most at the scene rate).
+//!
+//! With a staleness bound ([`Pipeline::with_stale_after`]) the scene is only
+//! sent while the robot's state keeps coming: when none arrived for that
+//! long (by the clock `tick` is given), no scene or frame goes out stamped as
+//! current; a status saying `stale`, with the state's age, goes out a few
+//! times a second instead, until states come again. No I/O:
 //! `phri-viz` logs the outputs to its WebSocket server, `phri-record` writes
 //! them into its MCAP file.
 
@@ -49,6 +55,8 @@ impl Default for Rates {
 
 /// Results older than this are no longer shown [ns]: a stopped worker's arrows vanish.
 pub const REPULSION_MAX_AGE_NS: u64 = 500_000_000;
+/// Time between two stale statuses [ns].
+pub const STALE_STATUS_EVERY_NS: u64 = 250_000_000;
 
 /// One Foxglove message.
 #[derive(Clone, Debug, PartialEq)]
@@ -125,6 +133,15 @@ pub struct Pipeline {
     /// the newest depth frame not yet sent: header and depths
     frame: Option<FrameHeader>,
     depths: Vec<u16>,
+    /// a robot state came since the last tick
+    state_came: bool,
+    /// the tick that saw the newest robot state [ns, tick's clock]
+    state_seen_ns: Option<u64>,
+    /// no robot state for longer than this: stale [ns] (None: never stale)
+    stale_after_ns: Option<u64>,
+    /// stale at the last tick
+    stale: bool,
+    next_stale_status_ns: u64,
 }
 
 impl Pipeline {
@@ -146,7 +163,30 @@ impl Pipeline {
             next_depth_ns: 0,
             frame: None,
             depths: Vec::new(),
+            state_came: false,
+            state_seen_ns: None,
+            stale_after_ns: None,
+            stale: false,
+            next_stale_status_ns: 0,
         }
+    }
+
+    /// Stale when no robot state came for `after` (None, the default: never;
+    /// a recording of a past run ticks on its own clock).
+    pub fn with_stale_after(mut self, after: Option<std::time::Duration>) -> Pipeline {
+        self.stale_after_ns = after.map(|d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+        self
+    }
+
+    /// Whether the last tick found the robot's state stale.
+    pub fn is_stale(&self) -> bool {
+        self.stale
+    }
+
+    /// Time since the tick that saw the newest robot state, at `now_ns` [ns]
+    /// (None: no state yet).
+    pub fn input_age_ns(&self, now_ns: u64) -> Option<u64> {
+        self.state_seen_ns.map(|t| now_ns.saturating_sub(t))
     }
 
     /// A pipeline from a loaded configuration: its robot model, `[dynamics]`
@@ -225,6 +265,7 @@ impl Pipeline {
 
     fn on_state(&mut self, s: &JointState, wanted: &dyn Fn(&str) -> bool, out: &mut Vec<Output>) {
         self.latest.state = Some(*s);
+        self.state_came = true;
         let period_ns = (1e9 / self.rates.joints_hz.max(1e-3)) as u64;
         // a little early still counts: the robot's clock ticks exactly, the rate need not divide it
         let due = match self.last_joints_ns {
@@ -252,12 +293,15 @@ impl Pipeline {
             out.push(Output {
                 topic: topics::STATUS,
                 log_ns: t,
-                message: VizMessage::Status(Status::from_latest(
-                    l.control.as_ref(),
-                    l.collab.as_ref(),
-                    l.residual.as_ref(),
-                    &self.thresholds,
-                )),
+                message: VizMessage::Status(Status {
+                    input_age: Some(0.0),
+                    ..Status::from_latest(
+                        l.control.as_ref(),
+                        l.collab.as_ref(),
+                        l.residual.as_ref(),
+                        &self.thresholds,
+                    )
+                }),
             });
         }
     }
@@ -290,9 +334,40 @@ impl Pipeline {
     }
 
     /// At `now_ns` [CLOCK_MONOTONIC]: the scene and the frames when due (the
-    /// scene needs a joint state), and the newest depth frame when one came.
+    /// scene needs a joint state), and the newest depth frame when one came;
+    /// when the robot's state is stale, a stale status instead of the scene.
     pub fn tick(&mut self, now_ns: u64, wanted: &dyn Fn(&str) -> bool, out: &mut Vec<Output>) {
         let period_ns = (1e9 / self.rates.scene_hz.max(1e-3)) as u64;
+        if std::mem::take(&mut self.state_came) {
+            self.state_seen_ns = Some(now_ns);
+        }
+        if let Some(after) = self.stale_after_ns {
+            let age = self.input_age_ns(now_ns);
+            if age.is_none_or(|a| a > after) {
+                if !self.stale || now_ns >= self.next_stale_status_ns {
+                    self.next_stale_status_ns = now_ns + STALE_STATUS_EVERY_NS;
+                    if wanted(topics::STATUS) {
+                        out.push(Output {
+                            topic: topics::STATUS,
+                            log_ns: now_ns,
+                            message: VizMessage::Status(self.stale_status(age)),
+                        });
+                    }
+                }
+                self.stale = true;
+                // a frame of a camera still running is its own time's
+                if self.frame.is_some() && now_ns >= self.next_depth_ns {
+                    self.next_depth_ns = now_ns + period_ns * 9 / 10;
+                    self.depth(wanted, out);
+                }
+                return;
+            }
+            if self.stale {
+                // back: the scene at once
+                self.stale = false;
+                self.next_scene_ns = now_ns;
+            }
+        }
         if now_ns >= self.next_scene_ns {
             self.next_scene_ns = if now_ns > self.next_scene_ns + period_ns {
                 now_ns + period_ns // behind (a stall): start afresh
@@ -365,6 +440,16 @@ impl Pipeline {
             if !tf.transforms.is_empty() {
                 push(topics::TF, VizMessage::Transforms(tf));
             }
+        }
+    }
+
+    /// The status of a stale cell: stale, the state's age [s], nothing of
+    /// the controller (what it said last is not what it says now).
+    fn stale_status(&self, age_ns: Option<u64>) -> Status {
+        Status {
+            stale: true,
+            input_age: age_ns.map(|a| a as f64 * 1e-9),
+            ..Status::from_latest(None, None, None, &self.thresholds)
         }
     }
 
@@ -575,5 +660,98 @@ mod tests {
         out.clear();
         p.tick(2_000_000_000, &all, &mut out);
         assert_eq!(repulsion(&out), 0);
+    }
+
+    #[test]
+    fn a_stopped_robot_makes_the_scene_stale_until_it_comes_back() {
+        const MS: u64 = 1_000_000;
+        let mut p = pipeline(Rates::default())
+            .with_stale_after(Some(std::time::Duration::from_millis(500)));
+        let statuses = |out: &[Output]| -> Vec<Status> {
+            out.iter()
+                .filter_map(|o| match &o.message {
+                    VizMessage::Status(s) => Some(s.clone()),
+                    _ => None,
+                })
+                .collect()
+        };
+        // nothing yet: stale, no age, no scene
+        let mut out = Vec::new();
+        p.tick(1000 * MS, &all, &mut out);
+        assert!(p.is_stale());
+        assert_eq!(topics_of(&out), vec![topics::STATUS]);
+        let s = &statuses(&out)[0];
+        assert!(
+            s.stale && s.input_age.is_none() && s.mode == "none",
+            "{s:?}"
+        );
+        // states, every ms for a second: live, the scene at its rate
+        out.clear();
+        let mut t = 2000 * MS;
+        for i in 0..1000 {
+            p.offer(&state(i, t), &all, &mut out);
+            p.tick(t, &all, &mut out);
+            t += MS;
+        }
+        assert!(!p.is_stale());
+        assert!(topics_of(&out).contains(&topics::ROBOT));
+        assert!(statuses(&out)
+            .iter()
+            .all(|s| !s.stale && s.input_age == Some(0.0)));
+        // the robot stops: live until the bound, then stale statuses only
+        let last = t - MS;
+        out.clear();
+        while t <= last + 500 * MS {
+            p.tick(t, &all, &mut out);
+            t += MS;
+        }
+        assert!(!p.is_stale(), "not before the bound");
+        out.clear();
+        while t < last + 2000 * MS {
+            p.tick(t, &all, &mut out);
+            t += MS;
+        }
+        assert!(p.is_stale());
+        assert!(
+            topics_of(&out).iter().all(|t| *t == topics::STATUS),
+            "no scene stamped as current: {:?}",
+            topics_of(&out)
+        );
+        let ages: Vec<f64> = statuses(&out)
+            .iter()
+            .map(|s| s.input_age.unwrap_or(-1.0))
+            .collect();
+        // one on entering, then every 250 ms
+        assert_eq!(ages.len(), 6, "{ages:?}");
+        assert!(
+            ages[0] > 0.5 && ages.windows(2).all(|w| w[1] > w[0]),
+            "{ages:?}"
+        );
+        assert_eq!(p.input_age_ns(last + 1000 * MS), Some(1000 * MS));
+        // a state again: live, the scene at once
+        out.clear();
+        p.offer(&state(5000, t), &all, &mut out);
+        p.tick(t, &all, &mut out);
+        assert!(!p.is_stale());
+        assert!(
+            topics_of(&out).contains(&topics::ROBOT),
+            "{:?}",
+            topics_of(&out)
+        );
+    }
+
+    #[test]
+    fn without_a_bound_nothing_is_ever_stale() {
+        let mut p = pipeline(Rates::default());
+        let mut out = Vec::new();
+        p.offer(&state(1, 1_000_000), &all, &mut out);
+        p.tick(1_000_000, &all, &mut out);
+        out.clear();
+        p.tick(3_600_000_000_000, &all, &mut out);
+        assert!(!p.is_stale());
+        assert!(
+            topics_of(&out).contains(&topics::ROBOT),
+            "phri-record's scene, as before"
+        );
     }
 }

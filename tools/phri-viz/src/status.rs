@@ -64,6 +64,12 @@ pub struct Status {
     pub task_scale: Option<f64>,
     /// ‖r − Σ J_kᵀ F̂_k‖: residual the intended contacts do not explain [Nm]
     pub unexplained_norm: Option<f64>,
+    /// no robot state for longer than phri-viz's `--stale-after`: the cell
+    /// stopped (or stalled); the scene is not being sent
+    pub stale: bool,
+    /// age of the newest robot state when this status was sent [s] (0: it came
+    /// with this status; null: none yet)
+    pub input_age: Option<f64>,
 }
 
 fn finite(x: f64) -> Option<f64> {
@@ -140,7 +146,8 @@ impl Status {
                 "contact_threshold": nums, "collision_threshold": nums,
                 "collision_norm_threshold": num,
                 "min_distance": opt, "risk": opt, "task_scale": opt,
-                "unexplained_norm": opt
+                "unexplained_norm": opt,
+                "stale": {"type": "boolean"}, "input_age": opt
             }
         })
     }

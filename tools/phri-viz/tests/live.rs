@@ -5,98 +5,18 @@
 //! payload`), and checks the rates and contents it receives, and that the
 //! torque loop missed no deadline with the viewer attached.
 
+mod common;
+
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
-use std::net::TcpStream;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use common::{connect, repo, start_viz, Proc, VIZ};
 use foxglove::messages::{JointStates, RawImage, SceneUpdate};
 use foxglove::Decode;
 use serde_json::{json, Value};
-use tungstenite::client::IntoClientRequest;
-use tungstenite::stream::MaybeTlsStream;
-use tungstenite::{Message, WebSocket};
-
-const VIZ: &str = env!("CARGO_BIN_EXE_phri-viz");
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// A child process killed (SIGTERM, then SIGKILL) when dropped.
-struct Proc(Child);
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        if self.0.try_wait().ok().flatten().is_none() {
-            // SAFETY: kill(2) on our own child's pid.
-            unsafe { libc::kill(self.0.id() as i32, libc::SIGTERM) };
-            let t0 = Instant::now();
-            while self.0.try_wait().ok().flatten().is_none()
-                && t0.elapsed() < Duration::from_secs(5)
-            {
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
-    }
-}
-
-/// Start phri-viz on a free port; returns it and the port it serves on
-/// (read from its "serving ws://HOST:PORT" line; every stderr line is echoed).
-fn start_viz(prefix: &str) -> (Proc, u16) {
-    let mut child = Command::new(VIZ)
-        .current_dir(repo())
-        .args(["--prefix", prefix, "--addr", "127.0.0.1:0", "--rate", "30"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start phri-viz");
-    let stderr = child.stderr.take().expect("stderr");
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            eprintln!("[viz] {line}");
-            if let Some(rest) = line.split("serving ws://").nth(1) {
-                let port = rest
-                    .split_whitespace()
-                    .next()
-                    .and_then(|a| a.rsplit(':').next())
-                    .and_then(|p| p.parse::<u16>().ok());
-                let _ = tx.send(port);
-            }
-        }
-    });
-    let port = rx
-        .recv_timeout(Duration::from_secs(20))
-        .expect("phri-viz announces its port")
-        .expect("a port number");
-    (Proc(child), port)
-}
-
-fn connect(port: u16) -> WebSocket<MaybeTlsStream<TcpStream>> {
-    let mut req = format!("ws://127.0.0.1:{port}")
-        .into_client_request()
-        .unwrap();
-    req.headers_mut()
-        .insert("Sec-WebSocket-Protocol", "foxglove.sdk.v1".parse().unwrap());
-    let (ws, resp) = tungstenite::connect(req).expect("connect to phri-viz");
-    assert_eq!(
-        resp.headers()
-            .get("sec-websocket-protocol")
-            .and_then(|v| v.to_str().ok()),
-        Some("foxglove.sdk.v1")
-    );
-    if let MaybeTlsStream::Plain(s) = ws.get_ref() {
-        s.set_read_timeout(Some(Duration::from_millis(200)))
-            .unwrap();
-    }
-    ws
-}
+use tungstenite::Message;
 
 /// What the client saw on one topic.
 #[derive(Default)]
@@ -131,7 +51,7 @@ fn a_foxglove_client_gets_the_scene_and_joint_states_and_the_loop_misses_nothing
             .expect("start the supervisor"),
     );
     std::thread::sleep(Duration::from_secs(3));
-    let (mut viz, port) = start_viz(&prefix);
+    let (mut viz, port) = start_viz(&prefix, &[]);
     let mut ws = connect(port);
 
     // serverInfo, then the advertised channels
@@ -352,6 +272,9 @@ fn bad_flags_are_one_line_naming_the_flag() {
         (vec!["--depth-downsample", "0"], "--depth-downsample"),
         (vec!["--cloud-downsample", "65"], "--cloud-downsample"),
         (vec!["--config", "/no/such/phri.toml"], "--config"),
+        (vec!["--max-clients", "0"], "--max-clients"),
+        (vec!["--client-buffer", "0"], "--client-buffer"),
+        (vec!["--stale-after", "1"], "--stale-after"),
     ] {
         let out = Command::new(VIZ)
             .current_dir(repo())
@@ -387,4 +310,5 @@ fn bad_flags_are_one_line_naming_the_flag() {
         .unwrap();
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("--joint-rate"));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("--max-clients"));
 }
