@@ -158,6 +158,8 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
     if ctx.checking() {
         return Ok(());
     }
+    // audio only from the microphone the supervisor started (counted on audit/inputs)
+    let owners = ctx.watch_inputs();
     ctx.start_deadman()?;
     let node = ctx.node()?;
     let audio = AUDIO_MIC.waking_subscriber(&node, phri_ipc::Queue::Drain)?;
@@ -176,7 +178,10 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
         let mut failure = None;
         skeletons.update()?;
         let hands = Hands::of(skeletons.get(), now_ns(), max_age_ns);
-        audio.drain(|chunk| {
+        audio.drain_from(|pid, chunk| {
+            if !owners.admit(phri_ipc::Owned::AUDIO_MIC, pid).accepted() {
+                return;
+            }
             if last_seq != 0 && chunk.seq > last_seq + 1 {
                 lost += chunk.seq - last_seq - 1;
             }
