@@ -145,6 +145,10 @@ struct RawHuman {
     repeat_s: Option<f64>,
 }
 
+/// The longest run [s] (about 116 days): a longer one would overflow the
+/// nanosecond clocks.
+pub const MAX_DURATION_S: f64 = 1e7;
+
 fn default_duration_s() -> f64 {
     Scenario::DEFAULT_DURATION_S
 }
@@ -256,10 +260,10 @@ impl Scenario {
             field,
             reason,
         };
-        if !(raw.duration_s.is_finite() && raw.duration_s > 0.0) {
+        if !(raw.duration_s.is_finite() && raw.duration_s > 0.0 && raw.duration_s <= MAX_DURATION_S) {
             return Err(invalid(
                 "duration_s".into(),
-                format!("{} is not a positive number of seconds", raw.duration_s),
+                format!("{} is not a positive number of seconds up to {MAX_DURATION_S}", raw.duration_s),
             ));
         }
         let (human, collaborative_parts) = match raw.human {

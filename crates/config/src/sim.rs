@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::check::{finite, non_negative, positive};
+use crate::check::{finite, non_negative, positive, within};
 use crate::error::Invalid;
 use crate::PerJoint;
 
@@ -44,7 +44,8 @@ pub struct SimConfig {
 impl SimConfig {
     /// Range checks of every field (joint counts are checked against the model).
     pub fn validate(&self) -> Result<(), Invalid> {
-        positive(S, "dt_s", self.dt_s)?;
+        // buffers and the scenario clock count periods: 0.1-10 ms
+        within(S, "dt_s", self.dt_s, 1e-4, 1e-2)?;
         if !(1..=1000).contains(&self.substeps) {
             return Err(Invalid::new(
                 "sim.substeps",

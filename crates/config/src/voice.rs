@@ -69,11 +69,12 @@ impl VoiceConfig {
         if !(1..=50).contains(&self.onset_frames) {
             return Err(Invalid::new("voice.onset_frames", "not in 1..=50"));
         }
-        positive(S, "hangover_s", self.hangover_s)?;
+        // the segmenter's buffer holds an utterance and its hangover: bounded
+        within(S, "hangover_s", self.hangover_s, 0.01, 5.0)?;
         within(S, "min_voiced_s", self.min_voiced_s, 0.0, 1.0)?;
         within(S, "padding_s", self.padding_s, 0.0, 2.0)?;
         within(S, "min_hand_confidence", self.min_hand_confidence, 0.0, 1.0)?;
-        positive(S, "skeleton_max_age_ms", self.skeleton_max_age_ms)?;
+        within(S, "skeleton_max_age_ms", self.skeleton_max_age_ms, 1.0, 60_000.0)?;
         Ok(())
     }
 }

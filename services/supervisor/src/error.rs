@@ -15,7 +15,7 @@ pub enum SupervisorError {
     /// a value that does not fit the robot model (key named)
     #[error(transparent)]
     Invalid(#[from] Invalid),
-    #[error("--duration: must be a finite, positive number of seconds")]
+    #[error("--duration: must be a positive number of seconds, at most 1e7 (116 days)")]
     Duration,
     #[error("[services.{service}] binary '{binary}' not found in {} (build with: cargo build --release)", dir.display())]
     MissingBinary {

@@ -414,10 +414,7 @@ fn check_services(plan: &Plan, launch: &Launch) -> Result<(), SupervisorError> {
                 Ok(out) => {
                     let err = String::from_utf8_lossy(&out.stderr);
                     Some(
-                        err.lines()
-                            .rev()
-                            .find(|l| !l.trim().is_empty())
-                            .map(str::to_string)
+                        phri_supervisor::process::cause_line(&err)
                             .unwrap_or_else(|| phri_supervisor::process::status_text(out.status)),
                     )
                 }

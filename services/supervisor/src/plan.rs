@@ -40,7 +40,9 @@ impl Plan {
         sets: &[&str],
         duration_s: Option<f64>,
     ) -> Result<Plan, SupervisorError> {
-        if duration_s.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
+        if duration_s.is_some_and(|d| {
+            !(d.is_finite() && d > 0.0 && d <= phri_config::scenario::MAX_DURATION_S)
+        }) {
             return Err(SupervisorError::Duration);
         }
         let loaded = Loaded::load(config, scenario, sets)?;
@@ -199,12 +201,13 @@ mod tests {
         let err = |r: Result<Plan, SupervisorError>| r.unwrap_err().to_string();
         assert_eq!(
             err(Plan::load(&deploy(), None, &[], Some(0.0))),
-            "--duration: must be a finite, positive number of seconds"
+            "--duration: must be a positive number of seconds, at most 1e7 (116 days)"
         );
-        for d in [f64::NAN, f64::INFINITY, -5.0] {
+        // 2^64 ns and more would overflow the clock: refused, never "over at once"
+        for d in [f64::NAN, f64::INFINITY, -5.0, 2e10] {
             assert_eq!(
                 err(Plan::load(&deploy(), None, &[], Some(d))),
-                "--duration: must be a finite, positive number of seconds",
+                "--duration: must be a positive number of seconds, at most 1e7 (116 days)",
                 "{d}"
             );
         }

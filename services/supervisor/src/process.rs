@@ -258,6 +258,28 @@ impl Proc {
     }
 }
 
+/// The cause of a failed run in its stderr: the service's one-line error
+/// (`phri-…: …`), else a panic's message (never the backtrace's notes),
+/// else the last line.
+pub fn cause_line(stderr: &str) -> Option<String> {
+    let lines: Vec<&str> = stderr.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("phri-") && l.contains(": ")) {
+        return Some(l.to_string());
+    }
+    if let Some(i) = lines.iter().position(|l| l.contains("panicked at")) {
+        let message = lines.get(i + 1).filter(|m| !m.starts_with("note:"));
+        return Some(match message {
+            Some(m) => format!("{} {m}", lines[i]),
+            None => lines[i].to_string(),
+        });
+    }
+    lines
+        .iter()
+        .rev()
+        .find(|l| !l.starts_with("note:") && !l.starts_with("stack backtrace"))
+        .map(|l| l.to_string())
+}
+
 /// How [`status_text`] begins for a service its dead-man stopped.
 pub const DEADMAN_TEXT: &str = "stopped by its dead-man";
 
@@ -276,6 +298,21 @@ pub fn status_text(st: std::process::ExitStatus) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_cause_of_a_failed_check_is_its_error_or_its_panic_not_the_backtrace() {
+        let e = "2026 WARN something\nphri-sim: sim.dt_s: 1e-9 is not in [0.0001, 0.01]\n";
+        assert_eq!(
+            cause_line(e).unwrap(),
+            "phri-sim: sim.dt_s: 1e-9 is not in [0.0001, 0.01]"
+        );
+        let p = "thread 'main' panicked at src/x.rs:3:5:\ncapacity overflow\nnote: run with `RUST_BACKTRACE=1` environment variable to display a backtrace\n";
+        assert_eq!(
+            cause_line(p).unwrap(),
+            "thread 'main' panicked at src/x.rs:3:5: capacity overflow"
+        );
+        assert_eq!(cause_line("\n"), None);
+    }
 
     #[test]
     fn process_matching_checks_the_command_line() {
