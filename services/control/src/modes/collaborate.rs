@@ -94,6 +94,8 @@ pub struct Collaboration {
     /// the axis point of the touched capsule nearest the hand \[m\], base
     /// frame (the robot part's: [`Collaboration::robot_point`], or the wrist's)
     contact_axis: Vector3<f64>,
+    /// the touched capsule's radius \[m\] (`robot_radius_m`, or the wrist's)
+    contact_radius: f64,
     /// joint collision thresholds of the detector \[Nm\]
     collision_threshold: [f64; MAX_DOF],
     n: usize,
@@ -196,6 +198,7 @@ impl Collaboration {
             contact_on_wrist: false,
             contact_frame: frame,
             contact_axis: Vector3::zeros(),
+            contact_radius: c.robot_radius_m,
             wrist_point: cfg
                 .repulsion
                 .points
@@ -547,12 +550,14 @@ impl Collaboration {
         };
         self.robot_point = pose.apply(&axis);
         self.contact_axis = self.robot_point;
-        if let Some((point, axis)) = self
+        self.contact_radius = radius;
+        if let Some((point, axis, r)) = self
             .hand
             .and_then(|h| self.wrist_contact(&h, part_distance))
         {
             self.contact_on_wrist = true;
             self.contact_axis = axis;
+            self.contact_radius = r;
             self.contact_frame = self.wrist_frame;
             return ContactPoint {
                 frame: self.wrist_frame,
@@ -566,7 +571,7 @@ impl Collaboration {
     }
 
     /// The wrist's surface point toward the hand `h` \[m\] (base frame), in
-    /// the wrist link's frame, and the capsule's axis point nearest `h`
+    /// the wrist link's frame, the capsule's axis point nearest `h` and its radius
     /// \[m\], base frame, when `h` is nearer the surface of the wrist's
     /// collision capsules than `part_distance` \[m\] (the robot part's
     /// surface), at the joints of the last kinematics.
@@ -574,7 +579,7 @@ impl Collaboration {
         &self,
         h: &Vector3<f64>,
         part_distance: f64,
-    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    ) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
         let (model, data) = (self.forces.model(), self.forces.data());
         let (axis, distance, radius) = self
             .wrist_objects
@@ -598,7 +603,7 @@ impl Collaboration {
         let normal = (h - axis).try_normalize(1e-9)?;
         let surface = axis + normal * radius;
         let wrist = phri_model::frame_placement(model, data, self.wrist_frame);
-        Some((wrist.r.transpose() * (surface - wrist.p), axis))
+        Some((wrist.r.transpose() * (surface - wrist.p), axis, radius))
     }
 
     /// A collaboration begins or ends: nothing of the hand carries over.
@@ -733,8 +738,10 @@ impl Collaboration {
     /// measured end effector \[m\], `dt` \[s\], `speed_scale` of the safety judgement).
     pub fn reference(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> CartesianRef {
         let c = &self.cfg;
-        // the end effector's point relative to the collaborative robot point
-        let offset = ee - self.robot_point;
+        // the end effector's point relative to where the robot meets the
+        // hand: the robot part's axis point, or the wrist's when the hand is
+        // nearer the wrist (the approach brings that part to the hand)
+        let offset = ee - self.contact_axis;
         let mut velocity = Vector3::zeros();
         let phase = self.machine.phase();
         if phase == CollabPhase::Contact && self.ref_phase != CollabPhase::Contact {
@@ -751,9 +758,9 @@ impl Collaboration {
         match phase {
             CollabPhase::Approach | CollabPhase::Follow => {
                 if let Some(h) = self.hand {
-                    let to = h - self.robot_point;
+                    let to = h - self.contact_axis;
                     if to.norm() > 1e-6 {
-                        let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
+                        let reach = self.contact_radius + c.hand_radius_m - c.reach_into_m;
                         let target = h - to.normalize() * reach + offset;
                         let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
                         // within `slow_down_m`, the hand's own speed toward
