@@ -94,8 +94,6 @@ pub struct Collaboration {
     /// the axis point of the touched capsule nearest the hand \[m\], base
     /// frame (the robot part's: [`Collaboration::robot_point`], or the wrist's)
     contact_axis: Vector3<f64>,
-    /// the touched capsule's radius \[m\] (`robot_radius_m`, or the wrist's)
-    contact_radius: f64,
     /// joint collision thresholds of the detector \[Nm\]
     collision_threshold: [f64; MAX_DOF],
     n: usize,
@@ -198,7 +196,6 @@ impl Collaboration {
             contact_on_wrist: false,
             contact_frame: frame,
             contact_axis: Vector3::zeros(),
-            contact_radius: c.robot_radius_m,
             wrist_point: cfg
                 .repulsion
                 .points
@@ -550,14 +547,12 @@ impl Collaboration {
         };
         self.robot_point = pose.apply(&axis);
         self.contact_axis = self.robot_point;
-        self.contact_radius = radius;
-        if let Some((point, axis, r)) = self
+        if let Some((point, axis)) = self
             .hand
             .and_then(|h| self.wrist_contact(&h, part_distance))
         {
             self.contact_on_wrist = true;
             self.contact_axis = axis;
-            self.contact_radius = r;
             self.contact_frame = self.wrist_frame;
             return ContactPoint {
                 frame: self.wrist_frame,
@@ -571,7 +566,7 @@ impl Collaboration {
     }
 
     /// The wrist's surface point toward the hand `h` \[m\] (base frame), in
-    /// the wrist link's frame, the capsule's axis point nearest `h` and its radius
+    /// the wrist link's frame, and the capsule's axis point nearest `h`
     /// \[m\], base frame, when `h` is nearer the surface of the wrist's
     /// collision capsules than `part_distance` \[m\] (the robot part's
     /// surface), at the joints of the last kinematics.
@@ -579,7 +574,7 @@ impl Collaboration {
         &self,
         h: &Vector3<f64>,
         part_distance: f64,
-    ) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let (model, data) = (self.forces.model(), self.forces.data());
         let (axis, distance, radius) = self
             .wrist_objects
@@ -603,7 +598,7 @@ impl Collaboration {
         let normal = (h - axis).try_normalize(1e-9)?;
         let surface = axis + normal * radius;
         let wrist = phri_model::frame_placement(model, data, self.wrist_frame);
-        Some((wrist.r.transpose() * (surface - wrist.p), axis, radius))
+        Some((wrist.r.transpose() * (surface - wrist.p), axis))
     }
 
     /// A collaboration begins or ends: nothing of the hand carries over.
@@ -686,13 +681,13 @@ impl Collaboration {
         }
         self.wrist_pattern = pattern;
         let wrist = self.wrist_centre();
-        // the collaborative hand resting on the wrist (F̂ is estimated there):
-        // the wrist's force is its own, and depth near the wrist may be its
-        // arm; only another part seen in the skeleton then confirms a push
-        let hand_at_wrist = self.contact_on_wrist
-            && self
-                .hand
-                .is_some_and(|h| (h - wrist).norm() <= self.cfg.wrist_confirm_m);
+        // the collaborative hand near the wrist (resting on it, or holding
+        // the end effector beside it): the wrist's force may be its own, and
+        // depth near the wrist may be its arm; only another part seen in the
+        // skeleton then confirms a push
+        let hand_at_wrist = self
+            .hand
+            .is_some_and(|h| (h - wrist).norm() <= self.cfg.wrist_confirm_m);
         // the collaborative arm (its hand, its elbow) never confirms: its
         // force is the collaboration's
         let part = self.machine.part();
@@ -738,10 +733,11 @@ impl Collaboration {
     /// measured end effector \[m\], `dt` \[s\], `speed_scale` of the safety judgement).
     pub fn reference(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> CartesianRef {
         let c = &self.cfg;
-        // the end effector's point relative to where the robot meets the
-        // hand: the robot part's axis point, or the wrist's when the hand is
-        // nearer the wrist (the approach brings that part to the hand)
-        let offset = ee - self.contact_axis;
+        // the end effector's point relative to the collaborative robot point
+        // (aiming the wrist instead when the hand is nearer it reached a hand
+        // held out to the wrist, but pressed the wrist into a hand the end
+        // effector also touched: contacts that would not release)
+        let offset = ee - self.robot_point;
         let mut velocity = Vector3::zeros();
         let phase = self.machine.phase();
         if phase == CollabPhase::Contact && self.ref_phase != CollabPhase::Contact {
@@ -758,9 +754,9 @@ impl Collaboration {
         match phase {
             CollabPhase::Approach | CollabPhase::Follow => {
                 if let Some(h) = self.hand {
-                    let to = h - self.contact_axis;
+                    let to = h - self.robot_point;
                     if to.norm() > 1e-6 {
-                        let reach = self.contact_radius + c.hand_radius_m - c.reach_into_m;
+                        let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
                         let target = h - to.normalize() * reach + offset;
                         let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
                         // within `slow_down_m`, the hand's own speed toward
