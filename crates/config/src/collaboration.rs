@@ -152,11 +152,20 @@ pub struct CollaborationConfig {
     pub contact_force_n: f64,
     /// contact: admittance on the estimated force, end-effector velocity per newton [m/(N s)]
     pub admittance: f64,
+    /// contact: at the touch the reference leads the end effector by at most
+    /// this [m] (the approach's lead, cut back; the admittance builds the
+    /// force from there)
+    pub touch_lead_m: f64,
     /// contact: the end effector keeps pressing the hand with this force [N]
     /// (the admittance's reference: it yields to more, closes in on less)
     pub contact_hold_n: f64,
-    /// contact → follow once the hand is this far from the end effector's surface [m]
+    /// contact → follow once the hand is this far from the robot's surface
+    /// (the robot part's or the wrist's, whichever is nearer) [m] ...
     pub follow_gap_m: f64,
+    /// ... and the estimated force below this [N] (at most `contact_force_n`) ...
+    pub release_force_n: f64,
+    /// ... both for this long without a break [s]
+    pub release_s: f64,
     /// the collaboration ends when the hand has not been seen for this long [s]
     pub hand_lost_s: f64,
     /// the approach stops and backs off when an estimated force passes this
@@ -208,6 +217,7 @@ impl CollaborationConfig {
             ("hand_radius_m", self.hand_radius_m),
             ("reach_into_m", self.reach_into_m),
             ("contact_hold_n", self.contact_hold_n),
+            ("touch_lead_m", self.touch_lead_m),
             ("back_off_m", self.back_off_m),
             ("mask_forearm_m", self.mask_forearm_m),
             ("rearm_quiet_s", self.rearm_quiet_s),
@@ -222,6 +232,8 @@ impl CollaborationConfig {
             ("contact_force_n", self.contact_force_n),
             ("admittance", self.admittance),
             ("follow_gap_m", self.follow_gap_m),
+            ("release_force_n", self.release_force_n),
+            ("release_s", self.release_s),
             ("hand_lost_s", self.hand_lost_s),
             ("iso_hand_n", self.iso_hand_n),
             ("iso_lower_arm_n", self.iso_lower_arm_n),
@@ -244,6 +256,12 @@ impl CollaborationConfig {
             return Err(Invalid::new(
                 "collaboration.contact_speed",
                 "must not exceed approach_speed",
+            ));
+        }
+        if self.release_force_n > self.contact_force_n {
+            return Err(Invalid::new(
+                "collaboration.release_force_n",
+                "must not exceed contact_force_n (the contact would never hold)",
             ));
         }
         within(

@@ -7,11 +7,17 @@
 //! | --- | --- | --- |
 //! | idle | approach | a `begin`/`follow` request for a well-tracked hand, the robot neither reacting nor stopped |
 //! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within `slow_down_m` |
-//! | contact | follow | the hand more than `follow_gap_m` away and ‖F̂‖ below half `contact_force_n` |
+//! | contact | follow | the hand `follow_gap_m` farther than where it last pressed (‖F̂‖ ≥ `contact_force_n`) and ‖F̂‖ below `release_force_n`, both for `release_s` without a break |
 //! | follow | contact | as approach → contact |
 //! | approach, contact, follow | back off | ‖F̂‖ above the force limit |
 //! | back off | idle | backed off `back_off_m` (or given up after [`BACK_OFF_MAX_S`]) |
 //! | any | idle | a wrist push, an `end`/`stop` request, the hand unseen for `hand_lost_s` (not backing off), a collision elsewhere, a stale safety input |
+//!
+//! Contact holds by hysteresis: it begins on an overlap or a force and ends
+//! only when the hand has gone, farther and without force, for a while. A
+//! held hand's contact bounces apart for tens of milliseconds (on touching,
+//! as the person presses) and depth places the hand only to centimetres:
+//! neither is the hand moving away, and neither ends the contact.
 
 use phri_config::CollaborationConfig;
 use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
@@ -31,13 +37,15 @@ pub struct Observation {
     pub t: f64,
     /// the collaborative hand was seen in this period (a fresh observation)
     pub hand_seen: bool,
-    /// surface gap between the robot part and the hand \[m\] (centre distance
-    /// less both radii; negative: they overlap)
+    /// surface gap between the robot and the hand \[m\]: to the nearer of
+    /// the collaborative robot part and the wrist (centre distance less both
+    /// radii; negative: they overlap)
     pub gap_m: f64,
     /// ‖F̂‖ at the collaborative contact \[N\]
     pub force_n: f64,
     /// the residual has the pattern of a push on the wrist, confirmed by a
-    /// human part seen near the wrist, for `wrist_hold_s`
+    /// human part other than the collaborative hand seen near the wrist, for
+    /// `wrist_hold_s`
     pub wrist_push: bool,
     /// the residual the intended contact does not explain crosses the
     /// collision thresholds
@@ -80,6 +88,12 @@ pub struct CollabMachine {
     hand_seen_t: f64,
     /// the phase changed at \[s\]
     since: f64,
+    /// in contact: the hand has been away and the force low since \[s\]
+    apart_since: Option<f64>,
+    /// in contact: the gap seen while the force last said the hand touches
+    /// \[m\] (depth places a touching hand 0-6 cm off the surface, by the
+    /// view): the hand has gone `follow_gap_m` beyond it
+    touch_gap: Option<f64>,
     /// a `stop` request asked for a protective stop
     stop_requested: bool,
 }
@@ -95,6 +109,8 @@ impl CollabMachine {
             person: u32::MAX,
             hand_seen_t: 0.0,
             since: 0.0,
+            apart_since: None,
+            touch_gap: None,
             stop_requested: false,
         }
     }
@@ -149,6 +165,8 @@ impl CollabMachine {
         self.phase = phase;
         self.reason = reason;
         self.since = t;
+        self.apart_since = None;
+        self.touch_gap = None;
     }
 
     /// Answer `req` at controller time `t`; `hand_confidence` is the
@@ -263,12 +281,28 @@ impl CollabMachine {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
                 self.enter(CollabPhase::Contact, CollabReason::ContactMade, obs.t)
             }
-            CollabPhase::Contact
-                if obs.gap_m > self.cfg.follow_gap_m
-                    && obs.force_n < 0.5 * self.cfg.contact_force_n
-                    && obs.t - self.since >= MIN_CONTACT_S =>
-            {
-                self.enter(CollabPhase::Follow, CollabReason::HandMovedAway, obs.t)
+            CollabPhase::Contact => {
+                if obs.force_n >= self.cfg.contact_force_n && obs.gap_m.is_finite() {
+                    self.touch_gap = Some(obs.gap_m);
+                }
+                // the hand has gone: away from where it touched and without
+                // force, for `release_s`
+                let touched_at = self.touch_gap.unwrap_or(0.0).max(0.0);
+                let apart = obs.gap_m > touched_at + self.cfg.follow_gap_m
+                    && obs.force_n < self.cfg.release_force_n;
+                let since = match apart {
+                    true => *self.apart_since.get_or_insert(obs.t),
+                    false => {
+                        self.apart_since = None;
+                        obs.t
+                    }
+                };
+                if apart
+                    && obs.t - since >= self.cfg.release_s
+                    && obs.t - self.since >= MIN_CONTACT_S
+                {
+                    self.enter(CollabPhase::Follow, CollabReason::HandMovedAway, obs.t)
+                }
             }
             _ => {}
         }
@@ -384,20 +418,25 @@ mod tests {
         assert_eq!(m.reason(), CollabReason::ContactMade);
         // pushed around in contact: still contact
         assert_eq!(m.step(&seen(0.3, 0.03, 20.0)), CollabPhase::Contact);
-        // the hand moves away (after a touch of at least MIN_CONTACT_S)
-        assert_eq!(m.step(&seen(0.4, 0.2, 0.0)), CollabPhase::Contact);
+        // the hand moves away: away and without force for `release_s`
+        // (after a touch of at least MIN_CONTACT_S)
+        let release = m.cfg.release_s;
+        let t0 = 0.2 + MIN_CONTACT_S;
+        assert_eq!(m.step(&seen(t0, 0.2, 0.0)), CollabPhase::Contact);
         assert_eq!(
-            m.step(&seen(0.2 + MIN_CONTACT_S, 0.2, 0.0)),
-            CollabPhase::Follow
+            m.step(&seen(t0 + release * 0.9, 0.2, 0.0)),
+            CollabPhase::Contact
         );
+        assert_eq!(m.step(&seen(t0 + release, 0.2, 0.0)), CollabPhase::Follow);
         assert_eq!(m.reason(), CollabReason::HandMovedAway);
         // a force is contact near the hand, not far from it
-        assert_eq!(m.step(&seen(0.45, 0.4, 10.0)), CollabPhase::Follow);
-        assert_eq!(m.step(&seen(0.5, 0.05, 10.0)), CollabPhase::Contact);
+        let t1 = t0 + release + 0.05;
+        assert_eq!(m.step(&seen(t1, 0.4, 10.0)), CollabPhase::Follow);
+        assert_eq!(m.step(&seen(t1 + 0.05, 0.05, 10.0)), CollabPhase::Contact);
         // the wrist push ends it; `begin` without a part resumes with the last one
         let push = Observation {
             wrist_push: true,
-            ..seen(0.6, 0.0, 5.0)
+            ..seen(t1 + 0.1, 0.0, 5.0)
         };
         assert_eq!(m.step(&push), CollabPhase::Idle);
         assert_eq!(
@@ -408,10 +447,54 @@ mod tests {
             &req(RequestKind::Begin, CollabPart::None),
             RobotState::Available,
             0.9,
-            1.0,
+            t1 + 0.5,
         );
         assert!(a.accepted);
         assert_eq!(m.part(), CollabPart::RightHand);
+    }
+
+    #[test]
+    fn a_held_hand_stays_in_contact_through_bounces_and_depth_errors() {
+        let mut m = approaching_left_hand();
+        let c = m.cfg.clone();
+        // touched: depth sees the pressing hand 4 cm off the surface
+        assert_eq!(m.step(&seen(1.0, 0.04, 30.0)), CollabPhase::Contact);
+        let mut t = 1.0;
+        for k in 0..3000 {
+            t += 1e-3;
+            // the contact bounces apart 40 ms in every 100 ms (F̂ drops to
+            // 0), depth's gap wanders ±1.5 cm about where the hand pressed
+            let bounce = k % 100 < 40;
+            let gap = 0.04 + 0.015 * ((k as f64) * 0.37).sin();
+            let force = if bounce { 0.0 } else { 20.0 };
+            assert_eq!(
+                m.step(&seen(t, gap, force)),
+                CollabPhase::Contact,
+                "t {t:.3}"
+            );
+        }
+        // apart without a break for less than release_s: still contact
+        let from = t;
+        while t < from + c.release_s * 0.9 {
+            t += 1e-3;
+            assert_eq!(
+                m.step(&seen(t, 0.04 + c.follow_gap_m + 0.01, 0.0)),
+                CollabPhase::Contact
+            );
+        }
+        // a force again resets the release; then the hand goes for release_s
+        assert_eq!(m.step(&seen(t, 0.04, 10.0)), CollabPhase::Contact);
+        let from = t;
+        while m.phase() == CollabPhase::Contact {
+            t += 1e-3;
+            m.step(&seen(t, 0.04 + c.follow_gap_m + 0.01, 0.0));
+            assert!(t < from + c.release_s + 0.01, "never released");
+        }
+        assert!(t >= from + c.release_s - 1e-9);
+        assert_eq!(
+            (m.phase(), m.reason()),
+            (CollabPhase::Follow, CollabReason::HandMovedAway)
+        );
     }
 
     #[test]

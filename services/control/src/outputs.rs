@@ -111,7 +111,7 @@ pub fn write_collab_state(
         for (f, i) in out.forces.iter_mut().zip(0..n) {
             f.point = [e.points[i].x, e.points[i].y, e.points[i].z];
             f.force = [e.forces[i].x, e.forces[i].y, e.forces[i].z];
-            f.frame = c.robot_frame() as i32;
+            f.frame = c.contact_frame() as i32;
             f.observable = e.observable[i] as u32;
         }
     }

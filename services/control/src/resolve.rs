@@ -196,8 +196,11 @@ impl Resolver {
                     true => BEHIND_MARGIN_CONTACT_M,
                     false => BEHIND_MARGIN_M,
                 };
-                let behind_the_hand =
-                    k == 0 && c.collab_hand.is_some_and(|h| behind(&h, p, margin));
+                let behind_the_hand = (k == 0 || k == c.collab_point)
+                    && c.collab_hand.is_some_and(|h| behind(&h, p, margin));
+                // touching, what lies at the hand is the hand (for every point)
+                let behind_the_hand = behind_the_hand
+                    || (c.collab_touching && c.collab_hand.is_some_and(|h| at_the_hand(&h, p)));
                 let target = if p.active == 0 || behind_the_hand {
                     Vector3::zeros()
                 } else {
@@ -345,6 +348,17 @@ const BEHIND_MARGIN_M: f64 = 0.02;
 /// itself (where the tracker misplaced the mask) and the mask's edge, and
 /// its repulsion would only shake the contact.
 const BEHIND_MARGIN_CONTACT_M: f64 = 0.05;
+
+/// While touching the collaborative hand, an obstacle this near the hand's
+/// centre as the controller sees it \[m\] is the hand itself or its mask's
+/// edge (the hand's radius 4.5 cm, depth's error of the centre 3-5 cm).
+const AT_THE_HAND_M: f64 = 0.10;
+
+/// The obstacle of `p` is the collaborative hand `h` itself ([`AT_THE_HAND_M`]).
+fn at_the_hand(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
+    let o = Vector3::from(p.obstacle);
+    o.iter().all(|v| v.is_finite()) && (o - h).norm() <= AT_THE_HAND_M
+}
 
 /// The obstacle of `p` lies behind the collaborative hand `h` as seen from
 /// the control point: farther along the direction to the hand than the hand,

@@ -17,6 +17,13 @@ use serde::Serialize;
 const MIN_GRADED_FORCE_N: f64 = 5.0;
 /// Unmatched samples older than this are dropped \[ns\].
 const MATCH_WINDOW_NS: u64 = 2_000_000_000;
+/// The collaborative hand apart from the robot for less than this between
+/// two contacts touched once \[ns\]: a held hand's contact bounces apart for
+/// 10-300 ms (on touching, while the admittance closes in again), while a
+/// hand that moved away and was followed touches again 1.0 s or more later
+/// (the scenarios' second touch: 1.0-1.9 s). The simulator's episodes
+/// (`contacts`, per robot link, ended after 50 ms apart) count every bounce.
+const TOUCH_GAP_NS: u64 = 500_000_000;
 
 /// `collaboration.requests[]`.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -85,8 +92,12 @@ pub struct CollabReport {
     pub phases: Vec<PhaseReport>,
     /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
     pub wave_to_start_ms: Option<f64>,
-    /// intended contact episodes (ground truth)
+    /// touches of the collaborative hand (ground truth): its contacts with
+    /// any robot link, apart for less than 0.5 s, are one touch
     pub contacts_intended: usize,
+    /// the simulator's intended contact episodes (per robot link and body
+    /// part, the scripted pushes included; a bounce apart of 50 ms is a new one)
+    pub intended_episodes: usize,
     /// `‖F̂ − F_true‖ / ‖F_true‖` over the samples with `‖F_true‖ ≥ 5 N` of
     /// the collaborative hand
     pub force_error: ErrorPercentiles,
@@ -126,6 +137,10 @@ pub struct CollabEvaluator {
     errors: Vec<f64>,
     follow: Vec<f64>,
     part: CollabPart,
+    /// touches of the collaborative hand so far, and the truth stamp it was
+    /// last seen touching [ns, robot clock]
+    touches: usize,
+    touch_last_ns: Option<u64>,
     /// voice requests by seq: (text, score, utterance end → request [ms])
     voice: BTreeMap<u64, (String, f64, f64)>,
 }
@@ -160,6 +175,8 @@ impl CollabEvaluator {
             errors: Vec::new(),
             follow: Vec::new(),
             part: CollabPart::None,
+            touches: 0,
+            touch_last_ns: None,
             voice: BTreeMap::new(),
         }
     }
@@ -292,6 +309,14 @@ impl CollabEvaluator {
             }
         }
         if any {
+            // a touch begins after the hand was apart for TOUCH_GAP_NS
+            if self
+                .touch_last_ns
+                .is_none_or(|t| m.stamp_ns.saturating_sub(t) > TOUCH_GAP_NS)
+            {
+                self.touches += 1;
+            }
+            self.touch_last_ns = Some(m.stamp_ns);
             self.truths.insert(m.stamp_ns, f);
             self.match_up(m.stamp_ns);
         }
@@ -336,7 +361,8 @@ impl CollabEvaluator {
                 peak = Some(peak.map_or(f, |p| p.max(f)));
             }
         }
-        r.contacts_intended = intended;
+        r.contacts_intended = self.touches;
+        r.intended_episodes = intended;
         r.peak_intended_force_n = peak;
         let mut e = self.errors.clone();
         e.sort_by(f64::total_cmp);
@@ -434,8 +460,59 @@ mod tests {
         let want = (4.0f64 + 36.0).sqrt() / 10.0;
         assert!((r.force_error.p50.unwrap() - want).abs() < 1e-12);
         assert_eq!(r.ended_by.as_deref(), Some("wrist_push"));
-        assert_eq!(r.contacts_intended, 2);
+        // the simulator's two intended episodes; the truth saw the hand touch once
+        assert_eq!(r.intended_episodes, 2);
+        assert_eq!(r.contacts_intended, 1);
         assert_eq!(r.peak_intended_force_n, Some(40.0));
+    }
+
+    /// A truth sample at `t_ms` with the right hand touching `link` (or nothing).
+    fn touching(t_ms: u64, link: Option<i32>) -> Truth {
+        let mut t = Truth::zeroed();
+        t.stamp_ns = t_ms * 1_000_000;
+        t.seq = t_ms + 1;
+        if let Some(l) = link {
+            t.n_contacts = 1;
+            t.contacts[0] = ContactTruth {
+                robot_object: l,
+                human_part: BodyPart::HandRight as i32,
+                intended: 1,
+                force: [0.0, 0.0, 20.0],
+                ..Default::default()
+            };
+        }
+        t
+    }
+
+    #[test]
+    fn a_touch_is_one_however_it_bounces_and_whichever_links_it_meets() {
+        let mut e = CollabEvaluator::new(0, vec![], 1_000_000);
+        e.on_state(&state(1000, CollabPhase::Approach, CollabReason::Accepted));
+        // touch 1 (2.0-4.0 s): on link 7, a 20 ms and a 300 ms bounce apart,
+        // then on link 6 as well as link 7
+        let mut samples: Vec<(u64, Option<i32>)> = Vec::new();
+        for t in (2000..4000).step_by(1) {
+            let apart = (2100..2120).contains(&t) || (2500..2800).contains(&t);
+            let link = match (apart, t >= 3000 && t % 2 == 0) {
+                (true, _) => None,
+                (false, true) => Some(5),
+                (false, false) => Some(6),
+            };
+            samples.push((t, link));
+        }
+        // apart 1.0 s (the hand moved away, the robot followed): touch 2
+        samples.extend((4000..5000).map(|t| (t, None)));
+        samples.extend((5000..6000).map(|t| (t, Some(6))));
+        for (t, link) in samples {
+            e.on_truth(&touching(t, link));
+        }
+        // another part's contact (the other hand's push) is no touch of the
+        // collaborative hand
+        let mut push = touching(7000, Some(5));
+        push.contacts[0].human_part = BodyPart::HandLeft as i32;
+        e.on_truth(&push);
+        let r = e.report(std::iter::empty());
+        assert_eq!(r.contacts_intended, 2);
     }
 
     #[test]

@@ -1,10 +1,12 @@
 //! Collaboration (paper Sect. VI): the modes `approach`, `contact` and
 //! `follow`. Each period [`Collaboration::observe`] answers the requests,
 //! finds the collaborative hand in the newest skeleton, estimates the
-//! contact force at the collaborative robot point from the residual
-//! (eqs. 21-22), checks what the intended contact does not explain against
-//! the collision thresholds, looks for a push on the wrist, and steps the
-//! phase machine ([`crate::collab`]). [`Collaboration::reference`] is the
+//! contact force from the residual (eqs. 21-22) where the hand meets the
+//! robot (the collaborative robot part, or the wrist when the hand is
+//! nearer the wrist's surface), checks what the intended contact does not
+//! explain against the collision thresholds, looks for a push on the wrist
+//! by another part than the collaborative hand, and steps the phase machine
+//! ([`crate::collab`]). [`Collaboration::reference`] is the
 //! Cartesian reference of the end effector in the phase, which the
 //! avoidance stage resolves under SNS with every other obstacle.
 //!
@@ -25,7 +27,8 @@ use nalgebra::Vector3;
 use phri_config::{CollaborationConfig, Config, OnRequest};
 use phri_estimation::{ContactPoint, ForceEstimate, ForceEstimator};
 use phri_ipc::{
-    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, MAX_DOF, MAX_PEOPLE,
+    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, SkeletonJoint, MAX_DOF,
+    MAX_PEOPLE,
 };
 use phri_model::Model;
 
@@ -47,9 +50,6 @@ const MAX_LEAD_M: f64 = 0.05;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
-/// In contact, the wrist this much nearer the hand than the robot part \[m\]
-/// holds it: the admittance does not close in further.
-const WRIST_AHEAD_M: f64 = 0.005;
 
 /// The collaboration's inputs of one period.
 #[derive(Clone, Copy, Debug, Default)]
@@ -83,6 +83,17 @@ pub struct Collaboration {
     /// links: the gap to the hand is to the nearest of them too (the wrist
     /// may meet a hand coming from its side first)
     near_objects: Vec<usize>,
+    /// the model's collision objects of the wrist's link: a hand nearer to
+    /// them than to the robot part meets the robot there
+    wrist_objects: Vec<usize>,
+    /// F̂'s contact point is on the wrist (the hand nearer the wrist's
+    /// surface than the robot part's), not on the robot part
+    contact_on_wrist: bool,
+    /// the frame of F̂'s contact point (the robot part's or the wrist's)
+    contact_frame: usize,
+    /// the axis point of the touched capsule nearest the hand \[m\], base
+    /// frame (the robot part's: [`Collaboration::robot_point`], or the wrist's)
+    contact_axis: Vector3<f64>,
     /// joint collision thresholds of the detector \[Nm\]
     collision_threshold: [f64; MAX_DOF],
     n: usize,
@@ -110,6 +121,9 @@ pub struct Collaboration {
     /// collision objects \[m\]: the approach slows down by it
     near_gap: f64,
     wrist_since: Option<f64>,
+    /// the residual had the pattern of a wrist push in the last period
+    /// (confirmed by a part or not)
+    wrist_pattern: bool,
     collision: bool,
     /// after a collaboration: full detection re-arms once the residual was
     /// quiet for `rearm_quiet_s` (None: armed)
@@ -117,6 +131,8 @@ pub struct Collaboration {
     last_answer: Option<Answered>,
     /// backing off after a force limit
     back_off: Option<BackOff>,
+    /// the phase of the last reference
+    ref_phase: CollabPhase,
 }
 
 /// Backing off after a force limit: along the force the person applied.
@@ -170,6 +186,16 @@ impl Collaboration {
                 .filter(|(_, o)| o.link == c.robot_link || o.link == c.wrist_link)
                 .map(|(i, _)| i)
                 .collect(),
+            wrist_objects: model
+                .collisions
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.link == c.wrist_link)
+                .map(|(i, _)| i)
+                .collect(),
+            contact_on_wrist: false,
+            contact_frame: frame,
+            contact_axis: Vector3::zeros(),
             wrist_point: cfg
                 .repulsion
                 .points
@@ -188,10 +214,12 @@ impl Collaboration {
             gap: f64::INFINITY,
             near_gap: f64::INFINITY,
             wrist_since: None,
+            wrist_pattern: false,
             collision: false,
             rearm: None,
             last_answer: None,
             back_off: None,
+            ref_phase: CollabPhase::Idle,
             cfg: c.clone(),
         })
     }
@@ -215,6 +243,18 @@ impl Collaboration {
         self.contact.frame
     }
 
+    /// The frame of F̂'s contact point: the robot part's, or the wrist's
+    /// while the hand is nearer the wrist's surface.
+    pub fn contact_frame(&self) -> usize {
+        self.contact_frame
+    }
+
+    /// F̂ is estimated on the wrist (the hand nearer the wrist's surface
+    /// than the robot part's).
+    pub fn contact_on_wrist(&self) -> bool {
+        self.contact_on_wrist
+    }
+
     /// The last force estimate (while collaborating).
     pub fn estimate(&self) -> Option<&ForceEstimate> {
         self.estimate.as_ref()
@@ -223,6 +263,12 @@ impl Collaboration {
     /// Surface gap between the robot part and the hand \[m\] (∞: no hand).
     pub fn gap_m(&self) -> f64 {
         self.gap
+    }
+
+    /// Surface gap between the hand and the nearer of the robot part and the
+    /// wrist \[m\] (∞: no hand): what the phases' contact and release use.
+    pub fn near_gap_m(&self) -> f64 {
+        self.near_gap
     }
 
     /// The collaborative robot part's axis point nearest the hand \[m\],
@@ -259,6 +305,12 @@ impl Collaboration {
     /// The residual the intended contact does not explain crosses a collision threshold.
     pub fn collision(&self) -> bool {
         self.collision
+    }
+
+    /// The residual had the pattern of a wrist push in the last period (a
+    /// force through the wrist centre), whoever applied it.
+    pub fn wrist_pattern(&self) -> bool {
+        self.wrist_pattern
     }
 
     /// Full detection is not yet re-armed after a collaboration.
@@ -409,6 +461,7 @@ impl Collaboration {
             .wrist_point
             .and_then(|i| perception?.points.get(i))
             .is_some_and(|p| p.active != 0 && p.min_distance <= WRIST_SEEN_M);
+        self.wrist_pattern = false;
         let wrist_push =
             self.machine.active() && self.wrist_push(t, q, residual, fresh_skeleton, wrist_seen);
         // 5. the gap and the phase
@@ -428,7 +481,7 @@ impl Collaboration {
         let phase = self.machine.step(&Observation {
             t,
             hand_seen: self.hand_seen,
-            gap_m: self.gap,
+            gap_m: self.near_gap,
             force_n,
             wrist_push,
             collision: self.collision,
@@ -460,12 +513,16 @@ impl Collaboration {
         phase
     }
 
-    /// Where the hand meets the robot part at joints `q`: on the capsule
-    /// `robot_point ± robot_half_length_m ẑ` (link frame), the surface point
-    /// toward the hand seen in depth (the capsule's tip along ẑ while no hand
-    /// is known). Sets [`Collaboration::robot_point`] to the axis point
-    /// nearest the hand.
+    /// Where the hand meets the robot at joints `q`: on the robot part's
+    /// capsule `robot_point ± robot_half_length_m ẑ` (link frame), the surface
+    /// point toward the hand seen in depth (the capsule's tip along ẑ while no
+    /// hand is known); or, when the hand is nearer the surface of the wrist's
+    /// collision capsules, the wrist's surface point toward it (in the wrist
+    /// link's frame). Sets [`Collaboration::robot_point`] to the robot part's
+    /// axis point nearest the hand, and which of the two F̂ is estimated on.
     fn contact_point(&mut self, q: &[f64]) -> ContactPoint {
+        self.contact_on_wrist = false;
+        self.contact_frame = self.contact.frame;
         let Ok(pose) = self.forces.placement(q, self.contact.frame) else {
             return self.contact;
         };
@@ -475,7 +532,7 @@ impl Collaboration {
             self.cfg.robot_radius_m,
         );
         let z = Vector3::z();
-        let (axis, normal) = match self.hand {
+        let (axis, normal, part_distance) = match self.hand {
             Some(h) => {
                 let local = pose.r.transpose() * (h - pose.p);
                 let axis = centre + z * (local - centre).dot(&z).clamp(-half, half);
@@ -484,15 +541,64 @@ impl Collaboration {
                     true => d / d.norm(),
                     false => z,
                 };
-                (axis, normal)
+                (axis, normal, d.norm() - radius)
             }
-            None => (centre + z * half, z),
+            None => (centre + z * half, z, f64::INFINITY),
         };
         self.robot_point = pose.apply(&axis);
+        self.contact_axis = self.robot_point;
+        if let Some((point, axis)) = self
+            .hand
+            .and_then(|h| self.wrist_contact(&h, part_distance))
+        {
+            self.contact_on_wrist = true;
+            self.contact_axis = axis;
+            self.contact_frame = self.wrist_frame;
+            return ContactPoint {
+                frame: self.wrist_frame,
+                point,
+            };
+        }
         ContactPoint {
             frame: self.contact.frame,
             point: axis + normal * radius,
         }
+    }
+
+    /// The wrist's surface point toward the hand `h` \[m\] (base frame), in
+    /// the wrist link's frame, and the capsule's axis point nearest `h`
+    /// \[m\], base frame, when `h` is nearer the surface of the wrist's
+    /// collision capsules than `part_distance` \[m\] (the robot part's
+    /// surface), at the joints of the last kinematics.
+    fn wrist_contact(
+        &self,
+        h: &Vector3<f64>,
+        part_distance: f64,
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let (model, data) = (self.forces.model(), self.forces.data());
+        let (axis, distance, radius) = self
+            .wrist_objects
+            .iter()
+            .filter_map(|&i| model.collisions.get(i))
+            .map(|o| {
+                let (a, b, radius) = o.capsule_segment(data);
+                let ab = b - a;
+                let len2 = ab.norm_squared();
+                let t = match len2 > 1e-12 {
+                    true => ((h - a).dot(&ab) / len2).clamp(0.0, 1.0),
+                    false => 0.0,
+                };
+                let axis = a + ab * t;
+                (axis, (h - axis).norm() - radius, radius)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        if !(distance < part_distance) {
+            return None;
+        }
+        let normal = (h - axis).try_normalize(1e-9)?;
+        let surface = axis + normal * radius;
+        let wrist = phri_model::frame_placement(model, data, self.wrist_frame);
+        Some((wrist.r.transpose() * (surface - wrist.p), axis))
     }
 
     /// A collaboration begins or ends: nothing of the hand carries over.
@@ -534,8 +640,11 @@ impl Collaboration {
 
     /// `‖r₅..₇‖ ≤ wrist_ratio ‖r₁..₄‖`, `‖r₁..₄‖ ≥ wrist_min_nm`, a force
     /// at the wrist centre leaving at most `wrist_fit ‖r‖` unexplained, for
-    /// `wrist_hold_s`, with a human part seen within `wrist_confirm_m` of the
-    /// wrist and nearer to it than to the collaborative contact.
+    /// `wrist_hold_s`, with a human part other than the collaborative arm
+    /// seen within `wrist_confirm_m` of the wrist (in the skeleton; or in
+    /// depth at the wrist's control point, unless the collaborative hand
+    /// rests on the wrist). The collaborative hand's own force on the wrist
+    /// is a contact, not a push.
     fn wrist_push(
         &mut self,
         t: f64,
@@ -544,6 +653,7 @@ impl Collaboration {
         sk: Option<&Skeleton>,
         seen_in_depth: bool,
     ) -> bool {
+        self.wrist_pattern = false;
         let (Some(r), Some(_)) = (residual, self.estimate.as_ref()) else {
             self.wrist_since = None;
             return false;
@@ -569,11 +679,27 @@ impl Collaboration {
                 .estimate(q, r, std::slice::from_ref(&wrist))
                 .is_ok_and(|e| e.unexplained <= self.cfg.wrist_fit * norm);
         }
+        self.wrist_pattern = pattern;
         let wrist = self.wrist_centre();
-        // the collaborative hand confirms only when it is nearer to the wrist
-        // than to the end effector it holds; any other part when it is near
-        let collaborative = self.machine.part().joint().map(|j| j as usize);
-        let confirmed = seen_in_depth
+        // the collaborative hand near the wrist (resting on it, or holding
+        // the end effector beside it): the wrist's force may be its own, and
+        // depth near the wrist may be its arm; only another part seen in the
+        // skeleton then confirms a push
+        let hand_at_wrist = self
+            .hand
+            .is_some_and(|h| (h - wrist).norm() <= self.cfg.wrist_confirm_m);
+        // the collaborative arm (its hand, its elbow) never confirms: its
+        // force is the collaboration's
+        let part = self.machine.part();
+        let elbow = match part {
+            CollabPart::RightHand => Some(SkeletonJoint::RightElbow),
+            CollabPart::LeftHand => Some(SkeletonJoint::LeftElbow),
+            CollabPart::None => None,
+        };
+        let own = |i: usize| {
+            part.joint().is_some_and(|j| j as usize == i) || elbow.is_some_and(|j| j as usize == i)
+        };
+        let confirmed = (seen_in_depth && !hand_at_wrist)
             || sk.is_some_and(|sk| {
                 let n = (sk.n_people as usize).min(MAX_PEOPLE);
                 sk.people[..n].iter().filter(|p| p.tracked != 0).any(|p| {
@@ -582,11 +708,9 @@ impl Collaboration {
                         .zip(&p.confidence)
                         .enumerate()
                         .any(|(i, (j, c))| {
-                            let x = Vector3::from(*j);
                             *c >= self.cfg.min_hand_confidence
-                                && (x - wrist).norm() <= self.cfg.wrist_confirm_m
-                                && (Some(i) != collaborative
-                                    || (x - wrist).norm() < (x - self.robot_point).norm())
+                                && !own(i)
+                                && (Vector3::from(*j) - wrist).norm() <= self.cfg.wrist_confirm_m
                         })
                 })
             });
@@ -610,9 +734,24 @@ impl Collaboration {
     pub fn reference(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> CartesianRef {
         let c = &self.cfg;
         // the end effector's point relative to the collaborative robot point
+        // (aiming the wrist instead when the hand is nearer it reached a hand
+        // held out to the wrist, but pressed the wrist into a hand the end
+        // effector also touched: contacts that would not release)
         let offset = ee - self.robot_point;
         let mut velocity = Vector3::zeros();
-        match self.machine.phase() {
+        let phase = self.machine.phase();
+        if phase == CollabPhase::Contact && self.ref_phase != CollabPhase::Contact {
+            // the touch: the approach's lead (up to `MAX_LEAD_M` where the
+            // hand stopped the arm) would press on as a spring; the
+            // admittance builds the contact force from `touch_lead_m`
+            let lead = self.x_d - ee;
+            let cap = self.cfg.touch_lead_m;
+            if lead.norm() > cap {
+                self.x_d = ee + lead * (cap / lead.norm());
+            }
+        }
+        self.ref_phase = phase;
+        match phase {
             CollabPhase::Approach | CollabPhase::Follow => {
                 if let Some(h) = self.hand {
                     let to = h - self.robot_point;
@@ -655,22 +794,17 @@ impl Collaboration {
                     let f = e.forces[0];
                     let to = match f.norm() >= 0.5 * c.contact_force_n {
                         true => -f,
-                        false => self.hand.map_or(Vector3::zeros(), |h| h - self.robot_point),
+                        false => self
+                            .hand
+                            .map_or(Vector3::zeros(), |h| h - self.contact_axis),
                     };
                     let hold = match to.norm() > 1e-6 {
                         true => to / to.norm() * c.contact_hold_n,
                         false => Vector3::zeros(),
                     };
+                    // F̂ is where the hand is (the robot part or the wrist):
+                    // the end effector's translation moves either alike
                     velocity = (e.forces[0] + hold) * c.admittance;
-                    // the wrist nearer the hand than the robot part: it takes
-                    // the force F̂ does not see at the part; no closing in
-                    let toward_hand = self
-                        .hand
-                        .filter(|_| self.near_gap < self.gap - WRIST_AHEAD_M)
-                        .and_then(|h| (h - self.robot_point).try_normalize(1e-9));
-                    if let Some(a) = toward_hand {
-                        velocity -= a * velocity.dot(&a).max(0.0);
-                    }
                     let v = velocity.norm();
                     if v > c.approach_speed {
                         velocity *= c.approach_speed / v;
@@ -706,6 +840,10 @@ impl Collaboration {
             // backing off, the hand is an obstacle like any other
             collab_hand: self.hand.filter(|_| self.back_off.is_none()),
             collab_touching: self.machine.phase() == CollabPhase::Contact,
+            collab_point: match (self.contact_on_wrist, self.wrist_point) {
+                (true, Some(i)) => i,
+                _ => 0,
+            },
         }
     }
 

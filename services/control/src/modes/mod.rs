@@ -119,6 +119,11 @@ pub struct CartesianRef {
     /// collaborating in contact with that hand: what lies about as deep as
     /// the hand is the hand (and its mask's edge), not an obstacle
     pub collab_touching: bool,
+    /// the control point (index into `[[repulsion.points]]`) where the robot
+    /// meets that hand: 0, the end effector, or the wrist's while the hand is
+    /// nearer the wrist (then obstacles behind the hand, seen from the
+    /// wrist, do not repel the wrist either)
+    pub collab_point: usize,
 }
 
 /// What a behaviour leaves for the rest of the period.

@@ -33,6 +33,7 @@ pub fn step(
             path_time: None,
             collab_hand: None,
             collab_touching: false,
+            collab_point: 0,
         });
     }
     reference.hold(q, qd, gains, accel);

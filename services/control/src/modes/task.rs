@@ -167,6 +167,7 @@ impl TaskState {
             path_time: Some(self.s),
             collab_hand: None,
             collab_touching: false,
+            collab_point: 0,
         }
     }
 }
