@@ -440,7 +440,7 @@ fn run_state_is_private_and_tampered_state_is_never_trusted() {
         .find(|l| l.contains(" done after "))
         .unwrap_or("");
     assert!(
-        last.contains("degraded (") && last.contains("restarts: control 1)"),
+        last.contains("degraded (") && last.contains("restarts: control 1"),
         "{last}"
     );
     assert_nothing_left(&p);

@@ -21,7 +21,8 @@ pub const PUBLISHERS: &[(&str, &[&str])] = &[
     ("robot/state", &["phri-sim", "phri-franka"]),
     ("dynamics/residual", &["phri-dynamics"]),
     ("perception/repulsion", &["phri-repulsion"]),
-    ("perception/skeleton", &["phri-perception"]),
+    // the simulated camera's body tracker (a real tracker's driver alike)
+    ("perception/skeleton", &["phri-camera"]),
     ("perception/hand", &["phri-perception"]),
     ("hri/request", &["phri-gesture", "phri-voice"]),
     ("audio/mic", &["phri-mic"]),

@@ -260,10 +260,14 @@ impl Scenario {
             field,
             reason,
         };
-        if !(raw.duration_s.is_finite() && raw.duration_s > 0.0 && raw.duration_s <= MAX_DURATION_S) {
+        if !(raw.duration_s.is_finite() && raw.duration_s > 0.0 && raw.duration_s <= MAX_DURATION_S)
+        {
             return Err(invalid(
                 "duration_s".into(),
-                format!("{} is not a positive number of seconds up to {MAX_DURATION_S}", raw.duration_s),
+                format!(
+                    "{} is not a positive number of seconds up to {MAX_DURATION_S}",
+                    raw.duration_s
+                ),
             ));
         }
         let (human, collaborative_parts) = match raw.human {

@@ -74,7 +74,13 @@ impl VoiceConfig {
         within(S, "min_voiced_s", self.min_voiced_s, 0.0, 1.0)?;
         within(S, "padding_s", self.padding_s, 0.0, 2.0)?;
         within(S, "min_hand_confidence", self.min_hand_confidence, 0.0, 1.0)?;
-        within(S, "skeleton_max_age_ms", self.skeleton_max_age_ms, 1.0, 60_000.0)?;
+        within(
+            S,
+            "skeleton_max_age_ms",
+            self.skeleton_max_age_ms,
+            1.0,
+            60_000.0,
+        )?;
         Ok(())
     }
 }

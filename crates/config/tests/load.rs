@@ -227,9 +227,15 @@ fn the_eight_point_comparison_keeps_the_first_eight_points() {
 #[test]
 fn values_that_would_exhaust_memory_or_overflow_time_are_refused() {
     let e = err(&["voice.hangover_s=1e9"]);
-    assert!(e.contains("voice.hangover_s") && e.contains("[0.01, 5]"), "{e}");
+    assert!(
+        e.contains("voice.hangover_s") && e.contains("[0.01, 5]"),
+        "{e}"
+    );
     let e = err(&["sim.dt_s=1e-9"]);
-    assert!(e.contains("sim.dt_s") && e.contains("[0.0001, 0.01]"), "{e}");
+    assert!(
+        e.contains("sim.dt_s") && e.contains("[0.0001, 0.01]"),
+        "{e}"
+    );
     let e = err(&["voice.skeleton_max_age_ms=1e300"]);
     assert!(e.contains("voice.skeleton_max_age_ms"), "{e}");
 }

@@ -55,7 +55,12 @@ static DEADMAN_FIRED: AtomicBool = AtomicBool::new(false);
 
 /// How often the supervision thread reads `supervisor/health` (the owners
 /// of the owned channels follow restarts this fast) [ms].
-const SUPERVISION_POLL_MS: u64 = 20;
+const SUPERVISION_POLL_MS: u64 = 5;
+
+/// How long [`ServiceContext::start_deadman`] waits for the supervisor's
+/// first health, so the owners of the inputs are known before the loop
+/// starts [ms].
+const FIRST_HEALTH_MS: u64 = 500;
 
 /// How often the supervision thread publishes `audit/inputs` [ms].
 const AUDIT_PERIOD_MS: u64 = 500;
@@ -255,10 +260,7 @@ impl ServiceContext {
                 Ok((node, sub, audits))
             });
             let (_node, health, audits) = match opened {
-                Ok(x) => {
-                    let _ = ready.send(Ok(()));
-                    x
-                }
+                Ok(x) => x,
                 Err(e) => {
                     let _ = ready.send(Err(e));
                     return;
@@ -266,12 +268,17 @@ impl ServiceContext {
             };
             let mut last = crate::now_ns();
             let mut trusted: Option<i32> = None;
+            // the first health before the service's loop starts: its inputs'
+            // owners are known from its first sample on
+            let first_by = last + FIRST_HEALTH_MS * 1_000_000;
+            let mut first = true;
             let mut refused_pid = 0;
             let mut report = phri_ipc::InputAudit::zeroed();
             report.service = phri_ipc::json::to_c_str(&service);
             let mut next_audit = last;
             while !shutdown.requested() {
-                std::thread::sleep(std::time::Duration::from_millis(SUPERVISION_POLL_MS));
+                let pause = if first { 1 } else { SUPERVISION_POLL_MS };
+                std::thread::sleep(std::time::Duration::from_millis(pause));
                 let now = crate::now_ns();
                 let mut newest: Option<phri_ipc::Health> = None;
                 let _ = health.drain_from(|pid, h| {
@@ -294,6 +301,13 @@ impl ServiceContext {
                     {
                         owners.set_pid(s.name_str(), if s.alive != 0 { s.pid } else { 0 });
                     }
+                }
+                if first {
+                    if newest.is_none() && now <= first_by {
+                        continue;
+                    }
+                    first = false;
+                    let _ = ready.send(Ok(()));
                 }
                 if now.saturating_sub(last) > limit_ns {
                     tracing::warn!(

@@ -262,8 +262,16 @@ impl Proc {
 /// (`phri-…: …`), else a panic's message (never the backtrace's notes),
 /// else the last line.
 pub fn cause_line(stderr: &str) -> Option<String> {
-    let lines: Vec<&str> = stderr.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
-    if let Some(l) = lines.iter().rev().find(|l| l.starts_with("phri-") && l.contains(": ")) {
+    let lines: Vec<&str> = stderr
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    if let Some(l) = lines
+        .iter()
+        .rev()
+        .find(|l| l.starts_with("phri-") && l.contains(": "))
+    {
         return Some(l.to_string());
     }
     if let Some(i) = lines.iter().position(|l| l.contains("panicked at")) {

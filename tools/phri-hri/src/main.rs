@@ -337,14 +337,24 @@ fn run(args: Args) -> Result<ExitCode, String> {
             ))
         }
         Command::Resume { wait_s } => {
-            let Some(health) = phri_ipc::SUPERVISOR_HEALTH
-                .subscriber_if_exists(&node, Queue::Latest)
-                .map_err(|e| e.to_string())?
-            else {
-                return Err(format!(
-                    "{}: not sent: no supervisor runs the cell of prefix {}",
-                    HRI_REQUEST.name, args.prefix
-                ));
+            // the supervisor's channel, found within the wait (a supervisor
+            // just back from a stall may still be cleaning up its dead services)
+            let t0 = Instant::now();
+            let health = loop {
+                let found = phri_ipc::SUPERVISOR_HEALTH.subscriber_if_exists(&node, Queue::Latest);
+                match found {
+                    Ok(Some(h)) => break h,
+                    _ if t0.elapsed().as_secs_f64() < wait_s.min(2.0) => {
+                        std::thread::sleep(Duration::from_millis(50));
+                    }
+                    Ok(None) => {
+                        return Err(format!(
+                            "{}: not sent: no supervisor runs the cell of prefix {}",
+                            HRI_REQUEST.name, args.prefix
+                        ))
+                    }
+                    Err(e) => return Err(e.to_string()),
+                }
             };
             let publisher = HRI_REQUEST.publisher(&node).map_err(|e| e.to_string())?;
             publisher
