@@ -80,6 +80,8 @@ const TICK_NS: u64 = 10_000_000;
 const WATCH_NS: u64 = 50_000_000;
 /// Period of the samples of the services' CPU time [ns].
 const CPU_SAMPLE_NS: u64 = 20_000_000;
+/// How long health goes out every tick after a (re)start [ns].
+const FAST_HEALTH_NS: u64 = 1_000_000_000;
 /// A supervision loop later than this was a stall of the supervisor itself [ns].
 const STALL_NS: u64 = 100_000_000;
 /// A service's `--check` must answer within this.
@@ -647,6 +649,10 @@ fn body() -> Result<(), SupervisorError> {
     let mut stop_reason: Option<String> = None;
     let mut cpu_use = CpuUse::new(cell.roster.len());
     let mut next_health = now_ns();
+    // after a (re)start, health every tick for a while: a new service waits
+    // for it (its inputs' owners) before its loop starts, and iceoryx2 hands
+    // a new subscriber the last sample only with the next one published
+    let mut fast_health_until = now_ns() + FAST_HEALTH_NS;
     let mut next_watch = now_ns();
     let mut next_cpu_sample = now_ns();
     let mut tick = now_ns();
@@ -973,6 +979,7 @@ fn body() -> Result<(), SupervisorError> {
                     cell.roster.started(i, now, child.id());
                     cell.procs[i] = Some(Proc::Child(child));
                     cpu_use.restarted(i);
+                    fast_health_until = now + FAST_HEALTH_NS;
                     changed = true;
                 }
                 Err(e) => {
@@ -1003,7 +1010,7 @@ fn body() -> Result<(), SupervisorError> {
                 stop_reason = Some(reason);
             }
         }
-        if now >= next_health {
+        if now >= next_health || now < fast_health_until {
             next_health = now + health_period;
             cell.roster.fill_health(&mut health, now);
             let _ = ports.health.publish(&health);
