@@ -1062,13 +1062,14 @@ fn body() -> Result<(), SupervisorError> {
     }
     let intended = report.contacts.iter().filter(|c| c.intended).count();
     tracing::info!(
-        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} unintended contacts, {intended} intended, {} false detections; {}",
+        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} unintended contacts, {} intended touches, {} false detections; {}",
         report.scenario,
         report.duration_s,
         report.torque_loop.cycles,
         report.torque_loop.missed_deadlines,
         report.torque_loop.latency_us.p99,
         report.contacts.len() - intended,
+        report.collaboration.contacts_intended,
         report.false_detections,
         report.summary
     );
