@@ -225,7 +225,8 @@ pub fn c_str<const N: usize>(b: &[u8; N]) -> String {
     c_str_ref(b).to_string()
 }
 
-fn c_str_ref<const N: usize>(b: &[u8; N]) -> &str {
+/// The text of a zero-padded UTF-8 field, borrowed (`?` when not UTF-8).
+pub fn c_str_ref<const N: usize>(b: &[u8; N]) -> &str {
     let end = b.iter().position(|&c| c == 0).unwrap_or(N);
     std::str::from_utf8(&b[..end]).unwrap_or("?")
 }

@@ -277,12 +277,7 @@ pub struct ServiceHealth {
 
 impl ServiceHealth {
     pub fn name_str(&self) -> &str {
-        let end = self
-            .name
-            .iter()
-            .position(|&b| b == 0)
-            .unwrap_or(self.name.len());
-        std::str::from_utf8(&self.name[..end]).unwrap_or("?")
+        crate::json::c_str_ref(&self.name)
     }
 }
 
@@ -324,12 +319,7 @@ pub struct InputAudit {
 
 impl InputAudit {
     pub fn service_str(&self) -> &str {
-        let end = self
-            .service
-            .iter()
-            .position(|&b| b == 0)
-            .unwrap_or(self.service.len());
-        std::str::from_utf8(&self.service[..end]).unwrap_or("?")
+        crate::json::c_str_ref(&self.service)
     }
 }
 
