@@ -15,11 +15,14 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+mod support;
+
 static SERIAL: Mutex<()> = Mutex::new(());
 
 const NOBODY: u32 = 65534;
 
 fn serial() -> std::sync::MutexGuard<'static, ()> {
+    support::loud_panics();
     SERIAL.lock().unwrap_or_else(|e| e.into_inner())
 }
 

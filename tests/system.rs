@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+mod support;
+
 static SERIAL: Mutex<()> = Mutex::new(());
 
 fn repo() -> PathBuf {
@@ -40,6 +42,7 @@ struct Cell {
 
 impl Cell {
     fn start(test: &str, scenario: &str, duration: Option<f64>, sets: &[&str]) -> Cell {
+        support::loud_panics();
         for b in ["phri-sim", "phri-dynamics", "phri-control"] {
             bin(b);
         }
@@ -695,6 +698,56 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
         r["events"]
     );
     assert_eq!(r["services"]["perception"]["restarts"], 1);
+    assert_no_unintended_contact(&r);
+}
+
+#[test]
+fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_hand_is_there() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // the robot touches the held-out right hand from ~8 s; the hand stays
+    // at the robot (within 5 cm) until it is lowered at 15-15.5 s. The
+    // controller is stopped for 300 ms in contact: frozen (heartbeat
+    // timeout 200 ms), killed and restarted
+    let cell = Cell::start("ctlcontact", "collaboration", Some(20.0), &[]);
+    cell.pid_of("control");
+    let deadline = Instant::now() + Duration::from_secs(14);
+    while collab_phase(&cell).as_deref() != Some("contact") {
+        assert!(Instant::now() < deadline, "no contact within 14 s");
+        wait(0.1);
+    }
+    wait(0.5);
+    let pid = cell.kill("control", libc::SIGSTOP);
+    wait(0.3);
+    // SAFETY: kill(2) on the stopped controller (gone if already killed).
+    unsafe { libc::kill(pid, libc::SIGCONT) };
+    let r = cell.finish();
+    let c = &r["collaboration"];
+    eprintln!("collaboration: {c}");
+    eprintln!("events: {}", r["events"]);
+    assert_eq!(r["services"]["control"]["restarts"], 1, "{}", r["events"]);
+    let restart_t = events(&r, "restart", "control")[0]["t_s"].as_f64().unwrap();
+    let end = c["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["phase"] == "idle" && p["reason"] == "controller_restart")
+        .unwrap_or_else(|| panic!("not ended by the restart: {c}"));
+    assert!(end["t_s"].as_f64().unwrap() >= restart_t - 0.01);
+    assert_eq!(c["ended_by"], "controller_restart");
+    // the restarted controller held: a protective stop for the hand at the
+    // robot, and no task before the hand was lowered (15 s)
+    assert_eq!(r["protective_stop_causes"]["controller_restart"], 1);
+    let resumed: Vec<f64> = events(&r, "resume", "control")
+        .iter()
+        .chain(events(&r, "sync", "control").iter())
+        .filter_map(|e| e["t_s"].as_f64())
+        .filter(|t| *t > restart_t)
+        .collect();
+    assert!(
+        resumed.iter().all(|t| *t >= 15.0),
+        "task motion at {resumed:?} s with the hand at the robot"
+    );
+    assert!(!resumed.is_empty(), "the task never resumed: {}", r["events"]);
     assert_no_unintended_contact(&r);
 }
 

@@ -315,6 +315,9 @@ wire_enum! {
         Collision = 14 => "collision",
         /// ended: a safety input went stale
         Stale = 15 => "stale",
+        /// ended: the controller restarted (it crashed or froze); the new
+        /// one holds until no hand is at the end effector
+        ControllerRestart = 16 => "controller_restart",
     }
 }
 

@@ -166,6 +166,10 @@ pub struct CollaborationConfig {
     pub release_force_n: f64,
     /// ... both for this long without a break [s]
     pub release_s: f64,
+    /// a restarted controller holds (protective stop) while a tracked hand
+    /// is within this of the robot part's or the wrist's surface [m], until
+    /// every hand is farther for `release_s`
+    pub restart_clear_m: f64,
     /// the collaboration ends when the hand has not been seen for this long [s]
     pub hand_lost_s: f64,
     /// the approach stops and backs off when an estimated force passes this
@@ -234,6 +238,7 @@ impl CollaborationConfig {
             ("follow_gap_m", self.follow_gap_m),
             ("release_force_n", self.release_force_n),
             ("release_s", self.release_s),
+            ("restart_clear_m", self.restart_clear_m),
             ("hand_lost_s", self.hand_lost_s),
             ("iso_hand_n", self.iso_hand_n),
             ("iso_lower_arm_n", self.iso_lower_arm_n),

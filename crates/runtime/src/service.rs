@@ -119,6 +119,17 @@ pub const RUN_DIR_ENV: &str = "PHRI_RUN_DIR";
 /// of its cell has published `supervisor/health` for `[supervisor] deadman_s`.
 pub const SUPERVISED_ENV: &str = "PHRI_SUPERVISED";
 
+/// Environment variable the supervisor sets (to `1`) for a service it starts
+/// again in the same cell (after a crash, a freeze, a dead-man stop): a
+/// restarted controller ends whatever collaboration its predecessor ran
+/// and holds while a hand is at the robot.
+pub const RESTARTED_ENV: &str = "PHRI_RESTARTED";
+
+/// This process is a service started again in its cell ([`RESTARTED_ENV`]).
+pub fn restarted() -> bool {
+    std::env::var_os(RESTARTED_ENV).is_some_and(|v| v == "1")
+}
+
 /// Environment variable giving the iceoryx2 prefix when `--prefix` is absent.
 pub const PREFIX_ENV: &str = "PHRI_PREFIX";
 

@@ -119,6 +119,11 @@ impl CollabMachine {
         self.phase
     }
 
+    /// `[collaboration]`.
+    pub fn config(&self) -> &CollaborationConfig {
+        &self.cfg
+    }
+
     /// Why the phase last changed.
     pub fn reason(&self) -> CollabReason {
         self.reason
@@ -167,6 +172,12 @@ impl CollabMachine {
         self.since = t;
         self.apart_since = None;
         self.touch_gap = None;
+    }
+
+    /// The controller restarted at `t`: whatever collaboration its
+    /// predecessor ran is over (`controller_restart`); nothing of it carries over.
+    pub fn restarted(&mut self, t: f64) {
+        self.enter(CollabPhase::Idle, CollabReason::ControllerRestart, t);
     }
 
     /// Answer `req` at controller time `t`; `hand_confidence` is the

@@ -17,6 +17,7 @@ use crate::limits::{LimitActivity, Limits};
 use crate::modes::collaborate::Collaboration;
 use crate::modes::reaction::{ReactionIo, ReactionState};
 use crate::modes::task::TaskState;
+use crate::modes::restart_hold::{Hold, RestartHold};
 use crate::modes::{self, protective_stop, recover, sync, Behaviour, CartesianRef, Conditions};
 use crate::reference::{JointReference, TrackingGains};
 use crate::resolve::{Faults, Resolver};
@@ -93,6 +94,10 @@ pub struct Controller {
     reaction: ReactionState,
     /// the collaboration layer (`None`: `[collaboration] enabled = false`)
     collab: Option<Collaboration>,
+    /// a restarted controller's hold while a hand is at the robot (`None`: not restarted, or over)
+    restart: Option<RestartHold>,
+    /// the hold's judgement of this period
+    hold: Hold,
     mode: ControlMode,
     last_stamp: Option<u64>,
     /// controller time \[s\]: the sum of the periods seen
@@ -175,6 +180,8 @@ impl Controller {
             task: TaskState::new(&cfg),
             reaction: ReactionState::new(&cfg, params.period_s),
             collab: None,
+            restart: None,
+            hold: Hold::Clear,
             mode: ControlMode::Sync,
             last_stamp: None,
             t: 0.0,
@@ -212,6 +219,24 @@ impl Controller {
         Ok(c)
     }
 
+    /// This controller replaces one that crashed or froze (its process was
+    /// restarted), perhaps mid-collaboration: the collaboration is over
+    /// (`controller_restart`), and the task waits while a tracked hand is at
+    /// the robot (a protective stop until every hand stayed
+    /// `restart_clear_m` away for `release_s`). Without the collaboration
+    /// layer, or without a body tracker (`[skeleton] enabled = false`: no
+    /// collaboration could run), nothing changes. Call it before the first step.
+    pub fn restarted(&mut self) {
+        if let Some(c) = self.collab.as_mut() {
+            c.restarted(self.t);
+            let cfg = c.machine().config();
+            // without a body tracker nobody collaborated: nothing to judge
+            self.restart = c
+                .sees_hands()
+                .then(|| RestartHold::new(cfg.restart_clear_m, cfg.release_s));
+        }
+    }
+
     /// The control points of the repulsion workers (`[repulsion] points`), in
     /// their configured order; the first is the end effector.
     pub fn set_control_points(&mut self, points: &[PointConfig]) -> Result<(), ControlError> {
@@ -234,6 +259,7 @@ impl Controller {
         let safety = self.safety.assess(input, &self.cfg, n);
         self.measure(q, qd);
         self.observe_collaboration(q, dt, &safety, input);
+        self.hold = self.judge_restart(q, input);
 
         // 2. the reaction to a detected collision, and every other change of mode
         let next = modes::next_mode(self.mode, &self.conditions(&safety));
@@ -339,6 +365,19 @@ impl Controller {
         );
     }
 
+    /// A restarted controller's hold: is a tracked hand at the robot?
+    fn judge_restart(&mut self, q: &[f64], input: &ControlInput<'_>) -> Hold {
+        let (Some(hold), Some(collab)) = (self.restart.as_mut(), self.collab.as_mut()) else {
+            return Hold::Clear;
+        };
+        let gap = collab.nearest_hand_gap(q, input.state_stamp_ns, input.collab.skeleton);
+        let judged = hold.step(self.t, gap);
+        if judged == Hold::Clear {
+            self.restart = None;
+        }
+        judged
+    }
+
     fn conditions(&mut self, s: &Safety) -> Conditions {
         if self.mode == ControlMode::Recover {
             if s.contact || s.collision {
@@ -383,6 +422,7 @@ impl Controller {
             collab_collision: self.collab.as_ref().is_some_and(Collaboration::collision),
             rearming: self.collab.as_ref().is_some_and(Collaboration::rearming),
             stop_requested: self.collab.as_mut().is_some_and(Collaboration::take_stop),
+            restart: self.hold,
         }
     }
 

@@ -52,6 +52,10 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     if ctx.checking() {
         return Ok(());
     }
+    if phri_runtime::service::restarted() {
+        // the predecessor may have left a hand on the end effector
+        controller.restarted();
+    }
 
     let node = ctx.node()?;
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Latest)?;

@@ -197,9 +197,11 @@ impl Cell {
     /// Start service `i`.
     fn spawn(&self, i: usize) -> Result<std::process::Child, SupervisorError> {
         let (name, spec) = (&self.roster.get(i).name, &self.roster.get(i).spec);
-        self.launch
-            .command(name, spec)
-            .spawn()
+        let mut cmd = self.launch.command(name, spec);
+        if self.roster.get(i).started_before() {
+            cmd.env(phri_runtime::service::RESTARTED_ENV, "1");
+        }
+        cmd.spawn()
             .map_err(|source| SupervisorError::Spawn {
                 service: name.clone(),
                 binary: spec.binary.clone(),

@@ -220,6 +220,8 @@ pub enum StopCause {
     StaleResidual,
     StalePerception,
     Request,
+    /// a restarted controller holds while a hand is at the robot
+    ControllerRestart,
 }
 
 impl StopCause {
@@ -229,6 +231,7 @@ impl StopCause {
             StopCause::StaleResidual => "stale_residual",
             StopCause::StalePerception => "stale_perception",
             StopCause::Request => "request",
+            StopCause::ControllerRestart => "controller_restart",
         }
     }
 
@@ -240,6 +243,9 @@ impl StopCause {
                 "perception is stale with a person near (camera, ingestion or a worker late or down)"
             }
             StopCause::Request => "a stop request",
+            StopCause::ControllerRestart => {
+                "the restarted controller holds while a hand is at the robot"
+            }
         }
     }
 
@@ -327,6 +333,9 @@ pub struct Evaluator {
     status: Restartable<(u64, u64, u64, u64)>,
     /// the controller's last mode (`None`: no status yet from this controller)
     last_mode: Option<u32>,
+    /// the controller restarted and has not run its task since: a stop on
+    /// fresh inputs is its hold (a hand at the robot)
+    restart_pending: bool,
     resyncs: Vec<(Resync, Vec<f64>)>,
     seen_status: bool,
     /// the newest truth: sequence number and true joint positions
@@ -399,6 +408,7 @@ impl Evaluator {
             latency_max_ns: 0,
             status: Restartable::default(),
             last_mode: None,
+            restart_pending: false,
             resyncs: Vec::new(),
             seen_status: false,
             truth_seq: 0,
@@ -654,6 +664,7 @@ impl Evaluator {
             );
             self.status.last = (0, 0, 0, 0);
             self.last_mode = None;
+            self.restart_pending = true;
         }
         if now.3 > self.status.last.3 {
             self.events.push(Event {
@@ -672,7 +683,11 @@ impl Evaluator {
                     detail: reaction_name.into(),
                 }),
                 Ok(ControlMode::ProtectiveStop) => {
-                    let detail = match self.stale.map(|b| b.cause(m)) {
+                    let cause = self.stale.map(|b| match b.cause(m) {
+                        StopCause::Request if self.restart_pending => StopCause::ControllerRestart,
+                        c => c,
+                    });
+                    let detail = match cause {
                         Some(cause) => {
                             *self.stop_causes.entry(cause.key().into()).or_default() += 1;
                             cause.detail()
@@ -703,6 +718,9 @@ impl Evaluator {
                     })
                 }
                 _ => {}
+            }
+            if m.mode == ControlMode::Task as u32 {
+                self.restart_pending = false;
             }
             self.last_mode = Some(m.mode);
         }
@@ -892,7 +910,10 @@ impl Evaluator {
         let by_service: Vec<(&String, &u64)> = self
             .stop_causes
             .iter()
-            .filter(|(k, _)| k.as_str() != StopCause::Request.key())
+            .filter(|(k, _)| {
+                k.as_str() != StopCause::Request.key()
+                    && k.as_str() != StopCause::ControllerRestart.key()
+            })
             .collect();
         let stops: u64 = by_service.iter().map(|(_, n)| **n).sum();
         if stops > 0 {
@@ -906,6 +927,18 @@ impl Evaluator {
                 "{} on a stale input",
                 plural(stops, "protective stop")
             ));
+        }
+        let holds = self
+            .stop_causes
+            .get(StopCause::ControllerRestart.key())
+            .copied()
+            .unwrap_or(0);
+        if holds > 0 {
+            lines.push(format!(
+                "{} of a restarted controller while a hand was at the robot",
+                plural(holds, "protective stop")
+            ));
+            words.push(plural(holds, "restart hold"));
         }
         let restarted: Vec<String> = services
             .iter()
@@ -1470,5 +1503,28 @@ mod tests {
         e.on_status(&m, "reflex");
         let r = e.report(1_000_000_000, "x", BTreeMap::new());
         assert!(r.clean && r.protective_stop_causes["request"] == 1);
+        // a restarted controller (its status sequence starts again) holds on
+        // fresh inputs before its task: its hold, not a request; once it ran
+        // its task, a stop on fresh inputs is a request again
+        let mut e = eval().with_stale_bounds(bounds);
+        e.on_status(&status(500, ControlMode::Contact, 1, 30), "reflex");
+        e.on_status(&status(3, ControlMode::Sync, 1, 30), "reflex");
+        e.on_status(&status(4, ControlMode::ProtectiveStop, 1, 30), "reflex");
+        e.on_status(&status(5, ControlMode::Recover, 1, 30), "reflex");
+        e.on_status(&status(6, ControlMode::Task, 1, 30), "reflex");
+        e.on_status(&status(7, ControlMode::ProtectiveStop, 1, 30), "reflex");
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.protective_stop_causes["controller_restart"], 1);
+        assert_eq!(r.protective_stop_causes["request"], 1);
+        assert_eq!(r.summary, "degraded (1 restart hold)");
+        let ev = r
+            .events
+            .iter()
+            .find(|e| e.kind == "protective_stop")
+            .unwrap();
+        assert_eq!(
+            ev.detail,
+            "the restarted controller holds while a hand is at the robot"
+        );
     }
 }

@@ -43,6 +43,11 @@ impl Supervised {
         self.policy.restarts
     }
 
+    /// it was started (or adopted) before in this cell: its next start is a restart
+    pub fn started_before(&self) -> bool {
+        self.started_ns > 0
+    }
+
     /// running (started or adopted, not yet reaped)
     pub fn alive(&self) -> bool {
         self.pid.is_some()

@@ -133,6 +133,9 @@ pub struct Collaboration {
     back_off: Option<BackOff>,
     /// the phase of the last reference
     ref_phase: CollabPhase,
+    /// the camera tracks people (`[skeleton] enabled`): a restarted
+    /// controller can judge where the hands are
+    sees_hands: bool,
 }
 
 /// Backing off after a force limit: along the force the person applied.
@@ -220,12 +223,18 @@ impl Collaboration {
             last_answer: None,
             back_off: None,
             ref_phase: CollabPhase::Idle,
+            sees_hands: cfg.skeleton.enabled,
             cfg: c.clone(),
         })
     }
 
     pub fn phase(&self) -> CollabPhase {
         self.machine.phase()
+    }
+
+    /// The camera tracks people (`[skeleton] enabled`): hands can be judged.
+    pub fn sees_hands(&self) -> bool {
+        self.sees_hands
     }
 
     /// A request lets the task's segment in progress end before the
@@ -599,6 +608,52 @@ impl Collaboration {
         let surface = axis + normal * radius;
         let wrist = phri_model::frame_placement(model, data, self.wrist_frame);
         Some((wrist.r.transpose() * (surface - wrist.p), axis))
+    }
+
+    /// The controller restarted at `t`: its predecessor's collaboration is
+    /// over (`controller_restart`), and the collision flag waits for the
+    /// residual to decay (a hand may still press on the robot).
+    pub fn restarted(&mut self, t: f64) {
+        self.machine.restarted(t);
+        self.forget_hand();
+        self.rearm = Some(None);
+    }
+
+    /// The smallest surface gap \[m\] between a hand of anyone tracked in
+    /// `sk` and the robot part (its capsule) or the wrist's collision
+    /// objects at joints `q` (∞: no hand tracked); `None` without a skeleton
+    /// fresh at `stamp_ns` \[ns, robot clock\] or when the model refuses `q`.
+    /// A hand of any confidence counts: one on the robot is partly hidden.
+    pub fn nearest_hand_gap(
+        &mut self,
+        q: &[f64],
+        stamp_ns: u64,
+        sk: Option<&Skeleton>,
+    ) -> Option<f64> {
+        let sk = sk.filter(|sk| {
+            stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
+        })?;
+        let pose = self.forces.placement(q, self.contact.frame).ok()?;
+        let (centre, half) = (self.contact.point, self.cfg.robot_half_length_m);
+        let n = (sk.n_people as usize).min(MAX_PEOPLE);
+        let hands = [SkeletonJoint::LeftHand as usize, SkeletonJoint::RightHand as usize];
+        let mut gap = f64::INFINITY;
+        for p in sk.people[..n].iter().filter(|p| p.tracked != 0) {
+            for &j in &hands {
+                let (Some(x), Some(c)) = (p.joints.get(j), p.confidence.get(j)) else {
+                    continue;
+                };
+                if !(x.iter().all(|v| v.is_finite()) && *c > 0.0) {
+                    continue;
+                }
+                let h = Vector3::from(*x);
+                let local = pose.r.transpose() * (h - pose.p);
+                let axis = centre + Vector3::z() * (local - centre).z.clamp(-half, half);
+                let part = (local - axis).norm() - self.cfg.robot_radius_m;
+                gap = gap.min(part.min(self.surface_distance(&h)) - self.cfg.hand_radius_m);
+            }
+        }
+        Some(gap)
     }
 
     /// A collaboration begins or ends: nothing of the hand carries over.

@@ -8,6 +8,7 @@
 //! | [`reaction`] | the configured reaction to a detected collision (eqs. 9, 13, stop, float, retreat) |
 //! | [`protective_stop`] | hold while a safety input is stale |
 //! | [`recover`] | hold (evading under perception) until the residual stays quiet, then resume |
+//! | [`restart_hold`] | a restarted controller: `protective_stop` while a tracked hand is at the robot |
 //! | [`collaborate`] | `approach` the collaborative hand, `contact` (admittance on F̂), `follow` it (paper Sect. VI), `back_off` after a force limit |
 //!
 //! A behaviour writes the joint reference and either an acceleration for the
@@ -18,11 +19,14 @@ pub mod collaborate;
 pub mod protective_stop;
 pub mod reaction;
 pub mod recover;
+pub mod restart_hold;
 pub mod sync;
 pub mod task;
 
 use nalgebra::Vector3;
 use phri_ipc::{CollabPhase, ControlMode};
+
+pub use restart_hold::Hold;
 
 /// What the transition of one period looks at.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -51,11 +55,15 @@ pub struct Conditions {
     pub rearming: bool,
     /// a `stop` request
     pub stop_requested: bool,
+    /// a restarted controller's hold: a hand at the robot, or not yet judged
+    pub restart: Hold,
 }
 
 /// The mode of this period, from the mode of the last one.
 ///
 /// - `sync` waits for fresh inputs (residual and perception), then starts the task;
+///   a restarted controller also waits for its first judgement of the hands
+///   and, with a hand at the robot, holds in a protective stop until it left;
 /// - in every other mode a stale residual, or perception that asks for it,
 ///   is a protective stop;
 /// - from the protective stop, fresh inputs lead to `recover`;
@@ -72,9 +80,14 @@ pub struct Conditions {
 pub fn next_mode(mode: ControlMode, c: &Conditions) -> ControlMode {
     use ControlMode::*;
     match mode {
-        Sync if c.residual_fresh && c.perception_fresh => Task,
+        Sync if c.residual_fresh && c.perception_fresh => match c.restart {
+            Hold::Clear => Task,
+            Hold::Judging => Sync,
+            Hold::HandNear => ProtectiveStop,
+        },
         Sync => Sync,
         _ if !c.residual_fresh || c.perception_stop || c.stop_requested => ProtectiveStop,
+        ProtectiveStop if c.restart != Hold::Clear => ProtectiveStop,
         ProtectiveStop => Recover,
         Task | Slow if c.collision => Reaction,
         Task | Slow if c.collab.is_some() && c.segment_done => collab_mode(c.collab),
@@ -154,6 +167,7 @@ mod tests {
         collab_collision: false,
         rearming: false,
         stop_requested: false,
+        restart: Hold::Clear,
     };
 
     /// `fresh` with the named conditions changed.
@@ -182,6 +196,8 @@ mod tests {
                 "unexplained" => c.collab_collision = true,
                 "rearming" => c.rearming = true,
                 "stop" => c.stop_requested = true,
+                "restart-judging" => c.restart = Hold::Judging,
+                "restart-hand-near" => c.restart = Hold::HandNear,
                 other => panic!("unknown condition {other}"),
             }
         }
@@ -212,6 +228,12 @@ mod tests {
             (ProtectiveStop, &[], Recover),
             (ProtectiveStop, &["collision"], Recover),
             (ProtectiveStop, &["blind"], Recover),
+            // a restarted controller: judge the hands first; hold while one is at the robot
+            (Sync, &["restart-judging"], Sync),
+            (Sync, &["restart-hand-near"], ProtectiveStop),
+            (Sync, &["restart-hand-near", "stale"], Sync),
+            (ProtectiveStop, &["restart-hand-near"], ProtectiveStop),
+            (ProtectiveStop, &["restart-judging"], ProtectiveStop),
             // the task, slowed while perception is stale
             (Task, &[], Task),
             (Task, &["blind"], Slow),
