@@ -164,11 +164,13 @@ fn wait(s: f64) {
 #[test]
 fn free_motion_cycles_without_false_detections() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let r = Cell::start("free", "free-motion", Some(10.0), &[]).finish();
+    // 3 waypoints take 9-10 s of the robot's time: 14 s leave room for a
+    // loaded machine's slipped ticks
+    let r = Cell::start("free", "free-motion", Some(14.0), &[]).finish();
     let tl = &r["torque_loop"];
     let cycles = tl["cycles"].as_u64().unwrap();
     // a loaded 2-core machine makes the robot's loop slip ticks (overruns)
-    assert!(cycles >= 8000, "{cycles} cycles in 10 s");
+    assert!(cycles >= 11200, "{cycles} cycles in 14 s");
     // deadlines are the benchmark's business; here: the loop holds
     assert!(
         tl["missed_deadlines"].as_u64().unwrap() * 100 <= cycles,
@@ -285,7 +287,9 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
     );
     assert_eq!(r["false_detections"], 0);
     // the torque loop itself never stopped: the controller kept answering
-    assert!(r["torque_loop"]["braked_cycles"].as_u64().unwrap() < 100);
+    // (the arm waits braked only at the start, before the controller's first
+    // command; a brake engaged later is more than 20 answers missed)
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
 }
 
 #[test]

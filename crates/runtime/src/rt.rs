@@ -14,21 +14,29 @@ pub enum RtError {
     Lock(std::io::Error),
 }
 
-/// Run the calling process under SCHED_FIFO at `priority` (1-99) and lock the
-/// memory it has mapped so far (call it after creating its ports). Not
+/// Lock the memory the calling process has mapped so far, then run it under
+/// SCHED_FIFO at `priority` (1-99) (call it after creating its ports). The
+/// lock comes first: faulting in and locking every page (the binary, the
+/// heap, each shared-memory segment) takes milliseconds, which at real-time
+/// priority would stall every lower-priority loop on the same CPU (a
+/// restarted residual service, the highest on the torque loop's CPU, kept
+/// the robot and its controller from running and the robot braked). Not
 /// MCL_FUTURE: a real-time loop would then stall while the kernel faults in
 /// and locks every shared-memory segment of a publisher that appears later
 /// (a restarted perception worker, a monitor), milliseconds per segment.
-/// Returns a description of what could not be done (the process then runs
-/// under the normal scheduler), never fails hard.
+/// Returns a description of what could not be done (without SCHED_FIFO the
+/// process runs under the normal scheduler), never fails hard.
 pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     if priority <= 0 {
         return Err(RtError::NoPriority);
     }
+    // SAFETY: plain syscall with a valid flag.
+    let locked = unsafe { libc::mlockall(libc::MCL_CURRENT) };
+    let lock_error = std::io::Error::last_os_error();
     let param = libc::sched_param {
         sched_priority: priority.min(99),
     };
-    // SAFETY: plain syscalls with valid arguments.
+    // SAFETY: plain syscall with valid arguments.
     let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
     if rc != 0 {
         return Err(RtError::Scheduler {
@@ -36,10 +44,8 @@ pub fn make_realtime(priority: i32) -> Result<(), RtError> {
             source: std::io::Error::last_os_error(),
         });
     }
-    // SAFETY: as above.
-    let rc = unsafe { libc::mlockall(libc::MCL_CURRENT) };
-    if rc != 0 {
-        return Err(RtError::Lock(std::io::Error::last_os_error()));
+    if locked != 0 {
+        return Err(RtError::Lock(lock_error));
     }
     Ok(())
 }
