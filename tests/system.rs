@@ -751,7 +751,11 @@ fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_han
         resumed.iter().all(|t| *t >= 15.0),
         "task motion at {resumed:?} s with the hand at the robot"
     );
-    assert!(!resumed.is_empty(), "the task never resumed: {}", r["events"]);
+    assert!(
+        !resumed.is_empty(),
+        "the task never resumed: {}",
+        r["events"]
+    );
     assert_no_unintended_contact(&r);
 }
 

@@ -1,6 +1,30 @@
 //! Range checks shared by the sections' `validate`, each naming the key.
 
+use std::io::Read;
+use std::path::Path;
+
 use crate::error::Invalid;
+
+/// A configuration or scenario file larger than this is refused \[bytes\]
+/// (the deployed ones are under 40 KiB): one read never takes all memory.
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
+
+/// The text of `path`, at most `MAX_FILE_BYTES` of UTF-8 (read so, even
+/// from a file whose size the file system does not report, such as a pipe).
+pub(crate) fn read_text(path: &Path) -> std::io::Result<String> {
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("larger than {MAX_FILE_BYTES} bytes: not a configuration"),
+        ));
+    }
+    String::from_utf8(bytes)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
 
 /// `section.key` for errors.
 pub(crate) fn key(section: &str, name: &str) -> String {

@@ -122,6 +122,8 @@ pub enum ScriptError {
     FloorZ(f64),
     #[error("keyframe: a human needs at least one keyframe")]
     NoKeyframe,
+    #[error("keyframe: {count} keyframes, more than the {max} a script may have")]
+    TooMany { count: usize, max: usize },
     #[error("keyframe[{index}].{field}: not a finite number")]
     NotFinite { index: usize, field: &'static str },
     #[error("keyframe[{index}].t: {t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)")]
@@ -142,6 +144,10 @@ impl HumanScript {
     /// Default floor height \[m\]: the robot stands on a 0.8 m table.
     pub const DEFAULT_FLOOR_Z: f64 = -0.8;
 
+    /// Most keyframes a script may have (the deployed ones have at most 15;
+    /// the simulator searches them every period).
+    pub const MAX_KEYFRAMES: usize = 10_000;
+
     /// Check and keep a script. `floor_z` \[m\] is the height of the human's
     /// soles in the robot base frame.
     pub fn new(floor_z: f64, keyframes: Vec<Keyframe>) -> Result<HumanScript, ScriptError> {
@@ -150,6 +156,12 @@ impl HumanScript {
         }
         if keyframes.is_empty() {
             return Err(ScriptError::NoKeyframe);
+        }
+        if keyframes.len() > Self::MAX_KEYFRAMES {
+            return Err(ScriptError::TooMany {
+                count: keyframes.len(),
+                max: Self::MAX_KEYFRAMES,
+            });
         }
         for (index, k) in keyframes.iter().enumerate() {
             let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());

@@ -376,7 +376,7 @@ impl Loaded {
     /// `[scenario] file` (written by the supervisor) gives the person's script,
     /// its `[config]` already merged.
     pub fn load(path: &Path, scenario: Option<&str>, sets: &[&str]) -> Result<Loaded, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        let text = crate::check::read_text(path).map_err(|source| ConfigError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -227,7 +227,7 @@ impl Scenario {
     /// Read and check a scenario file; errors name the file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scenario, ScenarioError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+        let text = crate::check::read_text(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -332,6 +332,7 @@ impl Scenario {
                 let script = HumanScript::new(h.floor_z, keyframes).map_err(|e| match e {
                     ScriptError::FloorZ(v) => invalid("human.floor_z".into(), format!("{v} is not a finite number")),
                     ScriptError::NoKeyframe => invalid("human.keyframe".into(), "a human needs at least one [[human.keyframe]]".into()),
+                    ScriptError::TooMany { count, max } => invalid("human.keyframe".into(), format!("{count} keyframes, more than the {max} a script may have")),
                     ScriptError::NotFinite { index, field } => invalid(format!("human.keyframe[{index}].{field}"), "not a finite number".into()),
                     ScriptError::Unsorted { index, t, previous } => {
                         invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))

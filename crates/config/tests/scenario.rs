@@ -128,7 +128,38 @@ fn file_errors_name_the_file() {
         e.contains("bad.toml") && e.contains("human.keyframe[1].t"),
         "{e}"
     );
+    // a file past the size bound is refused before it is parsed
+    let huge = dir.join("huge.toml");
+    let mut text = String::from(HEAD);
+    text.push_str(K0);
+    while text.len() <= 1 << 20 {
+        text.push_str("# padding padding padding padding padding padding padding\n");
+    }
+    std::fs::write(&huge, text).expect("write");
+    let e = Scenario::from_file(&huge)
+        .expect_err("too large")
+        .to_string();
+    assert!(e.contains("huge.toml") && e.contains("larger than"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_script_of_too_many_keyframes_is_refused() {
+    let keyframes: Vec<Keyframe> = (0..=HumanScript::MAX_KEYFRAMES)
+        .map(|i| Keyframe {
+            t: i as f64,
+            base: [1.0, 0.0, 0.0],
+            ..Default::default()
+        })
+        .collect();
+    let e = HumanScript::new(-0.8, keyframes).expect_err("too many");
+    assert_eq!(
+        e,
+        ScriptError::TooMany {
+            count: HumanScript::MAX_KEYFRAMES + 1,
+            max: HumanScript::MAX_KEYFRAMES
+        }
+    );
 }
 
 /// Garbage never panics: truncations and byte flips of a valid file.

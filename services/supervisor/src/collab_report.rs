@@ -24,6 +24,19 @@ const MATCH_WINDOW_NS: u64 = 2_000_000_000;
 /// (the scenarios' second touch: 1.0-1.9 s). The simulator's episodes
 /// (`contacts`, per robot link, ended after 50 ms apart) count every bounce.
 const TOUCH_GAP_NS: u64 = 500_000_000;
+/// The report lists at most this many requests, utterances and phase
+/// changes each; the rest are counted (`*_left_out`): a flood of requests
+/// or a flapping phase must not grow the report without bound.
+pub const MAX_LISTED: usize = 1000;
+
+/// `item` appended to `list` unless it holds [`MAX_LISTED`] already; then counted in `left_out`.
+fn push_capped<T>(list: &mut Vec<T>, left_out: &mut u64, item: T) {
+    if list.len() < MAX_LISTED {
+        list.push(item);
+    } else {
+        *left_out += 1;
+    }
+}
 
 /// `collaboration.requests[]`.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -90,6 +103,11 @@ pub struct CollabReport {
     pub requests: Vec<RequestReport>,
     pub utterances: Vec<UtteranceReport>,
     pub phases: Vec<PhaseReport>,
+    /// requests, utterances and phase changes past the first
+    /// [`MAX_LISTED`] of each, counted but not listed
+    pub requests_left_out: u64,
+    pub utterances_left_out: u64,
+    pub phases_left_out: u64,
     /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
     pub wave_to_start_ms: Option<f64>,
     /// touches of the collaborative hand (ground truth): its contacts with
@@ -189,27 +207,35 @@ impl CollabEvaluator {
         let t = self.t(s.stamp_ns);
         if s.request_source != 0 && self.last_request != Some((s.request_source, s.request_seq)) {
             self.last_request = Some((s.request_source, s.request_seq));
-            self.report.requests.push(RequestReport {
-                t_s: t,
-                source: RequestSource::name_of(s.request_source).into(),
-                kind: phri_ipc::RequestKind::name_of(s.request_kind).into(),
-                part: CollabPart::name_of(s.request_part).into(),
-                accepted: s.request_accepted != 0,
-                reason: CollabReason::name_of(s.request_reason).into(),
-                seq: s.request_seq,
-                text: None,
-                score: None,
-                utterance_end_to_request_ms: None,
-                refused_by: (s.request_accepted == 0).then(|| "control".into()),
-            });
+            push_capped(
+                &mut self.report.requests,
+                &mut self.report.requests_left_out,
+                RequestReport {
+                    t_s: t,
+                    source: RequestSource::name_of(s.request_source).into(),
+                    kind: phri_ipc::RequestKind::name_of(s.request_kind).into(),
+                    part: CollabPart::name_of(s.request_part).into(),
+                    accepted: s.request_accepted != 0,
+                    reason: CollabReason::name_of(s.request_reason).into(),
+                    seq: s.request_seq,
+                    text: None,
+                    score: None,
+                    utterance_end_to_request_ms: None,
+                    refused_by: (s.request_accepted == 0).then(|| "control".into()),
+                },
+            );
         }
         if s.phase != self.last_phase {
             let phase = CollabPhase::try_from(s.phase).unwrap_or(CollabPhase::Idle);
-            self.report.phases.push(PhaseReport {
-                t_s: t,
-                phase: phase.name().into(),
-                reason: CollabReason::name_of(s.reason).into(),
-            });
+            push_capped(
+                &mut self.report.phases,
+                &mut self.report.phases_left_out,
+                PhaseReport {
+                    t_s: t,
+                    phase: phase.name().into(),
+                    reason: CollabReason::name_of(s.reason).into(),
+                },
+            );
             if phase == CollabPhase::Approach && self.first_approach_ns.is_none() {
                 self.first_approach_ns = Some(s.state_stamp_ns);
             }
@@ -252,6 +278,10 @@ impl CollabEvaluator {
             let latency = r.stamp_ns.saturating_sub(r.utterance_end_ns) as f64 * 1e-6;
             self.voice
                 .insert(r.seq, (phri_ipc::json::c_str(&r.text), r.score, latency));
+            // the words of the newest requests only (a flood keeps no more)
+            while self.voice.len() > MAX_LISTED {
+                self.voice.pop_first();
+            }
         }
     }
 
@@ -260,33 +290,41 @@ impl CollabEvaluator {
         let t = self.t(u.decoded_ns);
         let text = phri_ipc::json::c_str(&u.text);
         let intent = VoiceIntent::try_from(u.intent).unwrap_or(VoiceIntent::None);
-        self.report.utterances.push(UtteranceReport {
-            t_s: t,
-            text: text.clone(),
-            intent: intent.name().into(),
-            score: u.score,
-            verdict: VoiceVerdict::name_of(u.verdict).into(),
-            duration_s: u.end_ns.saturating_sub(u.start_ns) as f64 * 1e-9,
-            decode_ms: u.decode_ms,
-        });
+        push_capped(
+            &mut self.report.utterances,
+            &mut self.report.utterances_left_out,
+            UtteranceReport {
+                t_s: t,
+                text: text.clone(),
+                intent: intent.name().into(),
+                score: u.score,
+                verdict: VoiceVerdict::name_of(u.verdict).into(),
+                duration_s: u.end_ns.saturating_sub(u.start_ns) as f64 * 1e-9,
+                decode_ms: u.decode_ms,
+            },
+        );
         if u.verdict != VoiceVerdict::Accepted as u32 {
             let (kind, part) = match intent.request() {
                 Some((k, p)) => (k.name(), p.name()),
                 None => ("none", "none"),
             };
-            self.report.requests.push(RequestReport {
-                t_s: t,
-                source: RequestSource::Voice.name().into(),
-                kind: kind.into(),
-                part: part.into(),
-                accepted: false,
-                reason: VoiceVerdict::name_of(u.verdict).into(),
-                seq: 0,
-                text: Some(text),
-                score: Some(u.score),
-                utterance_end_to_request_ms: None,
-                refused_by: Some("voice".into()),
-            });
+            push_capped(
+                &mut self.report.requests,
+                &mut self.report.requests_left_out,
+                RequestReport {
+                    t_s: t,
+                    source: RequestSource::Voice.name().into(),
+                    kind: kind.into(),
+                    part: part.into(),
+                    accepted: false,
+                    reason: VoiceVerdict::name_of(u.verdict).into(),
+                    seq: 0,
+                    text: Some(text),
+                    score: Some(u.score),
+                    utterance_end_to_request_ms: None,
+                    refused_by: Some("voice".into()),
+                },
+            );
         }
     }
 
@@ -567,5 +605,35 @@ mod tests {
         assert!((accepted.utterance_end_to_request_ms.unwrap() - 600.0).abs() < 1e-6);
         assert_eq!(rep.utterances.len(), 1);
         assert!((rep.utterances[0].duration_s - 1.3).abs() < 1e-9);
+    }
+
+    /// A flood of requests (each answered) and of refused utterances keeps
+    /// the first MAX_LISTED of each and counts the rest.
+    #[test]
+    fn a_flood_is_listed_up_to_the_cap_and_counted() {
+        let mut e = CollabEvaluator::new(0, vec![], 1_000_000);
+        let flood = MAX_LISTED as u64 + 250;
+        for k in 0..flood {
+            let mut s = state(1000 + k, CollabPhase::Idle, CollabReason::None);
+            s.request_source = RequestSource::Cli as u32;
+            s.request_seq = k + 1;
+            s.request_kind = phri_ipc::RequestKind::End as u32;
+            s.request_reason = CollabReason::NotCollaborating as u32;
+            e.on_state(&s);
+            let mut u = phri_ipc::Utterance::zeroed();
+            u.verdict = VoiceVerdict::NotSpeech as u32;
+            e.on_utterance(&u);
+            let mut r = HriRequest::zeroed();
+            r.seq = k;
+            r.source = RequestSource::Voice as u32;
+            e.on_request(&r);
+        }
+        assert!(e.voice.len() <= MAX_LISTED);
+        let rep = e.report(std::iter::empty());
+        assert_eq!(rep.requests.len(), MAX_LISTED);
+        assert_eq!(rep.utterances.len(), MAX_LISTED);
+        // answered requests and the refused utterances' requests share the list
+        assert_eq!(rep.requests_left_out, 2 * flood - MAX_LISTED as u64);
+        assert_eq!(rep.utterances_left_out, flood - MAX_LISTED as u64);
     }
 }

@@ -201,12 +201,11 @@ impl Cell {
         if self.roster.get(i).started_before() {
             cmd.env(phri_runtime::service::RESTARTED_ENV, "1");
         }
-        cmd.spawn()
-            .map_err(|source| SupervisorError::Spawn {
-                service: name.clone(),
-                binary: spec.binary.clone(),
-                source,
-            })
+        cmd.spawn().map_err(|source| SupervisorError::Spawn {
+            service: name.clone(),
+            binary: spec.binary.clone(),
+            source,
+        })
     }
 
     /// `state.json` and `supervisor.state`, each replaced atomically, owner-only.

@@ -105,12 +105,29 @@ fn a_controller_restarted_with_the_hand_at_the_end_effector_holds_until_it_left(
     let l = common::loaded("collaboration", &[]);
     let r = restart_in_contact(&l, "hand_right", 19.0);
     report("collaboration", &r);
-    assert!(r.distance_at_restart < 0.02, "the hand was not at the robot");
-    assert_eq!((r.phase, r.reason), (CollabPhase::Idle, CollabReason::ControllerRestart));
-    assert_eq!(r.protective_stops, 1, "the restarted controller did not hold");
-    assert_eq!(r.task_near_hand, 0, "task motion with the hand at the robot");
-    let (t, d) = r.resumed.expect("the task never resumed after the hand left");
-    assert!(t > 15.5 && d > 0.1, "resumed at {t:.2} s, the hand {d:.3} m away");
+    assert!(
+        r.distance_at_restart < 0.02,
+        "the hand was not at the robot"
+    );
+    assert_eq!(
+        (r.phase, r.reason),
+        (CollabPhase::Idle, CollabReason::ControllerRestart)
+    );
+    assert_eq!(
+        r.protective_stops, 1,
+        "the restarted controller did not hold"
+    );
+    assert_eq!(
+        r.task_near_hand, 0,
+        "task motion with the hand at the robot"
+    );
+    let (t, d) = r
+        .resumed
+        .expect("the task never resumed after the hand left");
+    assert!(
+        t > 15.5 && d > 0.1,
+        "resumed at {t:.2} s, the hand {d:.3} m away"
+    );
     assert_eq!(r.unintended, 0);
 }
 
@@ -126,10 +143,19 @@ fn a_controller_restarted_with_a_hand_resting_on_the_wrist_keeps_holding() {
     l.scenario.voice.retain(|v| v.t < 10.0);
     let r = restart_in_contact(&l, "hand_left", 19.0);
     report("voice-collaboration", &r);
-    assert!(r.distance_at_restart < 0.02, "the hand was not at the robot");
-    assert_eq!((r.phase, r.reason), (CollabPhase::Idle, CollabReason::ControllerRestart));
+    assert!(
+        r.distance_at_restart < 0.02,
+        "the hand was not at the robot"
+    );
+    assert_eq!(
+        (r.phase, r.reason),
+        (CollabPhase::Idle, CollabReason::ControllerRestart)
+    );
     assert_eq!(r.protective_stops, 1);
-    assert_eq!(r.resumed, None, "the task resumed with the hand on the robot");
+    assert_eq!(
+        r.resumed, None,
+        "the task resumed with the hand on the robot"
+    );
 }
 
 #[test]
@@ -148,7 +174,11 @@ fn a_controller_restarted_far_from_any_hand_resumes_at_once() {
     let t0 = c.time_ns();
     while !matches!(c.mode(), ControlMode::Task | ControlMode::Slow) {
         c.tick().unwrap();
-        assert!(c.time_ns() - t0 < 1_000_000_000, "still {:?} after 1 s", c.mode());
+        assert!(
+            c.time_ns() - t0 < 1_000_000_000,
+            "still {:?} after 1 s",
+            c.mode()
+        );
     }
     let waited = (c.time_ns() - t0) as f64 * 1e-9;
     eprintln!("hands {d:.3} m from the robot at the restart: task again after {waited:.3} s");

@@ -636,7 +636,10 @@ impl Collaboration {
         let pose = self.forces.placement(q, self.contact.frame).ok()?;
         let (centre, half) = (self.contact.point, self.cfg.robot_half_length_m);
         let n = (sk.n_people as usize).min(MAX_PEOPLE);
-        let hands = [SkeletonJoint::LeftHand as usize, SkeletonJoint::RightHand as usize];
+        let hands = [
+            SkeletonJoint::LeftHand as usize,
+            SkeletonJoint::RightHand as usize,
+        ];
         let mut gap = f64::INFINITY;
         for p in sk.people[..n].iter().filter(|p| p.tracked != 0) {
             for &j in &hands {
