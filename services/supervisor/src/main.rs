@@ -676,7 +676,13 @@ fn body() -> Result<(), SupervisorError> {
             roster.heard(ROBOT_STATS.name, now);
         }
         ports.contacts.drain(|m| eval.on_contact_event(m))?;
-        ports.collab.drain(|m| collab_eval.on_state(m))?;
+        ports.collab.drain(|m| {
+            if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
+                let source = phri_ipc::RequestSource::name_of(m.request_source);
+                eval.stop_requested_by(source, m.request_seq);
+            }
+            collab_eval.on_state(m);
+        })?;
         let mut resume = false;
         ports.requests.drain(|m| {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;

@@ -336,7 +336,15 @@ pub struct Evaluator {
     /// the controller restarted and has not run its task since: a stop on
     /// fresh inputs is its hold (a hand at the robot)
     restart_pending: bool,
-    resyncs: Vec<(Resync, Vec<f64>)>,
+    /// who made the last `stop` request the controller accepted (`voice`,
+    /// `gesture`, `cli`), until a protective stop names it
+    stop_source: Option<String>,
+    /// the last `stop` request seen: its source and number (collab/state
+    /// repeats the last answered request every period)
+    stop_seen: Option<(String, u64)>,
+    /// each resync, the robot-clock stamp of the state its controller
+    /// answered first [ns], and the true joints at that state (its reference)
+    resyncs: Vec<(Resync, u64, Vec<f64>)>,
     seen_status: bool,
     /// the newest truth: sequence number and true joint positions
     truth_seq: u64,
@@ -409,6 +417,8 @@ impl Evaluator {
             status: Restartable::default(),
             last_mode: None,
             restart_pending: false,
+            stop_source: None,
+            stop_seen: None,
             resyncs: Vec::new(),
             seen_status: false,
             truth_seq: 0,
@@ -578,8 +588,11 @@ impl Evaluator {
                 e.closed = true;
             }
         }
-        for (r, q0) in self.resyncs.iter_mut() {
-            if t >= r.t_s && t <= r.t_s + 0.5 {
+        // like with like: the states from the one the new controller
+        // answered first on, on the robot's clock (never a sample from before
+        // a stall, mapped onto the report's time base with a stale offset)
+        for (r, from_ns, q0) in self.resyncs.iter_mut() {
+            if m.stamp_ns >= *from_ns && m.stamp_ns <= *from_ns + 500_000_000 {
                 if q0.is_empty() {
                     q0.extend_from_slice(&m.q[..n]);
                 }
@@ -629,6 +642,17 @@ impl Evaluator {
         self.last_collision = collision;
     }
 
+    /// The controller accepted `stop` request `seq` from `source`
+    /// (`collab/state`, which repeats it every period): the protective stop
+    /// it causes names it.
+    pub fn stop_requested_by(&mut self, source: &str, seq: u64) {
+        let seen = Some((source.to_string(), seq));
+        if self.stop_seen != seen {
+            self.stop_seen = seen;
+            self.stop_source = Some(source.to_string());
+        }
+    }
+
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
         // one time base: the status's publish time (CLOCK_MONOTONIC); its pair
         // of stamps maps the robot's clock (truth, residual) onto it
@@ -649,6 +673,7 @@ impl Evaluator {
                     max_joint_speed_rad_s: 0.0,
                     max_joint_travel_rad: 0.0,
                 },
+                m.state_stamp_ns,
                 Vec::new(),
             ));
         }
@@ -690,15 +715,20 @@ impl Evaluator {
                     let detail = match cause {
                         Some(cause) => {
                             *self.stop_causes.entry(cause.key().into()).or_default() += 1;
-                            cause.detail()
+                            match (cause, self.stop_source.take()) {
+                                (StopCause::Request, Some(source)) => {
+                                    format!("{} ({source})", cause.detail())
+                                }
+                                _ => cause.detail().to_string(),
+                            }
                         }
-                        None => "a safety input is stale, or a stop was requested",
+                        None => "a safety input is stale, or a stop was requested".to_string(),
                     };
                     self.events.push(Event {
                         t_s: t,
                         kind: "protective_stop".into(),
                         service: "control".into(),
-                        detail: detail.into(),
+                        detail,
                     })
                 }
                 Ok(ControlMode::Slow) => self.events.push(Event {
@@ -1083,7 +1113,7 @@ impl Evaluator {
                 waypoints_reached: st.0,
             },
             min_distance_m: self.min_distance.is_finite().then_some(self.min_distance),
-            resyncs: self.resyncs.iter().map(|(r, _)| r.clone()).collect(),
+            resyncs: self.resyncs.iter().map(|(r, _, _)| r.clone()).collect(),
             sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
             collaboration: Default::default(),
@@ -1301,6 +1331,27 @@ mod tests {
             "{}",
             r.resyncs[0].t_s
         );
+        // the travel after the restart counts from the state the new
+        // controller answered first: a true state from before (a stall's
+        // backlog, delivered late) is not its reference
+        let truth = |seq: u64, t_ms: u64, q0: f64| {
+            let mut m = Truth::zeroed();
+            m.seq = seq;
+            m.stamp_ns = t_ms * 1_000_000;
+            m.dof = 7;
+            m.q[0] = q0;
+            m
+        };
+        e.on_truth(&truth(1, 990, 0.39));
+        e.on_truth(&truth(2, 1000, 0.0));
+        e.on_truth(&truth(3, 1100, 0.004));
+        e.on_truth(&truth(4, 1600, 0.2));
+        let r = e.report(2_000_000_000, "x", BTreeMap::new());
+        assert!(
+            (r.resyncs[0].max_joint_travel_rad - 0.004).abs() < 1e-12,
+            "{:?}",
+            r.resyncs[0]
+        );
     }
 
     fn event(seq: u64, t_ms: u64, start_ms: u64, phase: ContactPhase, peak: f64) -> ContactEvent {
@@ -1480,6 +1531,19 @@ mod tests {
             .find(|e| e.kind == "protective_stop")
             .unwrap();
         assert_eq!(ev.detail, "a stop request");
+        // the request's source, when collab/state told it first
+        let mut e = eval().with_stale_bounds(bounds);
+        e.on_status(&status(1, ControlMode::Task, 1, 30), "reflex");
+        e.stop_requested_by("voice", 3);
+        e.stop_requested_by("voice", 3);
+        e.on_status(&status(2, ControlMode::ProtectiveStop, 1, 30), "reflex");
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        let ev = r
+            .events
+            .iter()
+            .find(|e| e.kind == "protective_stop")
+            .unwrap();
+        assert_eq!(ev.detail, "a stop request (voice)");
         // the residual stale (dynamics killed)
         let r = run(status(2, ControlMode::ProtectiveStop, 12, 30));
         assert!(!r.clean);
