@@ -3,8 +3,8 @@
 //! malformed commands, late cycles and the reports of missed deadlines.
 
 use phri_ipc::{robot_status, TorqueCommand, Zeroed, LATENCY_BINS};
-use phri_sim::link::{LATE_CYCLE_GRACE_NS, MAX_MISSED, STATS_EVERY};
-use phri_sim::{CycleTiming, LinkError, LinkOutput, RobotLink};
+use phri_robot::link::{LATE_CYCLE_GRACE_NS, MAX_MISSED, STATS_EVERY};
+use phri_robot::{CycleTiming, LinkError, LinkOutput, RobotLink};
 
 const DOF: usize = 7;
 const PERIOD_NS: u64 = 1_000_000;

@@ -28,7 +28,8 @@ pub mod contact;
 pub mod contact_log;
 pub mod error;
 pub mod human;
-pub mod link;
+/// The robot side of the protocol (crate `phri-robot`), as the simulator applies it.
+pub use phri_robot::link;
 pub mod messages;
 pub mod sim;
 pub mod snapshot;
