@@ -1,0 +1,11 @@
+//! `phri-franka`: a Franka arm (FR3 over FCI v10, Panda/FER over v5) behind
+//! phri's robot channels, as `phri-sim` serves them for the simulated arm.
+//! The control box compensates gravity itself and expects joint torques
+//! without it; it also refuses a torque that changes faster than
+//! 1000 Nm/s. [`FciCycle`] turns phri's command (the whole torque, gravity
+//! included) into what the box accepts, with the protocol rules of
+//! [`phri_robot::RobotLink`] (fresh, reused, missed; brakes after 20).
+
+pub mod cycle;
+
+pub use cycle::{CycleError, FciCycle, FciTorque, MAX_TORQUE_RATE_NM_PER_S};
