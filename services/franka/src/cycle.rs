@@ -75,9 +75,14 @@ impl FciCycle {
         })
     }
 
-    /// The protocol's bookkeeping (statistics for `robot/stats`).
+    /// The protocol's bookkeeping.
     pub fn link(&self) -> &RobotLink {
         &self.link
+    }
+
+    /// `robot/stats` now (`stamp_ns` on this machine's clock).
+    pub fn stats_message(&mut self, stamp_ns: u64) -> &phri_ipc::RobotStats {
+        self.link.stats_message(stamp_ns)
     }
 
     /// Gravity `g(q)` of the model \[Nm\].

@@ -7,5 +7,9 @@
 //! [`phri_robot::RobotLink`] (fresh, reused, missed; brakes after 20).
 
 pub mod cycle;
+pub mod model_check;
+pub mod state;
 
-pub use cycle::{CycleError, FciCycle, FciTorque, MAX_TORQUE_RATE_NM_PER_S};
+pub use cycle::{CycleError, FciCycle, FciTorque, JOINTS, MAX_TORQUE_RATE_NM_PER_S};
+pub use model_check::first_difference;
+pub use state::fill_state;

@@ -6,57 +6,18 @@
 //! (its command carries gravity, as phri's does); the adapter removes
 //! gravity with phri's model of that URDF before the box adds its own.
 
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+mod common;
+
 use std::time::{Duration, Instant};
 
 use phri_franka::FciCycle;
 use phri_ipc::{TorqueCommand, Zeroed};
 use phri_robot::CycleTiming;
 
-fn deploy() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy")
-}
-
-/// franka-sim's FCI server on 127.0.0.1:`port`, killed when dropped.
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn serve(port: u16) -> Server {
-    let out = Command::new(deploy().join("franka-sim/install"))
-        .stderr(Stdio::inherit())
-        .output()
-        .expect("deploy/franka-sim/install runs");
-    assert!(out.status.success(), "deploy/franka-sim/install failed");
-    let dir = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
-    let mut child = Command::new(dir.join("venv/bin/python"))
-        .arg(deploy().join("franka-sim/serve.py"))
-        .arg("--port")
-        .arg(port.to_string())
-        .env("FR3_MJCF", dir.join("fr3.xml"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .expect("franka-sim starts");
-    // its first line says it listens
-    let mut line = String::new();
-    let stdout = child.stdout.take().expect("stdout");
-    BufReader::new(stdout).read_line(&mut line).expect("a line");
-    assert!(line.contains("FCI server"), "franka-sim said: {line}");
-    Server(child)
-}
-
 #[test]
 fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
-    let port = 20_000 + (std::process::id() % 20_000) as u16;
-    let _server = serve(port);
+    let port = common::port(0);
+    let _server = common::serve(port);
     let address = format!("127.0.0.1:{port}");
     let deadline = Instant::now() + Duration::from_secs(30);
     let robot = loop {

@@ -1,0 +1,141 @@
+//! `phri-franka`: a Franka arm over the Franka Control Interface behind
+//! `robot/state` and `robot/command`, as `phri-sim` serves them. Per state
+//! of the control box (1 kHz): publish `robot/state`, wait for the command
+//! answering it, send it less gravity ([`phri_franka::FciCycle`]). Under the
+//! protocol's brakes (more than 20 commands missing) the torque control
+//! ends (the box stops the arm by its own rule) and the adapter goes on
+//! publishing the arm's states; the first command that answers one starts
+//! torque control again, from zero torque. Only channel wiring and the FCI
+//! session live here.
+
+use std::error::Error;
+use std::process::ExitCode;
+
+use phri_franka::{fill_state, first_difference, FciCycle, JOINTS};
+use phri_ipc::{JointState, Queue, TorqueCommand, Zeroed, ROBOT_COMMAND, ROBOT_STATE, ROBOT_STATS};
+use phri_robot::{CycleTiming, LinkOutput, RobotLink, GRACE_POLL_NS};
+use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
+
+/// The adapter's own flag.
+#[derive(clap::Args, Debug)]
+struct RobotAddress {
+    /// The control box's address (FCI), optionally with the command port:
+    /// `172.16.0.2`, or `127.0.0.1:1337` for franka-sim
+    #[arg(long, value_name = "ADDRESS", required = true)]
+    robot_ip: Option<String>,
+}
+
+/// How long after publishing a state the adapter waits for its command [ns]
+/// (the box wants one every millisecond).
+const ANSWER_BUDGET_NS: u64 = 700_000;
+
+fn main() -> ExitCode {
+    phri_runtime::service::run("phri-franka", body)
+}
+
+fn body() -> Result<(), Box<dyn Error>> {
+    let (ctx, RobotAddress { robot_ip }) = ServiceContext::from_cli(
+        "phri-franka",
+        "robot",
+        "A Franka arm over FCI behind robot/state and robot/command (torques sent without gravity: the box adds it)",
+    )?;
+    let address = robot_ip.ok_or("--robot-ip is required")?;
+    let model = ctx.robot_model()?;
+    if model.nv() != JOINTS {
+        return Err(format!("robot.urdf: {} joints; a Franka arm has 7", model.nv()).into());
+    }
+    if ctx.checking() {
+        return Ok(());
+    }
+    // phri keeps its own real-time discipline (go_realtime below)
+    let robot = franka::Robot::new(&address, franka::RealtimeConfig::Ignore)
+        .map_err(|e| format!("{address}: {e}"))?;
+    let urdf = robot
+        .robot_model()
+        .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
+    let served = phri_model::Model::from_urdf_str(&urdf)
+        .map_err(|e| format!("{address}: the robot's URDF: {e}"))?;
+    if let Some(d) = first_difference(&model, &served) {
+        return Err(format!("robot.urdf is not the arm at {address}: {d}").into());
+    }
+    let mut cycle = FciCycle::new(model, 1e-3)?;
+
+    let node = ctx.node()?;
+    let state_pub = ROBOT_STATE.publisher(&node)?;
+    let stats_pub = ROBOT_STATS.publisher(&node)?;
+    let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
+    ctx.start_deadman()?;
+    ctx.go_realtime();
+
+    let mut state = JointState::zeroed();
+    let mut seq = 0u64;
+    let mut clock: Option<(u64, u64)> = None;
+    // one state: publish it, wait for its answer, decide
+    let mut period = |q: &[f64; JOINTS],
+                      tau_j: &[f64; JOINTS],
+                      box_ms: u64,
+                      cycle: &mut FciCycle|
+     -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>> {
+        seq += 1;
+        // the robot's clock, on this machine's: the box's milliseconds from the first state
+        let (epoch, ms0) = *clock.get_or_insert((now_ns(), box_ms));
+        let stamp = epoch + box_ms.saturating_sub(ms0) * 1_000_000;
+        let published = now_ns();
+        fill_state(
+            q,
+            tau_j,
+            cycle.link().output(),
+            seq,
+            stamp,
+            published,
+            &mut state,
+        );
+        state_pub.publish(&state)?;
+        let mut newest: Option<TorqueCommand> = commands.latest()?;
+        while !newest.as_ref().is_some_and(|c| RobotLink::answers(c, seq))
+            && now_ns() < published + ANSWER_BUDGET_NS
+        {
+            sleep_until_ns(now_ns() + GRACE_POLL_NS);
+            if let Some(c) = commands.latest()? {
+                newest = Some(c);
+            }
+        }
+        let timing = CycleTiming {
+            state_published_ns: published,
+            command_event_ns: 0,
+            now_ns: now_ns(),
+            behind_schedule_ns: 0,
+        };
+        let decided = cycle.step(newest.as_ref(), seq, &timing, q)?;
+        if decided.0.publish_stats {
+            stats_pub.publish(cycle.stats_message(now_ns()))?;
+        }
+        Ok(decided)
+    };
+
+    while !ctx.shutdown.requested() {
+        // torque control until the protocol brakes
+        cycle.restart();
+        let mut control = robot.start_torque_control()?;
+        loop {
+            let (s, _) = control.read_once()?;
+            let (_, out) = period(&s.q, &s.tau_J, s.time.as_millis(), &mut cycle)?;
+            if out.brake || ctx.shutdown.requested() {
+                control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
+                break;
+            }
+            control.write_once(&franka::Torques::new(out.tau))?;
+        }
+        tracing::debug!("brakes: torque control ended until a controller answers");
+        // braked: the arm's states go on; a fresh answer resumes control
+        while !ctx.shutdown.requested() {
+            let s = robot.read_once()?;
+            let (link, _) = period(&s.q, &s.tau_J, s.time.as_millis(), &mut cycle)?;
+            if !link.brake {
+                break;
+            }
+        }
+    }
+    let _ = stats_pub.publish(cycle.stats_message(now_ns()));
+    Ok(())
+}
