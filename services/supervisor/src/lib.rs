@@ -22,6 +22,7 @@ pub mod roster;
 pub mod shm;
 pub mod spec;
 pub mod state;
+pub mod verdict;
 
 pub use error::SupervisorError;
 pub use plan::Plan;

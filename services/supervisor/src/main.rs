@@ -31,10 +31,11 @@ use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
 use phri_supervisor::cpu::{self, CpuUse};
 use phri_supervisor::owned::{self, AuditLog};
-use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc, DEADMAN_TEXT};
+use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
 use phri_supervisor::realtime::{self, RealtimeWatch};
 use phri_supervisor::shm::{self, SHM_DIR};
 use phri_supervisor::state::{StateJson, STATE_FILE};
+use phri_supervisor::verdict::{self, ExitVerdict};
 use phri_supervisor::{Plan, Roster, SupervisorError, SupervisorState};
 
 /// The supervisor's command line.
@@ -741,18 +742,10 @@ fn body() -> Result<(), SupervisorError> {
                 "stalled for {} ms: heartbeats judged afresh",
                 stalled_ns / 1_000_000
             );
-            roster.judge_afresh(now);
-            if stalled_ns > deadman_ns && !roster.held() {
-                // the services heard no supervisor for their dead-man's time:
-                // they stopped the cell (the robot braked); it stays stopped
-                let reason = format!(
-                    "dead-man: no supervisor for {:.1} s (this supervisor was stalled); the cell stopped itself and stays stopped until an operator resumes it (phri-hri resume)",
-                    stalled_ns as f64 * 1e-9
-                );
+            if let Some(reason) = verdict::on_stall(roster, stalled_ns, deadman_ns, now) {
                 tracing::warn!("{reason}");
                 eval.event(now, "deadman", "supervisor", reason.clone());
                 eval.degrade(reason);
-                roster.hold();
             }
         }
 
@@ -849,45 +842,30 @@ fn body() -> Result<(), SupervisorError> {
             let _ = node.try_cleanup_dead_nodes();
             let name = cell.roster.get(i).name.clone();
             eval.event(now, "exit", &name, detail.clone());
-            if detail.starts_with(DEADMAN_TEXT) {
-                // stopped itself for want of a supervisor: not a crash, and
-                // the cell stays stopped until an operator resumes it
-                cell.roster.stopped_by_deadman(i);
-                cpu_use.restarted(i);
-                if !cell.roster.held() {
-                    let reason = format!(
-                        "dead-man: {name} heard no supervisor for {} s and stopped the cell; it stays stopped until an operator resumes it (phri-hri resume)",
-                        sup.deadman_s
-                    );
-                    tracing::warn!("{reason}");
-                    eval.event(now, "deadman", &name, reason.clone());
-                    eval.degrade(reason);
-                    cell.roster.hold();
-                }
-                continue;
-            }
-            if starting_until.is_some() {
-                start_error = Some(format!("{name} {detail} during start-up"));
-                break;
-            }
-            let restart_at = cell.roster.exited(i, now);
             cpu_use.restarted(i);
-            if let Some(n) = cell.roster.crash_looping(i, now) {
-                let reason = format!(
-                    "{name} ended {n} times within {} s (last: {detail}): the cell is not whole",
-                    sup.crash_loop_window_s
-                );
-                tracing::warn!("{reason}; stopping the cell");
-                eval.degrade(reason.clone());
-                stop_reason = Some(reason);
-                break;
-            }
-            match restart_at {
-                Some(at) => tracing::warn!(
+            match verdict::on_exit(&mut cell.roster, i, now, &detail, starting_until.is_some()) {
+                ExitVerdict::DeadmanHold(held) => {
+                    if let Some(reason) = held {
+                        tracing::warn!("{reason}");
+                        eval.event(now, "deadman", &name, reason.clone());
+                        eval.degrade(reason);
+                    }
+                }
+                ExitVerdict::StartFailed(reason) => {
+                    start_error = Some(reason);
+                    break;
+                }
+                ExitVerdict::CrashLoop(reason) => {
+                    tracing::warn!("{reason}; stopping the cell");
+                    eval.degrade(reason.clone());
+                    stop_reason = Some(reason);
+                    break;
+                }
+                ExitVerdict::Restart(Some(at)) => tracing::warn!(
                     "{name} {detail}; restarting in {} ms",
                     (at - now) / 1_000_000
                 ),
-                None => tracing::warn!("{name} {detail}"),
+                ExitVerdict::Restart(None) => tracing::warn!("{name} {detail}"),
             }
         }
         if start_error.is_some() || stop_reason.is_some() {

@@ -1,0 +1,179 @@
+//! The supervisor's verdicts on what happened to the cell, as decisions on
+//! the roster and the clock alone: a service that ended (a crash to
+//! restart, a start that failed, a crash loop that ends the run, or a
+//! dead-man stop that holds the cell until an operator resumes it), and a
+//! stall of the supervisor itself. The main loop logs, records and acts on
+//! them.
+
+use crate::process::DEADMAN_TEXT;
+use crate::roster::Roster;
+
+/// What became of a service that ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ExitVerdict {
+    /// it stopped itself for want of a supervisor (its dead-man): not a
+    /// crash, and the cell stays stopped until an operator resumes it;
+    /// `Some(reason)` when this exit put the cell on hold
+    DeadmanHold(Option<String>),
+    /// it ended during the start-up: the start fails
+    StartFailed(String),
+    /// it ended too often: the run ends
+    CrashLoop(String),
+    /// a crash: started again at this time [ns], or never (`restart = false`)
+    Restart(Option<u64>),
+}
+
+/// Service `index` of `roster` ended at `now_ns` as `detail` says (its exit
+/// status in words); `starting`: the cell's start-up is not over;
+/// `deadman_s` and `crash_window_s` name the settings in the reasons.
+pub fn on_exit(
+    roster: &mut Roster,
+    index: usize,
+    now_ns: u64,
+    detail: &str,
+    starting: bool,
+) -> ExitVerdict {
+    let name = roster.get(index).name.clone();
+    let sup = roster.config().clone();
+    if detail.starts_with(DEADMAN_TEXT) {
+        roster.stopped_by_deadman(index);
+        if roster.held() {
+            return ExitVerdict::DeadmanHold(None);
+        }
+        roster.hold();
+        return ExitVerdict::DeadmanHold(Some(format!(
+            "dead-man: {name} heard no supervisor for {} s and stopped the cell; it stays stopped until an operator resumes it (phri-hri resume)",
+            sup.deadman_s
+        )));
+    }
+    if starting {
+        return ExitVerdict::StartFailed(format!("{name} {detail} during start-up"));
+    }
+    let at = roster.exited(index, now_ns);
+    if let Some(n) = roster.crash_looping(index, now_ns) {
+        return ExitVerdict::CrashLoop(format!(
+            "{name} ended {n} times within {} s (last: {detail}): the cell is not whole",
+            sup.crash_loop_window_s
+        ));
+    }
+    ExitVerdict::Restart(at)
+}
+
+/// The supervisor did not run for `stalled_ns` (stopped, starved) until
+/// `now_ns`: the services' silence meanwhile is not theirs to answer for,
+/// and a stall past the dead-man's time (`deadman_ns`) means the services
+/// stopped the cell themselves: it holds. `Some(reason)` when this stall put
+/// the cell on hold.
+pub fn on_stall(
+    roster: &mut Roster,
+    stalled_ns: u64,
+    deadman_ns: u64,
+    now_ns: u64,
+) -> Option<String> {
+    roster.judge_afresh(now_ns);
+    if stalled_ns <= deadman_ns || roster.held() {
+        return None;
+    }
+    roster.hold();
+    Some(format!(
+        "dead-man: no supervisor for {:.1} s (this supervisor was stalled); the cell stopped itself and stays stopped until an operator resumes it (phri-hri resume)",
+        stalled_ns as f64 * 1e-9
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_config::ServiceSpec;
+
+    const S: u64 = 1_000_000_000;
+
+    fn roster() -> Roster {
+        let defaults = phri_config::Config::defaults();
+        let spec = |binary: &str| ServiceSpec {
+            binary: binary.into(),
+            ..defaults.services["sim"].clone()
+        };
+        let mut r = Roster::new(
+            defaults.supervisor.clone(),
+            vec![
+                ("sim".into(), spec("phri-sim")),
+                ("control".into(), spec("phri-control")),
+            ],
+        );
+        r.started(0, S, 100);
+        r.started(1, S, 101);
+        r
+    }
+
+    #[test]
+    fn a_crash_restarts_with_back_off_and_too_many_end_the_run() {
+        let mut r = roster();
+        let min_ms = r.config().restart_backoff_min_ms;
+        let v = on_exit(&mut r, 1, 10 * S, "killed by signal 9", false);
+        assert_eq!(v, ExitVerdict::Restart(Some(10 * S + min_ms * 1_000_000)));
+        let limit = r.config().crash_loop_restarts as u64;
+        let mut last = v;
+        for k in 1..=limit {
+            r.started(1, 10 * S + k * 1_000_000, 200 + k as u32);
+            last = on_exit(&mut r, 1, 10 * S + k * 2_000_000, "exit status 101", false);
+        }
+        match last {
+            ExitVerdict::CrashLoop(why) => {
+                assert!(
+                    why.starts_with("control ended") && why.contains("exit status 101"),
+                    "{why}"
+                )
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn an_exit_during_the_start_fails_the_start() {
+        let mut r = roster();
+        match on_exit(&mut r, 0, 2 * S, "exit status 2", true) {
+            ExitVerdict::StartFailed(why) => assert_eq!(why, "sim exit status 2 during start-up"),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_dead_man_stop_holds_the_cell_once_and_restarts_nothing() {
+        let mut r = roster();
+        let detail = format!("{DEADMAN_TEXT} (exit status 3)");
+        let first = on_exit(&mut r, 0, 20 * S, &detail, false);
+        assert!(
+            matches!(&first, ExitVerdict::DeadmanHold(Some(why)) if why.contains("sim heard no supervisor"))
+        );
+        assert!(r.held());
+        // the next one finds the cell held already
+        assert_eq!(
+            on_exit(&mut r, 1, 20 * S, &detail, false),
+            ExitVerdict::DeadmanHold(None)
+        );
+        assert!(
+            (0..2).all(|i| !r.restart_due(i, 60 * S)),
+            "restarted without an operator"
+        );
+        // an operator resumes: both start again
+        assert!(r.resume(61 * S));
+        assert!((0..2).all(|i| r.restart_due(i, 61 * S)));
+    }
+
+    #[test]
+    fn a_stall_past_the_dead_man_holds_the_cell() {
+        let mut r = roster();
+        let deadman = (r.config().deadman_s * 1e9) as u64;
+        assert_eq!(on_stall(&mut r, 200_000_000, deadman, 5 * S), None);
+        assert!(!r.held());
+        let why = on_stall(&mut r, deadman + S, deadman, 30 * S).expect("held");
+        assert!(why.starts_with("dead-man: no supervisor for"), "{why}");
+        assert!(r.held());
+        assert_eq!(
+            on_stall(&mut r, deadman + S, deadman, 40 * S),
+            None,
+            "held once"
+        );
+    }
+}
