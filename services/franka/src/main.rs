@@ -29,6 +29,69 @@ struct RobotAddress {
 /// (the box wants one every millisecond).
 const ANSWER_BUDGET_NS: u64 = 700_000;
 
+/// Why torque control ended other than by the protocol's brakes.
+enum Served {
+    /// the control box aborted the motion (a reflex, a limit, lost commands)
+    Box(franka::ControlException),
+    /// the connection, the channels: the process ends (the supervisor restarts it)
+    Fatal(Box<dyn Error>),
+}
+
+impl From<franka::FrankaError> for Served {
+    fn from(e: franka::FrankaError) -> Self {
+        match e {
+            franka::FrankaError::Control(c) => Served::Box(c),
+            other => Served::Fatal(other.into()),
+        }
+    }
+}
+
+impl From<Box<dyn Error>> for Served {
+    fn from(e: Box<dyn Error>) -> Self {
+        Served::Fatal(e)
+    }
+}
+
+/// One period of the adapter: the state published, its answer awaited and decided.
+type Period<'a> = dyn FnMut(
+        &[f64; JOINTS],
+        &[f64; JOINTS],
+        u64,
+        &mut FciCycle,
+    ) -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>>
+    + 'a;
+
+/// Torque control until the protocol brakes, then the arm's states until a
+/// command answers one (or shutdown).
+fn serve(
+    robot: &franka::Robot,
+    cycle: &mut FciCycle,
+    period: &mut Period<'_>,
+    shutdown: &phri_runtime::Shutdown,
+) -> Result<(), Served> {
+    cycle.restart();
+    let mut control = robot.start_torque_control()?;
+    loop {
+        let (s, _) = control.read_once()?;
+        let (_, out) = period(&s.q, &s.tau_J, s.time.as_millis(), cycle)?;
+        if out.brake || shutdown.requested() {
+            control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
+            break;
+        }
+        control.write_once(&franka::Torques::new(out.tau))?;
+    }
+    drop(control);
+    // braked: the arm's states go on; a fresh answer resumes control
+    while !shutdown.requested() {
+        let s = robot.read_once()?;
+        let (link, _) = period(&s.q, &s.tau_J, s.time.as_millis(), cycle)?;
+        if !link.brake {
+            break;
+        }
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-franka", body)
 }
@@ -113,27 +176,23 @@ fn body() -> Result<(), Box<dyn Error>> {
         Ok(decided)
     };
 
+    let mut recoveries = 0u64;
     while !ctx.shutdown.requested() {
-        // torque control until the protocol brakes
-        cycle.restart();
-        let mut control = robot.start_torque_control()?;
-        loop {
-            let (s, _) = control.read_once()?;
-            let (_, out) = period(&s.q, &s.tau_J, s.time.as_millis(), &mut cycle)?;
-            if out.brake || ctx.shutdown.requested() {
-                control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
-                break;
+        match serve(&robot, &mut cycle, &mut period, &ctx.shutdown) {
+            Ok(()) => {}
+            // the box ended the motion (a reflex, a joint limit, commands
+            // lost): its own error recovery, then torque control again
+            Err(Served::Box(e)) => {
+                recoveries += 1;
+                tracing::warn!(
+                    "control box: {}; automatic error recovery ({recoveries} so far)",
+                    e.message.lines().next().unwrap_or("motion aborted")
+                );
+                robot
+                    .automatic_error_recovery()
+                    .map_err(|e| format!("{address}: automatic error recovery: {e}"))?;
             }
-            control.write_once(&franka::Torques::new(out.tau))?;
-        }
-        tracing::debug!("brakes: torque control ended until a controller answers");
-        // braked: the arm's states go on; a fresh answer resumes control
-        while !ctx.shutdown.requested() {
-            let s = robot.read_once()?;
-            let (link, _) = period(&s.q, &s.tau_J, s.time.as_millis(), &mut cycle)?;
-            if !link.brake {
-                break;
-            }
+            Err(Served::Fatal(e)) => return Err(e),
         }
     }
     let _ = stats_pub.publish(cycle.stats_message(now_ns()));

@@ -33,7 +33,7 @@ impl Drop for Adapter {
 }
 
 #[test]
-fn the_adapter_serves_the_fr3_brakes_on_silence_and_resumes_without_a_jump() {
+fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kill() {
     let port = common::port(1);
     let _server = common::serve(port);
     let urdf = common::deploy()
@@ -58,19 +58,22 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_and_resumes_without_a_jump() {
         ),
     )
     .unwrap();
-    let adapter = Adapter(
-        Command::new(env!("CARGO_BIN_EXE_phri-franka"))
-            .arg("--config")
-            .arg(&config)
-            .arg("--prefix")
-            .arg(&prefix)
-            .arg("--robot-ip")
-            .arg(format!("127.0.0.1:{port}"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("phri-franka starts"),
-    );
+    let spawn = |log: &str| {
+        Adapter(
+            Command::new(env!("CARGO_BIN_EXE_phri-franka"))
+                .arg("--config")
+                .arg(&config)
+                .arg("--prefix")
+                .arg(&prefix)
+                .arg("--robot-ip")
+                .arg(format!("127.0.0.1:{port}"))
+                .stdout(Stdio::null())
+                .stderr(std::fs::File::create(dir.join(log)).unwrap())
+                .spawn()
+                .expect("phri-franka starts"),
+        )
+    };
+    let mut adapter = spawn("adapter.log");
     let model = phri_model::Model::from_urdf_file(&urdf).unwrap();
     let mut data = phri_model::Data::new(&model);
     let node = phri_ipc::node("franka-test", &prefix).unwrap();
@@ -84,19 +87,27 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_and_resumes_without_a_jump() {
     // (answering, seconds): hold, silence, hold again
     // per phase: (states published: the span of their numbers, states
     // marked braking among those received, largest |q − q0| [rad])
-    let mut seen = [(0u64, 0u64, 0.0f64); 4];
-    let mut first_seq = [0u64; 4];
+    let mut seen = [(0u64, 0u64, 0.0f64); 5];
+    let mut first_seq = [0u64; 5];
     let deadline = Instant::now() + Duration::from_secs(60);
     // (answer, seconds, torque added on every joint [Nm]): hold, silence,
-    // hold again, then a push the arm yields to by PUSH/kp
+    // hold again, a push the arm yields to by PUSH/kp; then the adapter
+    // killed (-9) mid-motion and started again: it recovers the box, holds
     const PUSH: f64 = 2.0;
     let phases = [
         (true, 3.0, 0.0),
         (false, 0.2, 0.0),
         (true, 2.0, 0.0),
         (true, 2.0, PUSH),
+        (true, 3.0, 0.0),
     ];
     for (phase, (answer, seconds, push)) in phases.into_iter().enumerate() {
+        if phase == 4 {
+            // SAFETY: kill(2) on our own child.
+            unsafe { libc::kill(adapter.0.id() as i32, libc::SIGKILL) };
+            let _ = adapter.0.wait();
+            adapter = spawn("restarted.log");
+        }
         let until = Instant::now() + Duration::from_secs_f64(seconds);
         let mut started = phase > 0;
         while Instant::now() < until || !started {
@@ -114,7 +125,8 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_and_resumes_without_a_jump() {
             last_q = q;
             started = true;
             let q0 = *q0.get_or_insert(q);
-            if first_seq[phase] == 0 {
+            if first_seq[phase] == 0 || s.seq < first_seq[phase] {
+                // the phase's first state (a restarted adapter counts from 1)
                 first_seq[phase] = s.seq;
             }
             let e = &mut seen[phase];
@@ -141,14 +153,27 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_and_resumes_without_a_jump() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     eprintln!(
-        "(states, braking, largest |q − q0| rad) per phase: hold {:?}, silence {:?}, hold again {:?}, push {:?}; \
-         under {PUSH} Nm each joint moved {moved:.4?} rad (PUSH/kp {:.4})",
-        seen[0], seen[1], seen[2], seen[3], PUSH / kp
+        "(states, braking, largest |q − q0| rad) per phase: hold {:?}, silence {:?}, hold again {:?}, push {:?}, \
+         after a kill -9 and a new adapter {:?}; under {PUSH} Nm each joint moved {moved:.4?} rad (PUSH/kp {:.4})",
+        seen[0], seen[1], seen[2], seen[3], seen[4], PUSH / kp
     );
     let status = adapter.stop();
+    let log = std::fs::read_to_string(dir.join("restarted.log")).unwrap_or_default();
+    eprintln!("the restarted phri-franka said:\n{log}");
+    let _ = std::fs::remove_dir_all(&dir);
     assert!(status.success(), "phri-franka ended {status} on SIGTERM");
+    // killed mid-motion: the new adapter took the arm over (franka-sim
+    // ends the motion of a client that went away; a real box that raised a
+    // reflex gets the adapter's error recovery) and served on, the arm
+    // where it held (within the push's deflection, which the hold takes back)
+    assert!(seen[4].0 >= 1000, "{:?}", seen[4]);
+    assert!(seen[4].1 <= 1, "{:?}", seen[4]);
+    assert!(
+        seen[4].2 <= 0.02,
+        "the arm moved {} rad over the restart",
+        seen[4].2
+    );
     // the last one out cleans up: nothing of the prefix stays in shared memory
     drop((states, commands, node));
     let _ = phri_ipc::remove_leftovers(&prefix);
