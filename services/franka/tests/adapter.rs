@@ -82,6 +82,9 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
     let (kp, kd) = (200.0, 20.0);
     let mut q0: Option<[f64; 7]> = None;
     let (mut last_q, mut dq) = ([0.0; 7], [0.0; 7]);
+    // the last state received: its number and stamp [ns] (states the test
+    // was too slow to see are skipped: the velocity is over the real interval)
+    let (mut last_seq, mut last_stamp) = (0u64, 0u64);
     let mut seq = 0;
     let mut moved: Vec<f64> = Vec::new();
     // (answering, seconds): hold, silence, hold again
@@ -94,6 +97,10 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
     // hold again, a push the arm yields to by PUSH/kp; then the adapter
     // killed (-9) mid-motion and started again: it recovers the box, holds
     const PUSH: f64 = 2.0;
+    // states marked braking at a (re)start before the first answer arrives
+    // (the protocol brakes until a controller answers; the test's answer
+    // to a state takes a few of franka-sim's periods under load)
+    const START_BRAKED: u64 = 10;
     let phases = [
         (true, 3.0, 0.0),
         (false, 0.2, 0.0),
@@ -117,12 +124,16 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
                 continue;
             };
             let q: [f64; 7] = s.q[..7].try_into().unwrap();
-            if s.seq > 1 {
+            let dt = s.stamp_ns.saturating_sub(last_stamp) as f64 * 1e-9;
+            if s.seq > last_seq && last_seq > 0 && dt > 0.0 {
                 for k in 0..7 {
-                    dq[k] = (q[k] - last_q[k]) / 1e-3;
+                    dq[k] = (q[k] - last_q[k]) / dt;
                 }
+            } else {
+                // the first state, or a restarted adapter's: no velocity yet
+                dq = [0.0; 7];
             }
-            last_q = q;
+            (last_q, last_seq, last_stamp) = (q, s.seq, s.stamp_ns);
             started = true;
             let q0 = *q0.get_or_insert(q);
             if first_seq[phase] == 0 || s.seq < first_seq[phase] {
@@ -168,7 +179,7 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
     // reflex gets the adapter's error recovery) and served on, the arm
     // where it held (within the push's deflection, which the hold takes back)
     assert!(seen[4].0 >= 1000, "{:?}", seen[4]);
-    assert!(seen[4].1 <= 1, "{:?}", seen[4]);
+    assert!(seen[4].1 <= START_BRAKED, "{:?}", seen[4]);
     assert!(
         seen[4].2 <= 0.02,
         "the arm moved {} rad over the restart",
@@ -182,7 +193,12 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
     // served without a break at franka-sim's own pace (MuJoCo in Python:
     // 0.6-1 kHz beside the cell's processes on 2 cores); answered, never braked
     assert!(seen[0].0 >= 1500, "{} states in 3 s", seen[0].0);
-    assert!(seen[0].1 <= 1, "brakes while answered: {:?}", seen[0]);
+    // (an adapter's first states are braked until its first answer: a few)
+    assert!(
+        seen[0].1 <= START_BRAKED,
+        "brakes while answered: {:?}",
+        seen[0]
+    );
     assert!(
         seen[0].2 < 1e-3,
         "the arm moved {} rad while held",
@@ -192,7 +208,7 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
     assert!(seen[1].1 > 0, "no brakes after 200 ms without commands");
     // answered again: control resumes, no jump
     assert!(
-        seen[2].0 >= 1000 && seen[2].1 <= 1 && seen[3].1 == 0,
+        seen[2].0 >= 1000 && seen[2].1 <= START_BRAKED && seen[3].1 == 0,
         "{:?}",
         &seen[2..]
     );
