@@ -75,6 +75,11 @@ impl FciCycle {
         })
     }
 
+    /// The arm's model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
     /// The protocol's bookkeeping.
     pub fn link(&self) -> &RobotLink {
         &self.link

@@ -104,9 +104,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     let address = robot_ip.ok_or("--robot-ip is required")?;
     let model = ctx.robot_model()?;
-    if model.nv() != JOINTS {
-        return Err(format!("robot.urdf: {} joints; a Franka arm has 7", model.nv()).into());
-    }
+    // 7 joints, a positive period: refused here, before any connection
+    let mut cycle = FciCycle::new(model, 1e-3)?;
     if ctx.checking() {
         return Ok(());
     }
@@ -118,10 +117,9 @@ fn body() -> Result<(), Box<dyn Error>> {
         .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
     let served = phri_model::Model::from_urdf_str(&urdf)
         .map_err(|e| format!("{address}: the robot's URDF: {e}"))?;
-    if let Some(d) = first_difference(&model, &served) {
+    if let Some(d) = first_difference(cycle.model(), &served) {
         return Err(format!("robot.urdf is not the arm at {address}: {d}").into());
     }
-    let mut cycle = FciCycle::new(model, 1e-3)?;
 
     let node = ctx.node()?;
     let state_pub = ROBOT_STATE.publisher(&node)?;

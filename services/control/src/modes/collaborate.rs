@@ -30,7 +30,7 @@ use phri_ipc::{
     CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, SkeletonJoint, MAX_DOF,
     MAX_PEOPLE,
 };
-use phri_model::Model;
+use phri_model::{Model, Placement};
 
 use crate::collab::{Answer, CollabMachine, Observation, RobotState};
 use crate::error::ControlError;
@@ -522,6 +522,19 @@ impl Collaboration {
         phase
     }
 
+    /// `h` \[m\] (base frame) in the robot part's link frame (`pose`: that
+    /// link's placement), and the point of the part's capsule axis
+    /// (`robot_point ± robot_half_length_m ẑ`) nearest it, link frame.
+    fn part_axis(&self, pose: &Placement, h: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let (centre, half) = (self.contact.point, self.cfg.robot_half_length_m);
+        let local = pose.r.transpose() * (h - pose.p);
+        let z = Vector3::z();
+        (
+            local,
+            centre + z * (local - centre).dot(&z).clamp(-half, half),
+        )
+    }
+
     /// Where the hand meets the robot at joints `q`: on the robot part's
     /// capsule `robot_point ± robot_half_length_m ẑ` (link frame), the surface
     /// point toward the hand seen in depth (the capsule's tip along ẑ while no
@@ -543,8 +556,7 @@ impl Collaboration {
         let z = Vector3::z();
         let (axis, normal, part_distance) = match self.hand {
             Some(h) => {
-                let local = pose.r.transpose() * (h - pose.p);
-                let axis = centre + z * (local - centre).dot(&z).clamp(-half, half);
+                let (local, axis) = self.part_axis(&pose, &h);
                 let d = local - axis;
                 let normal = match d.norm() > 1e-9 {
                     true => d / d.norm(),
@@ -634,7 +646,6 @@ impl Collaboration {
             stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
         })?;
         let pose = self.forces.placement(q, self.contact.frame).ok()?;
-        let (centre, half) = (self.contact.point, self.cfg.robot_half_length_m);
         let n = (sk.n_people as usize).min(MAX_PEOPLE);
         let hands = [
             SkeletonJoint::LeftHand as usize,
@@ -650,8 +661,7 @@ impl Collaboration {
                     continue;
                 }
                 let h = Vector3::from(*x);
-                let local = pose.r.transpose() * (h - pose.p);
-                let axis = centre + Vector3::z() * (local - centre).z.clamp(-half, half);
+                let (local, axis) = self.part_axis(&pose, &h);
                 let part = (local - axis).norm() - self.cfg.robot_radius_m;
                 gap = gap.min(part.min(self.surface_distance(&h)) - self.cfg.hand_radius_m);
             }
