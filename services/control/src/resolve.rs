@@ -38,6 +38,10 @@ pub struct Resolver {
     jac_point: Matrix6xX<f64>,
     /// low-passed repulsive vectors per control point [m/s], base frame
     v_call_filtered: Vec<Vector3<f64>>,
+    /// per control point: its obstacle lay behind the collaborative hand in
+    /// the last period (the test then keeps it there for
+    /// [`BEHIND_HYSTERESIS_M`] more: depth's noise flipped it frame by frame)
+    behind_before: Vec<bool>,
     /// task scale of the last SNS solution
     task_scale: f64,
 }
@@ -58,6 +62,7 @@ impl Resolver {
             jac_ee: Data::jacobian_buffer(model),
             jac_point: Data::jacobian_buffer(model),
             v_call_filtered: Vec::new(),
+            behind_before: Vec::new(),
             task_scale: 1.0,
         }
     }
@@ -83,6 +88,7 @@ impl Resolver {
             })
             .collect::<Result<_, ControlError>>()?;
         self.v_call_filtered = vec![Vector3::zeros(); points.len()];
+        self.behind_before = vec![false; points.len()];
         Ok(())
     }
 
@@ -192,12 +198,16 @@ impl Resolver {
         if let Some(v) = perception {
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
+                let was_behind = self.behind_before.get(k).copied().unwrap_or(false);
                 let margin = match c.collab_touching {
                     true => BEHIND_MARGIN_CONTACT_M,
                     false => BEHIND_MARGIN_M,
                 };
                 let behind_the_hand = (k == 0 || k == c.collab_point)
-                    && c.collab_hand.is_some_and(|h| behind(&h, p, margin));
+                    && c.collab_hand.is_some_and(|h| still_behind(&h, p, margin, was_behind));
+                if let Some(b) = self.behind_before.get_mut(k) {
+                    *b = behind_the_hand && p.active != 0;
+                }
                 // touching, what lies at the hand is the hand (for every point)
                 let behind_the_hand = behind_the_hand
                     || (c.collab_touching && c.collab_hand.is_some_and(|h| at_the_hand(&h, p)));
@@ -349,6 +359,12 @@ const BEHIND_MARGIN_M: f64 = 0.02;
 /// its repulsion would only shake the contact.
 const BEHIND_MARGIN_CONTACT_M: f64 = 0.05;
 
+/// An obstacle found behind the collaborative hand stays behind it until
+/// it comes this much nearer than the margin \[m\] (depth's noise of a few
+/// centimetres flipped a body just behind the hand in and out, each flip a
+/// step of the end effector's repulsion that shook a held contact).
+const BEHIND_HYSTERESIS_M: f64 = 0.03;
+
 /// While touching the collaborative hand, an obstacle this near the hand's
 /// centre as the controller sees it \[m\] is the hand itself or its mask's
 /// edge (the hand's radius 4.5 cm, depth's error of the centre 3-5 cm).
@@ -358,6 +374,13 @@ const AT_THE_HAND_M: f64 = 0.10;
 fn at_the_hand(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
     let o = Vector3::from(p.obstacle);
     o.iter().all(|v| v.is_finite()) && (o - h).norm() <= AT_THE_HAND_M
+}
+
+/// [`behind`], with [`BEHIND_HYSTERESIS_M`] more margin for an obstacle
+/// that lay behind the hand in the last period (`was`).
+fn still_behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64, was: bool) -> bool {
+    let more = if was { BEHIND_HYSTERESIS_M } else { 0.0 };
+    behind(h, p, margin + more)
 }
 
 /// The obstacle of `p` lies behind the collaborative hand `h` as seen from
@@ -412,6 +435,36 @@ mod tests {
         // a malformed repulsion: the cautious cap everywhere
         let nan = Vector3::new(f64::NAN, 0.0, 0.0);
         assert!((cap_feedback(side, &nan, caps(0.1, 0.0)).norm() - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_body_just_behind_the_hand_stays_behind_it_through_depths_noise() {
+        // the control point at the origin, the hand 0.2 m along x; the
+        // boundary of the contact margin lies at x = 0.15
+        let h = Vector3::new(0.2, 0.0, 0.0);
+        let at = |x: f64| phri_ipc::PointRepulsion {
+            position: [0.0; 3],
+            obstacle: [x, 0.05, 0.0],
+            active: 1,
+            ..Default::default()
+        };
+        let m = BEHIND_MARGIN_CONTACT_M;
+        // depth's noise moves the body ±1.5 cm about the boundary
+        let xs = [0.16, 0.14, 0.165, 0.136, 0.158, 0.137];
+        let mut was = still_behind(&h, &at(xs[0]), m, false);
+        let (mut flips_held, mut flips_bare) = (0, 0);
+        for w in xs.windows(2) {
+            let before = was;
+            was = still_behind(&h, &at(w[1]), m, before);
+            flips_held += (was != before) as u32;
+            flips_bare += (behind(&h, &at(w[1]), m) != behind(&h, &at(w[0]), m)) as u32;
+        }
+        assert!(behind(&h, &at(xs[0]), m), "it starts behind");
+        assert_eq!(flips_held, 0, "held behind through the noise");
+        assert_eq!(flips_bare, 5, "without the hysteresis it flips each frame");
+        // a part that comes clearly nearer than the hand repels again
+        assert!(!still_behind(&h, &at(0.10), m, true));
+        assert!(!still_behind(&h, &at(0.05), m, true));
     }
 
     #[test]

@@ -9,7 +9,8 @@
 //! contact ↔ follow switches, F̂'s error ‖F̂ − F‖/‖F‖ p50/p95 over the
 //! contact phase's observable samples with ‖F‖ ≥ 5 N (as
 //! `collaboration.force_error`), how it ended, unintended contacts.
-//! `FIGURES_SCENARIOS` / `FIGURES_OFFSETS` (comma-separated) narrow it.
+//! `FIGURES_SCENARIOS` / `FIGURES_OFFSETS` (comma-separated) narrow it;
+//! `FIGURES_SET` (space-separated `key=value`) overrides `deploy/phri.toml`.
 
 mod common;
 
@@ -29,7 +30,9 @@ fn collaboration_figures() {
             .split(',')
             .filter_map(|o| o.trim().parse::<f64>().ok())
         {
-            let l = common::loaded(scenario, &[]);
+            let sets = std::env::var("FIGURES_SET").unwrap_or_default();
+            let sets: Vec<&str> = sets.split_whitespace().collect();
+            let l = common::loaded(scenario, &sets);
             let opts = CellOptions {
                 human_time_offset_s: offset,
                 ..CellOptions::default()
