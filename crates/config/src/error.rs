@@ -63,6 +63,15 @@ pub enum ConfigError {
         /// the scenarios there, by name
         known: String,
     },
+    #[error("{by}: robot.name: no arm '{name}': no robots/{name}/robot.toml in {dir} or the built-in deploy/robots (known: {known})")]
+    NoRobot {
+        name: String,
+        /// what named it: a `--set`, or the configuration file
+        by: String,
+        dir: String,
+        /// the arms with a robot file there, by name
+        known: String,
+    },
     #[error("{}", model_message(path, source))]
     Model {
         path: PathBuf,

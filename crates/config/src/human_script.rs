@@ -61,7 +61,8 @@ impl Wave {
 /// that hand with that link.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Push {
-    /// robot link name (checked against the robot model by the simulator)
+    /// robot link name (checked against the robot model by the simulator),
+    /// or a role: [`Push::WRIST`], [`Push::FLANGE`]
     pub link: String,
     /// point of application \[m\], in the link's frame (|point| ≤ [`Push::MAX_POINT_M`])
     pub point: [f64; 3],
@@ -74,6 +75,11 @@ pub struct Push {
 }
 
 impl Push {
+    /// The link given by role: the arm's wrist (`collaboration.wrist_link`).
+    pub const WRIST: &'static str = "wrist";
+    /// The link given by role: the arm's end-effector link (`control.ee_link`).
+    pub const FLANGE: &'static str = "flange";
+
     /// Ramp time \[s\] of the force, at the start and the end of the push.
     pub const RAMP_S: f64 = 0.2;
     pub const MAX_FORCE_N: f64 = 500.0;
@@ -242,6 +248,19 @@ impl HumanScript {
     /// The keyframes, sorted by time.
     pub fn keyframes(&self) -> &[Keyframe] {
         &self.keyframes
+    }
+
+    /// The pushes' links given by role, named: [`Push::WRIST`] becomes
+    /// `wrist` (the arm's `collaboration.wrist_link`), [`Push::FLANGE`]
+    /// `flange` (its `control.ee_link`), so one scenario fits every arm.
+    pub fn name_link_roles(&mut self, wrist: &str, flange: &str) {
+        for p in self.keyframes.iter_mut().filter_map(|k| k.push.as_mut()) {
+            match p.link.as_str() {
+                Push::WRIST => p.link = wrist.to_string(),
+                Push::FLANGE => p.link = flange.to_string(),
+                _ => {}
+            }
+        }
     }
 
     /// Time of the last keyframe \[s\]: the human stands still afterwards.

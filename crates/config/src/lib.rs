@@ -20,6 +20,7 @@ pub mod merge;
 pub mod per_joint;
 pub mod perception;
 pub mod record;
+pub mod robot;
 pub mod scenario;
 pub mod sim;
 pub mod supervisor;
@@ -40,6 +41,7 @@ pub use merge::{apply_set, merge};
 pub use per_joint::PerJoint;
 pub use perception::{CameraConfig, DepthSource, IngestConfig, PointConfig, RepulsionConfig};
 pub use record::{Compression, RecordConfig};
+pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
 pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
@@ -52,14 +54,6 @@ pub const DEFAULTS: &str = include_str!("../../../deploy/phri.toml");
 /// Where the defaults' relative paths (`[robot] urdf`) resolve when a
 /// configuration file does not say otherwise.
 pub const DEFAULT_DEPLOY_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../deploy");
-
-/// `[robot]`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RobotSection {
-    /// robot description (URDF), relative to the configuration file
-    pub urdf: String,
-}
 
 /// `[scenario]`: which scenario the cell runs (set by the supervisor in the
 /// merged file it hands to the services).
@@ -104,6 +98,12 @@ pub struct Loaded {
     pub table: Table,
     /// the file it was loaded from (`<defaults>` when none)
     pub origin: PathBuf,
+    /// the robot file merged under it, and its keys (to name it in errors
+    /// about a key it alone gives)
+    pub robot_origin: PathBuf,
+    robot_keys: Table,
+    /// what the file, the scenario and `--set` gave
+    given: Table,
 }
 
 fn parse_table(text: &str, origin: &str) -> Result<Table, ConfigError> {
@@ -114,20 +114,130 @@ fn parse_table(text: &str, origin: &str) -> Result<Table, ConfigError> {
         })
 }
 
-/// The defaults as a table.
+/// The defaults as a table: `deploy/phri.toml` with the default arm's
+/// robot file merged over it, both as built.
 pub fn defaults_table() -> Table {
-    // the embedded file is checked by this crate's tests
-    parse_table(DEFAULTS, "<defaults>").unwrap_or_default()
-}
-
-/// The defaults with `[robot] urdf` made absolute (in [`DEFAULT_DEPLOY_DIR`]).
-fn defaults_table_resolved() -> Table {
-    let mut table = defaults_table();
-    absolute_urdf(
+    // the embedded files are checked by this crate's tests
+    let mut table = parse_table(DEFAULTS, "<defaults>").unwrap_or_default();
+    merge(
         &mut table,
-        Path::new(DEFAULT_DEPLOY_DIR).join("phri.toml").as_path(),
+        &parse_table(DEFAULT_ROBOT_FILE, "<default robot>").unwrap_or_default(),
     );
     table
+}
+
+/// The default arm's robot file in [`DEFAULT_DEPLOY_DIR`].
+fn default_robot_path() -> PathBuf {
+    Path::new(DEFAULT_DEPLOY_DIR)
+        .join("robots")
+        .join(DEFAULT_ROBOT)
+        .join("robot.toml")
+}
+
+/// The defaults with `[robot] urdf` made absolute (the default robot file's,
+/// in [`DEFAULT_DEPLOY_DIR`]) and `[robot] file` set.
+fn defaults_table_resolved() -> Table {
+    let mut table = defaults_table();
+    let robot = default_robot_path();
+    absolute_urdf(&mut table, &robot);
+    set_robot_file(&mut table, &robot);
+    table
+}
+
+/// `[robot] file` = `path`.
+fn set_robot_file(table: &mut Table, path: &Path) {
+    let path = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    if let Some(Value::Table(robot)) = table.get_mut("robot") {
+        robot.insert("file".into(), Value::String(path.display().to_string()));
+    }
+}
+
+/// The arm named `name` (`[robot] name`): its robot file, parsed, with its
+/// `[robot] urdf` made absolute, and where it is. A file named by
+/// `[robot] file` (`given`, written by the loader for the services) comes
+/// first, then `robots/<name>/robot.toml` beside the configuration file
+/// `config_path`, then in [`DEFAULT_DEPLOY_DIR`].
+pub fn robot_file(
+    name: &str,
+    given: Option<&str>,
+    config_path: &Path,
+) -> Result<(Table, PathBuf), ConfigError> {
+    let valid = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    let beside = config_path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join("robots");
+    let builtin = Path::new(DEFAULT_DEPLOY_DIR).join("robots");
+    let given = given
+        .filter(|g| !g.is_empty())
+        .map(PathBuf::from)
+        .filter(|g| g.is_file() && g.parent().and_then(|d| d.file_name()) == Some(name.as_ref()));
+    let found = given.or_else(|| {
+        valid
+            .then(|| {
+                [&beside, &builtin]
+                    .into_iter()
+                    .map(|d| d.join(name).join("robot.toml"))
+                    .find(|p| p.is_file())
+            })
+            .flatten()
+    });
+    let Some(path) = found else {
+        let mut known: Vec<String> = [&beside, &builtin]
+            .iter()
+            .filter_map(|d| std::fs::read_dir(d).ok())
+            .flat_map(|entries| entries.flatten())
+            .filter(|e| e.path().join("robot.toml").is_file())
+            .filter_map(|e| e.file_name().to_str().map(String::from))
+            .collect();
+        known.sort();
+        known.dedup();
+        return Err(ConfigError::NoRobot {
+            name: name.to_string(),
+            by: config_path.display().to_string(),
+            dir: beside.display().to_string(),
+            known: if known.is_empty() {
+                "none".into()
+            } else {
+                known.join(", ")
+            },
+        });
+    };
+    let text = crate::check::read_text(&path).map_err(|source| ConfigError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let mut table = parse_table(&text, &path.display().to_string())?;
+    absolute_urdf(&mut table, &path);
+    Ok((table, path))
+}
+
+/// `key` (`section.key`, `section.list[i].key`) is given in `table`.
+fn gives(table: &Table, key: &str) -> bool {
+    let mut at: Option<&Value> = None;
+    for (i, part) in key.split('.').enumerate() {
+        let (name, index) = match part.split_once('[') {
+            Some((n, rest)) => (n, rest.trim_end_matches(']').parse::<usize>().ok()),
+            None => (part, None),
+        };
+        let next = match (i, at) {
+            (0, _) => table.get(name),
+            (_, Some(Value::Table(t))) => t.get(name),
+            _ => None,
+        };
+        at = match (next, index) {
+            (Some(Value::Array(a)), Some(k)) => a.get(k),
+            (v, None) => v,
+            _ => None,
+        };
+        if at.is_none() {
+            return false;
+        }
+    }
+    true
 }
 
 /// `[robot] urdf` resolved against `base_file` ([`resolve`]) and made absolute.
@@ -221,6 +331,7 @@ impl Config {
 
     /// Range checks of every section, naming the key at fault.
     pub fn validate(&self) -> Result<(), Invalid> {
+        self.robot.validate()?;
         self.supervisor.validate()?;
         for (name, s) in &self.services {
             s.validate(name)?;
@@ -289,6 +400,14 @@ impl Config {
                 Err(Invalid::new(key, format!("the robot has no link '{name}'")))
             }
         };
+        for (i, c) in self.robot.capsules.iter().enumerate() {
+            if model.frame_id(&c.link).is_err() {
+                return Err(Invalid::new(
+                    format!("robot.capsules[{i}].link"),
+                    format!("the robot has no link '{}'", c.link),
+                ));
+            }
+        }
         link("control.ee_link".into(), &self.control.ee_link)?;
         link("dynamics.ft_link".into(), &d.ft_link)?;
         link(
@@ -391,29 +510,73 @@ impl Loaded {
         sets: &[&str],
     ) -> Result<Loaded, ConfigError> {
         let origin = path.display().to_string();
-        let mut table = defaults_table();
-        merge(&mut table, &parse_table(text, &origin)?);
+        let file = parse_table(text, &origin)?;
+        // over the file: the scenario's [config], its name and file, --set
+        let mut over = Table::new();
         let scen = match scenario {
             Some(name) => {
                 let file = find_scenario(name, path)?;
                 let abs = std::fs::canonicalize(&file).unwrap_or(file);
                 let s = Scenario::from_file(&abs)?;
-                merge(&mut table, &s.config);
+                merge(&mut over, &s.config);
                 let mut sect = Table::new();
                 sect.insert("name".into(), Value::String(s.name.clone()));
                 sect.insert("file".into(), Value::String(abs.display().to_string()));
-                table.insert("scenario".into(), Value::Table(sect));
+                over.insert("scenario".into(), Value::Table(sect));
                 Some(s)
             }
             None => None,
         };
         for s in sets {
-            apply_set(&mut table, s)?;
+            apply_set(&mut over, s)?;
         }
+        // the arm the file, the scenario or a --set names, its robot file
+        // under the file: defaults < robot file < file < scenario < --set
+        let mut named = file.clone();
+        merge(&mut named, &over);
+        let robot_key = |key: &str| {
+            named
+                .get("robot")
+                .and_then(|r| r.get(key))
+                .and_then(|v| v.as_str())
+                .map(String::from)
+        };
+        let name = robot_key("name").unwrap_or_else(|| DEFAULT_ROBOT.into());
+        let (robot, robot_path) = robot_file(&name, robot_key("file").as_deref(), path)
+            .map_err(|e| match e {
+                ConfigError::NoRobot {
+                    name,
+                    by,
+                    dir,
+                    known,
+                } => ConfigError::NoRobot {
+                    name,
+                    by: merge::set_giving(sets, "robot.name").unwrap_or(by),
+                    dir,
+                    known,
+                },
+                e => e,
+            })?;
+        let mut table = parse_table(DEFAULTS, "<defaults>")?;
+        merge(&mut table, &robot);
         // relative paths anchored at the file that gave them
-        absolute_urdf(&mut table, path);
-        // an error about a key a --set gave names that flag, not the file
-        let blame = |key: &str| merge::set_giving(sets, key).unwrap_or_else(|| origin.clone());
+        let mut file = file;
+        absolute_urdf(&mut file, path);
+        merge(&mut table, &file);
+        absolute_urdf(&mut over, path);
+        merge(&mut table, &over);
+        set_robot_file(&mut table, &robot_path);
+        // an error about a key names what gave it: a --set, the file, the
+        // scenario, the robot file
+        let robot_origin = robot_path.display().to_string();
+        let blame = |key: &str| {
+            merge::set_giving(sets, key).unwrap_or_else(|| {
+                match !gives(&file, key) && !gives(&over, key) && gives(&robot, key) {
+                    true => robot_origin.clone(),
+                    false => origin.clone(),
+                }
+            })
+        };
         let config = Config::from_table(&table, &origin).map_err(|e| match e {
             ConfigError::Key { key, message, .. } => ConfigError::Key {
                 origin: blame(&key),
@@ -440,11 +603,20 @@ impl Loaded {
             }
             None => Scenario::free_motion(),
         };
+        let mut scenario = scenario;
+        if let Some(h) = scenario.human.as_mut() {
+            h.name_link_roles(&config.collaboration.wrist_link, &config.control.ee_link);
+        }
+        let mut given = file;
+        merge(&mut given, &over);
         Ok(Loaded {
             config,
             scenario,
             table,
             origin: path.to_path_buf(),
+            robot_origin: robot_path,
+            robot_keys: robot,
+            given,
         })
     }
 
@@ -456,6 +628,9 @@ impl Loaded {
             scenario: Scenario::free_motion(),
             table,
             origin: PathBuf::from("<defaults>"),
+            robot_origin: default_robot_path(),
+            robot_keys: parse_table(DEFAULT_ROBOT_FILE, "<default robot>").unwrap_or_default(),
+            given: Table::new(),
         }
     }
 
@@ -468,7 +643,7 @@ impl Loaded {
     /// carry or when the configuration does not fit it.
     pub fn model(&self) -> Result<phri_model::Model, ConfigError> {
         let path = self.urdf();
-        let model =
+        let mut model =
             phri_model::Model::from_urdf_file(&path).map_err(|source| ConfigError::Model {
                 path: path.clone(),
                 source,
@@ -480,10 +655,22 @@ impl Loaded {
                 max: phri_ipc::MAX_DOF,
             });
         }
-        self.config
-            .check_model(&model)
+        let checked = self.config.check_model(&model).and_then(|_| {
+            for (i, c) in self.config.robot.capsules.iter().enumerate() {
+                model
+                    .add_capsule(&c.link, &c.a.into(), &c.b.into(), c.radius)
+                    .map_err(|e| Invalid::new(format!("robot.capsules[{i}]"), e.to_string()))?;
+            }
+            Ok(())
+        });
+        checked
             .map_err(|invalid| ConfigError::Invalid {
-                origin: self.origin.display().to_string(),
+                origin: match !gives(&self.given, &invalid.key)
+                    && gives(&self.robot_keys, &invalid.key)
+                {
+                    true => self.robot_origin.display().to_string(),
+                    false => self.origin.display().to_string(),
+                },
                 invalid,
             })?;
         Ok(model)

@@ -25,8 +25,10 @@
 //! #   the hand ("right" | "left") is raised above its elbow and swings along
 //! #   the person's left-right axis: frequency in (0, 5] Hz, peak amplitude
 //! #   in (0, 0.5] m about the elbow; blends in and out over 0.5 s
-//! push = { link = "lwr_link_7", point = [0.0, 0.0, 0.04], force_n = 30.0, part = "right_hand", intended = true }
-//! #   the simulator pushes robot link `link` at `point` [m] (link frame) with
+//! push = { link = "flange", point = [0.0, 0.0, 0.04], force_n = 30.0, part = "right_hand", intended = true }
+//! #   the simulator pushes robot link `link` (a link of the URDF, or a role
+//! #   that fits every arm: "wrist", the arm's collaboration.wrist_link;
+//! #   "flange", its control.ee_link) at `point` [m] (link frame) with
 //! #   force_n in (0, 500] N, horizontal, from the person's base position
 //! #   towards the point, ramped over 0.2 s at both ends; the hand `part`
 //! #   ("right_hand" | "left_hand") is put on the link there and the force is

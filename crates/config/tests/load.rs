@@ -239,3 +239,104 @@ fn values_that_would_exhaust_memory_or_overflow_time_are_refused() {
     let e = err(&["voice.skeleton_max_age_ms=1e300"]);
     assert!(e.contains("voice.skeleton_max_age_ms"), "{e}");
 }
+
+#[test]
+fn the_arm_comes_from_its_robot_file() {
+    // the default: the LWR-IV, from robots/lwr4/robot.toml
+    let lwr = load(&[]).unwrap();
+    assert_eq!(lwr.config.robot.name, "lwr4");
+    assert!(lwr.config.robot.file.ends_with("robots/lwr4/robot.toml"));
+    assert_eq!(lwr.config.control.ee_link, "lwr_flange");
+    // --robot fr3: everything the cell knows of the arm changes with it
+    let fr3 = load(&["robot.name=fr3"]).unwrap();
+    let c = &fr3.config;
+    assert!(fr3.urdf().ends_with("robots/fr3/fr3.urdf"), "{:?}", fr3.urdf());
+    assert_eq!(c.control.ee_link, "link8");
+    assert_eq!(c.collaboration.robot_link, "link7");
+    assert_eq!(c.collaboration.wrist_link, "link6");
+    assert_eq!(c.sim.q0[3], -2.356);
+    assert!(c.repulsion.points.iter().all(|p| p.link.starts_with("link")));
+    let model = fr3.model().unwrap();
+    assert_eq!(model.nv(), 7);
+    // its URDF's collisions are meshes: the capsules are the robot file's
+    assert_eq!(model.collisions.len(), c.robot.capsules.len());
+    assert!(model.collisions.len() >= 10);
+    // the rest is the configuration's, and a --set still wins over the robot file
+    assert_eq!(c.control.kp, lwr.config.control.kp);
+    let kp = load(&["robot.name=fr3", "control.posture=[0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8]"]).unwrap();
+    assert_eq!(kp.config.control.posture[1], -0.5);
+    // the merged table the supervisor hands its services loads the same, wherever it is written
+    let dir = tempdir("merged");
+    let merged = dir.join("cell.toml");
+    std::fs::write(&merged, fr3.to_toml()).unwrap();
+    let again = Loaded::load(&merged, None, &[]).unwrap();
+    assert_eq!(again.config, fr3.config);
+}
+
+#[test]
+fn an_unknown_arm_and_a_wrong_link_in_a_robot_file_are_refused_by_name() {
+    let e = err(&["robot.name=ur5"]);
+    assert!(
+        e.contains("--set robot.name=ur5") && e.contains("'ur5'") && e.contains("fr3, lwr4"),
+        "{e}"
+    );
+    let e = err(&["robot.name=../lwr4"]);
+    assert!(e.contains("robot.name") && e.contains("known"), "{e}");
+    // a robot file beside the configuration, with a link its URDF lacks
+    let dir = tempdir("robot-file");
+    std::fs::create_dir_all(dir.join("robots/arm")).unwrap();
+    let lwr = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/robots");
+    let text = std::fs::read_to_string(lwr.join("lwr4/robot.toml"))
+        .unwrap()
+        .replace(
+            "urdf = \"../kuka_lwr4.urdf\"",
+            &format!("urdf = \"{}\"", lwr.join("kuka_lwr4.urdf").display()),
+        )
+        .replace("wrist_link = \"lwr_link_6\"", "wrist_link = \"lwr_link_9\"");
+    let robot = dir.join("robots/arm/robot.toml");
+    std::fs::write(&robot, text).unwrap();
+    let config = dir.join("cell.toml");
+    std::fs::write(&config, "[robot]\nname = \"arm\"\n").unwrap();
+    let l = Loaded::load(&config, None, &[]).unwrap();
+    assert_eq!(l.config.robot.file, robot.canonicalize().unwrap().display().to_string());
+    let e = l.model().unwrap_err().to_string();
+    assert!(
+        e.contains("robots/arm/robot.toml")
+            && e.contains("collaboration.wrist_link")
+            && e.contains("lwr_link_9"),
+        "{e}"
+    );
+    // a capsule on a link the URDF lacks, likewise
+    let capsule = "\n[[robot.capsules]]\nlink = \"nowhere\"\na = [0.0, 0.0, 0.0]\nb = [0.0, 0.0, 0.1]\nradius = 0.05\n";
+    let text = std::fs::read_to_string(&robot).unwrap();
+    let text = text.replace("wrist_link = \"lwr_link_9\"", "wrist_link = \"lwr_link_6\"");
+    let text = text.replace("[sim]", &format!("{capsule}\n[sim]"));
+    std::fs::write(&robot, text).unwrap();
+    let e = Loaded::load(&config, None, &[]).unwrap().model().unwrap_err().to_string();
+    assert!(e.contains("robot.capsules[0].link") && e.contains("nowhere"), "{e}");
+}
+
+/// A fresh directory of this test's own.
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("phri-config-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn a_push_on_the_wrist_by_role_lands_on_each_arms_wrist() {
+    for (sets, wrist) in [(&[][..], "lwr_link_6"), (&["robot.name=fr3"][..], "link6")] {
+        let l = Loaded::load(&deploy(), Some("collaboration"), sets).unwrap();
+        let pushes: Vec<&str> = l
+            .scenario
+            .human
+            .as_ref()
+            .unwrap()
+            .keyframes()
+            .iter()
+            .filter_map(|k| k.push.as_ref().map(|p| p.link.as_str()))
+            .collect();
+        assert_eq!(pushes, [wrist], "{sets:?}");
+    }
+}

@@ -742,6 +742,64 @@ impl Model {
             .ok_or_else(|| ModelError::UnknownLink(link.to_string()))
     }
 
+    /// Adds a capsule to link `link`'s collision geometry: the segment
+    /// `a`–`b` \[m\] (link frame) swept by a sphere of `radius` \[m\] (a
+    /// robot whose URDF has only mesh collisions gets its capsules from its
+    /// robot file this way).
+    pub fn add_capsule(
+        &mut self,
+        link: &str,
+        a: &Vector3<f64>,
+        b: &Vector3<f64>,
+        radius: f64,
+    ) -> Result<(), ModelError> {
+        let element = format!("capsule on link '{link}'");
+        if !a.iter().chain(b.iter()).all(|x| x.is_finite()) {
+            return Err(ModelError::NotFinite {
+                element,
+                field: "a or b".into(),
+            });
+        }
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(ModelError::NotFinite {
+                element,
+                field: "radius (> 0)".into(),
+            });
+        }
+        let frame = &self.frames[self.frame_id(link)?];
+        let d = b - a;
+        let len = d.norm();
+        // z onto the segment's direction
+        let r = match len > 1e-9 {
+            true => {
+                let u = d / len;
+                let z = Vector3::z();
+                let axis = z.cross(&u);
+                let (sin, cos) = (axis.norm(), z.dot(&u));
+                match sin > 1e-12 {
+                    true => crate::spatial::axis_angle(&(axis / sin), sin.atan2(cos)),
+                    false if cos > 0.0 => Matrix3::identity(),
+                    false => crate::spatial::axis_angle(&Vector3::x(), std::f64::consts::PI),
+                }
+            }
+            false => Matrix3::identity(),
+        };
+        let placement = frame.placement.compose(&Placement {
+            r,
+            p: (a + b) * 0.5,
+        });
+        self.collisions.push(CollisionObject {
+            link: link.to_string(),
+            body: frame.body,
+            placement,
+            shape: Shape::Capsule {
+                radius,
+                half_length: len * 0.5,
+            },
+        });
+        Ok(())
+    }
+
     /// Actuated joint names, in array order.
     pub fn joint_names(&self) -> Vec<&str> {
         self.actuated().iter().map(|j| j.name.as_str()).collect()

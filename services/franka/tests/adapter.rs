@@ -36,28 +36,12 @@ impl Drop for Adapter {
 fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kill() {
     let port = common::port(1);
     let _server = common::serve(port);
-    let urdf = common::deploy()
-        .join("robots/fr3/fr3.urdf")
-        .canonicalize()
-        .unwrap();
     let prefix = format!("tfr{}_", std::process::id());
-    // the FR3's keys over the defaults (its own links, a posture in its limits)
+    // the FR3, by its robot file
     let dir = std::env::temp_dir().join(format!("phri-franka-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let config = dir.join("fr3.toml");
-    std::fs::write(
-        &config,
-        format!(
-            "[robot]\nurdf = \"{}\"\n\
-             [sim]\nq0 = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]\n\
-             [control]\nee_link = \"link8\"\n\
-             [collaboration]\nrobot_link = \"link7\"\nwrist_link = \"link6\"\n\
-             [[repulsion.points]]\nname = \"end_effector\"\nlink = \"link7\"\n\
-             xyz = [0.0, 0.0, 0.1]\nradius = 0.075\n",
-            urdf.display()
-        ),
-    )
-    .unwrap();
+    std::fs::write(&config, "[robot]\nname = \"fr3\"\n").unwrap();
     let spawn = |log: &str| {
         Adapter(
             Command::new(env!("CARGO_BIN_EXE_phri-franka"))
@@ -74,7 +58,8 @@ fn the_adapter_serves_the_fr3_brakes_on_silence_resumes_and_recovers_after_a_kil
         )
     };
     let mut adapter = spawn("adapter.log");
-    let model = phri_model::Model::from_urdf_file(&urdf).unwrap();
+    let model =
+        phri_model::Model::from_urdf_file(common::deploy().join("robots/fr3/fr3.urdf")).unwrap();
     let mut data = phri_model::Data::new(&model);
     let node = phri_ipc::node("franka-test", &prefix).unwrap();
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Latest).unwrap();

@@ -58,6 +58,10 @@ struct Cli {
     /// Write the run's report (JSON) to this file
     #[arg(long, value_name = "FILE")]
     report: Option<String>,
+    /// The arm: its robot file deploy/robots/NAME/robot.toml (lwr4, the
+    /// default; fr3); the same as `--set robot.name=NAME`
+    #[arg(long, value_name = "NAME")]
+    robot: Option<String>,
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -73,6 +77,15 @@ struct Cli {
     run_dir: Option<PathBuf>,
     #[command(subcommand)]
     completions: Option<phri_runtime::cli::CompletionsCmd>,
+}
+
+/// `--robot NAME` as the first `--set` (a later `--set robot.name` wins).
+fn robot_and_sets(robot: Option<&str>, sets: &[String]) -> Vec<String> {
+    robot
+        .map(|r| format!("robot.name={r}"))
+        .into_iter()
+        .chain(sets.iter().cloned())
+        .collect()
 }
 
 /// Period of the supervision loop [ns].
@@ -450,7 +463,10 @@ fn body() -> Result<(), SupervisorError> {
     let plan = Plan::load(
         &args.config,
         args.scenario.as_deref(),
-        &args.set.iter().map(String::as_str).collect::<Vec<_>>(),
+        &robot_and_sets(args.robot.as_deref(), &args.set)
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
         args.duration,
     )?;
     let bin_dir = std::env::current_exe()

@@ -43,6 +43,10 @@ struct Cli {
     /// Cell configuration (TOML)
     #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
     config: PathBuf,
+    /// The arm: its robot file deploy/robots/NAME/robot.toml (lwr4, the
+    /// default; fr3); the same as `--set robot.name=NAME`
+    #[arg(long, value_name = "NAME")]
+    robot: Option<String>,
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -113,7 +117,12 @@ fn sweep(s: &str) -> Result<Vec<f64>, String> {
 fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     // clap requires it unless a subcommand is given
     let name = cli.scenario.as_deref().ok_or("--scenario is required")?;
-    let sets: Vec<&str> = cli.set.iter().map(String::as_str).collect();
+    let robot = cli.robot.as_ref().map(|r| format!("robot.name={r}"));
+    let sets: Vec<&str> = robot
+        .iter()
+        .chain(&cli.set)
+        .map(String::as_str)
+        .collect();
     let loaded = Loaded::load(&cli.config, Some(name), &sets)?;
     let model = loaded.model()?;
     let duration = cli.duration.unwrap_or(loaded.scenario.duration_s);

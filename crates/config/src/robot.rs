@@ -1,0 +1,74 @@
+//! `[robot]`: which arm, and what the cell knows about it beyond its URDF.
+//! An arm's robot file, `deploy/robots/<name>/robot.toml`, holds its
+//! `[robot]` (URDF, capsules) and whatever else belongs to the arm (postures,
+//! thresholds per joint, links, control points): the loader merges it under
+//! the configuration file ([`crate::Loaded::load`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::Invalid;
+
+/// The default arm's name (`[robot] name`).
+pub const DEFAULT_ROBOT: &str = "lwr4";
+
+/// The default arm's robot file, `deploy/robots/lwr4/robot.toml`, as built.
+pub const DEFAULT_ROBOT_FILE: &str = include_str!("../../../deploy/robots/lwr4/robot.toml");
+
+/// `[robot]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSection {
+    /// the arm: its robot file `robots/<name>/robot.toml` (beside the
+    /// configuration file, else in the built-in `deploy/`) merges under the
+    /// configuration file
+    #[serde(default = "default_robot_name")]
+    pub name: String,
+    /// robot description (URDF), relative to the file that gives it (the
+    /// robot file, or a configuration file that overrides it)
+    pub urdf: String,
+    /// the robot file merged (absolute; written by the loader, "" for none)
+    #[serde(default)]
+    pub file: String,
+    /// collision capsules added to the URDF's (a URDF with mesh collisions
+    /// only has none phri can use): the camera's self-filter and scene, the
+    /// simulated contacts
+    #[serde(default)]
+    pub capsules: Vec<CapsuleConfig>,
+}
+
+/// `[[robot.capsules]]`: the segment `a`–`b` \[m\] on `link` (its frame)
+/// swept by a sphere of `radius` \[m\].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CapsuleConfig {
+    pub link: String,
+    pub a: [f64; 3],
+    pub b: [f64; 3],
+    pub radius: f64,
+}
+
+impl RobotSection {
+    /// Finite segments, positive radii.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        for (i, c) in self.capsules.iter().enumerate() {
+            if !c.a.iter().chain(&c.b).all(|x| x.is_finite()) {
+                return Err(Invalid::new(
+                    format!("robot.capsules[{i}].a"),
+                    "a and b must be finite [m]",
+                ));
+            }
+            if !(c.radius.is_finite() && c.radius > 0.0 && c.radius <= 1.0) {
+                return Err(Invalid::new(
+                    format!("robot.capsules[{i}].radius"),
+                    "must be in (0, 1] m",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn default_robot_name() -> String {
+    DEFAULT_ROBOT.into()
+}
+
