@@ -197,9 +197,19 @@ fn collisions_are_detected_within_the_bound_and_the_reaction_ends_them() {
     // evades these reaches in most phases of its cycle (phri-lockstep --sweep)
     let r = Cell::start("coll", "collision", None, &["control.avoidance=false"]).finish();
     let contacts = r["contacts"].as_array().unwrap();
+    // contacts that reached twice the threshold and lasted past the bound
+    // after it: the bound is the residual's step response, and a graze
+    // over before it (7 ms at 76 N, seen once under load) is a pulse the
+    // first-order residual only partly sees
+    let lasted_past_bound = |c: &&Value| {
+        let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+        let dur_ms = (f("t_end_s") - f("t_start_s")) * 1e3;
+        dur_ms >= f("reached_twice_threshold_after_ms") + f("bound_ms")
+    };
     let strong: Vec<&Value> = contacts
         .iter()
         .filter(|c| c["intended"] == false && !c["reached_twice_threshold_after_ms"].is_null())
+        .filter(lasted_past_bound)
         .collect();
     assert!(
         !strong.is_empty(),

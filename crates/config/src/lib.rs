@@ -215,6 +215,55 @@ pub fn robot_file(
     Ok((table, path))
 }
 
+/// With an arm outside the cell (`[robot] ip`: the hybrid cell), its
+/// adapter `[services.franka]` runs in the simulator's place on the torque
+/// loop's CPU, and the simulator, serving the person and the world only,
+/// moves beside perception (CPU 0, priority at most 60); what depended on
+/// the simulator's states depends on the adapter's. In the merged table, so
+/// that every service sees the same cell.
+fn hybrid(table: &mut Table) -> Result<(), Invalid> {
+    let outside = table
+        .get("robot")
+        .and_then(|r| r.get("ip"))
+        .and_then(|v| v.as_str())
+        .is_some_and(|ip| !ip.trim().is_empty());
+    if !outside {
+        return Ok(());
+    }
+    let Some(Value::Table(services)) = table.get_mut("services") else {
+        return Err(Invalid::new("robot.ip", "no [services] to drive the arm with"));
+    };
+    let Some(Value::Table(franka)) = services.get_mut("franka") else {
+        return Err(Invalid::new(
+            "robot.ip",
+            "the configuration has no [services.franka] (phri-franka) to drive the arm with",
+        ));
+    };
+    franka.insert("enabled".into(), Value::Boolean(true));
+    if let Some(Value::Table(sim)) = services.get_mut("sim") {
+        sim.insert("cpus".into(), Value::Array(vec![Value::Integer(0)]));
+        let prio = sim
+            .get("rt_priority")
+            .and_then(|p| p.as_integer())
+            .unwrap_or(0)
+            .min(60);
+        sim.insert("rt_priority".into(), Value::Integer(prio));
+    }
+    for (name, spec) in services.iter_mut() {
+        if name == "franka" {
+            continue;
+        }
+        if let Some(Value::Array(deps)) = spec.get_mut("depends_on") {
+            for d in deps.iter_mut() {
+                if d.as_str() == Some("sim") {
+                    *d = Value::String("franka".into());
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// `key` (`section.key`, `section.list[i].key`) is given in `table`.
 fn gives(table: &Table, key: &str) -> bool {
     let mut at: Option<&Value> = None;
@@ -577,6 +626,10 @@ impl Loaded {
                 }
             })
         };
+        hybrid(&mut table).map_err(|invalid| ConfigError::Invalid {
+            origin: blame("robot.ip"),
+            invalid,
+        })?;
         let config = Config::from_table(&table, &origin).map_err(|e| match e {
             ConfigError::Key { key, message, .. } => ConfigError::Key {
                 origin: blame(&key),
@@ -656,6 +709,14 @@ impl Loaded {
             });
         }
         let checked = self.config.check_model(&model).and_then(|_| {
+            let armature = self
+                .config
+                .robot
+                .armature
+                .resolve(model.nv(), "robot.armature")?;
+            model
+                .set_armature(&armature)
+                .map_err(|e| Invalid::new("robot.armature", e.to_string()))?;
             for (i, c) in self.config.robot.capsules.iter().enumerate() {
                 model
                     .add_capsule(&c.link, &c.a.into(), &c.b.into(), c.radius)

@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::Invalid;
+use crate::{Invalid, PerJoint};
 
 /// The default arm's name (`[robot] name`).
 pub const DEFAULT_ROBOT: &str = "lwr4";
@@ -26,9 +26,18 @@ pub struct RobotSection {
     /// robot description (URDF), relative to the file that gives it (the
     /// robot file, or a configuration file that overrides it)
     pub urdf: String,
+    /// a robot outside the cell (`--robot-ip`): the address of its control
+    /// box, which `phri-franka` drives (`phri-sim` then simulates the person
+    /// and the world only); "" for the simulated arm
+    #[serde(default)]
+    pub ip: String,
     /// the robot file merged (absolute; written by the loader, "" for none)
     #[serde(default)]
     pub file: String,
+    /// rotor inertia reflected at each joint [kg m²] (one number or one per
+    /// joint), added to the model's `M` (a URDF has no place for it)
+    #[serde(default = "no_armature")]
+    pub armature: PerJoint,
     /// collision capsules added to the URDF's (a URDF with mesh collisions
     /// only has none phri can use): the camera's self-filter and scene, the
     /// simulated contacts
@@ -50,6 +59,13 @@ pub struct CapsuleConfig {
 impl RobotSection {
     /// Finite segments, positive radii.
     pub fn validate(&self) -> Result<(), Invalid> {
+        let armature = match &self.armature {
+            PerJoint::All(x) => std::slice::from_ref(x),
+            PerJoint::Each(v) => v.as_slice(),
+        };
+        if armature.iter().any(|a| !(a.is_finite() && (0.0..=100.0).contains(a))) {
+            return Err(Invalid::new("robot.armature", "must be in [0, 100] kg m²"));
+        }
         for (i, c) in self.capsules.iter().enumerate() {
             if !c.a.iter().chain(&c.b).all(|x| x.is_finite()) {
                 return Err(Invalid::new(
@@ -66,6 +82,10 @@ impl RobotSection {
         }
         Ok(())
     }
+}
+
+fn no_armature() -> PerJoint {
+    PerJoint::All(0.0)
 }
 
 fn default_robot_name() -> String {

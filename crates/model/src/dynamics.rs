@@ -39,6 +39,9 @@ pub fn rnea<'a>(
     inertia_pass(model, data);
     rnea_pass(model, data, qd, Some(qdd), base_acceleration(model));
     project(model, data, |d| &mut d.tau);
+    for k in 0..model.nv() {
+        data.tau[k] += model.armature[k] * qdd[k];
+    }
     Ok(&data.tau)
 }
 
@@ -170,6 +173,9 @@ fn crba_pass(model: &Model, data: &mut Data) {
             data.m[(cj, ci)] += mij;
             k = model.joints[j].parent;
         }
+    }
+    for k in 0..model.nv() {
+        data.m[(k, k)] += model.armature[k];
     }
 }
 
@@ -303,6 +309,7 @@ pub fn residual_terms(
         }
     }
     for k in 0..model.nv() {
+        data.p[k] += model.armature[k] * qd[k];
         data.residual_bias[k] = data.ct_qd[k] - data.g[k];
     }
     Ok(())

@@ -153,6 +153,10 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// mass attached rigidly to the root (does not enter the dynamics) [kg]
     pub root_mass: f64,
+    /// rotor inertia reflected at each actuated joint [kg m² or kg], added
+    /// to `M`'s diagonal (zero unless [`Model::set_armature`] gives it: a
+    /// URDF has no place for it)
+    pub armature: Vec<f64>,
     /// number of actuated joints (= configuration and velocity dimension)
     pub(crate) nv: usize,
     /// every joint index once, parents before children (depth-first preorder)
@@ -691,6 +695,7 @@ impl Model {
             skipped_meshes,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             root_mass: root_props.m,
+            armature: vec![0.0; nv],
             nv,
             order,
             frame_index,
@@ -740,6 +745,21 @@ impl Model {
             .get(link)
             .copied()
             .ok_or_else(|| ModelError::UnknownLink(link.to_string()))
+    }
+
+    /// The rotor inertia reflected at each actuated joint \[kg m² or kg\]
+    /// (a robot file's `armature`): `M` gains it on its diagonal, the
+    /// torque of RNEA `armature ⊙ q̈`, the momentum `armature ⊙ q̇`.
+    pub fn set_armature(&mut self, armature: &[f64]) -> Result<(), ModelError> {
+        crate::check_len("armature", self.nv, armature.len())?;
+        if let Some(bad) = armature.iter().find(|a| !(a.is_finite() && **a >= 0.0)) {
+            return Err(ModelError::NotFinite {
+                element: "armature".into(),
+                field: format!("{bad} (must be finite and ≥ 0)"),
+            });
+        }
+        self.armature.copy_from_slice(armature);
+        Ok(())
     }
 
     /// Adds a capsule to link `link`'s collision geometry: the segment

@@ -104,6 +104,17 @@ impl FciCycle {
         self.last = [0.0; JOINTS];
     }
 
+    /// The torque the arm's motors apply as phri's residual counts it, at
+    /// joints `q` \[rad\]: the last torque sent plus the box's gravity
+    /// compensation (phri's model's g(q), the one subtracted) \[Nm\]. What
+    /// `robot/state` carries, as phri-sim's applied torque: a box's own
+    /// τ_J is its sensors' (franka-sim reports the commanded torque without
+    /// gravity).
+    pub fn applied(&mut self, q: &[f64; JOINTS]) -> Result<[f64; JOINTS], CycleError> {
+        let g = self.gravity(q)?;
+        Ok(std::array::from_fn(|k| self.last[k] + g[k]))
+    }
+
     /// One period: `newest` is phri's newest command, `state_seq` the state
     /// it should answer, `q` the measured joints \[rad\]. The torque for the
     /// box is phri's, clipped to the model's effort limits, less gravity,

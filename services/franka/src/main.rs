@@ -20,8 +20,9 @@ use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 #[derive(clap::Args, Debug)]
 struct RobotAddress {
     /// The control box's address (FCI), optionally with the command port:
-    /// `172.16.0.2`, or `127.0.0.1:1337` for franka-sim
-    #[arg(long, value_name = "ADDRESS", required = true)]
+    /// `172.16.0.2`, or `127.0.0.1:1337` for franka-sim [default: the
+    /// configuration's `robot.ip`]
+    #[arg(long, value_name = "ADDRESS")]
     robot_ip: Option<String>,
 }
 
@@ -55,7 +56,6 @@ impl From<Box<dyn Error>> for Served {
 /// One period of the adapter: the state published, its answer awaited and decided.
 type Period<'a> = dyn FnMut(
         &[f64; JOINTS],
-        &[f64; JOINTS],
         u64,
         &mut FciCycle,
     ) -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>>
@@ -73,7 +73,7 @@ fn serve(
     let mut control = robot.start_torque_control()?;
     loop {
         let (s, _) = control.read_once()?;
-        let (_, out) = period(&s.q, &s.tau_J, s.time.as_millis(), cycle)?;
+        let (_, out) = period(&s.q, s.time.as_millis(), cycle)?;
         if out.brake || shutdown.requested() {
             control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
             break;
@@ -84,7 +84,7 @@ fn serve(
     // braked: the arm's states go on; a fresh answer resumes control
     while !shutdown.requested() {
         let s = robot.read_once()?;
-        let (link, _) = period(&s.q, &s.tau_J, s.time.as_millis(), cycle)?;
+        let (link, _) = period(&s.q, s.time.as_millis(), cycle)?;
         if !link.brake {
             break;
         }
@@ -102,7 +102,9 @@ fn body() -> Result<(), Box<dyn Error>> {
         "robot",
         "A Franka arm over FCI behind robot/state and robot/command (torques sent without gravity: the box adds it)",
     )?;
-    let address = robot_ip.ok_or("--robot-ip is required")?;
+    let address = robot_ip
+        .or_else(|| Some(ctx.config().robot.ip.clone()).filter(|ip| !ip.is_empty()))
+        .ok_or("--robot-ip: the control box's address is required (or robot.ip in the configuration)")?;
     let model = ctx.robot_model()?;
     // 7 joints, a positive period: refused here, before any connection
     let mut cycle = FciCycle::new(model, 1e-3)?;
@@ -133,7 +135,6 @@ fn body() -> Result<(), Box<dyn Error>> {
     let mut clock: Option<(u64, u64)> = None;
     // one state: publish it, wait for its answer, decide
     let mut period = |q: &[f64; JOINTS],
-                      tau_j: &[f64; JOINTS],
                       box_ms: u64,
                       cycle: &mut FciCycle|
      -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>> {
@@ -142,9 +143,10 @@ fn body() -> Result<(), Box<dyn Error>> {
         let (epoch, ms0) = *clock.get_or_insert((now_ns(), box_ms));
         let stamp = epoch + box_ms.saturating_sub(ms0) * 1_000_000;
         let published = now_ns();
+        let applied = cycle.applied(q)?;
         fill_state(
             q,
-            tau_j,
+            &applied,
             cycle.link().output(),
             seq,
             stamp,

@@ -5,13 +5,13 @@ use phri_robot::LinkOutput;
 
 use crate::cycle::JOINTS;
 
-/// Fill `state` for state `seq`: the measured joints `q` \[rad\] and joint
-/// torques `tau_j` \[Nm\] (the box's torque sensors), the protocol's status
+/// Fill `state` for state `seq`: the measured joints `q` \[rad\] and the
+/// joint torques `tau` \[Nm\] applied ([`crate::FciCycle::applied`]), the protocol's status
 /// of the last period (`link`), stamped `stamp_ns` on the robot's clock and
 /// published at `published_ns`.
 pub fn fill_state(
     q: &[f64; JOINTS],
-    tau_j: &[f64; JOINTS],
+    tau: &[f64; JOINTS],
     link: &LinkOutput,
     seq: u64,
     stamp_ns: u64,
@@ -22,7 +22,7 @@ pub fn fill_state(
     state.seq = seq;
     state.dof = n as u32;
     state.q[..n].copy_from_slice(&q[..n]);
-    state.tau[..n].copy_from_slice(&tau_j[..n]);
+    state.tau[..n].copy_from_slice(&tau[..n]);
     state.status = link.status;
     state.wrench = [0.0; 6];
     state.command_seq = link.command_seq;

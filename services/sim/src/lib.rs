@@ -17,6 +17,10 @@
 //!   real robot adapter wraps: which command to apply, when to brake, the
 //!   loop statistics. It knows commands and time, not the simulator.
 //!
+//! With a robot outside (`[robot] ip`), [`WorldFollower`] ([`world`]) puts
+//! the simulated arm where the real one is and the simulator serves only
+//! the person and the world the camera sees.
+//!
 //! [`messages`] fills the cell's messages from both. `main.rs` only wires
 //! them to channels and keeps the real-time schedule.
 //!
@@ -33,6 +37,7 @@ pub use phri_robot::link;
 pub mod messages;
 pub mod sim;
 pub mod snapshot;
+pub mod world;
 
 pub use contact::{
     capsule_distance, closest_points_segments, contact_force_magnitude, stiffness_n_per_m,
@@ -43,6 +48,7 @@ pub use error::SimError;
 pub use human::{ActivePush, Human, HumanCapsule, Reach, WAVE_BLEND_S};
 pub use link::{CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake};
 pub use messages::{fill_state, fill_truth, fill_world};
+pub use world::WorldFollower;
 pub use sim::{
     ContactTruth, ExternalForce, Measurement, RobotCapsule, ScriptedPush, Simulator, Truth,
     MAX_CONTACTS, MAX_JOINTS,

@@ -9,7 +9,10 @@
 //! [`phri_sim::RobotLink`], the arm [`phri_sim::Simulator`], the messages
 //! [`phri_sim::messages`]. This file wires them to channels and keeps the
 //! real-time schedule, with two helper threads: one stamps command arrivals,
-//! one saves the arm's state for a restarted simulator.
+//! one saves the arm's state for a restarted simulator. With a robot outside
+//! (`[robot] ip`: the hybrid cell) it publishes no `robot/state`: the
+//! simulated arm follows the real one's ([`phri_sim::WorldFollower`]) and
+//! the person and the camera's world are all it simulates.
 
 use std::error::Error;
 use std::path::PathBuf;
@@ -26,7 +29,9 @@ use phri_ipc::{
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
 use phri_sim::link::GRACE_POLL_NS;
 use phri_sim::snapshot::{self, SharedArm};
-use phri_sim::{fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator};
+use phri_sim::{
+    fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator, WorldFollower,
+};
 
 /// What the 1 kHz loop has to say, posted to the log's thread.
 enum LinkEvent {
@@ -63,6 +68,10 @@ fn body() -> Result<(), Box<dyn Error>> {
     let mut link = RobotLink::new(n, period_ns)?;
     if ctx.checking() {
         return Ok(());
+    }
+    if !ctx.config().robot.ip.is_empty() {
+        // the arm is outside: the person and the world only
+        return serve_world(&ctx, sim, period_ns);
     }
     let snapshot_path = phri_runtime::service::run_dir().map(|d| d.join(snapshot::FILE_NAME));
     if let Some(start) = phri_runtime::service::cell_start_ns() {
@@ -177,6 +186,62 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     if let Some(run) = link.finish() {
         tracing::warn!("{run}");
+    }
+    result
+}
+
+/// The hybrid cell: the arm behind `robot/state` is a robot outside; every
+/// period the simulated arm follows its newest state and the person moves,
+/// and `sim/truth`, `sim/world` and `sim/contacts` go out stamped with that
+/// state. Nothing is published on `robot/state`.
+fn serve_world(
+    ctx: &ServiceContext,
+    mut sim: Simulator,
+    period_ns: u64,
+) -> Result<(), Box<dyn Error>> {
+    let node = ctx.node()?;
+    let truth_pub = SIM_TRUTH.publisher(&node)?;
+    let world_pub = SIM_WORLD.publisher(&node)?;
+    let contacts_pub = SIM_CONTACTS.publisher(&node)?;
+    let states = ROBOT_STATE.subscriber(&node, Queue::Latest)?;
+    let mut follower = WorldFollower::new(&sim.truth().q.clone());
+    let mut contact_log = ContactLog::new();
+    let (mut truth, mut world) = (Truth::zeroed(), WorldState::zeroed());
+    ctx.start_deadman()?;
+    ctx.go_realtime();
+    tracing::info!("following the arm on robot/state (robot.ip set): simulating the person and the world only");
+    let mut newest: Option<JointState> = None;
+    let (mut tick, mut seq) = (now_ns(), 0u64);
+    let mut run = || -> Result<(), Box<dyn Error>> {
+        while !ctx.shutdown.requested() {
+            tick += period_ns;
+            sleep_until_ns(tick);
+            if let Some(s) = states.latest()? {
+                newest = Some(s);
+            }
+            follower.step(&mut sim, newest.as_ref());
+            seq += 1;
+            // the robot's clock when there is a state, else ours
+            let stamp = follower.last().map_or(now_ns(), |(_, t)| t);
+            fill_truth(&sim, seq, stamp, &mut truth);
+            truth_pub.publish(&truth)?;
+            for e in contact_log.step(stamp, &sim.truth().contacts) {
+                contacts_pub.publish(e)?;
+            }
+            fill_world(&sim, seq, stamp, &mut world);
+            world_pub.publish(&world)?;
+        }
+        Ok(())
+    };
+    let result = run();
+    for e in contact_log.finish() {
+        let _ = contacts_pub.publish(e);
+    }
+    if follower.refused() > 0 {
+        tracing::warn!(
+            "{} states on robot/state refused (a joint count other than the model's)",
+            follower.refused()
+        );
     }
     result
 }

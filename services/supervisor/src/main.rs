@@ -62,6 +62,12 @@ struct Cli {
     /// default; fr3); the same as `--set robot.name=NAME`
     #[arg(long, value_name = "NAME")]
     robot: Option<String>,
+    /// Drive the arm `--robot` names over FCI at this address (host[:port]:
+    /// a Franka's control box, or franka-sim) instead of simulating it: the
+    /// simulator then simulates the person and the world only (the same as
+    /// `--set robot.ip=ADDRESS`)
+    #[arg(long, value_name = "ADDRESS")]
+    robot_ip: Option<String>,
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -79,11 +85,13 @@ struct Cli {
     completions: Option<phri_runtime::cli::CompletionsCmd>,
 }
 
-/// `--robot NAME` as the first `--set` (a later `--set robot.name` wins).
-fn robot_and_sets(robot: Option<&str>, sets: &[String]) -> Vec<String> {
+/// `--robot NAME` and `--robot-ip ADDRESS` as the first `--set`s (a later
+/// `--set robot.name` or `robot.ip` wins).
+fn robot_and_sets(robot: Option<&str>, ip: Option<&str>, sets: &[String]) -> Vec<String> {
     robot
         .map(|r| format!("robot.name={r}"))
         .into_iter()
+        .chain(ip.map(|a| format!("robot.ip={a}")))
         .chain(sets.iter().cloned())
         .collect()
 }
@@ -463,7 +471,7 @@ fn body() -> Result<(), SupervisorError> {
     let plan = Plan::load(
         &args.config,
         args.scenario.as_deref(),
-        &robot_and_sets(args.robot.as_deref(), &args.set)
+        &robot_and_sets(args.robot.as_deref(), args.robot_ip.as_deref(), &args.set)
             .iter()
             .map(String::as_str)
             .collect::<Vec<_>>(),
@@ -1050,6 +1058,7 @@ fn body() -> Result<(), SupervisorError> {
     }
     let mut report = eval.report(end, plan.scenario_name(), services_report);
     report.inputs = inputs;
+    report.robot = plan.robot_report();
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
     close_ipc(node, Some(ports), &prefix);

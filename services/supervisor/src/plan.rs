@@ -26,6 +26,8 @@ pub struct Plan {
     pub detector: DetectorInfo,
     /// the robot model's collision objects by index (contact reports)
     pub link_names: Vec<String>,
+    /// the robot model's name (its URDF's)
+    pub model_name: String,
 }
 
 impl Plan {
@@ -67,7 +69,21 @@ impl Plan {
             duration_s,
             detector,
             link_names,
+            model_name: model.name.clone(),
         })
+    }
+
+    /// The arm the cell drives (the report's `robot`).
+    pub fn robot_report(&self) -> crate::report::RobotReport {
+        crate::report::RobotReport {
+            kind: match self.loaded.config.robot.ip.is_empty() {
+                true => "sim",
+                false => "franka",
+            }
+            .into(),
+            name: self.loaded.config.robot.name.clone(),
+            model: self.model_name.clone(),
+        }
     }
 
     /// The scenario's name (the report's `scenario`).

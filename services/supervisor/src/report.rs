@@ -132,6 +132,17 @@ pub struct PerceptionReport {
     pub repulsion_compute_ms: Percentiles,
 }
 
+/// `robot` in the report: the arm the cell drove.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RobotReport {
+    /// `sim` (phri-sim's arm) or `franka` (an arm behind FCI, phri-franka)
+    pub kind: String,
+    /// the arm's name (`[robot] name`: `lwr4`, `fr3`, …)
+    pub name: String,
+    /// the arm's model name in its URDF
+    pub model: String,
+}
+
 /// `--report` JSON.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
@@ -145,6 +156,8 @@ pub struct Report {
     pub evaluation: Evaluation,
     pub duration_s: f64,
     pub scenario: String,
+    /// the arm (set by the supervisor)
+    pub robot: RobotReport,
     pub torque_loop: TorqueLoop,
     pub services: BTreeMap<String, ServiceReport>,
     pub contacts: Vec<ContactReport>,
@@ -1092,6 +1105,7 @@ impl Evaluator {
             },
             duration_s: self.t(end_ns),
             scenario: scenario.to_string(),
+            robot: RobotReport::default(),
             torque_loop: TorqueLoop {
                 cycles: s.0 + b.0,
                 missed_deadlines: missed,

@@ -310,7 +310,7 @@ impl Roster {
     /// The services frozen at `now_ns`: running, out of their start-up
     /// grace, every service they depend on heard from, yet silent on their
     /// own heartbeat beyond its timeout. A service whose dependencies are
-    /// silent (or unknown) is not judged: its silence is explained by
+    /// silent, not yet heard since they started, or unknown is not judged: its silence is explained by
     /// theirs, and it is judged afresh once they are back. A frozen
     /// service's silence is also counted afresh (it is killed meanwhile).
     pub fn frozen(&mut self, now_ns: u64) -> Vec<Frozen> {
@@ -322,11 +322,15 @@ impl Roster {
         let grace = self.grace_ns();
         let mut frozen = Vec::new();
         for i in 0..self.services.len() {
+            // a dependency not yet heard since it started (connecting to a
+            // robot, loading) explains the silence too
             let deps_ok = self.services[i].spec.depends_on.iter().all(|d| {
                 self.services
                     .iter()
                     .zip(&self.silent)
-                    .any(|(o, &silent)| &o.name == d && !silent)
+                    .any(|(o, &silent)| {
+                        &o.name == d && !silent && (o.heard_since_start || o.spec.heartbeat.is_none())
+                    })
             });
             let s = &mut self.services[i];
             if !deps_ok {

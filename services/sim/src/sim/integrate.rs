@@ -72,6 +72,31 @@ impl Simulator {
         &self.meas
     }
 
+    /// Advance one control period with the arm where a robot outside
+    /// measured it (`q` \[rad\], `qd` [rad/s]; a wrong length or a
+    /// non-finite entry keeps the joint where it was): the person moves and
+    /// the contacts are found, but nothing is integrated and no force acts on
+    /// the arm (the hybrid cell: the arm is real, the person simulated).
+    /// Allocates nothing.
+    pub fn follow(&mut self, q: &[f64], qd: &[f64]) -> &Measurement {
+        if q.len() == self.n && qd.len() == self.n {
+            for i in 0..self.n {
+                if q[i].is_finite() && qd[i].is_finite() {
+                    self.q[i] = q[i];
+                    self.qd[i] = qd[i];
+                }
+            }
+        }
+        let dt = self.h * f64::from(self.cfg.substeps);
+        self.t += dt;
+        self.truth.tau_motor.fill(0.0);
+        self.truth.tau_friction.fill(0.0);
+        self.update_contacts(Some(dt), true);
+        self.meas.tau_applied.fill(0.0);
+        self.update_readings();
+        &self.meas
+    }
+
     /// One integration sub-step of length `h` (velocity Verlet: half kick,
     /// drift, contacts at the new position, half kick). The closing half kick
     /// depends on the velocity it produces (Coriolis, friction), so it is
