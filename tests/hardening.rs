@@ -567,7 +567,19 @@ fn a_refused_second_supervisor_writes_nothing_and_names_the_running_one() {
             .modified()
             .unwrap()
     };
-    let (before, before_mtime) = (snapshot(), mtime());
+    // the cell's files settle once every service has started (the binary
+    // state gains the last pids a little after state.json)
+    let settle = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let mut before = snapshot();
+    loop {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let again = snapshot();
+        if again == before || std::time::Instant::now() > settle {
+            break;
+        }
+        before = again;
+    }
+    let before_mtime = mtime();
     let sup = cell.child.id();
     // the refused supervisor: a configuration error, named
     let (code, err) = refused(supervisor(&p, Some(&rd), &["--set", "control.kp=abc"]));
