@@ -78,8 +78,19 @@ fn the_supervisor_drives_the_fr3_behind_franka_sim_with_the_cell_around_it() {
     let tl = &r["torque_loop"];
     assert!(tl["cycles"].as_u64().unwrap() > 10_000, "{tl}");
     assert!(tl["braked_cycles"].as_u64().unwrap() < 1_000, "{tl}");
-    for s in ["franka", "sim", "dynamics", "control", "camera", "perception"] {
-        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}: {}", r["services"]);
+    for s in [
+        "franka",
+        "sim",
+        "dynamics",
+        "control",
+        "camera",
+        "perception",
+    ] {
+        assert_eq!(
+            r["services"][s]["alive_at_end"], true,
+            "{s}: {}",
+            r["services"]
+        );
         assert_eq!(r["services"][s]["restarts"], 0, "{s}: {}", r["services"]);
     }
     // the controller took the arm over from the adapter's first state

@@ -231,7 +231,10 @@ fn hybrid(table: &mut Table) -> Result<(), Invalid> {
         return Ok(());
     }
     let Some(Value::Table(services)) = table.get_mut("services") else {
-        return Err(Invalid::new("robot.ip", "no [services] to drive the arm with"));
+        return Err(Invalid::new(
+            "robot.ip",
+            "no [services] to drive the arm with",
+        ));
     };
     let Some(Value::Table(franka)) = services.get_mut("franka") else {
         return Err(Invalid::new(
@@ -591,8 +594,8 @@ impl Loaded {
                 .map(String::from)
         };
         let name = robot_key("name").unwrap_or_else(|| DEFAULT_ROBOT.into());
-        let (robot, robot_path) = robot_file(&name, robot_key("file").as_deref(), path)
-            .map_err(|e| match e {
+        let (robot, robot_path) =
+            robot_file(&name, robot_key("file").as_deref(), path).map_err(|e| match e {
                 ConfigError::NoRobot {
                     name,
                     by,
@@ -724,16 +727,14 @@ impl Loaded {
             }
             Ok(())
         });
-        checked
-            .map_err(|invalid| ConfigError::Invalid {
-                origin: match !gives(&self.given, &invalid.key)
-                    && gives(&self.robot_keys, &invalid.key)
-                {
-                    true => self.robot_origin.display().to_string(),
-                    false => self.origin.display().to_string(),
-                },
-                invalid,
-            })?;
+        checked.map_err(|invalid| ConfigError::Invalid {
+            origin: match !gives(&self.given, &invalid.key) && gives(&self.robot_keys, &invalid.key)
+            {
+                true => self.robot_origin.display().to_string(),
+                false => self.origin.display().to_string(),
+            },
+            invalid,
+        })?;
         Ok(model)
     }
 

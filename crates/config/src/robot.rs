@@ -63,7 +63,10 @@ impl RobotSection {
             PerJoint::All(x) => std::slice::from_ref(x),
             PerJoint::Each(v) => v.as_slice(),
         };
-        if armature.iter().any(|a| !(a.is_finite() && (0.0..=100.0).contains(a))) {
+        if armature
+            .iter()
+            .any(|a| !(a.is_finite() && (0.0..=100.0).contains(a)))
+        {
             return Err(Invalid::new("robot.armature", "must be in [0, 100] kg m²"));
         }
         for (i, c) in self.capsules.iter().enumerate() {
@@ -91,4 +94,3 @@ fn no_armature() -> PerJoint {
 fn default_robot_name() -> String {
     DEFAULT_ROBOT.into()
 }
-

@@ -250,12 +250,20 @@ fn the_arm_comes_from_its_robot_file() {
     // --robot fr3: everything the cell knows of the arm changes with it
     let fr3 = load(&["robot.name=fr3"]).unwrap();
     let c = &fr3.config;
-    assert!(fr3.urdf().ends_with("robots/fr3/fr3.urdf"), "{:?}", fr3.urdf());
+    assert!(
+        fr3.urdf().ends_with("robots/fr3/fr3.urdf"),
+        "{:?}",
+        fr3.urdf()
+    );
     assert_eq!(c.control.ee_link, "link8");
     assert_eq!(c.collaboration.robot_link, "link7");
     assert_eq!(c.collaboration.wrist_link, "link6");
     assert_eq!(c.sim.q0[3], -2.356);
-    assert!(c.repulsion.points.iter().all(|p| p.link.starts_with("link")));
+    assert!(c
+        .repulsion
+        .points
+        .iter()
+        .all(|p| p.link.starts_with("link")));
     let model = fr3.model().unwrap();
     assert_eq!(model.nv(), 7);
     // its URDF's collisions are meshes: the capsules are the robot file's
@@ -263,7 +271,11 @@ fn the_arm_comes_from_its_robot_file() {
     assert!(model.collisions.len() >= 10);
     // the rest is the configuration's, and a --set still wins over the robot file
     assert_eq!(c.control.kp, lwr.config.control.kp);
-    let kp = load(&["robot.name=fr3", "control.posture=[0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8]"]).unwrap();
+    let kp = load(&[
+        "robot.name=fr3",
+        "control.posture=[0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8]",
+    ])
+    .unwrap();
     assert_eq!(kp.config.control.posture[1], -0.5);
     // the merged table the supervisor hands its services loads the same, wherever it is written
     let dir = tempdir("merged");
@@ -298,7 +310,10 @@ fn an_unknown_arm_and_a_wrong_link_in_a_robot_file_are_refused_by_name() {
     let config = dir.join("cell.toml");
     std::fs::write(&config, "[robot]\nname = \"arm\"\n").unwrap();
     let l = Loaded::load(&config, None, &[]).unwrap();
-    assert_eq!(l.config.robot.file, robot.canonicalize().unwrap().display().to_string());
+    assert_eq!(
+        l.config.robot.file,
+        robot.canonicalize().unwrap().display().to_string()
+    );
     let e = l.model().unwrap_err().to_string();
     assert!(
         e.contains("robots/arm/robot.toml")
@@ -312,8 +327,15 @@ fn an_unknown_arm_and_a_wrong_link_in_a_robot_file_are_refused_by_name() {
     let text = text.replace("wrist_link = \"lwr_link_9\"", "wrist_link = \"lwr_link_6\"");
     let text = text.replace("[sim]", &format!("{capsule}\n[sim]"));
     std::fs::write(&robot, text).unwrap();
-    let e = Loaded::load(&config, None, &[]).unwrap().model().unwrap_err().to_string();
-    assert!(e.contains("robot.capsules[0].link") && e.contains("nowhere"), "{e}");
+    let e = Loaded::load(&config, None, &[])
+        .unwrap()
+        .model()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("robot.capsules[0].link") && e.contains("nowhere"),
+        "{e}"
+    );
 }
 
 /// A fresh directory of this test's own.

@@ -26,7 +26,9 @@ fn armature_enters_m_rnea_momentum_and_forward_dynamics_alike() {
         }
         // RNEA(q̈) − RNEA(0) = M q̈; p = M q̇; forward dynamics inverts RNEA
         let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
-        let bias = rnea(&model, &mut data, &q, &qd, &vec![0.0; n]).unwrap().clone();
+        let bias = rnea(&model, &mut data, &q, &qd, &vec![0.0; n])
+            .unwrap()
+            .clone();
         let p = momentum(&model, &mut data, &q, &qd).unwrap().clone();
         for r in 0..n {
             let mq: f64 = (0..n).map(|c| m[(r, c)] * qdd[c]).sum();

@@ -10,7 +10,10 @@ use phri_model::{forward_kinematics, frame_placement, Data, Shape};
 fn an_added_capsule_rides_on_its_link() {
     let mut model = common::lwr4();
     let before = model.collisions.len();
-    let (a, b) = (Vector3::new(0.01, 0.08, -0.06), Vector3::new(-0.02, 0.05, -0.2));
+    let (a, b) = (
+        Vector3::new(0.01, 0.08, -0.06),
+        Vector3::new(-0.02, 0.05, -0.2),
+    );
     model.add_capsule("lwr_link_5", &a, &b, 0.055).unwrap();
     // a degenerate segment is a sphere; one along −z is turned, not mirrored
     model
@@ -22,7 +25,10 @@ fn an_added_capsule_rides_on_its_link() {
     let mut data = Data::new(&model);
     for q in [[0.0; 7], [0.3, -0.7, 1.1, 1.4, -0.9, 0.6, 2.0]] {
         forward_kinematics(&model, &mut data, &q).unwrap();
-        for (k, link, a, b) in [(before, "lwr_link_5", a, b), (before + 2, "lwr_link_4", c, d)] {
+        for (k, link, a, b) in [
+            (before, "lwr_link_5", a, b),
+            (before + 2, "lwr_link_4", c, d),
+        ] {
             let o = &model.collisions[k];
             let (p, r, radius) = o.capsule_segment(&data);
             let f = frame_placement(&model, &data, model.frame_id(link).unwrap());

@@ -204,7 +204,8 @@ impl Resolver {
                     false => BEHIND_MARGIN_M,
                 };
                 let behind_the_hand = (k == 0 || k == c.collab_point)
-                    && c.collab_hand.is_some_and(|h| still_behind(&h, p, margin, was_behind));
+                    && c.collab_hand
+                        .is_some_and(|h| still_behind(&h, p, margin, was_behind));
                 if let Some(b) = self.behind_before.get_mut(k) {
                     *b = behind_the_hand && p.active != 0;
                 }

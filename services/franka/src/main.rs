@@ -104,7 +104,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     let address = robot_ip
         .or_else(|| Some(ctx.config().robot.ip.clone()).filter(|ip| !ip.is_empty()))
-        .ok_or("--robot-ip: the control box's address is required (or robot.ip in the configuration)")?;
+        .ok_or(
+            "--robot-ip: the control box's address is required (or robot.ip in the configuration)",
+        )?;
     let model = ctx.robot_model()?;
     // 7 joints, a positive period: refused here, before any connection
     let mut cycle = FciCycle::new(model, 1e-3)?;

@@ -48,8 +48,8 @@ pub use error::SimError;
 pub use human::{ActivePush, Human, HumanCapsule, Reach, WAVE_BLEND_S};
 pub use link::{CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake};
 pub use messages::{fill_state, fill_truth, fill_world};
-pub use world::WorldFollower;
 pub use sim::{
     ContactTruth, ExternalForce, Measurement, RobotCapsule, ScriptedPush, Simulator, Truth,
     MAX_CONTACTS, MAX_JOINTS,
 };
+pub use world::WorldFollower;

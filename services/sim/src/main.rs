@@ -30,7 +30,8 @@ use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
 use phri_sim::link::GRACE_POLL_NS;
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
-    fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator, WorldFollower,
+    fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator,
+    WorldFollower,
 };
 
 /// What the 1 kHz loop has to say, posted to the log's thread.
@@ -204,12 +205,14 @@ fn serve_world(
     let world_pub = SIM_WORLD.publisher(&node)?;
     let contacts_pub = SIM_CONTACTS.publisher(&node)?;
     let states = ROBOT_STATE.subscriber(&node, Queue::Latest)?;
-    let mut follower = WorldFollower::new(&sim.truth().q.clone());
+    let mut follower = WorldFollower::new(&sim.truth().q);
     let mut contact_log = ContactLog::new();
     let (mut truth, mut world) = (Truth::zeroed(), WorldState::zeroed());
     ctx.start_deadman()?;
     ctx.go_realtime();
-    tracing::info!("following the arm on robot/state (robot.ip set): simulating the person and the world only");
+    tracing::info!(
+        "following the arm on robot/state (robot.ip set): simulating the person and the world only"
+    );
     let mut newest: Option<JointState> = None;
     let (mut tick, mut seq) = (now_ns(), 0u64);
     let mut run = || -> Result<(), Box<dyn Error>> {

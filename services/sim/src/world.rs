@@ -25,7 +25,7 @@ pub struct WorldFollower {
 }
 
 impl WorldFollower {
-    /// For an arm of `n` joints, at `q0` \[rad\] until the first state.
+    /// For the arm of `q0.len()` joints, at `q0` \[rad\] until the first state.
     pub fn new(q0: &[f64]) -> WorldFollower {
         WorldFollower {
             q: q0.to_vec(),
@@ -47,7 +47,9 @@ impl WorldFollower {
                 let gap = self.last.map(|(_, t)| s.stamp_ns.saturating_sub(t));
                 for i in 0..n {
                     self.qd[i] = match gap {
-                        Some(g) if g > 0 && g <= MAX_GAP_NS => (s.q[i] - self.q[i]) / (g as f64 * 1e-9),
+                        Some(g) if g > 0 && g <= MAX_GAP_NS => {
+                            (s.q[i] - self.q[i]) / (g as f64 * 1e-9)
+                        }
                         _ => 0.0,
                     };
                     self.q[i] = s.q[i];

@@ -325,12 +325,9 @@ impl Roster {
             // a dependency not yet heard since it started (connecting to a
             // robot, loading) explains the silence too
             let deps_ok = self.services[i].spec.depends_on.iter().all(|d| {
-                self.services
-                    .iter()
-                    .zip(&self.silent)
-                    .any(|(o, &silent)| {
-                        &o.name == d && !silent && (o.heard_since_start || o.spec.heartbeat.is_none())
-                    })
+                self.services.iter().zip(&self.silent).any(|(o, &silent)| {
+                    &o.name == d && !silent && (o.heard_since_start || o.spec.heartbeat.is_none())
+                })
             });
             let s = &mut self.services[i];
             if !deps_ok {

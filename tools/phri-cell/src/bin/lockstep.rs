@@ -118,11 +118,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     // clap requires it unless a subcommand is given
     let name = cli.scenario.as_deref().ok_or("--scenario is required")?;
     let robot = cli.robot.as_ref().map(|r| format!("robot.name={r}"));
-    let sets: Vec<&str> = robot
-        .iter()
-        .chain(&cli.set)
-        .map(String::as_str)
-        .collect();
+    let sets: Vec<&str> = robot.iter().chain(&cli.set).map(String::as_str).collect();
     let loaded = Loaded::load(&cli.config, Some(name), &sets)?;
     let model = loaded.model()?;
     let duration = cli.duration.unwrap_or(loaded.scenario.duration_s);
