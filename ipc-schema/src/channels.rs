@@ -14,6 +14,9 @@ pub const ROBOT_COMMAND: Channel<TorqueCommand> =
     Channel::new("robot/command", Qos::ONE_PUBLISHER, true);
 /// [`RobotStats`] from the robot adapter: loop timing and latency histogram, 10 Hz.
 pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SLOW, false);
+/// [`BoxStatus`] from a real robot's adapter: its control box's own figures
+/// and errors, 10 Hz and at every error (none with the simulated arm).
+pub const ROBOT_BOX: Channel<BoxStatus> = Channel::new("robot/box", Qos::SLOW, false);
 /// [`Truth`]: simulator ground truth for evaluation only, 1 kHz. No controller may read it.
 pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISHER, false);
 /// [`Residual`] from the dynamics service, 1 kHz. Wakes: new residual.
@@ -96,10 +99,12 @@ pub const ALL: &[&str] = &[
     AUDIO_MIC.name,
     VOICE_UTTERANCE.name,
     INPUT_AUDIT.name,
+    ROBOT_BOX.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
-/// fault, a contact, a request, a collaboration): monitors and tests must not
+/// fault, a contact, a request, a collaboration, an arm outside the cell):
+/// monitors and tests must not
 /// expect traffic on them.
 pub const ON_DEMAND: &[&str] = &[
     FAULT_DEPTH.name,
@@ -107,6 +112,7 @@ pub const ON_DEMAND: &[&str] = &[
     HRI_REQUEST.name,
     PERCEPTION_HAND.name,
     VOICE_UTTERANCE.name,
+    ROBOT_BOX.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -138,6 +144,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(AUDIO_MIC);
     v.message(VOICE_UTTERANCE);
     v.message(INPUT_AUDIT);
+    v.message(ROBOT_BOX);
 }
 
 /// Visit the channel called `name`; `false` when the cell has none of that name.

@@ -323,6 +323,47 @@ impl InputAudit {
     }
 }
 
+/// Bytes of [`BoxStatus::last_error`].
+pub const BOX_ERROR_TEXT: usize = 128;
+
+/// The control box behind a robot adapter (`phri-franka`: FCI), 10 Hz and at
+/// every error ([`crate::ROBOT_BOX`]): the box's own figures, cumulative
+/// since the adapter started.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::BoxStatus")]
+pub struct BoxStatus {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// states read from the box
+    pub states: u64,
+    /// states read while phri controlled the arm (torque control running)
+    pub controlled: u64,
+    /// sum over those states of FCI's `control_command_success_rate` (the
+    /// share of the box's last 100 periods that got a command): mean = sum / controlled
+    #[serde(with = "crate::json::finite")]
+    pub success_sum: f64,
+    /// the lowest `control_command_success_rate` of those states (1 before any)
+    #[serde(with = "crate::json::finite")]
+    pub success_min: f64,
+    /// errors of the box (motions it aborted: reflexes, limits, lost commands)
+    pub errors: u64,
+    /// automatic error recoveries the adapter ran
+    pub recoveries: u64,
+    /// when the newest error came [ns, CLOCK_MONOTONIC] (0: none)
+    pub last_error_ns: u64,
+    /// the newest error: the box's error names (libfranka's), UTF-8, zero padded
+    #[serde(with = "crate::json::c_string")]
+    pub last_error: [u8; BOX_ERROR_TEXT],
+}
+
+impl BoxStatus {
+    pub fn last_error_str(&self) -> &str {
+        crate::json::c_str_ref(&self.last_error)
+    }
+}
+
 /// A zeroed value of a plain-data message (all fields are numbers).
 pub trait Zeroed: Sized + Copy {
     fn zeroed() -> Self {
@@ -340,6 +381,7 @@ impl Zeroed for Truth {}
 impl Zeroed for RobotStats {}
 impl Zeroed for Health {}
 impl Zeroed for InputAudit {}
+impl Zeroed for BoxStatus {}
 
 /// One capsule of the simulated world: segment `a`–`b` swept by `radius` [m], base frame.
 #[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
@@ -843,3 +885,4 @@ message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => p
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
+message!(BoxStatus, published: |m| Some(m.stamp_ns));

@@ -39,6 +39,10 @@ pub struct SimConfig {
     pub seed: u64,
     /// simulate a wrist force/torque sensor at the last joint's link frame
     pub ft_sensor: bool,
+    /// in the hybrid cell, where the person's contact forces go (UDP,
+    /// `ip:port`) to act on an arm that is itself simulated outside
+    /// (franka-sim: `deploy/franka-sim/serve.py --forces-port`); "": nowhere
+    pub forces_to: String,
 }
 
 impl SimConfig {
@@ -61,6 +65,12 @@ impl SimConfig {
         non_negative(S, "brake_damping", self.brake_damping)?;
         self.brake_torque_max.check("sim.brake_torque_max")?;
         finite(S, "q0", &self.q0)?;
+        if !self.forces_to.is_empty() && self.forces_to.parse::<std::net::SocketAddr>().is_err() {
+            return Err(Invalid::new(
+                "sim.forces_to",
+                format!("{:?} is not an address ip:port", self.forces_to),
+            ));
+        }
         Ok(())
     }
 

@@ -117,7 +117,8 @@ impl FciCycle {
 
     /// One period: `newest` is phri's newest command, `state_seq` the state
     /// it should answer, `q` the measured joints \[rad\]. The torque for the
-    /// box is phri's, clipped to the model's effort limits, less gravity,
+    /// box is phri's, clipped to the model's effort limits, less gravity
+    /// (itself within the limits, as the box checks what it is sent),
     /// changed by at most the box's rate from the last one sent; under the
     /// protocol's brakes it decays to zero at that rate.
     pub fn step(
@@ -133,7 +134,10 @@ impl FciCycle {
         for k in 0..JOINTS {
             let wanted = match out.brake {
                 true => 0.0,
-                false => out.tau[k].clamp(-self.effort[k], self.effort[k]) - g[k],
+                // the motors' total within the effort limit, and the part
+                // the box is sent too (the box checks its tau_J_d range)
+                false => (out.tau[k].clamp(-self.effort[k], self.effort[k]) - g[k])
+                    .clamp(-self.effort[k], self.effort[k]),
             };
             tau[k] = wanted.clamp(self.last[k] - self.max_step, self.last[k] + self.max_step);
         }
@@ -212,20 +216,31 @@ mod tests {
 
     #[test]
     fn a_command_beyond_the_effort_limit_is_clipped_before_gravity_comes_off() {
-        let mut c = cycle();
-        let g = c.gravity(&Q).unwrap();
-        let effort = c.effort;
-        let mut last = None;
-        for seq in 1..=400 {
-            let out = c.step(Some(&command(seq, [1e6; JOINTS])), seq, &timing(seq), &Q);
-            last = Some(out.unwrap().1);
-        }
-        let last = last.unwrap();
-        for k in 0..JOINTS {
-            assert!(
-                (last.tau[k] - (effort[k] - g[k])).abs() < 1e-9,
-                "joint {k}: {last:?}"
-            );
+        for sign in [1.0, -1.0] {
+            let mut c = cycle();
+            let g = c.gravity(&Q).unwrap();
+            let effort = c.effort;
+            let mut last = None;
+            for seq in 1..=400 {
+                let out = c.step(
+                    Some(&command(seq, [sign * 1e6; JOINTS])),
+                    seq,
+                    &timing(seq),
+                    &Q,
+                );
+                last = Some(out.unwrap().1);
+            }
+            let last = last.unwrap();
+            for k in 0..JOINTS {
+                let e = effort[k];
+                assert!(
+                    (last.tau[k] - (sign * e - g[k]).clamp(-e, e)).abs() < 1e-9,
+                    "joint {k}: {last:?}"
+                );
+                // what the box is sent and what the motors give, both within
+                assert!(last.tau[k].abs() <= e + 1e-9);
+                assert!((last.tau[k] + g[k]).abs() <= e + 1e-9);
+            }
         }
     }
 

@@ -6,10 +6,12 @@
 //! included) into what the box accepts, with the protocol rules of
 //! [`phri_robot::RobotLink`] (fresh, reused, missed; brakes after 20).
 
+pub mod box_status;
 pub mod cycle;
 pub mod model_check;
 pub mod state;
 
+pub use box_status::{BoxError, BoxLog};
 pub use cycle::{CycleError, FciCycle, FciTorque, JOINTS, MAX_TORQUE_RATE_NM_PER_S};
 pub use model_check::first_difference;
 pub use state::fill_state;

@@ -11,8 +11,11 @@
 use std::error::Error;
 use std::process::ExitCode;
 
-use phri_franka::{fill_state, first_difference, FciCycle, JOINTS};
-use phri_ipc::{JointState, Queue, TorqueCommand, Zeroed, ROBOT_COMMAND, ROBOT_STATE, ROBOT_STATS};
+use phri_franka::{fill_state, first_difference, BoxError, BoxLog, FciCycle, JOINTS};
+use phri_ipc::{
+    BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
+    ROBOT_STATE, ROBOT_STATS,
+};
 use phri_robot::{CycleTiming, LinkOutput, RobotLink, GRACE_POLL_NS};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
@@ -61,18 +64,42 @@ type Period<'a> = dyn FnMut(
     ) -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>>
     + 'a;
 
+/// `robot/box`: the box's figures, published every [`BoxLog::EVERY`] states
+/// and at every error.
+struct BoxChannel {
+    log: BoxLog,
+    publisher: Publisher<BoxStatus>,
+}
+
+impl BoxChannel {
+    fn state(&mut self, controlled: bool, success_rate: f64) -> Result<(), Box<dyn Error>> {
+        if self.log.on_state(controlled, success_rate) {
+            self.publisher.publish(self.log.message(now_ns()))?;
+        }
+        Ok(())
+    }
+
+    fn error(&mut self, e: &BoxError) -> Result<(), Box<dyn Error>> {
+        self.log.on_error(now_ns(), e);
+        self.publisher.publish(self.log.message(now_ns()))?;
+        Ok(())
+    }
+}
+
 /// Torque control until the protocol brakes, then the arm's states until a
 /// command answers one (or shutdown).
 fn serve(
     robot: &franka::Robot,
     cycle: &mut FciCycle,
     period: &mut Period<'_>,
+    boxed: &mut BoxChannel,
     shutdown: &phri_runtime::Shutdown,
 ) -> Result<(), Served> {
     cycle.restart();
     let mut control = robot.start_torque_control()?;
     loop {
         let (s, _) = control.read_once()?;
+        boxed.state(true, s.control_command_success_rate)?;
         let (_, out) = period(&s.q, s.time.as_millis(), cycle)?;
         if out.brake || shutdown.requested() {
             control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
@@ -84,6 +111,7 @@ fn serve(
     // braked: the arm's states go on; a fresh answer resumes control
     while !shutdown.requested() {
         let s = robot.read_once()?;
+        boxed.state(false, s.control_command_success_rate)?;
         let (link, _) = period(&s.q, s.time.as_millis(), cycle)?;
         if !link.brake {
             break;
@@ -129,6 +157,10 @@ fn body() -> Result<(), Box<dyn Error>> {
     let state_pub = ROBOT_STATE.publisher(&node)?;
     let stats_pub = ROBOT_STATS.publisher(&node)?;
     let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
+    let mut boxed = BoxChannel {
+        log: BoxLog::default(),
+        publisher: ROBOT_BOX.publisher(&node)?,
+    };
     ctx.start_deadman()?;
     ctx.go_realtime();
 
@@ -178,25 +210,24 @@ fn body() -> Result<(), Box<dyn Error>> {
         Ok(decided)
     };
 
-    let mut recoveries = 0u64;
     while !ctx.shutdown.requested() {
-        match serve(&robot, &mut cycle, &mut period, &ctx.shutdown) {
+        match serve(&robot, &mut cycle, &mut period, &mut boxed, &ctx.shutdown) {
             Ok(()) => {}
             // the box ended the motion (a reflex, a joint limit, commands
             // lost): its own error recovery, then torque control again
             Err(Served::Box(e)) => {
-                recoveries += 1;
-                tracing::warn!(
-                    "control box: {}; automatic error recovery ({recoveries} so far)",
-                    e.message.lines().next().unwrap_or("motion aborted")
-                );
+                let error = BoxError::new(&e.last_motion_errors.names(), &e.message);
+                boxed.error(&error)?;
+                tracing::warn!("{error}; automatic error recovery");
                 robot
                     .automatic_error_recovery()
                     .map_err(|e| format!("{address}: automatic error recovery: {e}"))?;
+                boxed.log.on_recovery();
             }
             Err(Served::Fatal(e)) => return Err(e),
         }
     }
     let _ = stats_pub.publish(cycle.stats_message(now_ns()));
+    let _ = boxed.publisher.publish(boxed.log.message(now_ns()));
     Ok(())
 }

@@ -31,6 +31,7 @@
 pub mod contact;
 pub mod contact_log;
 pub mod error;
+pub mod forces_out;
 pub mod human;
 /// The robot side of the protocol (crate `phri-robot`), as the simulator applies it.
 pub use phri_robot::link;

@@ -30,8 +30,8 @@ use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
 use phri_sim::link::GRACE_POLL_NS;
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
-    fill_state, fill_truth, fill_world, ContactLog, CycleTiming, RobotLink, Simulator,
-    WorldFollower,
+    fill_state, fill_truth, fill_world, forces_out::ForcesDatagram, ContactLog, CycleTiming,
+    RobotLink, Simulator, WorldFollower,
 };
 
 /// What the 1 kHz loop has to say, posted to the log's thread.
@@ -208,6 +208,20 @@ fn serve_world(
     let mut follower = WorldFollower::new(&sim.truth().q);
     let mut contact_log = ContactLog::new();
     let (mut truth, mut world) = (Truth::zeroed(), WorldState::zeroed());
+    // the person's contact forces, to an outside arm that is itself simulated
+    let forces_to = &ctx.config().sim.forces_to;
+    let forces_socket = if forces_to.is_empty() {
+        None
+    } else {
+        let socket = std::net::UdpSocket::bind("0.0.0.0:0")
+            .and_then(|s| s.connect(forces_to.as_str()).map(|()| s))
+            .and_then(|s| s.set_nonblocking(true).map(|()| s))
+            .map_err(|e| format!("sim.forces_to {forces_to}: {e}"))?;
+        tracing::info!("the person's contact forces go to {forces_to} (sim.forces_to)");
+        Some(socket)
+    };
+    let mut datagram = ForcesDatagram::default();
+    let mut forces_unsent = 0u64;
     ctx.start_deadman()?;
     ctx.go_realtime();
     tracing::info!(
@@ -231,12 +245,25 @@ fn serve_world(
             for e in contact_log.step(stamp, &sim.truth().contacts) {
                 contacts_pub.publish(e)?;
             }
+            if let Some(socket) = &forces_socket {
+                if let Some(bytes) = datagram.encode(sim.model(), &sim.truth().contacts) {
+                    // a receiver not (yet) listening loses these forces, never the period
+                    if socket.send(bytes).is_err() {
+                        forces_unsent += 1;
+                    }
+                }
+            }
             fill_world(&sim, seq, stamp, &mut world);
             world_pub.publish(&world)?;
         }
         Ok(())
     };
     let result = run();
+    if forces_unsent > 0 {
+        tracing::warn!(
+            "{forces_unsent} datagrams of contact forces not sent to {forces_to} (sim.forces_to)"
+        );
+    }
     for e in contact_log.finish() {
         let _ = contacts_pub.publish(e);
     }

@@ -9,6 +9,7 @@
 //! spawns, signals and reaps the processes, reads the channels, publishes
 //! the health, writes the files, every 10 ms.
 
+pub mod box_report;
 pub mod collab_report;
 pub mod cpu;
 pub mod error;

@@ -129,6 +129,7 @@ struct Ports {
     utterances: Subscriber<phri_ipc::Utterance>,
     audio: Subscriber<phri_ipc::AudioChunk>,
     audits: Subscriber<phri_ipc::InputAudit>,
+    boxes: Subscriber<phri_ipc::BoxStatus>,
 }
 
 impl Ports {
@@ -148,6 +149,7 @@ impl Ports {
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
             audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
             audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
+            boxes: phri_ipc::ROBOT_BOX.subscriber(node, Queue::Drain)?,
         })
     }
 }
@@ -588,6 +590,7 @@ fn body() -> Result<(), SupervisorError> {
     launch.cell_start_ns = cell_start_ns;
     let mut eval = plan.evaluator(cell_start_ns);
     let mut audits = AuditLog::default();
+    let mut box_eval = phri_supervisor::box_report::BoxEval::new(cell_start_ns);
     // (owned channel, pid) of every stranger reported, each once
     let mut strangers_seen: Vec<(&'static str, i32)> = Vec::new();
     let deadman_ns = (plan.loaded.config.supervisor.deadman_s * 1e9) as u64;
@@ -714,6 +717,7 @@ fn body() -> Result<(), SupervisorError> {
             collab_eval.on_request(m);
         })?;
         ports.audits.drain(|m| audits.on_audit(m))?;
+        ports.boxes.drain(|m| box_eval.on_box(m))?;
         if resume && roster.resume(now) {
             tracing::warn!("resumed by the operator: starting the services the dead-man stopped");
             eval.event(
@@ -1052,6 +1056,7 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     eval.set_realtime(rt_watch.report());
     let _ = ports.audits.drain(|m| audits.on_audit(m));
+    let _ = ports.boxes.drain(|m| box_eval.on_box(m));
     let inputs = audits.report();
     for line in inputs.degraded() {
         eval.degrade(line);
@@ -1059,6 +1064,7 @@ fn body() -> Result<(), SupervisorError> {
     let mut report = eval.report(end, plan.scenario_name(), services_report);
     report.inputs = inputs;
     report.robot = plan.robot_report();
+    box_eval.fill(&mut report);
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
     close_ipc(node, Some(ports), &prefix);

@@ -83,6 +83,7 @@ impl Plan {
             .into(),
             name: self.loaded.config.robot.name.clone(),
             model: self.model_name.clone(),
+            ..Default::default()
         }
     }
 

@@ -141,6 +141,20 @@ pub struct RobotReport {
     pub name: String,
     /// the arm's model name in its URDF
     pub model: String,
+    /// the robot's state → command latency \[µs\] (the torque loop's: the
+    /// adapter's or the simulator's)
+    pub latency_us: Percentiles,
+    /// periods whose command came too late (the torque loop's)
+    pub missed_deadlines: u64,
+    /// FCI's `control_command_success_rate`, mean over the states phri
+    /// controlled the arm (null: no control box)
+    pub control_command_success_rate: Option<f64>,
+    /// ... its lowest
+    pub control_command_success_rate_min: Option<f64>,
+    /// every error of the control box, with its time
+    pub box_errors: Vec<crate::box_report::BoxErrorReport>,
+    /// the control box's automatic error recoveries the adapter ran
+    pub box_recoveries: u64,
 }
 
 /// `--report` JSON.

@@ -1,0 +1,143 @@
+//! The control box's own figures and errors, as `robot/box` carries them:
+//! FCI's command success rate while phri controls the arm, and every error
+//! of the box (a motion it aborted) with its time.
+
+use phri_ipc::{BoxStatus, Zeroed};
+
+/// An error of the control box: the motion it aborted, and why.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("control box: {names}")]
+pub struct BoxError {
+    /// the box's error names (libfranka's, e.g. `communication_constraints_violation`),
+    /// comma separated, or its message when it named none
+    pub names: String,
+}
+
+impl BoxError {
+    /// From the error names the box set (`names`) and its message.
+    pub fn new(names: &[&str], message: &str) -> BoxError {
+        let names = match names.is_empty() {
+            true => message
+                .lines()
+                .next()
+                .unwrap_or("motion aborted")
+                .to_owned(),
+            false => names.join(", "),
+        };
+        BoxError { names }
+    }
+}
+
+/// The figures of `robot/box`, kept across torque controls.
+pub struct BoxLog {
+    msg: BoxStatus,
+}
+
+impl Default for BoxLog {
+    fn default() -> Self {
+        let mut msg = BoxStatus::zeroed();
+        msg.success_min = 1.0;
+        BoxLog { msg }
+    }
+}
+
+impl BoxLog {
+    /// States between two messages (10 Hz at FCI's 1 kHz).
+    pub const EVERY: u64 = 100;
+
+    /// A state read from the box: `controlled` while phri's torque control
+    /// runs, with FCI's `control_command_success_rate` (in (0, 1\]; 0 says
+    /// no control loop runs yet, as in the first states of a torque control,
+    /// and a value outside is refused: neither is counted). True every [`BoxLog::EVERY`] states: time
+    /// to publish. Allocates nothing.
+    pub fn on_state(&mut self, controlled: bool, success_rate: f64) -> bool {
+        self.msg.states += 1;
+        if controlled && success_rate > 0.0 && success_rate <= 1.0 {
+            self.msg.controlled += 1;
+            self.msg.success_sum += success_rate;
+            self.msg.success_min = self.msg.success_min.min(success_rate);
+        }
+        self.msg.states % Self::EVERY == 0
+    }
+
+    /// The box aborted the motion at `now_ns` \[ns, CLOCK_MONOTONIC\].
+    pub fn on_error(&mut self, now_ns: u64, error: &BoxError) {
+        self.msg.errors += 1;
+        self.msg.last_error_ns = now_ns;
+        self.msg.last_error = phri_ipc::json::to_c_str(&error.names);
+    }
+
+    /// The adapter ran the box's automatic error recovery.
+    pub fn on_recovery(&mut self) {
+        self.msg.recoveries += 1;
+    }
+
+    /// Mean success rate while controlled (1 before any state).
+    pub fn success_rate(&self) -> f64 {
+        match self.msg.controlled {
+            0 => 1.0,
+            n => self.msg.success_sum / n as f64,
+        }
+    }
+
+    /// The message, stamped `stamp_ns`.
+    pub fn message(&mut self, stamp_ns: u64) -> &BoxStatus {
+        self.msg.seq += 1;
+        self.msg.stamp_ns = stamp_ns;
+        &self.msg
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::BOX_ERROR_TEXT;
+
+    #[test]
+    fn the_rate_counts_only_controlled_states_and_errors_keep_their_names_and_time() {
+        let mut log = BoxLog::default();
+        assert_eq!(log.success_rate(), 1.0);
+        let mut due = 0;
+        for _ in 0..10 {
+            due += usize::from(log.on_state(false, 0.0)); // braked: no commands, on purpose
+        }
+        for k in 0..100 {
+            due += usize::from(log.on_state(true, if k < 90 { 1.0 } else { 0.95 }));
+        }
+        due += usize::from(log.on_state(true, f64::NAN));
+        due += usize::from(log.on_state(true, 0.0)); // the box's loop not armed yet
+        assert_eq!(due, 1, "one message per 100 states");
+        assert!((log.success_rate() - 0.995).abs() < 1e-12);
+        let e = BoxError::new(
+            &[
+                "communication_constraints_violation",
+                "joint_velocity_violation",
+            ],
+            "Motion aborted by reflex!",
+        );
+        log.on_error(42_000, &e);
+        log.on_recovery();
+        let m = *log.message(50_000);
+        assert_eq!((m.states, m.controlled), (112, 100));
+        assert_eq!(m.success_min, 0.95);
+        assert_eq!((m.errors, m.recoveries, m.last_error_ns), (1, 1, 42_000));
+        assert_eq!(
+            m.last_error_str(),
+            "communication_constraints_violation, joint_velocity_violation"
+        );
+        assert_eq!(
+            BoxError::new(&[], "libfranka: Move command aborted\nmore").names,
+            "libfranka: Move command aborted"
+        );
+    }
+
+    #[test]
+    fn a_long_error_is_cut_on_a_character() {
+        let mut log = BoxLog::default();
+        let long = "é".repeat(BOX_ERROR_TEXT);
+        log.on_error(1, &BoxError::new(&[], &long));
+        let m = *log.message(2);
+        assert!(m.last_error_str().len() <= BOX_ERROR_TEXT);
+        assert!(m.last_error_str().chars().all(|c| c == 'é'));
+    }
+}
