@@ -1,11 +1,13 @@
 //! The hybrid cell against a control box nobody here wrote: the FR3 of
 //! franka-sim (MuJoCo, the FCI wire protocol) on 127.0.0.1, driven by the
 //! supervisor's phri-franka, with phri-sim simulating only the person and
-//! the world the camera sees. The real processes, started by the real
-//! supervisor (`--robot fr3 --robot-ip`).
+//! the world the camera sees (and, through `sim.forces_to`, pushing the
+//! MuJoCo arm where the person touches it). The real processes, started by
+//! the real supervisor (`--robot fr3 --robot-ip`). One cell at a time.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
@@ -15,6 +17,8 @@ mod support;
 #[path = "../services/franka/tests/common/mod.rs"]
 mod franka_sim;
 
+static SERIAL: Mutex<()> = Mutex::new(());
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../..")
@@ -22,62 +26,127 @@ fn repo() -> PathBuf {
         .unwrap()
 }
 
-/// The supervisor's run of `scenario` for `duration` s on the FR3 behind
-/// franka-sim at `port`: its report.
-fn run(test: &str, port: u16, scenario: &str, duration: f64, sets: &[&str]) -> Value {
-    support::loud_panics();
-    let prefix = format!("h{}{}_", std::process::id(), test);
-    let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
-    let _ = std::fs::remove_dir_all(&run_dir);
-    let report = run_dir.join("report.json");
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
-    cmd.current_dir(repo())
-        .args(["--config", "deploy/phri.toml", "--robot", "fr3"])
-        .arg("--robot-ip")
-        .arg(format!("127.0.0.1:{port}"))
-        .args(["--scenario", scenario, "--duration", &duration.to_string()])
-        .arg("--prefix")
-        .arg(&prefix)
-        .arg("--run-dir")
-        .arg(&run_dir)
-        .arg("--report")
-        .arg(&report);
-    for s in sets {
-        cmd.arg("--set").arg(s);
+/// The supervisor's run on the FR3 behind franka-sim.
+struct Run {
+    child: Child,
+    run_dir: PathBuf,
+    report: PathBuf,
+    deadline: Instant,
+}
+
+impl Run {
+    /// `scenario` for `duration` s against franka-sim at `port`.
+    fn start(test: &str, port: u16, scenario: &str, duration: f64, sets: &[String]) -> Run {
+        support::loud_panics();
+        let prefix = format!("h{}{}_", std::process::id(), test);
+        let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
+        let _ = std::fs::remove_dir_all(&run_dir);
+        let report = run_dir.join("report.json");
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
+        cmd.current_dir(repo())
+            .args(["--config", "deploy/phri.toml", "--robot", "fr3"])
+            .arg("--robot-ip")
+            .arg(format!("127.0.0.1:{port}"))
+            .args(["--scenario", scenario, "--duration", &duration.to_string()])
+            .arg("--prefix")
+            .arg(&prefix)
+            .arg("--run-dir")
+            .arg(&run_dir)
+            .arg("--report")
+            .arg(&report);
+        for s in sets {
+            cmd.arg("--set").arg(s);
+        }
+        Run {
+            child: cmd.spawn().expect("the supervisor starts"),
+            run_dir,
+            report,
+            deadline: Instant::now() + Duration::from_secs_f64(duration + 60.0),
+        }
     }
-    let mut child = cmd.spawn().expect("the supervisor starts");
-    let deadline = Instant::now() + Duration::from_secs_f64(duration + 60.0);
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            panic!("the supervisor did not stop");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    };
-    assert!(status.success(), "the supervisor failed: {status}");
-    serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap()
+
+    /// Kill -9 the supervisor's `service` (its pid from the run's state).
+    fn kill(&self, service: &str) {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let pid = loop {
+            let text = std::fs::read_to_string(self.run_dir.join("state.json")).unwrap_or_default();
+            if let Some(pid) = serde_json::from_str::<Value>(&text)
+                .ok()
+                .and_then(|v| v["services"][service]["pid"].as_i64())
+            {
+                break pid as i32;
+            }
+            assert!(Instant::now() < deadline, "no pid for {service}");
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        // SAFETY: kill(2) on a pid the supervisor reported as its child.
+        assert_eq!(
+            unsafe { libc::kill(pid, libc::SIGKILL) },
+            0,
+            "kill {service}"
+        );
+    }
+
+    fn finish(mut self) -> Value {
+        let status = loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                break s;
+            }
+            if Instant::now() > self.deadline {
+                let _ = self.child.kill();
+                panic!("the supervisor did not stop");
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        };
+        assert!(status.success(), "the supervisor failed: {status}");
+        let r: Value =
+            serde_json::from_str(&std::fs::read_to_string(&self.report).unwrap()).unwrap();
+        eprintln!(
+            "robot {} torque_loop {} task {} contacts {} events {}",
+            r["robot"], r["torque_loop"], r["task"], r["contacts"], r["events"]
+        );
+        r
+    }
+}
+
+fn wait(s: f64) {
+    std::thread::sleep(Duration::from_secs_f64(s));
+}
+
+fn events<'a>(r: &'a Value, kind: &str) -> Vec<&'a Value> {
+    r["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == kind)
+        .collect()
+}
+
+/// The adapter served the arm at the box's rate, answered in time, and the
+/// box had nothing to say against it.
+fn assert_box_content(r: &Value) {
+    assert_eq!(r["robot"]["kind"], "franka");
+    assert_eq!(r["robot"]["name"], "fr3");
+    let rate = r["robot"]["control_command_success_rate"].as_f64().unwrap();
+    assert!(rate >= 0.999, "control_command_success_rate {rate}");
+    assert_eq!(
+        r["robot"]["box_errors"],
+        Value::Array(vec![]),
+        "{}",
+        r["robot"]
+    );
+    assert_eq!(r["robot"]["missed_deadlines"], 0, "{}", r["robot"]);
 }
 
 #[test]
-fn the_supervisor_drives_the_fr3_behind_franka_sim_with_the_cell_around_it() {
+fn the_supervisor_drives_the_fr3_behind_franka_sim_through_its_waypoints() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let port = franka_sim::port(0);
     let _server = franka_sim::serve(port);
-    let r = run("free", port, "free-motion", 15.0, &[]);
-    eprintln!(
-        "robot {} torque_loop {} task {} services {} degraded {}",
-        r["robot"], r["torque_loop"], r["task"], r["services"], r["degraded"]
-    );
-    assert_eq!(r["robot"]["kind"], "franka");
-    assert_eq!(r["robot"]["name"], "fr3");
-    // the adapter, not the simulator, serves the arm: its states at the
-    // box's 1 kHz (franka-sim runs at 0.9-1.0 × real time here), answered
-    // by the controller, with no restart of the adapter
+    let r = Run::start("free", port, "free-motion", 20.0, &[]).finish();
+    assert_box_content(&r);
     let tl = &r["torque_loop"];
-    assert!(tl["cycles"].as_u64().unwrap() > 10_000, "{tl}");
-    assert!(tl["braked_cycles"].as_u64().unwrap() < 1_000, "{tl}");
+    assert!(tl["cycles"].as_u64().unwrap() > 15_000, "{tl}");
     for s in [
         "franka",
         "sim",
@@ -93,14 +162,107 @@ fn the_supervisor_drives_the_fr3_behind_franka_sim_with_the_cell_around_it() {
         );
         assert_eq!(r["services"][s]["restarts"], 0, "{s}: {}", r["services"]);
     }
-    // the controller took the arm over from the adapter's first state
+    // the controller took the arm over from the adapter's first state, and
+    // the residual on MuJoCo's arm stayed quiet: the task went on (4 s a cycle)
+    assert!(!events(&r, "sync").is_empty(), "{}", r["events"]);
+    let reached = r["task"]["waypoints_reached"].as_u64().unwrap();
+    assert!(reached >= 6, "waypoints {reached}");
+    assert_eq!(r["false_detections"], 0);
+}
+
+#[test]
+fn a_person_walking_into_the_fr3_in_mujoco_is_detected_within_the_bound_and_reacted_to() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let (port, forces) = (franka_sim::port(1), franka_sim::port(2));
+    let _server = franka_sim::serve_with(port, Some(forces));
+    let sets = [
+        "control.avoidance=false".to_string(),
+        format!("sim.forces_to=\"127.0.0.1:{forces}\""),
+    ];
+    let r = Run::start("coll", port, "collision", 16.0, &sets).finish();
+    assert_box_content(&r);
+    let contacts = r["contacts"].as_array().unwrap();
+    assert!(!contacts.is_empty(), "the person never touched the arm");
+    for c in contacts {
+        // a contact the residual's filter can see (past twice the threshold
+        // and lasting its bound) is detected within the bound
+        let bound = c["bound_ms"].as_f64().unwrap();
+        let lasted = (c["t_end_s"].as_f64().unwrap() - c["t_start_s"].as_f64().unwrap()) * 1e3;
+        if let Some(twice) = c["reached_twice_threshold_after_ms"].as_f64() {
+            if lasted > twice + bound {
+                let d = c["detected_after_twice_threshold_ms"].as_f64();
+                assert!(d.is_some_and(|d| d <= bound), "late or missed: {c}");
+            }
+        }
+    }
+    let detections = events(&r, "detection");
+    let reactions = events(&r, "reaction");
     assert!(
-        r["events"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|e| e["kind"] == "sync" && e["service"] == "control"),
+        !detections.is_empty() && !reactions.is_empty(),
         "{}",
         r["events"]
     );
+    let first = detections[0]["t_s"].as_f64().unwrap();
+    assert!(reactions
+        .iter()
+        .any(|e| (e["t_s"].as_f64().unwrap() - first).abs() < 0.05));
+    assert_eq!(r["false_detections"], 0);
+}
+
+#[test]
+fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let port = franka_sim::port(3);
+    let _server = franka_sim::serve(port);
+    let sets = ["supervisor.restart_backoff_min_ms=300".to_string()];
+    let run = Run::start("kill", port, "free-motion", 24.0, &sets);
+    wait(6.0);
+    run.kill("franka");
+    wait(8.0);
+    run.kill("control");
+    let r = run.finish();
+    assert_eq!(r["services"]["franka"]["restarts"], 1, "{}", r["services"]);
+    assert_eq!(r["services"]["control"]["restarts"], 1, "{}", r["services"]);
+    // the box stopped the arm when its commands stopped (the one error the
+    // kill causes), the adapter recovered, the controller took over again
+    let errors = r["robot"]["box_errors"].as_array().unwrap();
+    assert!(errors.len() <= 1, "{errors:?}");
+    for e in errors {
+        assert!(
+            e["error"]
+                .as_str()
+                .unwrap()
+                .contains("communication_constraints_violation"),
+            "{e}"
+        );
+    }
+    let step = r["robot"]["max_joint_step_rad"].as_f64().unwrap();
+    assert!(step <= 0.01, "a joint jumped {step} rad");
+    // the controller held the arm while the adapter was away and resumed
+    // on the new one; the restarted controller took it over again
+    let t = |e: &Value| e["t_s"].as_f64().unwrap();
+    let restart = |service: &str| {
+        events(&r, "restart")
+            .into_iter()
+            .find(|e| e["service"] == service)
+            .map(t)
+            .unwrap_or_else(|| panic!("no restart of {service}: {}", r["events"]))
+    };
+    let (adapter_back, controller_back) = (restart("franka"), restart("control"));
+    assert!(
+        events(&r, "resume")
+            .iter()
+            .chain(events(&r, "sync").iter())
+            .any(|e| t(e) > adapter_back && t(e) < controller_back),
+        "no resume on the new adapter: {}",
+        r["events"]
+    );
+    assert!(
+        events(&r, "sync").iter().any(|e| t(e) > controller_back),
+        "the restarted controller never synced: {}",
+        r["events"]
+    );
+    assert_eq!(r["false_detections"], 0);
+    // the task went on after both
+    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 4);
 }

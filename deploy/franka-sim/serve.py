@@ -24,7 +24,12 @@ wire protocol or the physics:
   detection is checked against this physics engine. A datagram replaces the
   forces of the one before; none for 50 ms clears them.
 
-Usage: serve.py [--port P] [--forces-port P] [--free-running]
+* --rt-priority N (default 50): the server's threads run SCHED_FIFO at N
+  where permitted. A control box is hardware of its own; here it shares
+  two cores with phri's cell, whose perception runs SCHED_FIFO at 20-22
+  and would otherwise delay its states and commands behind every frame.
+
+Usage: serve.py [--port P] [--forces-port P] [--free-running] [--rt-priority N]
 """
 
 import argparse
@@ -149,11 +154,26 @@ def main() -> int:
     parser.add_argument(
         "--free-running", action="store_true", help="franka-sim's own physics timer, not one step per state"
     )
+    parser.add_argument(
+        "--rt-priority",
+        type=int,
+        default=50,
+        help="SCHED_FIFO priority of the server's threads where permitted (default 50; 0: none)",
+    )
     args = parser.parse_args()
+    if not 0 <= args.rt_priority <= 99:
+        print(f"serve.py: --rt-priority {args.rt_priority} is not in 0..=99", file=sys.stderr)
+        return 2
     if not os.environ.get("FR3_MJCF"):
         print("serve.py: FR3_MJCF is not set (deploy/franka-sim/install builds the model)", file=sys.stderr)
         return 2
     logging.basicConfig(level=logging.WARNING, format="franka-sim: %(levelname)s %(name)s: %(message)s")
+    if args.rt_priority:
+        # before any thread starts: they inherit it
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(args.rt_priority))
+        except (PermissionError, OSError) as e:
+            print(f"franka-sim: SCHED_FIFO {args.rt_priority} refused ({e}): running without", file=sys.stderr)
     from franka_sim import FrankaSimServer
     from franka_sim.mujoco_franka_sim import MujocoFrankaSim
     from franka_sim.server.state_stream import StateStreamMixin

@@ -36,6 +36,10 @@ pub mod robot_status {
     pub const FT_VALID: u32 = 2;
     /// the command applied in the last period was fresh (answered the previous state)
     pub const COMMAND_FRESH: u32 = 4;
+    /// the torque applied is not known: the arm's own control box holds it
+    /// (a real robot's adapter under the protocol's brakes), so `tau` is not
+    /// what acted and a momentum residual over this state means nothing
+    pub const TORQUE_UNKNOWN: u32 = 8;
 }
 
 /// Measured joint state, published by the robot every control period.

@@ -64,6 +64,8 @@ impl DynamicsStep {
     /// (−1: none), the state's sequence and stamp. `seq`, `stamp_ns` and
     /// `compute_ns` are those of the last [`DynamicsStep::seal`].
     ///
+    /// A state whose torque is not known (`TORQUE_UNKNOWN`: a control box
+    /// holds the arm) gives no valid residual and starts the observer over.
     /// A state of the wrong joint count or with non-finite values is refused
     /// and leaves the message as it was.
     pub fn step(&mut self, state: &JointState) -> Result<&Residual, DynamicsError> {
@@ -74,6 +76,20 @@ impl DynamicsStep {
                 got: state.dof,
                 model: n,
             });
+        }
+        if state.status & robot_status::TORQUE_UNKNOWN != 0 {
+            // the arm's own box holds it: no residual, and a fresh start
+            // (warm-up included) once phri's torque acts again
+            self.observer.reset();
+            let m = &mut self.msg;
+            m.r.fill(0.0);
+            m.qd.fill(0.0);
+            m.norm = 0.0;
+            m.flags = 0;
+            m.isolated_joint = -1;
+            m.state_seq = state.seq;
+            m.state_stamp_ns = state.stamp_ns;
+            return Ok(&self.msg);
         }
         let wrench = (state.status & robot_status::FT_VALID != 0).then_some(&state.wrench);
         let out = self
@@ -145,6 +161,41 @@ mod tests {
         s.q[..7].copy_from_slice(&Q);
         s.tau[..7].copy_from_slice(tau);
         s
+    }
+
+    #[test]
+    fn a_state_the_box_holds_gives_no_residual_and_a_fresh_warm_up() {
+        let loaded = Loaded::defaults();
+        let model = loaded.model().unwrap();
+        let mut d = phri_model::Data::new(&model);
+        let g: [f64; 7] = {
+            let g = phri_model::gravity(&model, &mut d, &Q).unwrap();
+            std::array::from_fn(|i| g[i])
+        };
+        let cfg = &loaded.config.dynamics;
+        let warm = cfg.warmup_samples as u64;
+        let mut step = DynamicsStep::new(model, cfg).unwrap();
+        for seq in 1..=warm + 10 {
+            step.step(&state(seq, &g)).unwrap();
+        }
+        assert_eq!(step.message().flags, residual_flags::VALID);
+        // the box holds the arm: the torque reported (none, say) did not act
+        let mut seq = warm + 11;
+        for _ in 0..100 {
+            let mut held = state(seq, &[0.0; 7]);
+            held.status = robot_status::BRAKING | robot_status::TORQUE_UNKNOWN;
+            let m = *step.step(&held).unwrap();
+            assert_eq!(m.flags, 0, "a residual over an unknown torque");
+            assert_eq!(m.state_seq, seq);
+            seq += 1;
+        }
+        // phri's torque acts again: a fresh warm-up, then quiet
+        for k in 1..=warm + 1 {
+            let m = *step.step(&state(seq, &g)).unwrap();
+            assert_eq!(m.flags & residual_flags::VALID != 0, k > warm, "sample {k}");
+            seq += 1;
+        }
+        assert!(step.message().norm < 1e-6);
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! `robot/state` from the control box's state.
 
-use phri_ipc::{JointState, MAX_DOF};
+use phri_ipc::{robot_status, JointState, MAX_DOF};
 use phri_robot::LinkOutput;
 
 use crate::cycle::JOINTS;
@@ -23,7 +23,11 @@ pub fn fill_state(
     state.dof = n as u32;
     state.q[..n].copy_from_slice(&q[..n]);
     state.tau[..n].copy_from_slice(&tau[..n]);
-    state.status = link.status;
+    // under the brakes the box holds the arm with a torque of its own
+    state.status = match link.status & robot_status::BRAKING {
+        0 => link.status,
+        _ => link.status | robot_status::TORQUE_UNKNOWN,
+    };
     state.wrench = [0.0; 6];
     state.command_seq = link.command_seq;
     state.missed_commands = link.missed;

@@ -155,6 +155,9 @@ pub struct RobotReport {
     pub box_errors: Vec<crate::box_report::BoxErrorReport>,
     /// the control box's automatic error recoveries the adapter ran
     pub box_recoveries: u64,
+    /// the largest change of a true joint position from one period to the
+    /// next over the run \[rad\]: a jump (after a restart, a stop) shows here
+    pub max_joint_step_rad: f64,
 }
 
 /// `--report` JSON.
@@ -377,6 +380,8 @@ pub struct Evaluator {
     truth_seq: u64,
     truth_q: Vec<f64>,
     sim_restarts: Vec<SimRestart>,
+    /// largest change of a true joint position between consecutive truths [rad]
+    max_joint_step: f64,
     /// camera frames: (seq, capture wall time) of the recent ones, and the count
     frames_seen: u64,
     last_frame_seq: Option<u64>,
@@ -451,6 +456,7 @@ impl Evaluator {
             truth_seq: 0,
             truth_q: Vec::new(),
             sim_restarts: Vec::new(),
+            max_joint_step: 0.0,
             frames_seen: 0,
             last_frame_seq: None,
             in_flight: Vec::new(),
@@ -565,6 +571,11 @@ impl Evaluator {
         });
     }
 
+    /// The largest change of a true joint position from one period to the next \[rad\].
+    pub fn max_joint_step(&self) -> f64 {
+        self.max_joint_step
+    }
+
     pub fn on_truth(&mut self, m: &Truth) {
         let t = self.t_robot(m.stamp_ns);
         if m.seq > self.truth_seq + 1 && self.truth_seq > 0 {
@@ -584,6 +595,13 @@ impl Evaluator {
                 t_s: t,
                 arm_jump_rad: jump,
             });
+        }
+        if m.seq == self.truth_seq + 1 && self.truth_q.len() == n {
+            let step = m.q[..n]
+                .iter()
+                .zip(&self.truth_q)
+                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            self.max_joint_step = self.max_joint_step.max(step);
         }
         self.truth_seq = m.seq;
         self.truth_q.clear();
@@ -1177,6 +1195,24 @@ mod tests {
         }
         m.min_distance = if force > 0.0 { -0.01 } else { 0.2 };
         m
+    }
+
+    #[test]
+    fn the_largest_joint_step_is_kept_between_consecutive_truths_only() {
+        let mut e = eval();
+        for (seq, q3) in [(1, 0.0), (2, 0.001), (3, 0.003), (4, 0.0035)] {
+            let mut m = truth(seq, 0.0, 0.0);
+            m.seq = seq;
+            m.q[3] = q3;
+            e.on_truth(&m);
+        }
+        assert!((e.max_joint_step() - 0.002).abs() < 1e-12);
+        // a lost sample is no step of the arm
+        let mut m = truth(10, 0.0, 0.0);
+        m.seq = 10;
+        m.q[3] = 0.5;
+        e.on_truth(&m);
+        assert!((e.max_joint_step() - 0.002).abs() < 1e-12);
     }
 
     fn residual(t_ms: u64, collision: bool) -> Residual {

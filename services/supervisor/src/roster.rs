@@ -322,11 +322,15 @@ impl Roster {
         let grace = self.grace_ns();
         let mut frozen = Vec::new();
         for i in 0..self.services.len() {
-            // a dependency not yet heard since it started (connecting to a
-            // robot, loading) explains the silence too
+            // a dependency that is down (restarting) or not yet heard since
+            // it started (connecting to a robot, loading) explains the
+            // silence too, before its own (maybe longer) timeout says so
             let deps_ok = self.services[i].spec.depends_on.iter().all(|d| {
                 self.services.iter().zip(&self.silent).any(|(o, &silent)| {
-                    &o.name == d && !silent && (o.heard_since_start || o.spec.heartbeat.is_none())
+                    &o.name == d
+                        && o.pid.is_some()
+                        && !silent
+                        && (o.heard_since_start || o.spec.heartbeat.is_none())
                 })
             });
             let s = &mut self.services[i];
@@ -515,6 +519,19 @@ mod tests {
         r.started(0, 4000 * MS, 200);
         let f = run(&mut r, 4000, 4400, &["dynamics/residual"]);
         assert_eq!(f, [(4200, 1)]);
+    }
+
+    #[test]
+    fn a_dead_dependency_with_a_long_timeout_explains_the_silence_at_once() {
+        let mut r = roster();
+        // the robot adapter: 3 s to connect to its box, so a long timeout
+        r.services[0].spec.heartbeat_timeout_ms = Some(3000);
+        run(&mut r, 0, 3000, &[]);
+        // killed: its dependant falls silent at once, long before the
+        // adapter's own timeout would call it silent
+        r.exited(0, 3000 * MS);
+        let f = run(&mut r, 3000, 3500, &["sim/truth", "dynamics/residual"]);
+        assert!(f.is_empty(), "{f:?}");
     }
 
     #[test]

@@ -11,9 +11,10 @@ pub fn deploy() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy")
 }
 
-/// A TCP port of this test process's own (`k`: which of its servers).
+/// A port of this test process's own (`k` < 10: which of its servers).
 pub fn port(k: u16) -> u16 {
-    20_000 + (std::process::id() % 10_000) as u16 * 2 + k
+    assert!(k < 10);
+    20_000 + (std::process::id() % 4_000) as u16 * 10 + k
 }
 
 /// franka-sim's FCI server on 127.0.0.1:`port`, killed when dropped.
@@ -27,6 +28,12 @@ impl Drop for Server {
 }
 
 pub fn serve(port: u16) -> Server {
+    serve_with(port, None)
+}
+
+/// franka-sim at `port`, taking the simulated person's contact forces on
+/// udp 127.0.0.1:`forces` (`sim.forces_to`) when given.
+pub fn serve_with(port: u16, forces: Option<u16>) -> Server {
     let out = Command::new(deploy().join("franka-sim/install"))
         .stderr(Stdio::inherit())
         .output()
@@ -37,6 +44,7 @@ pub fn serve(port: u16) -> Server {
         .arg(deploy().join("franka-sim/serve.py"))
         .arg("--port")
         .arg(port.to_string())
+        .args(forces.map(|f| format!("--forces-port={f}")))
         .env("FR3_MJCF", dir.join("fr3.xml"))
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
