@@ -241,6 +241,8 @@ fn serve_world(
             // the robot's clock when there is a state, else ours
             let stamp = follower.last().map_or(now_ns(), |(_, t)| t);
             fill_truth(&sim, seq, stamp, &mut truth);
+            // the arm's truth is the robot's state it follows
+            truth.state_seq = follower.last().map_or(0, |(s, _)| s);
             truth_pub.publish(&truth)?;
             for e in contact_log.step(stamp, &sim.truth().contacts) {
                 contacts_pub.publish(e)?;

@@ -1065,7 +1065,10 @@ fn body() -> Result<(), SupervisorError> {
     report.inputs = inputs;
     report.robot = plan.robot_report();
     box_eval.fill(&mut report);
-    report.robot.max_joint_step_rad = eval.max_joint_step();
+    (
+        report.robot.max_joint_step_rad,
+        report.robot.max_joint_step_t_s,
+    ) = eval.max_joint_step();
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
     close_ipc(node, Some(ports), &prefix);

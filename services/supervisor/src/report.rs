@@ -158,6 +158,8 @@ pub struct RobotReport {
     /// the largest change of a true joint position from one period to the
     /// next over the run \[rad\]: a jump (after a restart, a stop) shows here
     pub max_joint_step_rad: f64,
+    /// ... when it came \[s\] (null: no step measured)
+    pub max_joint_step_t_s: Option<f64>,
 }
 
 /// `--report` JSON.
@@ -382,6 +384,10 @@ pub struct Evaluator {
     sim_restarts: Vec<SimRestart>,
     /// largest change of a true joint position between consecutive truths [rad]
     max_joint_step: f64,
+    max_joint_step_t: Option<f64>,
+    /// the robot state of the newest truth, and the arm there [rad]
+    state_seq: u64,
+    state_q: Vec<f64>,
     /// camera frames: (seq, capture wall time) of the recent ones, and the count
     frames_seen: u64,
     last_frame_seq: Option<u64>,
@@ -457,6 +463,9 @@ impl Evaluator {
             truth_q: Vec::new(),
             sim_restarts: Vec::new(),
             max_joint_step: 0.0,
+            max_joint_step_t: None,
+            state_seq: 0,
+            state_q: Vec::new(),
             frames_seen: 0,
             last_frame_seq: None,
             in_flight: Vec::new(),
@@ -571,9 +580,10 @@ impl Evaluator {
         });
     }
 
-    /// The largest change of a true joint position from one period to the next \[rad\].
-    pub fn max_joint_step(&self) -> f64 {
-        self.max_joint_step
+    /// The largest change of a true joint position from one period to the
+    /// next \[rad\], and when it came \[s\].
+    pub fn max_joint_step(&self) -> (f64, Option<f64>) {
+        (self.max_joint_step, self.max_joint_step_t)
     }
 
     pub fn on_truth(&mut self, m: &Truth) {
@@ -596,12 +606,24 @@ impl Evaluator {
                 arm_jump_rad: jump,
             });
         }
-        if m.seq == self.truth_seq + 1 && self.truth_q.len() == n {
-            let step = m.q[..n]
-                .iter()
-                .zip(&self.truth_q)
-                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-            self.max_joint_step = self.max_joint_step.max(step);
+        // the arm's step from one robot state to the next, or across a
+        // restart of the robot (its first state against its predecessor's
+        // last); truths between two states, or across lost states, are no step
+        if m.state_seq != self.state_seq {
+            let robot_step = m.state_seq == self.state_seq + 1 || m.state_seq < self.state_seq;
+            if robot_step && self.state_q.len() == n {
+                let step = m.q[..n]
+                    .iter()
+                    .zip(&self.state_q)
+                    .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+                if step > self.max_joint_step || self.max_joint_step_t.is_none() {
+                    self.max_joint_step = step;
+                    self.max_joint_step_t = Some(t);
+                }
+            }
+            self.state_seq = m.state_seq;
+            self.state_q.clear();
+            self.state_q.extend_from_slice(&m.q[..n]);
         }
         self.truth_seq = m.seq;
         self.truth_q.clear();
@@ -1198,21 +1220,29 @@ mod tests {
     }
 
     #[test]
-    fn the_largest_joint_step_is_kept_between_consecutive_truths_only() {
+    fn the_largest_joint_step_is_kept_between_consecutive_robot_states_and_across_restarts() {
         let mut e = eval();
-        for (seq, q3) in [(1, 0.0), (2, 0.001), (3, 0.003), (4, 0.0035)] {
+        let e_at = |e: &mut Evaluator, seq: u64, state: u64, q3: f64| {
             let mut m = truth(seq, 0.0, 0.0);
             m.seq = seq;
+            m.state_seq = state;
             m.q[3] = q3;
             e.on_truth(&m);
+        };
+        for (seq, q3) in [(1, 0.0), (2, 0.001), (3, 0.003), (4, 0.0035)] {
+            e_at(&mut e, seq, seq, q3);
         }
-        assert!((e.max_joint_step() - 0.002).abs() < 1e-12);
-        // a lost sample is no step of the arm
-        let mut m = truth(10, 0.0, 0.0);
-        m.seq = 10;
-        m.q[3] = 0.5;
-        e.on_truth(&m);
-        assert!((e.max_joint_step() - 0.002).abs() < 1e-12);
+        // a truth between two states (the same state again), then states lost
+        e_at(&mut e, 5, 4, 0.0035);
+        e_at(&mut e, 6, 9, 0.02);
+        // the robot restarted: its first state against its predecessor's last
+        e_at(&mut e, 7, 1, 0.0205);
+        assert!((e.max_joint_step().0 - 0.002).abs() < 1e-12);
+        e_at(&mut e, 8, 2, 0.0205);
+        e_at(&mut e, 9, 1, 0.0305);
+        let (step, at) = e.max_joint_step();
+        assert!((step - 0.01).abs() < 1e-12, "{step}");
+        assert!((at.unwrap() - 0.009).abs() < 1e-9);
     }
 
     fn residual(t_ms: u64, collision: bool) -> Residual {
