@@ -29,7 +29,11 @@ wire protocol or the physics:
   two cores with phri's cell, whose perception runs SCHED_FIFO at 20-22
   and would otherwise delay its states and commands behind every frame.
 
-Usage: serve.py [--port P] [--forces-port P] [--free-running] [--rt-priority N]
+* --cpus LIST (default 1): the CPUs it runs on, where present: the torque
+  loop's in deploy/phri.toml, where phri's real-time work is light (on
+  perception's CPU its states and commands waited for depth frames).
+
+Usage: serve.py [--port P] [--forces-port P] [--free-running] [--rt-priority N] [--cpus LIST]
 """
 
 import argparse
@@ -160,6 +164,9 @@ def main() -> int:
         default=50,
         help="SCHED_FIFO priority of the server's threads where permitted (default 50; 0: none)",
     )
+    parser.add_argument(
+        "--cpus", default="1", help="comma-separated CPUs to run on, where present (default 1; '': any)"
+    )
     args = parser.parse_args()
     if not 0 <= args.rt_priority <= 99:
         print(f"serve.py: --rt-priority {args.rt_priority} is not in 0..=99", file=sys.stderr)
@@ -168,6 +175,17 @@ def main() -> int:
         print("serve.py: FR3_MJCF is not set (deploy/franka-sim/install builds the model)", file=sys.stderr)
         return 2
     logging.basicConfig(level=logging.WARNING, format="franka-sim: %(levelname)s %(name)s: %(message)s")
+    if args.cpus:
+        try:
+            wanted = {int(c) for c in args.cpus.split(",")}
+        except ValueError:
+            print(f"serve.py: --cpus {args.cpus!r} is not a list of CPU numbers", file=sys.stderr)
+            return 2
+        present = wanted & os.sched_getaffinity(0)
+        if present:
+            os.sched_setaffinity(0, present)
+        else:
+            print(f"franka-sim: none of CPUs {args.cpus} here: running on any", file=sys.stderr)
     if args.rt_priority:
         # before any thread starts: they inherit it
         try:
