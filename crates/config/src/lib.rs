@@ -700,10 +700,11 @@ impl Loaded {
     pub fn model(&self) -> Result<phri_model::Model, ConfigError> {
         let path = self.urdf();
         let mut model =
-            phri_model::Model::from_urdf_file(&path).map_err(|source| ConfigError::Model {
-                path: path.clone(),
-                source,
-            })?;
+            phri_model::Model::from_urdf_file_locked(&path, &self.config.robot.locked_joints)
+                .map_err(|source| ConfigError::Model {
+                    path: path.clone(),
+                    source,
+                })?;
         if model.nv() > phri_ipc::MAX_DOF {
             return Err(ConfigError::TooManyJoints {
                 path,

@@ -43,6 +43,10 @@ pub struct RobotSection {
     /// simulated contacts
     #[serde(default)]
     pub capsules: Vec<CapsuleConfig>,
+    /// URDF joints held at their zero (a gripper's fingers, with a
+    /// controller of their own): the model keeps the arm's joints only
+    #[serde(default)]
+    pub locked_joints: Vec<String>,
 }
 
 /// `[[robot.capsules]]`: the segment `a`–`b` \[m\] on `link` (its frame)

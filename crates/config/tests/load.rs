@@ -283,13 +283,32 @@ fn the_arm_comes_from_its_robot_file() {
     std::fs::write(&merged, fr3.to_toml()).unwrap();
     let again = Loaded::load(&merged, None, &[]).unwrap();
     assert_eq!(again.config, fr3.config);
+    // --robot panda: its URDF has the hand's fingers; the robot file locks
+    // them, so the arm's model has its 7 joints (and the collision model of
+    // its URDF, no capsules of the file)
+    let panda = load(&["robot.name=panda"]).unwrap();
+    let model = panda.model().unwrap();
+    assert_eq!(model.nv(), 7);
+    assert!(panda.config.robot.capsules.is_empty());
+    assert!(model.collisions.len() >= 30);
+    assert_eq!(panda.config.control.ee_link, "panda_link8");
+    let e = panda_err(&[
+        "robot.name=panda",
+        "robot.locked_joints=[\"panda_fingers\"]",
+    ]);
+    assert!(e.contains("panda_fingers"), "{e}");
+}
+
+fn panda_err(sets: &[&str]) -> String {
+    let loaded = load(sets).unwrap();
+    loaded.model().unwrap_err().to_string()
 }
 
 #[test]
 fn an_unknown_arm_and_a_wrong_link_in_a_robot_file_are_refused_by_name() {
     let e = err(&["robot.name=ur5"]);
     assert!(
-        e.contains("--set robot.name=ur5") && e.contains("'ur5'") && e.contains("fr3, lwr4"),
+        e.contains("--set robot.name=ur5") && e.contains("'ur5'") && e.contains("fr3, lwr4, panda"),
         "{e}"
     );
     let e = err(&["robot.name=../lwr4"]);

@@ -58,6 +58,8 @@ pub enum ModelError {
     TooLarge { path: PathBuf, max: u64 },
     #[error("unknown link '{0}'")]
     UnknownLink(String),
+    #[error("joint '{0}' to lock: the URDF has no moving joint of that name")]
+    UnknownLockedJoint(String),
     #[error(transparent)]
     Dimension(#[from] LengthError),
     #[error("the joint-space inertia matrix is not positive definite")]

@@ -51,5 +51,5 @@ pub use dynamics::{
 pub use error::{check_len, LengthError, ModelError};
 pub use geometry::{parry_shapes, CollisionObject, Shape};
 pub use kinematics::{forward_kinematics, frame_placement, point_jacobian};
-pub use model::{Frame, Joint, JointKind, Mimic, Model, Placement, MAX_URDF_BYTES};
+pub use model::{lock_joints, Frame, Joint, JointKind, Mimic, Model, Placement, MAX_URDF_BYTES};
 pub use xml_depth::MAX_XML_DEPTH;

@@ -263,6 +263,28 @@ fn moves_mass(joints: &[Joint], order: &[usize], nv: usize) -> Result<(), ModelE
     }
 }
 
+/// Make the joints `locked` (and the joints that mimic one of them) fixed,
+/// at their zero position: their origin stays as the URDF gives it.
+pub fn lock_joints(robot: &mut urdf_rs::Robot, locked: &[String]) -> Result<(), ModelError> {
+    for name in locked {
+        let known = robot
+            .joints
+            .iter()
+            .any(|j| &j.name == name && j.joint_type != urdf_rs::JointType::Fixed);
+        if !known {
+            return Err(ModelError::UnknownLockedJoint(name.clone()));
+        }
+    }
+    for j in &mut robot.joints {
+        let follows_locked = j.mimic.as_ref().is_some_and(|m| locked.contains(&m.joint));
+        if locked.contains(&j.name) || follows_locked {
+            j.joint_type = urdf_rs::JointType::Fixed;
+            j.mimic = None;
+        }
+    }
+    Ok(())
+}
+
 /// A checked `<mimic>`: leader (URDF joint index), multiplier, offset.
 type UrdfMimic = (usize, f64, f64);
 
@@ -317,8 +339,12 @@ impl Model {
     /// Build from a URDF file (at most [`MAX_URDF_BYTES`]: a larger one is
     /// refused without being read whole).
     pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<Model, ModelError> {
+        Self::from_urdf_file_locked(path, &[])
+    }
+
+    /// The URDF text of `path` (at most [`MAX_URDF_BYTES`]).
+    fn read_urdf(path: &Path) -> Result<String, ModelError> {
         use std::io::Read;
-        let path = path.as_ref();
         let io = |source| ModelError::Io {
             path: path.to_path_buf(),
             source,
@@ -336,13 +362,12 @@ impl Model {
                 max: MAX_URDF_BYTES,
             });
         }
-        let text = String::from_utf8(bytes).map_err(|_| {
+        String::from_utf8(bytes).map_err(|_| {
             io(std::io::Error::new(
                 std::io::ErrorKind::InvalidData,
                 "not UTF-8 text",
             ))
-        })?;
-        Self::from_urdf_str_named(&text, &path.display().to_string())
+        })
     }
 
     /// Build from URDF text.
@@ -350,7 +375,33 @@ impl Model {
         Self::from_urdf_str_named(text, "<urdf>")
     }
 
+    /// Build from a URDF file with the joints `locked` held at their zero
+    /// (Pinocchio's reduced model): a gripper's fingers, which have a
+    /// controller of their own, so the model has the arm's joints only.
+    /// Joints that mimic a locked joint are locked with it.
+    pub fn from_urdf_file_locked(
+        path: impl AsRef<Path>,
+        locked: &[String],
+    ) -> Result<Model, ModelError> {
+        let path = path.as_ref();
+        let text = Self::read_urdf(path)?;
+        let mut robot = Self::parse(&text, &path.display().to_string())?;
+        lock_joints(&mut robot, locked)?;
+        Self::from_urdf(&robot)
+    }
+
+    /// [`Model::from_urdf_file_locked`] from URDF text.
+    pub fn from_urdf_str_locked(text: &str, locked: &[String]) -> Result<Model, ModelError> {
+        let mut robot = Self::parse(text, "<urdf>")?;
+        lock_joints(&mut robot, locked)?;
+        Self::from_urdf(&robot)
+    }
+
     fn from_urdf_str_named(text: &str, origin: &str) -> Result<Model, ModelError> {
+        Self::from_urdf(&Self::parse(text, origin)?)
+    }
+
+    fn parse(text: &str, origin: &str) -> Result<urdf_rs::Robot, ModelError> {
         // the parser recurses per nesting level: bound the depth before it runs
         check_depth(text, MAX_XML_DEPTH).map_err(|_| ModelError::TooDeep {
             origin: origin.to_string(),
@@ -364,11 +415,10 @@ impl Model {
                     message: "parser failed".into(),
                 }
             })?;
-        let robot = parsed.map_err(|e| ModelError::Parse {
+        parsed.map_err(|e| ModelError::Parse {
             origin: origin.to_string(),
             message: e.to_string(),
-        })?;
-        Self::from_urdf(&robot)
+        })
     }
 
     /// Build from a parsed URDF.

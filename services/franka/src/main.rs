@@ -147,7 +147,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let urdf = robot
         .robot_model()
         .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
-    let served = phri_model::Model::from_urdf_str(&urdf)
+    let served = phri_model::Model::from_urdf_str_locked(&urdf, &ctx.config().robot.locked_joints)
         .map_err(|e| format!("{address}: the robot's URDF: {e}"))?;
     if let Some(d) = first_difference(cycle.model(), &served) {
         return Err(format!("robot.urdf is not the arm at {address}: {d}").into());
