@@ -360,6 +360,18 @@ pub struct BoxStatus {
     /// the newest error: the box's error names (libfranka's), UTF-8, zero padded
     #[serde(with = "crate::json::c_string")]
     pub last_error: [u8; BOX_ERROR_TEXT],
+    /// joints in the arrays below
+    pub dof: u32,
+    #[serde(skip)]
+    pub _pad: u32,
+    /// the box's own joint torques of its newest state [Nm] (FCI's `tau_J`,
+    /// its torque sensors), for comparison with phri's applied torque
+    #[serde(with = "crate::json::finite_array")]
+    pub tau_j: [f64; MAX_DOF],
+    /// the box's own external torque estimate of its newest state [Nm]
+    /// (FCI's `tau_ext_hat_filtered`), for comparison with phri's residual
+    #[serde(with = "crate::json::finite_array")]
+    pub tau_ext_hat: [f64; MAX_DOF],
 }
 
 impl BoxStatus {
@@ -889,4 +901,4 @@ message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => p
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
-message!(BoxStatus, published: |m| Some(m.stamp_ns));
+message!(BoxStatus, published: |m| Some(m.stamp_ns), counted: [dof => tau_j, tau_ext_hat]);

@@ -2,7 +2,18 @@
 //! FCI's command success rate while phri controls the arm, and every error
 //! of the box (a motion it aborted) with its time.
 
-use phri_ipc::{BoxStatus, Zeroed};
+use phri_ipc::{BoxStatus, Zeroed, MAX_DOF};
+
+use crate::cycle::JOINTS;
+
+/// The box's own torques of a state, kept for comparison with phri's.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BoxTorques {
+    /// its joint torque sensors \[Nm\] (FCI's `tau_J`)
+    pub tau_j: [f64; JOINTS],
+    /// its external torque estimate \[Nm\] (FCI's `tau_ext_hat_filtered`)
+    pub tau_ext_hat: [f64; JOINTS],
+}
 
 /// An error of the control box: the motion it aborted, and why.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -45,13 +56,22 @@ impl BoxLog {
     /// States between two messages (10 Hz at FCI's 1 kHz).
     pub const EVERY: u64 = 100;
 
-    /// A state read from the box: `controlled` while phri's torque control
+    /// A state read from the box (with its own torques, `box_torques`): `controlled` while phri's torque control
     /// runs, with FCI's `control_command_success_rate` (in (0, 1\]; 0 says
     /// no control loop runs yet, as in the first states of a torque control,
     /// and a value outside is refused: neither is counted). True every [`BoxLog::EVERY`] states: time
     /// to publish. Allocates nothing.
-    pub fn on_state(&mut self, controlled: bool, success_rate: f64) -> bool {
+    pub fn on_state(
+        &mut self,
+        controlled: bool,
+        success_rate: f64,
+        box_torques: &BoxTorques,
+    ) -> bool {
         self.msg.states += 1;
+        let n = box_torques.tau_j.len().min(MAX_DOF);
+        self.msg.dof = n as u32;
+        self.msg.tau_j[..n].copy_from_slice(&box_torques.tau_j[..n]);
+        self.msg.tau_ext_hat[..n].copy_from_slice(&box_torques.tau_ext_hat[..n]);
         if controlled && success_rate > 0.0 && success_rate <= 1.0 {
             self.msg.controlled += 1;
             self.msg.success_sum += success_rate;
@@ -98,14 +118,19 @@ mod tests {
         let mut log = BoxLog::default();
         assert_eq!(log.success_rate(), 1.0);
         let mut due = 0;
+        let t = BoxTorques::default();
         for _ in 0..10 {
-            due += usize::from(log.on_state(false, 0.0)); // braked: no commands, on purpose
+            due += usize::from(log.on_state(false, 0.0, &t)); // braked: no commands, on purpose
         }
         for k in 0..100 {
-            due += usize::from(log.on_state(true, if k < 90 { 1.0 } else { 0.95 }));
+            due += usize::from(log.on_state(true, if k < 90 { 1.0 } else { 0.95 }, &t));
         }
-        due += usize::from(log.on_state(true, f64::NAN));
-        due += usize::from(log.on_state(true, 0.0)); // the box's loop not armed yet
+        due += usize::from(log.on_state(true, f64::NAN, &t));
+        let newest = BoxTorques {
+            tau_j: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0],
+            tau_ext_hat: [0.5; JOINTS],
+        };
+        due += usize::from(log.on_state(true, 0.0, &newest)); // the box's loop not armed yet
         assert_eq!(due, 1, "one message per 100 states");
         assert!((log.success_rate() - 0.995).abs() < 1e-12);
         let e = BoxError::new(
@@ -120,6 +145,10 @@ mod tests {
         let m = *log.message(50_000);
         assert_eq!((m.states, m.controlled), (112, 100));
         assert_eq!(m.success_min, 0.95);
+        // the box's own torques of the newest state, for comparison
+        assert_eq!(m.dof, 7);
+        assert_eq!(m.tau_j[..7], newest.tau_j);
+        assert_eq!(m.tau_ext_hat[..7], [0.5; 7]);
         assert_eq!((m.errors, m.recoveries, m.last_error_ns), (1, 1, 42_000));
         assert_eq!(
             m.last_error_str(),

@@ -11,7 +11,7 @@ pub mod cycle;
 pub mod model_check;
 pub mod state;
 
-pub use box_status::{BoxError, BoxLog};
+pub use box_status::{BoxError, BoxLog, BoxTorques};
 pub use cycle::{CycleError, FciCycle, FciTorque, JOINTS, MAX_TORQUE_RATE_NM_PER_S};
 pub use model_check::first_difference;
 pub use state::fill_state;

@@ -11,7 +11,7 @@
 use std::error::Error;
 use std::process::ExitCode;
 
-use phri_franka::{fill_state, first_difference, BoxError, BoxLog, FciCycle, JOINTS};
+use phri_franka::{fill_state, first_difference, BoxError, BoxLog, BoxTorques, FciCycle, JOINTS};
 use phri_ipc::{
     BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
     ROBOT_STATE, ROBOT_STATS,
@@ -72,8 +72,15 @@ struct BoxChannel {
 }
 
 impl BoxChannel {
-    fn state(&mut self, controlled: bool, success_rate: f64) -> Result<(), Box<dyn Error>> {
-        if self.log.on_state(controlled, success_rate) {
+    fn state(&mut self, controlled: bool, s: &franka::RobotState) -> Result<(), Box<dyn Error>> {
+        let torques = BoxTorques {
+            tau_j: s.tau_J,
+            tau_ext_hat: s.tau_ext_hat_filtered,
+        };
+        if self
+            .log
+            .on_state(controlled, s.control_command_success_rate, &torques)
+        {
             self.publisher.publish(self.log.message(now_ns()))?;
         }
         Ok(())
@@ -99,7 +106,7 @@ fn serve(
     let mut control = robot.start_torque_control()?;
     loop {
         let (s, _) = control.read_once()?;
-        boxed.state(true, s.control_command_success_rate)?;
+        boxed.state(true, &s)?;
         let (_, out) = period(&s.q, s.time.as_millis(), cycle)?;
         if out.brake || shutdown.requested() {
             control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
@@ -111,7 +118,7 @@ fn serve(
     // braked: the arm's states go on; a fresh answer resumes control
     while !shutdown.requested() {
         let s = robot.read_once()?;
-        boxed.state(false, s.control_command_success_rate)?;
+        boxed.state(false, &s)?;
         let (link, _) = period(&s.q, s.time.as_millis(), cycle)?;
         if !link.brake {
             break;
