@@ -59,7 +59,7 @@ struct Cli {
     #[arg(long, value_name = "FILE")]
     report: Option<String>,
     /// The arm: its robot file deploy/robots/NAME/robot.toml (lwr4, the
-    /// default; fr3); the same as `--set robot.name=NAME`
+    /// default; fr3; panda); the same as `--set robot.name=NAME`
     #[arg(long, value_name = "NAME")]
     robot: Option<String>,
     /// Drive the arm `--robot` names over FCI at this address (host[:port]:

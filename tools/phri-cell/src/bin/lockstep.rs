@@ -44,7 +44,7 @@ struct Cli {
     #[arg(long, value_name = "FILE", default_value = "deploy/phri.toml")]
     config: PathBuf,
     /// The arm: its robot file deploy/robots/NAME/robot.toml (lwr4, the
-    /// default; fr3); the same as `--set robot.name=NAME`
+    /// default; fr3; panda); the same as `--set robot.name=NAME`
     #[arg(long, value_name = "NAME")]
     robot: Option<String>,
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
