@@ -143,10 +143,10 @@ fn the_supervisor_drives_the_fr3_behind_franka_sim_through_its_waypoints() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let port = franka_sim::port(0);
     let _server = franka_sim::serve(port);
-    let r = Run::start("free", port, "free-motion", 20.0, &[]).finish();
+    let r = Run::start("free", port, "free-motion", 15.0, &[]).finish();
     assert_box_content(&r);
     let tl = &r["torque_loop"];
-    assert!(tl["cycles"].as_u64().unwrap() > 15_000, "{tl}");
+    assert!(tl["cycles"].as_u64().unwrap() > 11_000, "{tl}");
     for s in [
         "franka",
         "sim",
@@ -166,7 +166,7 @@ fn the_supervisor_drives_the_fr3_behind_franka_sim_through_its_waypoints() {
     // the residual on MuJoCo's arm stayed quiet: the task went on (4 s a cycle)
     assert!(!events(&r, "sync").is_empty(), "{}", r["events"]);
     let reached = r["task"]["waypoints_reached"].as_u64().unwrap();
-    assert!(reached >= 6, "waypoints {reached}");
+    assert!(reached >= 4, "waypoints {reached}");
     assert_eq!(r["false_detections"], 0);
 }
 
@@ -215,10 +215,10 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     let port = franka_sim::port(3);
     let _server = franka_sim::serve(port);
     let sets = ["supervisor.restart_backoff_min_ms=300".to_string()];
-    let run = Run::start("kill", port, "free-motion", 24.0, &sets);
-    wait(6.0);
+    let run = Run::start("kill", port, "free-motion", 20.0, &sets);
+    wait(5.0);
     run.kill("franka");
-    wait(8.0);
+    wait(7.0);
     run.kill("control");
     let r = run.finish();
     assert_eq!(r["services"]["franka"]["restarts"], 1, "{}", r["services"]);
@@ -264,5 +264,5 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     );
     assert_eq!(r["false_detections"], 0);
     // the task went on after both
-    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 4);
+    assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 3);
 }
