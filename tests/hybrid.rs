@@ -6,7 +6,7 @@
 //! the real supervisor (`--robot fr3 --robot-ip`). One cell at a time.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command};
+use std::process::Child;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -37,30 +37,19 @@ struct Run {
 impl Run {
     /// `scenario` for `duration` s against franka-sim at `port`.
     fn start(test: &str, port: u16, scenario: &str, duration: f64, sets: &[String]) -> Run {
-        support::loud_panics();
-        let prefix = format!("h{}{}_", std::process::id(), test);
-        let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
-        let _ = std::fs::remove_dir_all(&run_dir);
-        let report = run_dir.join("report.json");
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
-        cmd.current_dir(repo())
-            .args(["--config", "deploy/phri.toml", "--robot", "fr3"])
+        let place = support::RunPlace::new('h', test);
+        let mut cmd = place.command(env!("CARGO_BIN_EXE_phri-supervisor"), &repo());
+        cmd.args(["--config", "deploy/phri.toml", "--robot", "fr3"])
             .arg("--robot-ip")
             .arg(format!("127.0.0.1:{port}"))
-            .args(["--scenario", scenario, "--duration", &duration.to_string()])
-            .arg("--prefix")
-            .arg(&prefix)
-            .arg("--run-dir")
-            .arg(&run_dir)
-            .arg("--report")
-            .arg(&report);
+            .args(["--scenario", scenario, "--duration", &duration.to_string()]);
         for s in sets {
             cmd.arg("--set").arg(s);
         }
         Run {
             child: cmd.spawn().expect("the supervisor starts"),
-            run_dir,
-            report,
+            run_dir: place.run_dir,
+            report: place.report,
             deadline: Instant::now() + Duration::from_secs_f64(duration + 60.0),
         }
     }

@@ -46,23 +46,13 @@ impl Cell {
         for b in ["phri-sim", "phri-dynamics", "phri-control"] {
             bin(b);
         }
-        let prefix = format!("t{}{}_", std::process::id(), test);
         // the supervisor creates its run directory itself, private (0700)
-        let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
-        let _ = std::fs::remove_dir_all(&run_dir);
-        let report = run_dir.join("report.json");
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_phri-supervisor"));
-        cmd.current_dir(repo())
-            .arg("--config")
+        let place = support::RunPlace::new('t', test);
+        let mut cmd = place.command(env!("CARGO_BIN_EXE_phri-supervisor"), &repo());
+        cmd.arg("--config")
             .arg(repo().join("deploy/phri.toml"))
             .arg("--scenario")
-            .arg(scenario)
-            .arg("--prefix")
-            .arg(&prefix)
-            .arg("--run-dir")
-            .arg(&run_dir)
-            .arg("--report")
-            .arg(&report);
+            .arg(scenario);
         if let Some(d) = duration {
             cmd.arg("--duration").arg(d.to_string());
         }
@@ -72,9 +62,9 @@ impl Cell {
         cmd.stdout(Stdio::null()).stderr(Stdio::inherit());
         Cell {
             child: cmd.spawn().unwrap(),
-            prefix,
-            run_dir,
-            report,
+            prefix: place.prefix,
+            run_dir: place.run_dir,
+            report: place.report,
         }
     }
 

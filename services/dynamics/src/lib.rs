@@ -163,18 +163,21 @@ mod tests {
         s
     }
 
-    #[test]
-    fn a_state_the_box_holds_gives_no_residual_and_a_fresh_warm_up() {
+    /// The default arm's observer, its gravity at `Q` [Nm] and its warm-up samples.
+    fn observer() -> (DynamicsStep, [f64; 7], u64) {
         let loaded = Loaded::defaults();
         let model = loaded.model().unwrap();
         let mut d = phri_model::Data::new(&model);
-        let g: [f64; 7] = {
-            let g = phri_model::gravity(&model, &mut d, &Q).unwrap();
-            std::array::from_fn(|i| g[i])
-        };
+        let g = phri_model::gravity(&model, &mut d, &Q).unwrap();
+        let g: [f64; 7] = std::array::from_fn(|i| g[i]);
         let cfg = &loaded.config.dynamics;
-        let warm = cfg.warmup_samples as u64;
-        let mut step = DynamicsStep::new(model, cfg).unwrap();
+        let step = DynamicsStep::new(model, cfg).unwrap();
+        (step, g, cfg.warmup_samples as u64)
+    }
+
+    #[test]
+    fn a_state_the_box_holds_gives_no_residual_and_a_fresh_warm_up() {
+        let (mut step, g, warm) = observer();
         for seq in 1..=warm + 10 {
             step.step(&state(seq, &g)).unwrap();
         }
@@ -200,18 +203,9 @@ mod tests {
 
     #[test]
     fn a_state_in_a_residual_out_flags_isolation_and_refusals() {
-        let loaded = Loaded::defaults();
-        let model = loaded.model().unwrap();
-        let mut d = phri_model::Data::new(&model);
-        let g: [f64; 7] = {
-            let g = phri_model::gravity(&model, &mut d, &Q).unwrap();
-            std::array::from_fn(|i| g[i])
-        };
-        let cfg = &loaded.config.dynamics;
-        let mut step = DynamicsStep::new(model, cfg).unwrap();
+        let (mut step, g, warm) = observer();
         assert_eq!(step.dof(), 7);
         // the arm held still by gravity compensation: valid after warm-up, quiet
-        let warm = cfg.warmup_samples as u64;
         for seq in 1..=warm {
             let m = step.step(&state(seq, &g)).unwrap();
             assert_eq!(m.flags & residual_flags::VALID, 0, "valid during warm-up");

@@ -338,13 +338,14 @@ fn run(args: Args) -> Result<ExitCode, String> {
         }
         Command::Resume { wait_s } => {
             // the supervisor's channel, found within the wait (a supervisor
-            // just back from a stall may still be cleaning up its dead services)
+            // just back from a stall may still be cleaning up its dead
+            // services: on a loaded machine that took over 2 s)
             let t0 = Instant::now();
             let health = loop {
                 let found = phri_ipc::SUPERVISOR_HEALTH.subscriber_if_exists(&node, Queue::Latest);
                 match found {
                     Ok(Some(h)) => break h,
-                    _ if t0.elapsed().as_secs_f64() < wait_s.min(2.0) => {
+                    _ if t0.elapsed().as_secs_f64() < wait_s.min(5.0) => {
                         std::thread::sleep(Duration::from_millis(50));
                     }
                     Ok(None) => {
