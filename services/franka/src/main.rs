@@ -151,13 +151,25 @@ fn body() -> Result<(), Box<dyn Error>> {
     // phri keeps its own real-time discipline (go_realtime below)
     let robot = franka::Robot::new(&address, franka::RealtimeConfig::Ignore)
         .map_err(|e| format!("{address}: {e}"))?;
-    let urdf = robot
-        .robot_model()
-        .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
-    let served = phri_model::Model::from_urdf_str_locked(&urdf, &ctx.config().robot.locked_joints)
-        .map_err(|e| format!("{address}: the robot's URDF: {e}"))?;
-    if let Some(d) = first_difference(cycle.model(), &served) {
-        return Err(format!("robot.urdf is not the arm at {address}: {d}").into());
+    // FCI v10 (FR3) serves the arm's URDF; v5 (Panda/FER) serves none
+    if robot.server_version() >= 10 {
+        let urdf = robot
+            .robot_model()
+            .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
+        // the arm's joints to lock may be missing from another arm's URDF:
+        // then the comparison below names the difference
+        let served =
+            phri_model::Model::from_urdf_str_locked(&urdf, &ctx.config().robot.locked_joints)
+                .or_else(|_| phri_model::Model::from_urdf_str(&urdf))
+                .map_err(|e| format!("{address}: the robot's URDF: {e}"))?;
+        if let Some(d) = first_difference(cycle.model(), &served) {
+            return Err(format!("robot.urdf is not the arm at {address}: {d}").into());
+        }
+    } else {
+        tracing::warn!(
+            "{address}: FCI v{} serves no URDF: robot.urdf is taken as the arm's, unchecked",
+            robot.server_version()
+        );
     }
 
     let node = ctx.node()?;
