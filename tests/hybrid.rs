@@ -204,10 +204,10 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     let port = franka_sim::port(3);
     let _server = franka_sim::serve(port);
     let sets = ["supervisor.restart_backoff_min_ms=300".to_string()];
-    let run = Run::start("kill", port, "free-motion", 20.0, &sets);
-    wait(5.0);
+    let run = Run::start("kill", port, "free-motion", 24.0, &sets);
+    wait(6.0);
     run.kill("franka");
-    wait(7.0);
+    wait(8.0);
     run.kill("control");
     let r = run.finish();
     assert_eq!(r["services"]["franka"]["restarts"], 1, "{}", r["services"]);

@@ -24,10 +24,10 @@ wire protocol or the physics:
   detection is checked against this physics engine. A datagram replaces the
   forces of the one before; none for 50 ms clears them.
 
-* --rt-priority N (default 50): the server's threads run SCHED_FIFO at N
-  where permitted. A control box is hardware of its own; here it shares
-  two cores with phri's cell, whose perception runs SCHED_FIFO at 20-22
-  and would otherwise delay its states and commands behind every frame.
+* --rt-priority N (default 0: none): the server's threads run SCHED_FIFO
+  at N where permitted. On the torque loop's CPU it needs none (the loop's
+  real-time work is light), and at 50 it starved the services starting
+  there (a controller not yet real-time missed its start-up heartbeat).
 
 * --cpus LIST (default 1): the CPUs it runs on, where present: the torque
   loop's in deploy/phri.toml, where phri's real-time work is light (on
@@ -161,8 +161,8 @@ def main() -> int:
     parser.add_argument(
         "--rt-priority",
         type=int,
-        default=50,
-        help="SCHED_FIFO priority of the server's threads where permitted (default 50; 0: none)",
+        default=0,
+        help="SCHED_FIFO priority of the server's threads where permitted (default 0: none)",
     )
     parser.add_argument(
         "--cpus", default="1", help="comma-separated CPUs to run on, where present (default 1; '': any)"
