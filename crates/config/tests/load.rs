@@ -165,11 +165,7 @@ fn per_joint_settings_are_one_number_or_one_value_per_joint() {
 
 #[test]
 fn the_model_check_names_links_and_lengths() {
-    let e = load(&["control.ee_link=nowhere"])
-        .unwrap()
-        .model()
-        .unwrap_err()
-        .to_string();
+    let e = model_err(&["control.ee_link=nowhere"]);
     assert!(
         e.contains("control.ee_link") && e.contains("nowhere"),
         "{e}"
@@ -292,16 +288,16 @@ fn the_arm_comes_from_its_robot_file() {
     assert!(panda.config.robot.capsules.is_empty());
     assert!(model.collisions.len() >= 30);
     assert_eq!(panda.config.control.ee_link, "panda_link8");
-    let e = panda_err(&[
+    let e = model_err(&[
         "robot.name=panda",
         "robot.locked_joints=[\"panda_fingers\"]",
     ]);
     assert!(e.contains("panda_fingers"), "{e}");
 }
 
-fn panda_err(sets: &[&str]) -> String {
-    let loaded = load(sets).unwrap();
-    loaded.model().unwrap_err().to_string()
+/// The configuration loads, its model does not: why.
+fn model_err(sets: &[&str]) -> String {
+    load(sets).unwrap().model().unwrap_err().to_string()
 }
 
 #[test]
