@@ -710,8 +710,8 @@ fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_han
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the robot touches the held-out right hand from ~8 s; the hand stays
     // at the robot (within 5 cm) until it is lowered at 15-15.5 s. The
-    // controller is stopped for 300 ms in contact: frozen (heartbeat
-    // timeout 200 ms), killed and restarted
+    // controller is stopped in contact until the supervisor finds it frozen
+    // (heartbeat timeout 200 ms), kills and restarts it
     let cell = Cell::start("ctlcontact", "collaboration", Some(20.0), &[]);
     cell.pid_of("control");
     let deadline = Instant::now() + Duration::from_secs(14);
@@ -721,8 +721,11 @@ fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_han
     }
     wait(0.5);
     let pid = cell.kill("control", libc::SIGSTOP);
-    wait(0.3);
-    // SAFETY: kill(2) on the stopped controller (gone if already killed).
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while alive(pid) && Instant::now() < deadline {
+        wait(0.05);
+    }
+    // SAFETY: kill(2) on the stopped controller (gone once killed).
     unsafe { libc::kill(pid, libc::SIGCONT) };
     let r = cell.finish();
     let c = &r["collaboration"];

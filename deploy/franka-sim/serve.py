@@ -50,6 +50,10 @@ import time
 FORCES_MAGIC = b"PHRF"
 FORCE_RECORD = struct.Struct("<32s3d3d")
 MAX_FORCES = 16
+#: a force larger than this is refused as garbage [N] (a hand walking into
+#: the moving arm is pushed back with a kilonewton or more by the person's
+#: contact model)
+MAX_FORCE_N = 10000.0
 #: forces older than this are dropped [s]
 FORCES_TIMEOUT_S = 0.05
 #: without a state stream for this long the arm runs on its own timer [s]
@@ -136,7 +140,7 @@ def lockstep_class(base):
             for k in range(n):
                 name, px, py, pz, fx, fy, fz = FORCE_RECORD.unpack_from(datagram, 8 + k * FORCE_RECORD.size)
                 values = (px, py, pz, fx, fy, fz)
-                if not all(np.isfinite(v) for v in values) or max(abs(v) for v in values[3:]) > 1000.0:
+                if not all(np.isfinite(v) for v in values) or max(abs(v) for v in values[3:]) > MAX_FORCE_N:
                     return None
                 body = mujoco.mj_name2id(
                     self.model, mujoco.mjtObj.mjOBJ_BODY, self.prefix + name.rstrip(b"\0").decode("utf-8", "replace")
@@ -233,6 +237,8 @@ def main() -> int:
         stop = getattr(server, "stop", None)
         if callable(stop):
             stop()
+        if sim.forces_refused:
+            print(f"franka-sim: {sim.forces_refused} forces datagram(s) refused (malformed, unknown body or over {MAX_FORCE_N:.0f} N)", file=sys.stderr)
     return 0
 
 

@@ -18,6 +18,7 @@ pub mod plan;
 pub mod process;
 pub mod realtime;
 pub mod report;
+pub mod residual_model;
 pub mod restart;
 pub mod roster;
 pub mod shm;

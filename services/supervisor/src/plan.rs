@@ -73,7 +73,8 @@ impl Plan {
         })
     }
 
-    /// The arm the cell drives (the report's `robot`).
+    /// The arm the cell drives (the report's `robot`); its `kind` is the
+    /// service that serves `robot/state` (`sim` or `franka`).
     pub fn robot_report(&self) -> crate::report::RobotReport {
         crate::report::RobotReport {
             kind: match self.loaded.config.robot.ip.is_empty() {
@@ -128,9 +129,12 @@ impl Plan {
             .services
             .iter()
             .any(|(_, s)| s.binary == "phri-repulsion");
-        Evaluator::new(t0_ns, self.detector.clone(), self.link_names.clone()).with_stale_bounds(
-            StaleBounds::from_config(&self.loaded.config.control, perception),
-        )
+        Evaluator::new(t0_ns, self.detector.clone(), self.link_names.clone())
+            .with_stale_bounds(StaleBounds::from_config(
+                &self.loaded.config.control,
+                perception,
+            ))
+            .with_robot_service(&self.robot_report().kind)
     }
 
     /// Every service's binary is an executable file in `bin_dir`.

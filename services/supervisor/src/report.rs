@@ -11,6 +11,7 @@ use phri_ipc::{
 use serde::Serialize;
 
 use crate::realtime::RealtimeReport;
+use crate::residual_model::ResidualModel;
 
 /// A camera frame some repulsion worker answered, and not every one yet.
 #[derive(Clone, Copy, Debug)]
@@ -73,6 +74,14 @@ pub struct ContactReport {
     pub detected_after_twice_threshold_ms: Option<f64>,
     /// first-order bound −ln(1 − θ/F)/K_I + 2 ms for F = 2θ [ms]
     pub bound_ms: f64,
+    /// when the observer's model fed with the true τ_ext (the residual an
+    /// exact model would read) first reached a collision threshold [ms after
+    /// start], null if never
+    pub model_crossed_threshold_after_ms: Option<f64>,
+    /// the largest that model residual got during the contact, in
+    /// multiples of the threshold (below 1: no observer of this bandwidth
+    /// could flag the contact)
+    pub model_peak_over_threshold: f64,
 }
 
 /// Times of the torque loop's events (detection, reaction, resume, …) are on
@@ -110,6 +119,8 @@ pub struct SimRestart {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TaskReport {
     pub waypoints_reached: u64,
+    /// when the last of them was reached [s], null if none
+    pub last_waypoint_t_s: Option<f64>,
 }
 
 /// `perception` in the report.
@@ -337,6 +348,10 @@ struct Episode {
     intended: bool,
     t_twice: Option<f64>,
     t_detect: Option<f64>,
+    /// when the model residual first reached a threshold
+    t_model: Option<f64>,
+    /// the model residual's largest ratio to the thresholds
+    model_peak: f64,
     closed: bool,
 }
 
@@ -352,6 +367,12 @@ struct Restartable<T> {
 pub struct Evaluator {
     t0_ns: u64,
     det: DetectorInfo,
+    /// the residual an exact model would read, from the true τ_ext
+    model: ResidualModel,
+    /// when the task last reached a waypoint [s]
+    last_waypoint_t: Option<f64>,
+    /// the service serving `robot/state`
+    robot_service: String,
     link_names: Vec<String>,
     episodes: Vec<Episode>,
     collision_edges: Vec<f64>,
@@ -439,9 +460,20 @@ impl Evaluator {
     /// `link_names` are the robot model's collision objects by index
     /// (`ContactTruth::robot_object`); body parts are named by [`BodyPart`].
     pub fn new(t0_ns: u64, det: DetectorInfo, link_names: Vec<String>) -> Evaluator {
+        let joints = det.collision_threshold.len();
+        // per-joint gains where the configuration resolves for these joints
+        let gains = det
+            .dynamics
+            .gain
+            .resolve(joints, "dynamics.gain")
+            .unwrap_or_else(|_| vec![det.gain; joints]);
+        let model = ResidualModel::new(&det.dynamics, gains, det.collision_threshold.clone());
         Evaluator {
             t0_ns,
             det,
+            model,
+            last_waypoint_t: None,
+            robot_service: "sim".into(),
             link_names,
             episodes: Vec::new(),
             collision_edges: Vec::new(),
@@ -496,6 +528,13 @@ impl Evaluator {
         self
     }
 
+    /// The service that serves `robot/state` (`sim`, or `franka` with a
+    /// robot outside): the one its brake events name.
+    pub fn with_robot_service(mut self, service: &str) -> Evaluator {
+        self.robot_service = service.to_string();
+        self
+    }
+
     /// Real-time scheduling as the services got it (the run is degraded
     /// when any lacked something).
     pub fn set_realtime(&mut self, realtime: RealtimeReport) {
@@ -525,6 +564,8 @@ impl Evaluator {
                     intended,
                     t_twice: None,
                     t_detect: None,
+                    t_model: None,
+                    model_peak: 0.0,
                     closed: false,
                 });
                 self.episodes.len() - 1
@@ -647,6 +688,17 @@ impl Evaluator {
                 e.t_twice = Some(t);
             }
         }
+        let ratio = self.model.step(t, &m.tau_ext[..n]);
+        for e in self
+            .episodes
+            .iter_mut()
+            .filter(|e| t >= e.t_start && t <= e.t_last + DETECTION_GRACE_S)
+        {
+            e.model_peak = e.model_peak.max(ratio);
+            if ratio >= 1.0 && e.t_model.is_none() {
+                e.t_model = Some(t);
+            }
+        }
         // with contact events, episodes end with their `end` event; without
         // them (an older simulator), after a gap in the truth
         let events = self.events_seen;
@@ -758,6 +810,9 @@ impl Evaluator {
             self.last_mode = None;
             self.restart_pending = true;
         }
+        if now.0 > self.status.last.0 {
+            self.last_waypoint_t = Some(t);
+        }
         if now.3 > self.status.last.3 {
             self.events.push(Event {
                 t_s: t,
@@ -853,7 +908,7 @@ impl Evaluator {
             self.events.push(Event {
                 t_s: t,
                 kind: "brake".into(),
-                service: "sim".into(),
+                service: self.robot_service.clone(),
                 detail: "more than 20 consecutive commands missing: brakes engaged".into(),
             });
         }
@@ -1124,6 +1179,8 @@ impl Evaluator {
                     reached_twice_threshold_after_ms: ms(e.t_twice, e.t_start),
                     detected_after_twice_threshold_ms: e.t_twice.and_then(|t2| ms(e.t_detect, t2)),
                     bound_ms,
+                    model_crossed_threshold_after_ms: ms(e.t_model, e.t_start),
+                    model_peak_over_threshold: (e.model_peak * 1000.0).round() / 1000.0,
                 }
             })
             .collect();
@@ -1179,6 +1236,7 @@ impl Evaluator {
             events,
             task: TaskReport {
                 waypoints_reached: st.0,
+                last_waypoint_t_s: self.last_waypoint_t,
             },
             min_distance_m: self.min_distance.is_finite().then_some(self.min_distance),
             resyncs: self.resyncs.iter().map(|(r, _, _)| r.clone()).collect(),
@@ -1376,6 +1434,32 @@ mod tests {
             (r.contacts[1].link.as_str(), r.contacts[1].part.as_str()),
             ("#3", "#99")
         );
+    }
+
+    #[test]
+    fn waypoints_add_up_across_a_controller_restart_with_the_time_of_the_last() {
+        let mut e = eval();
+        let status = |seq: u64, t_ms: u64, waypoints: u64| {
+            let mut m = ControlStatus::zeroed();
+            m.seq = seq;
+            m.state_stamp_ns = t_ms * 1_000_000;
+            m.stamp_ns = m.state_stamp_ns;
+            m.mode = ControlMode::Task as u32;
+            m.waypoints_reached = waypoints;
+            m
+        };
+        for (seq, t_ms, w) in [(1, 100, 0), (2, 900, 1), (3, 1500, 2), (4, 1600, 2)] {
+            e.on_status(&status(seq, t_ms, w), "reflex");
+        }
+        let r = e.report(5_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.task.waypoints_reached, 2);
+        assert_eq!(r.task.last_waypoint_t_s, Some(1.5));
+        // the new controller counts from 0 again
+        e.on_status(&status(1, 2000, 0), "reflex");
+        e.on_status(&status(2, 3000, 1), "reflex");
+        let r = e.report(5_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.task.waypoints_reached, 3);
+        assert_eq!(r.task.last_waypoint_t_s, Some(3.0));
     }
 
     #[test]
