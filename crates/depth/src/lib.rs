@@ -11,6 +11,8 @@
 //! - [`selffilter`]: [`SelfFilter`] removes the robot's own pixels.
 //! - [`distance`]: [`DepthSpaceDistance`], distances and repulsive vectors
 //!   (eqs. 15-18) for points of interest on the robot.
+//! - [`fusion`]: [`CameraView`] and [`fuse`], distances fused across several
+//!   cameras, each a lower bound of the truth.
 //! - [`png`](mod@png): 16-bit grayscale depth PNGs.
 //!
 //! Frames: base frame of the robot (SI units); camera frame z forward, x right,
@@ -22,6 +24,7 @@ pub mod camera;
 pub mod distance;
 pub mod error;
 pub mod flying;
+pub mod fusion;
 mod lanes;
 pub mod noise;
 pub mod png;
@@ -33,6 +36,7 @@ pub use camera::{CameraPose, Intrinsics, PixelDepth};
 pub use distance::{DepthSpaceDistance, PixelWindow, PointOfInterest, Repulsion, RepulsionParams};
 pub use error::{DepthError, DepthPngError};
 pub use flying::FlyingPixels;
+pub use fusion::{fuse, CameraView, Fused};
 pub use noise::sigma_z;
 pub use png::{decode_depth_png, encode_depth_png, read_depth_png, write_depth_png};
 pub use render::{RenderOptions, Renderer, LABEL_NONE};
