@@ -14,10 +14,11 @@
 mod common;
 
 use common::loaded;
-use nalgebra::Vector3;
+use nalgebra::{Point3, Vector3};
 use phri_cell::CellOptions;
 use phri_config::Loaded;
 use phri_control::clik::{Clik, ClikGains};
+use phri_depth::{CameraView, Capsule, PointOfInterest, Repulsion};
 use phri_ipc::{FrameHeader, WorldState, Zeroed};
 use phri_model::{forward_kinematics, frame_placement, Data, Model};
 use phri_perception::camera::CameraSim;
@@ -125,71 +126,128 @@ fn postures(
     out
 }
 
-/// The depth-space view of the arm at the simulator's state: the camera's
-/// frame, ingestion's self-filter and every repulsion worker, as the cell
-/// runs them.
-struct Perceiver {
+/// One camera's depth-space view of the arm: the camera's frame,
+/// ingestion's self-filter and every repulsion worker, as the cell runs
+/// them, and the space the camera watches.
+struct Eye {
     camera: CameraSim,
+    view: CameraView,
     ingest: Ingest,
-    history: StateHistory,
     workers: Vec<Worker>,
-    world: WorldState,
     frame: Vec<u16>,
     filtered: Vec<u16>,
+}
+
+/// The depth-space view of the arm at the simulator's state, from one
+/// camera per azimuth (the paper's set-up around the base).
+struct Perceiver {
+    eyes: Vec<Eye>,
+    history: StateHistory,
+    world: WorldState,
+    /// the control points' link radii [m]
+    radii: Vec<f64>,
+    /// the depth-space scan's reach ρ [m]
+    rho: f64,
     now_ns: u64,
 }
 
 impl Perceiver {
-    fn new(l: &Loaded) -> Perceiver {
+    fn new(l: &Loaded, azimuths: &[f64]) -> Perceiver {
         let cfg = &l.config;
         let model = l.model().unwrap();
-        let camera = CameraSim::new(model.clone(), &cfg.camera).unwrap();
-        let pixels = camera.pixels();
+        let eyes = azimuths
+            .iter()
+            .map(|&azimuth_rad| {
+                let mut c = cfg.camera.clone();
+                c.azimuth_rad = azimuth_rad;
+                let camera = CameraSim::new(model.clone(), &c).unwrap();
+                let pixels = camera.pixels();
+                let (near, far) = (c.render.min_range_m, c.render.max_range_m);
+                Eye {
+                    camera,
+                    view: CameraView::new(&c.intrinsics, c.pose().unwrap(), near, far).unwrap(),
+                    ingest: Ingest::new(model.clone(), &cfg.perception).unwrap(),
+                    workers: (0..cfg.repulsion.workers)
+                        .map(|w| Worker::new(model.clone(), &cfg.repulsion, w).unwrap())
+                        .collect(),
+                    frame: vec![0; pixels],
+                    filtered: vec![0; pixels],
+                }
+            })
+            .collect();
         Perceiver {
-            ingest: Ingest::new(model.clone(), &cfg.perception).unwrap(),
+            eyes,
             history: StateHistory::new(model.nv(), 8),
-            workers: (0..cfg.repulsion.workers)
-                .map(|w| Worker::new(model.clone(), &cfg.repulsion, w).unwrap())
-                .collect(),
             world: WorldState::zeroed(),
-            frame: vec![0; pixels],
-            filtered: vec![0; pixels],
+            radii: cfg.repulsion.points.iter().map(|p| p.radius).collect(),
+            rho: cfg.repulsion.params.rho,
             now_ns: 1_000_000_000,
-            camera,
         }
     }
 
-    /// The perceived clearance [m] of the end effector's control point and
-    /// the least over every control point.
-    fn clearance(&mut self, sim: &Simulator) -> (f64, f64) {
+    /// Per camera, per control point: its depth-space distance [m] (ρ when
+    /// nothing is near) and its lower bound of the clearance (no farther
+    /// than the space the camera does not watch); then per control point
+    /// the true clearance from the person [m].
+    fn perceive(&mut self, sim: &Simulator) -> (Vec<Vec<(f64, f64)>>, Vec<f64>) {
         self.now_ns += 33_000_000;
         let now = self.now_ns;
         fill_world(sim, 0, now, &mut self.world);
-        let mut header = FrameHeader::zeroed();
-        self.camera
-            .step(&self.world, now, &mut self.frame, &mut header)
-            .unwrap();
         self.history.push(now, &sim.truth().q);
-        self.ingest
-            .step(
-                &mut header,
-                &self.frame,
-                &self.history,
-                now,
-                &mut self.filtered,
-            )
-            .unwrap();
-        let (mut ee, mut all) = (f64::INFINITY, f64::INFINITY);
-        for w in self.workers.iter_mut() {
-            let r = w.respond(&header, &self.filtered).unwrap();
-            for p in &r.points[..r.n_points as usize] {
-                if p.point == 0 {
-                    ee = p.min_distance;
+        let n = self.radii.len();
+        let person: Vec<Capsule> = self.world.human[..self.world.n_human as usize]
+            .iter()
+            .map(|c| Capsule::new(Point3::from(c.a), Point3::from(c.b), c.radius))
+            .collect();
+        let mut truth = vec![f64::INFINITY; n];
+        let mut out = Vec::with_capacity(self.eyes.len());
+        for eye in self.eyes.iter_mut() {
+            let mut header = FrameHeader::zeroed();
+            eye.camera
+                .step(&self.world, now, &mut eye.frame, &mut header)
+                .unwrap();
+            eye.ingest
+                .step(
+                    &mut header,
+                    &eye.frame,
+                    &self.history,
+                    now,
+                    &mut eye.filtered,
+                )
+                .unwrap();
+            let mut points = vec![(f64::INFINITY, f64::INFINITY); n];
+            for w in eye.workers.iter_mut() {
+                let r = w.respond(&header, &eye.filtered).unwrap();
+                for p in &r.points[..r.n_points as usize] {
+                    let i = p.point as usize;
+                    let point = PointOfInterest::new(Point3::from(p.position), self.radii[i]);
+                    let seen = Repulsion {
+                        min_distance: p.min_distance,
+                        ..Repulsion::NONE
+                    };
+                    points[i] = (p.min_distance, eye.view.bound(&point, &seen, self.rho));
+                    truth[i] = person
+                        .iter()
+                        .map(|c| c.distance_to_point(&point.position) - point.radius)
+                        .fold(f64::INFINITY, f64::min)
+                        .max(0.0);
                 }
-                all = all.min(p.min_distance);
             }
+            out.push(points);
         }
-        (ee, all)
+        (out, truth)
+    }
+
+    /// The first camera's perceived clearance [m] of the end effector's
+    /// control point and the least over every control point, as the cell
+    /// with that camera alone sees them.
+    fn clearance(&mut self, sim: &Simulator) -> (f64, f64) {
+        let (seen, _) = self.perceive(sim);
+        let first = &seen[0];
+        (
+            first[0].0,
+            first.iter().map(|p| p.0).fold(f64::INFINITY, f64::min),
+        )
     }
 }
 
@@ -230,7 +288,7 @@ fn the_held_hand_hides_p1_and_p2_from_the_depth_space() {
     let control = &l.config.control;
     let mut sim = Simulator::from_scenario(model, l.config.sim.clone(), &l.scenario, None).unwrap();
     let ee = sim.model().frame_id(&control.ee_link).unwrap();
-    let mut eye = Perceiver::new(&l);
+    let mut eye = Perceiver::new(&l, &[l.config.camera.azimuth_rad]);
     let zeros = vec![0.0; sim.model().nv()];
     // for each waypoint free motion reaches, the person as `coexistence` has
     // them then: the clearest postures within the tolerance, truly and in
@@ -290,4 +348,132 @@ fn the_held_hand_hides_p1_and_p2_from_the_depth_space() {
             }
         }
     }
+}
+
+/// What a set of cameras makes of the waypoints: how many have a posture
+/// whose end effector is perceived clear beyond 5 cm and beyond 2 cm, at
+/// every control point beyond 2 cm, and how often (and by how much \[m\]) a
+/// perceived bound exceeded the true clearance by 2 cm or more, of how many
+/// compared.
+#[derive(Debug)]
+struct SetFigures {
+    open_5cm: usize,
+    open_2cm: usize,
+    all_open_2cm: usize,
+    over: usize,
+    largest_excess: f64,
+    compared: usize,
+}
+
+/// The waypoints of 60 s of free motion, the person as `coexistence` has
+/// them then, seen by the first camera of the configuration alone and by it
+/// with a second at each of `second` \[rad\] (the paper's set-up around
+/// the base), distances fused point by point (the larger bound); the
+/// waypoint count, then the first camera's figures and each pair's.
+fn camera_sets(second: &[f64]) -> (usize, Vec<SetFigures>) {
+    let free = free_motion_waypoints(60.0);
+    let l = loaded("coexistence", &[]);
+    let model = l.model().unwrap();
+    let control = &l.config.control;
+    let mut sim = Simulator::from_scenario(model, l.config.sim.clone(), &l.scenario, None).unwrap();
+    let ee = sim.model().frame_id(&control.ee_link).unwrap();
+    let mut azimuths = vec![l.config.camera.azimuth_rad];
+    azimuths.extend_from_slice(second);
+    let mut eyes = Perceiver::new(&l, &azimuths);
+    let zeros = vec![0.0; sim.model().nv()];
+    let sets = azimuths.len();
+    let mut figures: Vec<SetFigures> = (0..sets)
+        .map(|_| SetFigures {
+            open_5cm: 0,
+            open_2cm: 0,
+            all_open_2cm: 0,
+            over: 0,
+            largest_excess: 0.0,
+            compared: 0,
+        })
+        .collect();
+    for &(t, i) in &free {
+        sim.set_human_time_offset(t);
+        let found = postures(
+            &mut sim,
+            ee,
+            control.waypoints[i],
+            control.waypoint_tolerance,
+            1000,
+        );
+        // per set: the clearest end effector and the clearest least point
+        let mut best = vec![(f64::NEG_INFINITY, f64::NEG_INFINITY); sets];
+        for (_, q) in found.iter().take(40) {
+            sim.set_state(q, &zeros).unwrap();
+            let (seen, truth) = eyes.perceive(&sim);
+            for (k, (b, f)) in best.iter_mut().zip(figures.iter_mut()).enumerate() {
+                let fused = |p: usize| match k {
+                    0 => seen[0][p].1,
+                    _ => seen[0][p].1.max(seen[k][p].1),
+                };
+                for (p, t) in truth.iter().enumerate() {
+                    // beyond ρ depth space says nothing
+                    let excess = fused(p).min(eyes.rho) - t.min(eyes.rho);
+                    f.compared += 1;
+                    if excess >= 0.02 {
+                        f.over += 1;
+                    }
+                    f.largest_excess = f.largest_excess.max(excess);
+                }
+                let all = (0..truth.len()).map(fused).fold(f64::INFINITY, f64::min);
+                *b = (b.0.max(fused(0)), b.1.max(all));
+            }
+        }
+        for (b, f) in best.iter().zip(figures.iter_mut()) {
+            f.open_5cm += usize::from(b.0 > 0.05);
+            f.open_2cm += usize::from(b.0 > 0.02);
+            f.all_open_2cm += usize::from(b.1 > 0.02);
+        }
+    }
+    for (k, f) in figures.iter().enumerate() {
+        let name = match k {
+            0 => "the first camera alone".to_string(),
+            _ => format!("with a second at azimuth {:.2} rad", second[k - 1]),
+        };
+        eprintln!(
+            "{name}: {} of {} waypoints open beyond 5 cm at the end effector, {} beyond 2 cm, {} at every control point beyond 2 cm; bounds 2 cm or more over the truth: {} of {}, largest excess {:.3} m",
+            f.open_5cm,
+            free.len(),
+            f.open_2cm,
+            f.all_open_2cm,
+            f.over,
+            f.compared,
+            f.largest_excess
+        );
+    }
+    (free.len(), figures)
+}
+
+/// The second camera where the person's arm does not shadow the task: the
+/// paper's set-up mirrored across the robot's x axis (the first is at
+/// +0.6 rad). With it every perceived bound stays under the truth (to 2 cm:
+/// the sensor's noise is 6 mm at 2 m), and the waypoints the held hand's
+/// shadow closed (P1, P2) open: at least 80 % of free motion's.
+#[test]
+fn a_mirrored_second_camera_opens_the_shadowed_waypoints_and_stays_a_lower_bound() {
+    let (n, f) = camera_sets(&[-0.6]);
+    let (one, two) = (&f[0], &f[1]);
+    assert_eq!(one.over, 0, "{one:?}");
+    assert_eq!(two.over, 0, "the fused bound over the truth: {two:?}");
+    assert!(two.open_5cm as f64 >= 0.8 * n as f64, "{two:?} of {n}");
+    assert!(two.open_5cm > one.open_5cm, "{two:?} against {one:?}");
+}
+
+/// Placements of a second camera around the base, as figures: `cargo test
+/// --release -p phri-cell --test waypoint_clearance second_camera_placements
+/// -- --ignored --nocapture` (70 s). Behind and beside the robot the robot
+/// hides the person from the second camera, whose self-filtered pixels then
+/// read as free space: its bound exceeds the truth there.
+#[test]
+#[ignore = "figures (70 s): run with --ignored"]
+fn second_camera_placements() {
+    let pi = std::f64::consts::PI;
+    let (n, f) = camera_sets(&[-0.6, -1.5, 1.6, 2.4, -2.4, pi]);
+    assert_eq!(f.len(), 7);
+    assert!(n > 0);
 }
