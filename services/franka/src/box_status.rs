@@ -77,7 +77,7 @@ impl BoxLog {
             self.msg.success_sum += success_rate;
             self.msg.success_min = self.msg.success_min.min(success_rate);
         }
-        self.msg.states % Self::EVERY == 0
+        self.msg.states.is_multiple_of(Self::EVERY)
     }
 
     /// The box aborted the motion at `now_ns` \[ns, CLOCK_MONOTONIC\].

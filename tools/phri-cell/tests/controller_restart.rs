@@ -40,10 +40,8 @@ fn restart_in_contact(l: &Loaded, hand: &str, until_s: f64) -> AfterRestart {
         c.tick().unwrap();
         let t = c.time_ns() as f64 * 1e-9;
         let phase = c.controller.collaboration().unwrap().machine().phase();
-        if phase == CollabPhase::Contact {
-            if t - *contact_since.get_or_insert(t) >= 0.5 {
-                break;
-            }
+        if phase == CollabPhase::Contact && t - *contact_since.get_or_insert(t) >= 0.5 {
+            break;
         }
     }
     assert!(contact_since.is_some(), "no contact by 14 s");
