@@ -73,7 +73,12 @@ pub struct Config {
     pub supervisor: SupervisorConfig,
     pub services: BTreeMap<String, ServiceSpec>,
     pub sim: SimConfig,
+    /// the first camera (`[camera]`, or the first `[[camera]]`)
     pub camera: CameraConfig,
+    /// every camera, the first included (`[[camera]]` lists several; each
+    /// entry over the defaults of `[camera]`)
+    #[serde(skip)]
+    pub cameras: Vec<CameraConfig>,
     pub perception: IngestConfig,
     pub repulsion: RepulsionConfig,
     pub dynamics: ResidualConfig,
@@ -221,6 +226,26 @@ pub fn robot_file(
 /// moves beside perception (CPU 0, priority at most 60); what depended on
 /// the simulator's states depends on the adapter's. In the merged table, so
 /// that every service sees the same cell.
+/// Entry `i` of `[[camera]]`, typed; an error names the entry and the key.
+fn camera_from_value(value: &Value, i: usize, origin: &str) -> Result<CameraConfig, ConfigError> {
+    let key_err = |message: String| ConfigError::Key {
+        origin: origin.to_string(),
+        key: format!("camera[{i}]"),
+        message,
+    };
+    let Value::Table(t) = value else {
+        return Err(key_err("a [[camera]] entry must be a table".into()));
+    };
+    // over the defaults of [camera]: an entry names what differs
+    let mut entry = match defaults_table_resolved().get("camera") {
+        Some(Value::Table(d)) => d.clone(),
+        _ => Table::new(),
+    };
+    merge(&mut entry, t);
+    let text = toml::to_string(&entry).map_err(|e| key_err(e.to_string()))?;
+    toml::from_str(&text).map_err(|e: toml::de::Error| key_err(e.message().trim_end().to_string()))
+}
+
 fn hybrid(table: &mut Table) -> Result<(), Invalid> {
     let outside = table
         .get("robot")
@@ -359,6 +384,36 @@ impl Config {
                 known: KNOWN.join(", "),
             });
         }
+        // several cameras: the first types `camera`, each `cameras`
+        let several = match table.get("camera") {
+            Some(Value::Array(list)) => Some(list.clone()),
+            _ => None,
+        };
+        if let Some(list) = &several {
+            let mut first = table.clone();
+            let Some(head) = list.first() else {
+                return Err(ConfigError::Key {
+                    origin: origin.to_string(),
+                    key: "camera".into(),
+                    message: "[[camera]] lists no camera".into(),
+                });
+            };
+            let mut head_full = match defaults_table_resolved().get("camera") {
+                Some(Value::Table(d)) => d.clone(),
+                _ => Table::new(),
+            };
+            if let Value::Table(h) = head {
+                merge(&mut head_full, h);
+            }
+            first.insert("camera".into(), Value::Table(head_full));
+            let mut config = Config::from_table(&first, origin)?;
+            config.cameras = list
+                .iter()
+                .enumerate()
+                .map(|(i, c)| camera_from_value(c, i, origin))
+                .collect::<Result<_, _>>()?;
+            return Ok(config);
+        }
         // through text, so that an error's position names the key
         let text = toml::to_string(table).map_err(|e| ConfigError::Parse {
             origin: origin.to_string(),
@@ -378,6 +433,7 @@ impl Config {
             }
         })?;
         config.control.avoidance_params.v_max_repulsion = config.repulsion.params.v_max;
+        config.cameras = vec![config.camera.clone()];
         Ok(config)
     }
 
@@ -396,6 +452,14 @@ impl Config {
         }
         self.sim.validate()?;
         self.camera.validate()?;
+        for (i, c) in self.cameras.iter().enumerate() {
+            c.validate().map_err(|e| {
+                Invalid::new(
+                    e.key.replacen("camera", &format!("camera[{i}]"), 1),
+                    e.reason,
+                )
+            })?;
+        }
         self.perception.validate()?;
         self.repulsion.validate()?;
         self.dynamics.validate()?;

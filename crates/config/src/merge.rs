@@ -6,11 +6,32 @@ use toml::{Table, Value};
 use crate::error::ConfigError;
 
 /// Deep-merge `over` into `base` (tables merge key by key; anything else,
-/// arrays included, is replaced).
+/// arrays included, is replaced). Over a table, an array of tables (e.g.
+/// `[[camera]]` over the defaults' `[camera]`) becomes that array with each
+/// entry over the table; a table over an array of tables (`--set
+/// camera.rate_hz=15`) merges into every entry.
 pub fn merge(base: &mut Table, over: &Table) {
+    let tables = |a: &[Value]| !a.is_empty() && a.iter().all(Value::is_table);
     for (k, v) in over {
         match (base.get_mut(k), v) {
             (Some(Value::Table(b)), Value::Table(o)) => merge(b, o),
+            (Some(Value::Table(b)), Value::Array(o)) if tables(o) => {
+                let entries = o
+                    .iter()
+                    .filter_map(Value::as_table)
+                    .map(|e| {
+                        let mut t = b.clone();
+                        merge(&mut t, e);
+                        Value::Table(t)
+                    })
+                    .collect();
+                base.insert(k.clone(), Value::Array(entries));
+            }
+            (Some(Value::Array(b)), Value::Table(o)) if tables(b) => {
+                for e in b.iter_mut().filter_map(Value::as_table_mut) {
+                    merge(e, o);
+                }
+            }
             _ => {
                 base.insert(k.clone(), v.clone());
             }

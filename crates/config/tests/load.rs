@@ -377,3 +377,41 @@ fn a_push_on_the_wrist_by_role_lands_on_each_arms_wrist() {
         assert_eq!(pushes, [wrist], "{sets:?}");
     }
 }
+
+#[test]
+fn several_cameras_are_listed_as_camera_entries_over_the_defaults() {
+    // one camera: [camera], as every configuration so far
+    let one = load(&[]).unwrap().config;
+    assert_eq!(one.cameras, vec![one.camera.clone()]);
+    // two: each entry names what differs from [camera]'s defaults
+    let text = "[[camera]]\nazimuth_rad = 0.6\n\n[[camera]]\nazimuth_rad = -0.6\nrate_hz = 15.0\n";
+    let two = Loaded::load_text(text, &deploy(), None, &[])
+        .unwrap()
+        .config;
+    assert_eq!(two.cameras.len(), 2);
+    assert_eq!(two.camera, two.cameras[0]);
+    assert_eq!(two.cameras[1].azimuth_rad, -0.6);
+    assert_eq!(two.cameras[1].rate_hz, 15.0);
+    assert_eq!(two.cameras[0].rate_hz, one.camera.rate_hz);
+    assert_eq!(two.cameras[1].intrinsics, one.camera.intrinsics);
+    // a --set of a camera key sets it on every camera
+    let set = Loaded::load_text(text, &deploy(), None, &["camera.latency_ms=5"])
+        .unwrap()
+        .config;
+    assert!(set.cameras.iter().all(|c| c.latency_ms == 5.0));
+    assert_eq!(set.cameras[1].rate_hz, 15.0);
+    // a bad entry is named by its place
+    let bad = "[[camera]]\nazimuth_rad = 0.6\n\n[[camera]]\nrate_hz = -1.0\n";
+    let e = Loaded::load_text(bad, &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("camera[1].rate_hz"), "{e}");
+    let e = Loaded::load_text("[[camera]]\nfocus = 1\n", &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("camera[0]") || e.contains("focus"), "{e}");
+    let e = Loaded::load_text("camera = []\n", &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("camera"), "{e}");
+}

@@ -10,6 +10,7 @@
 
 pub mod camera;
 pub mod fault;
+pub mod fusion;
 pub mod ingest;
 pub mod mask;
 pub mod repulsion;
@@ -19,6 +20,7 @@ pub mod source;
 
 pub use camera::{CameraError, CameraSim, HeaderError};
 pub use fault::{FaultAccepted, FaultRefused, FaultState};
+pub use fusion::ResultFusion;
 pub use ingest::{FrameError, Ingest, IngestOutcome, StateHistory};
 pub use repulsion::{RepulsionError, Worker};
 pub use source::{PngReplay, RateLimited, SourceError, Ticks};

@@ -59,6 +59,17 @@ impl Plan {
         duration_s: Option<f64>,
     ) -> Result<Plan, SupervisorError> {
         let model = loaded.model()?;
+        if loaded.config.cameras.len() > 1 {
+            return Err(phri_config::Invalid::new(
+                "camera",
+                format!(
+                    "[[camera]] lists {} cameras: the cell of processes runs one so far \
+                     (phri-lockstep runs them all)",
+                    loaded.config.cameras.len()
+                ),
+            )
+            .into());
+        }
         let detector = DetectorInfo::from_config(&loaded.config.dynamics, model.nv())?;
         let link_names = model.collisions.iter().map(|c| c.link.clone()).collect();
         let services = in_start_order(&loaded.config.services);

@@ -104,8 +104,22 @@ struct InFlight {
     hand: Option<HandObservation>,
 }
 
+/// A further camera (`[[camera]]` beyond the first) with its own ingestion
+/// and repulsion workers; its results are fused with the first camera's.
+struct Eye {
+    camera: CameraSim,
+    ingest: Ingest,
+    workers: Vec<Worker>,
+    frame: Vec<u16>,
+    filtered: Vec<u16>,
+}
+
 /// The perception side: camera, ingestion and the repulsion workers.
 struct Perception {
+    /// the cameras after the first, and the fusion of every camera's
+    /// results (with one camera: none, the paper's distances as they are)
+    more: Vec<Eye>,
+    fusion: Option<phri_perception::ResultFusion>,
     camera: CameraSim,
     ingest: Ingest,
     history: StateHistory,
@@ -199,7 +213,35 @@ impl Cell {
                 .map_err(|e| step_err("repulsion")(&e))?;
             let mut world = WorldState::zeroed();
             world.dof = n as u32;
+            let more = cfg.cameras[1.min(cfg.cameras.len())..]
+                .iter()
+                .map(|c| {
+                    let camera =
+                        CameraSim::new(model.clone(), c).map_err(|e| step_err("camera")(&e))?;
+                    let pixels = camera.pixels();
+                    Ok(Eye {
+                        camera,
+                        ingest: Ingest::new(model.clone(), &cfg.perception)
+                            .map_err(|e| step_err("perception")(&e))?,
+                        workers: (0..cfg.repulsion.workers)
+                            .map(|w| Worker::new(model.clone(), &cfg.repulsion, w))
+                            .collect::<Result<Vec<_>, _>>()
+                            .map_err(|e| step_err("repulsion")(&e))?,
+                        frame: vec![0; pixels],
+                        filtered: vec![0; pixels],
+                    })
+                })
+                .collect::<Result<Vec<_>, CellError>>()?;
+            let fusion = match more.is_empty() {
+                true => None,
+                false => Some(
+                    phri_perception::ResultFusion::new(&cfg.cameras, &cfg.repulsion)
+                        .map_err(|e| step_err("perception")(&e))?,
+                ),
+            };
             Some(Perception {
+                more,
+                fusion,
                 ingest: Ingest::new(model.clone(), &cfg.perception)
                     .map_err(|e| step_err("perception")(&e))?,
                 history: StateHistory::new(n, 200),
@@ -414,6 +456,35 @@ impl Cell {
                     .map_err(|e| step_err("repulsion")(&e))?;
                 msg.published_ns = ready_ns;
                 results.push(*msg);
+            }
+            // the further cameras see the same instant; their results are
+            // fused with the first's, worker by worker
+            if let Some(fusion) = p.fusion.as_ref() {
+                let mut theirs: Vec<Vec<RepulsionResult>> = Vec::with_capacity(p.more.len());
+                for eye in p.more.iter_mut() {
+                    let mut h = FrameHeader::zeroed();
+                    eye.camera
+                        .step(&p.world, now, &mut eye.frame, &mut h)
+                        .map_err(|e| step_err("camera")(&e))?;
+                    eye.ingest.set_mask(mask);
+                    eye.ingest
+                        .step(&mut h, &eye.frame, &p.history, ready_ns, &mut eye.filtered)
+                        .map_err(|e| step_err("perception")(&e))?;
+                    let mut rs = Vec::with_capacity(eye.workers.len());
+                    for w in eye.workers.iter_mut() {
+                        let msg = w
+                            .respond(&h, &eye.filtered)
+                            .map_err(|e| step_err("repulsion")(&e))?;
+                        rs.push(*msg);
+                    }
+                    theirs.push(rs);
+                }
+                for (w, mine) in results.iter_mut().enumerate() {
+                    let first = *mine;
+                    let mut all: Vec<Option<&RepulsionResult>> = vec![Some(&first)];
+                    all.extend(theirs.iter().map(|rs| rs.get(w)));
+                    fusion.fuse(&all, mine);
+                }
             }
             p.in_flight.push_back(InFlight {
                 ready_ns,
