@@ -278,6 +278,15 @@ mod tests {
         ));
         assert!(e.contains("/nonexistent/robot.urdf"), "{e}");
         assert_eq!(e.lines().count(), 1, "{e}");
+        // several cameras run in lock-step only so far
+        let e = err(Plan::load(
+            &deploy().with_file_name("two-cameras.toml"),
+            None,
+            &[],
+            None,
+        ));
+        assert!(e.contains("camera") && e.contains("2 cameras"), "{e}");
+        assert_eq!(e.lines().count(), 1, "{e}");
     }
 
     #[test]
