@@ -39,21 +39,25 @@ pub fn merge(base: &mut Table, over: &Table) {
     }
 }
 
-/// Apply one `section.key=value` (any depth; the value is TOML, or a bare string).
+/// Apply one `section.key=value` (any depth; the value is TOML, or a bare
+/// string), or `section=[{…}, …]`: a whole list of tables (`camera=[{
+/// azimuth_rad = 0.6 }, { azimuth_rad = -0.6 }]`, as `[[camera]]` entries).
 pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
     let (path, value) = set
         .split_once('=')
         .ok_or_else(|| ConfigError::Override(set.to_string()))?;
     let keys: Vec<&str> = path.trim().split('.').collect();
-    if keys.len() < 2 || keys.iter().any(|k| k.is_empty()) {
-        return Err(ConfigError::Override(set.to_string()));
-    }
     let value = value.trim();
     let parsed: Value = format!("v = {value}")
         .parse::<Table>()
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| Value::String(value.to_string()));
+    let list_of_tables =
+        matches!(&parsed, Value::Array(a) if !a.is_empty() && a.iter().all(Value::is_table));
+    if keys.iter().any(|k| k.is_empty()) || (keys.len() < 2 && !list_of_tables) {
+        return Err(ConfigError::Override(set.to_string()));
+    }
     let mut cur = table;
     for k in &keys[..keys.len() - 1] {
         let entry = cur

@@ -400,6 +400,13 @@ fn several_cameras_are_listed_as_camera_entries_over_the_defaults() {
         .config;
     assert!(set.cameras.iter().all(|c| c.latency_ms == 5.0));
     assert_eq!(set.cameras[1].rate_hz, 15.0);
+    // or the whole list on the command line
+    let l = load(&["camera=[{azimuth_rad=0.6},{azimuth_rad=-0.6}]"])
+        .unwrap()
+        .config;
+    assert_eq!(l.cameras.len(), 2);
+    assert_eq!(l.cameras[1].azimuth_rad, -0.6);
+    assert!(err(&["camera=3"]).contains("camera=3"));
     // a bad entry is named by its place
     let bad = "[[camera]]\nazimuth_rad = 0.6\n\n[[camera]]\nrate_hz = -1.0\n";
     let e = Loaded::load_text(bad, &deploy(), None, &[])

@@ -209,6 +209,41 @@ impl SkeletonTracker {
     }
 }
 
+/// Another camera's view of the same people (`other`, same instant, the
+/// same tracker ids) merged into `into`: a joint seen by either camera is
+/// seen, with the position of the camera that sees it more surely; a
+/// person tracked by either is tracked. People `into` lacks are added.
+pub fn merge_views(into: &mut Skeleton, other: &Skeleton) {
+    let n_other = (other.n_people as usize).min(other.people.len());
+    for theirs in &other.people[..n_other] {
+        let n = (into.n_people as usize).min(into.people.len());
+        let capacity = into.people.len();
+        match into.people[..n].iter().position(|p| p.id == theirs.id) {
+            Some(k) => {
+                let mine = &mut into.people[k];
+                if theirs.tracked == 0 {
+                    continue;
+                }
+                if mine.tracked == 0 {
+                    *mine = *theirs;
+                    continue;
+                }
+                for j in 0..SKELETON_JOINTS {
+                    if theirs.confidence[j] > mine.confidence[j] {
+                        mine.confidence[j] = theirs.confidence[j];
+                        mine.joints[j] = theirs.joints[j];
+                    }
+                }
+            }
+            None if n < capacity => {
+                into.people[n] = *theirs;
+                into.n_people += 1;
+            }
+            None => {}
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -314,6 +349,37 @@ mod tests {
         assert_eq!(j[J::LeftFoot as usize], [1.0, -0.1, -0.75]);
         assert_eq!(r[J::Torso as usize], 0.15);
         assert!(joints_of(&WorldState::zeroed()).is_none());
+    }
+
+    #[test]
+    fn a_joint_either_camera_sees_is_seen() {
+        let mut a = Skeleton::zeroed();
+        a.n_people = 1;
+        a.people[0].id = 7;
+        a.people[0].tracked = 1;
+        a.people[0].confidence[3] = 0.9;
+        a.people[0].joints[3] = [1.0, 0.0, 0.0];
+        let mut b = a;
+        b.people[0].confidence = [0.0; SKELETON_JOINTS];
+        b.people[0].confidence[5] = 0.9;
+        b.people[0].joints[5] = [0.0, 2.0, 0.0];
+        b.people[0].joints[3] = [9.0, 9.0, 9.0];
+        merge_views(&mut a, &b);
+        let p = a.people[0];
+        assert_eq!((p.confidence[3], p.joints[3]), (0.9, [1.0, 0.0, 0.0]));
+        assert_eq!((p.confidence[5], p.joints[5]), (0.9, [0.0, 2.0, 0.0]));
+        assert_eq!(p.confidence[0], 0.0);
+        // lost by the first camera, tracked by the other: the other's
+        let mut lost = a;
+        lost.people[0].tracked = 0;
+        merge_views(&mut lost, &b);
+        assert_eq!(lost.people[0].tracked, 1);
+        assert_eq!(lost.people[0].confidence[3], 0.0);
+        // someone only the other camera sees is added
+        let mut none = Skeleton::zeroed();
+        merge_views(&mut none, &b);
+        assert_eq!(none.n_people, 1);
+        assert_eq!(none.people[0].id, 7);
     }
 
     #[test]

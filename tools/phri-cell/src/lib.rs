@@ -108,6 +108,9 @@ struct InFlight {
 /// and repulsion workers; its results are fused with the first camera's.
 struct Eye {
     camera: CameraSim,
+    /// its body tracker: a joint either camera sees is seen
+    tracker: SkeletonTracker,
+    skeleton: Skeleton,
     ingest: Ingest,
     workers: Vec<Worker>,
     frame: Vec<u16>,
@@ -220,6 +223,8 @@ impl Cell {
                         CameraSim::new(model.clone(), c).map_err(|e| step_err("camera")(&e))?;
                     let pixels = camera.pixels();
                     Ok(Eye {
+                        tracker: SkeletonTracker::new(&cfg.skeleton, c.intrinsics, camera.pose()),
+                        skeleton: Skeleton::zeroed(),
                         camera,
                         ingest: Ingest::new(model.clone(), &cfg.perception)
                             .map_err(|e| step_err("perception")(&e))?,
@@ -418,6 +423,24 @@ impl Cell {
                 &mut p.skeleton,
             );
             p.skeleton.published_ns = ready_ns;
+            // the further cameras see the same instant: their frames now,
+            // their trackers' joints merged into the first's
+            let mut more_headers: Vec<FrameHeader> = Vec::with_capacity(p.more.len());
+            for eye in p.more.iter_mut() {
+                let mut h = FrameHeader::zeroed();
+                eye.camera
+                    .step(&p.world, now, &mut eye.frame, &mut h)
+                    .map_err(|e| step_err("camera")(&e))?;
+                eye.tracker.step(
+                    &p.world,
+                    &h,
+                    &eye.frame,
+                    p.period_ns as f64 * 1e-9,
+                    &mut eye.skeleton,
+                );
+                phri_perception::skeleton::merge_views(&mut p.skeleton, &eye.skeleton);
+                more_headers.push(h);
+            }
             let mut request = None;
             if let Some(w) = p.gesture.step(&p.skeleton) {
                 self.summary.gesture(&w);
@@ -461,19 +484,15 @@ impl Cell {
             // fused with the first's, worker by worker
             if let Some(fusion) = p.fusion.as_ref() {
                 let mut theirs: Vec<Vec<RepulsionResult>> = Vec::with_capacity(p.more.len());
-                for eye in p.more.iter_mut() {
-                    let mut h = FrameHeader::zeroed();
-                    eye.camera
-                        .step(&p.world, now, &mut eye.frame, &mut h)
-                        .map_err(|e| step_err("camera")(&e))?;
+                for (eye, h) in p.more.iter_mut().zip(more_headers.iter_mut()) {
                     eye.ingest.set_mask(mask);
                     eye.ingest
-                        .step(&mut h, &eye.frame, &p.history, ready_ns, &mut eye.filtered)
+                        .step(h, &eye.frame, &p.history, ready_ns, &mut eye.filtered)
                         .map_err(|e| step_err("perception")(&e))?;
                     let mut rs = Vec::with_capacity(eye.workers.len());
                     for w in eye.workers.iter_mut() {
                         let msg = w
-                            .respond(&h, &eye.filtered)
+                            .respond(h, &eye.filtered)
                             .map_err(|e| step_err("repulsion")(&e))?;
                         rs.push(*msg);
                     }

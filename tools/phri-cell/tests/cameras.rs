@@ -24,3 +24,45 @@ fn the_mirrored_pair_keeps_the_person_clear_in_lock_step() {
     assert!(s.waypoints >= 2, "waypoints {}", s.waypoints);
     assert!(s.frames > 550, "frames {}", s.frames);
 }
+
+/// The mirrored collaboration (the left hand waves and is held out): the
+/// paper's one camera never sees the wave; with the mirrored pair a joint
+/// either camera sees is seen, the wave starts the collaboration, the robot
+/// touches the left hand and the push on the wrist ends it.
+#[test]
+fn the_mirrored_wave_is_seen_by_two_cameras_and_not_by_one() {
+    let one = Loaded::load(&common::deploy(), Some("collaboration-mirrored"), &[]).unwrap();
+    let mut c = common::cell_of(&one, &CellOptions::default());
+    for _ in 0..8_000 {
+        c.tick().unwrap();
+    }
+    assert!(
+        c.summary().gesture_requests.is_empty(),
+        "one camera saw the left hand wave"
+    );
+    let file = common::deploy().with_file_name("two-cameras.toml");
+    let two = Loaded::load(&file, Some("collaboration-mirrored"), &[]).unwrap();
+    let mut c = common::cell_of(&two, &CellOptions::default());
+    for _ in 0..20_000 {
+        c.tick().unwrap();
+    }
+    let s = c.summary();
+    let waves: Vec<&str> = s.gesture_requests.iter().map(|g| g.part.as_str()).collect();
+    assert!(!waves.is_empty(), "no wave recognised");
+    assert!(waves.iter().all(|p| p.contains("left")), "{waves:?}");
+    let modes: Vec<&str> = s.modes.iter().map(|m| m.1.as_str()).collect();
+    assert!(
+        modes.contains(&"approach") && modes.contains(&"contact"),
+        "{modes:?}"
+    );
+    assert!(
+        s.contacts
+            .iter()
+            .any(|k| k.intended && k.part.contains("left")),
+        "the left hand was never touched: {:?}",
+        s.contacts
+    );
+    assert_eq!(s.unintended_contacts, 0, "{:?}", s.contacts);
+    // the push on the wrist ends it: the task again
+    assert_eq!(modes.last(), Some(&"task"), "{modes:?}");
+}
