@@ -16,7 +16,10 @@
 use nalgebra::{Point3, Vector3};
 use phri_config::CollaborationConfig;
 use phri_depth::{CameraPose, Intrinsics};
-use phri_ipc::{CollabPart, FrameHeader, HandObservation, Skeleton, SkeletonJoint, Zeroed};
+use phri_ipc::{
+    CollabPart, CollabPhase, CollabState, FrameHeader, HandObservation, Skeleton, SkeletonJoint,
+    Zeroed,
+};
 
 /// The region to remove, base frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -203,6 +206,24 @@ impl MaskHold {
     }
 }
 
+/// A `collab/state` older than this no longer masks its hand \[ns\]: the
+/// controller publishes one every period (1 ms), so this is a controller
+/// stopped, killed or stalled, and its collaboration is over for safety.
+pub const COLLAB_STATE_MAX_AGE_NS: u64 = 50_000_000;
+
+/// The part to mask at `now_ns` \[ns, CLOCK_MONOTONIC\]: the collaborative
+/// part of the newest `collab/state` while a collaboration is on and that
+/// state is fresh. A controller that died mid-contact leaves its last state
+/// behind; once stale, the hand it named is an obstacle again, for the
+/// restarted controller as for any other.
+pub fn collaborating_part(state: Option<&CollabState>, now_ns: u64) -> Option<CollabPart> {
+    state
+        .filter(|s| s.phase != CollabPhase::Idle as u32)
+        .filter(|s| now_ns.saturating_sub(s.stamp_ns) <= COLLAB_STATE_MAX_AGE_NS)
+        .filter(|s| s.stamp_ns <= now_ns.saturating_add(COLLAB_STATE_MAX_AGE_NS))
+        .and_then(|s| CollabPart::try_from(s.human_part).ok())
+}
+
 /// The `perception/hand` message of a masked frame.
 pub fn hand_observation(
     header: &FrameHeader,
@@ -229,6 +250,30 @@ pub fn hand_observation(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stale_collaboration_state_masks_nothing() {
+        let mut st = CollabState::zeroed();
+        st.phase = CollabPhase::Contact as u32;
+        st.human_part = CollabPart::RightHand as u32;
+        st.stamp_ns = 1_000_000_000;
+        let fresh = st.stamp_ns + 10_000_000;
+        assert_eq!(
+            collaborating_part(Some(&st), fresh),
+            Some(CollabPart::RightHand)
+        );
+        // its controller stopped: 60 ms without a state
+        assert_eq!(
+            collaborating_part(Some(&st), st.stamp_ns + 60_000_000),
+            None
+        );
+        // idle, absent, or stamped far in the future: nothing
+        let mut idle = st;
+        idle.phase = CollabPhase::Idle as u32;
+        assert_eq!(collaborating_part(Some(&idle), fresh), None);
+        assert_eq!(collaborating_part(None, fresh), None);
+        assert_eq!(collaborating_part(Some(&st), 0), None);
+    }
     use phri_depth::{Capsule, RenderOptions, Renderer};
 
     fn scene(capsules: &[Capsule]) -> (Intrinsics, CameraPose, Vec<u16>) {

@@ -654,10 +654,13 @@ impl Collaboration {
         let mut gap = f64::INFINITY;
         for p in sk.people[..n].iter().filter(|p| p.tracked != 0) {
             for &j in &hands {
-                let (Some(x), Some(c)) = (p.joints.get(j), p.confidence.get(j)) else {
+                // an unseen hand of a tracked person (confidence 0, e.g.
+                // hidden behind the robot it touches) is judged where the
+                // tracker last placed it: never as gone
+                let Some(x) = p.joints.get(j) else {
                     continue;
                 };
-                if !(x.iter().all(|v| v.is_finite()) && *c > 0.0) {
+                if !x.iter().all(|v| v.is_finite()) {
                     continue;
                 }
                 let h = Vector3::from(*x);

@@ -14,10 +14,9 @@ use std::time::Duration;
 
 use phri_config::{CollaborationConfig, DepthSource};
 use phri_ipc::{
-    CollabPart, CollabPhase, CollabState, FrameHeader, FramePublisher, FrameSubscriber,
-    HandObservation, IpcError, LatestReader, Publisher, Queue, Skeleton, CAMERA_DEPTH,
-    COLLAB_STATE, FRAME_PIXELS, PERCEPTION_DEPTH, PERCEPTION_HAND, PERCEPTION_SKELETON,
-    ROBOT_STATE,
+    CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation, IpcError,
+    LatestReader, Publisher, Queue, Skeleton, CAMERA_DEPTH, COLLAB_STATE, FRAME_PIXELS,
+    PERCEPTION_DEPTH, PERCEPTION_HAND, PERCEPTION_SKELETON, ROBOT_STATE,
 };
 use phri_perception::mask::{hand_observation, MaskHold};
 use phri_perception::{Ingest, PngReplay, RateLimited, StateHistory, Ticks};
@@ -72,11 +71,8 @@ impl Out {
         if let Some(c) = self.collab.as_mut() {
             c.states.update()?;
             c.skeletons.update()?;
-            let part = c
-                .states
-                .get()
-                .filter(|s| s.phase != CollabPhase::Idle as u32)
-                .and_then(|s| CollabPart::try_from(s.human_part).ok());
+            // a stale state (its controller stopped or dead) masks nothing
+            let part = phri_perception::mask::collaborating_part(c.states.get(), now_ns());
             masking = c
                 .hold
                 .mask(c.skeletons.get(), part, &c.cfg, header.capture_ns)
