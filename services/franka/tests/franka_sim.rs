@@ -44,8 +44,15 @@ fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
     const END: u64 = 4000;
     let mut q0 = None;
     let (mut drift, mut state) = (0.0f64, None);
+    // FCI's success rate (over its last 100 commands), as the report
+    // averages it: over every state of the control
+    let (mut rate_sum, mut rates) = (0.0f64, 0u32);
     for seq in 1..=END {
         let (s, _) = control.read_once().expect("a state");
+        if s.control_command_success_rate > 0.0 {
+            rate_sum += s.control_command_success_rate;
+            rates += 1;
+        }
         let q0 = *q0.get_or_insert(s.q);
         let g = cycle.gravity(&s.q).expect("gravity");
         let push = if seq > HOLD { PUSH } else { 0.0 };
@@ -81,9 +88,10 @@ fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
     let moved: Vec<f64> = (0..7).map(|k| s.q[k] - q0[k]).collect();
     eprintln!(
         "held within {drift:.6} rad; under {PUSH} Nm a joint each: moved {moved:.4?} rad \
-         (PUSH/KP = {:.4}); success rate {:.4}",
+         (PUSH/KP = {:.4}); success rate {:.4} at the end, {:.5} on average",
         PUSH / KP,
-        s.control_command_success_rate
+        s.control_command_success_rate,
+        rate_sum / f64::from(rates.max(1))
     );
     // gravity: phri's g(q) of the box's URDF, taken out again, leaves the
     // arm where it stands (26 Nm left on joint 2 would sag it 0.13 rad)
@@ -97,5 +105,5 @@ fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
             PUSH / KP
         );
     }
-    assert!(s.control_command_success_rate >= 0.999);
+    assert!(rates > 0 && rate_sum / f64::from(rates) >= 0.999);
 }
