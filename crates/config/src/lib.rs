@@ -226,6 +226,17 @@ pub fn robot_file(
 /// moves beside perception (CPU 0, priority at most 60); what depended on
 /// the simulator's states depends on the adapter's. In the merged table, so
 /// that every service sees the same cell.
+/// A `[[camera]]` entry over the defaults of `[camera]`: an entry names
+/// what differs.
+fn over_camera_defaults(entry: &Table) -> Table {
+    let mut t = match defaults_table_resolved().get("camera") {
+        Some(Value::Table(d)) => d.clone(),
+        _ => Table::new(),
+    };
+    merge(&mut t, entry);
+    t
+}
+
 /// Entry `i` of `[[camera]]`, typed; an error names the entry and the key.
 fn camera_from_value(value: &Value, i: usize, origin: &str) -> Result<CameraConfig, ConfigError> {
     let key_err = |message: String| ConfigError::Key {
@@ -236,12 +247,7 @@ fn camera_from_value(value: &Value, i: usize, origin: &str) -> Result<CameraConf
     let Value::Table(t) = value else {
         return Err(key_err("a [[camera]] entry must be a table".into()));
     };
-    // over the defaults of [camera]: an entry names what differs
-    let mut entry = match defaults_table_resolved().get("camera") {
-        Some(Value::Table(d)) => d.clone(),
-        _ => Table::new(),
-    };
-    merge(&mut entry, t);
+    let entry = over_camera_defaults(t);
     let text = toml::to_string(&entry).map_err(|e| key_err(e.to_string()))?;
     toml::from_str(&text).map_err(|e: toml::de::Error| key_err(e.message().trim_end().to_string()))
 }
@@ -398,14 +404,11 @@ impl Config {
                     message: "[[camera]] lists no camera".into(),
                 });
             };
-            let mut head_full = match defaults_table_resolved().get("camera") {
-                Some(Value::Table(d)) => d.clone(),
-                _ => Table::new(),
-            };
-            if let Value::Table(h) = head {
-                merge(&mut head_full, h);
-            }
-            first.insert("camera".into(), Value::Table(head_full));
+            let head = head
+                .as_table()
+                .map(over_camera_defaults)
+                .unwrap_or_default();
+            first.insert("camera".into(), Value::Table(head));
             let mut config = Config::from_table(&first, origin)?;
             config.cameras = list
                 .iter()

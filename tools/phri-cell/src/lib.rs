@@ -216,8 +216,10 @@ impl Cell {
                 .map_err(|e| step_err("repulsion")(&e))?;
             let mut world = WorldState::zeroed();
             world.dof = n as u32;
-            let more = cfg.cameras[1.min(cfg.cameras.len())..]
+            let more = cfg
+                .cameras
                 .iter()
+                .skip(1)
                 .map(|c| {
                     let camera =
                         CameraSim::new(model.clone(), c).map_err(|e| step_err("camera")(&e))?;
