@@ -42,6 +42,17 @@ struct Cell {
 
 impl Cell {
     fn start(test: &str, scenario: &str, duration: Option<f64>, sets: &[&str]) -> Cell {
+        Cell::start_with("deploy/phri.toml", test, scenario, duration, sets)
+    }
+
+    /// As [`Cell::start`], with the configuration file `config` (relative to the repository).
+    fn start_with(
+        config: &str,
+        test: &str,
+        scenario: &str,
+        duration: Option<f64>,
+        sets: &[&str],
+    ) -> Cell {
         support::loud_panics();
         for b in ["phri-sim", "phri-dynamics", "phri-control"] {
             bin(b);
@@ -50,7 +61,7 @@ impl Cell {
         let place = support::RunPlace::new('t', test);
         let mut cmd = place.command(env!("CARGO_BIN_EXE_phri-supervisor"), &repo());
         cmd.arg("--config")
-            .arg(repo().join("deploy/phri.toml"))
+            .arg(repo().join(config))
             .arg("--scenario")
             .arg(scenario);
         if let Some(d) = duration {
@@ -415,6 +426,79 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     assert!(events(&r, "brake", "sim").is_empty());
     let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
     assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+    assert_untouched(&r);
+}
+
+/// Two cameras, each its own camera and ingestion process: killing one
+/// camera, then the other's ingestion, while the person is near costs no
+/// protective stop (the other camera's distances are still lower bounds,
+/// and the task goes on at their pace); each is restarted. Killing both
+/// cameras at once is today's stale-perception stop.
+#[test]
+fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start_with(
+        "deploy/two-cameras.toml",
+        "kcam2",
+        "coexistence",
+        Some(22.0),
+        &["supervisor.restart_backoff_min_ms=400"],
+    );
+    // the person's hand is in the end effector's path from t = 10 s
+    wait(11.0);
+    cell.kill("camera-1", libc::SIGKILL);
+    wait(3.0);
+    cell.kill("perception", libc::SIGKILL);
+    wait(3.0);
+    cell.kill("camera", libc::SIGKILL);
+    cell.kill("camera-1", libc::SIGKILL);
+    let r = cell.finish();
+    assert_eq!(
+        r["services"]["camera-1"]["restarts"], 2,
+        "{}",
+        r["services"]
+    );
+    assert_eq!(r["services"]["perception"]["restarts"], 1);
+    assert_eq!(r["services"]["camera"]["restarts"], 1);
+    for s in ["camera", "camera-1", "perception", "perception-1"] {
+        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
+    }
+    let exits = |s: &str| -> Vec<f64> {
+        events(&r, "exit", s)
+            .iter()
+            .map(|e| e["t_s"].as_f64().unwrap())
+            .collect()
+    };
+    let both_t = exits("camera")[0];
+    let one_t = exits("camera-1")[0];
+    let ingest_t = exits("perception")[0];
+    assert!(one_t < ingest_t && ingest_t < both_t, "{}", r["events"]);
+    let stops: Vec<f64> = events(&r, "protective_stop", "control")
+        .iter()
+        .map(|e| e["t_s"].as_f64().unwrap())
+        .collect();
+    // one camera down at a time: no stop
+    assert!(
+        stops.iter().all(|&t| t >= both_t - 0.05),
+        "a protective stop with one camera left: {stops:?}, {}",
+        r["events"]
+    );
+    // both down: the stale-perception stop, then the task resumes
+    assert!(
+        !stops.is_empty(),
+        "no stop with both cameras down: {}",
+        r["events"]
+    );
+    assert!(r["protective_stop_causes"]["stale_perception"].as_u64() >= Some(1));
+    // each camera answered the fusion while the other was down
+    let cams = r["perception"]["cameras"].as_array().unwrap();
+    assert_eq!(cams.len(), 2);
+    for c in cams {
+        assert!(c["frames"].as_u64().unwrap() > 300, "{c}");
+        assert!(c["fused_share"].as_f64().unwrap() > 0.05, "{c}");
+    }
+    assert!(events(&r, "brake", "sim").is_empty());
+    assert_eq!(r["torque_loop"]["missed_deadlines"], 0);
     assert_untouched(&r);
 }
 

@@ -707,3 +707,45 @@ impl FrameSubscriber {
         self.channel
     }
 }
+
+/// Block until any of `subscribers` announces a new frame or `timeout`
+/// passes (a signal also ends the wait), through one of iceoryx2's
+/// WaitSets; pending announcements are consumed. Subscribers without a
+/// listener (polling) are not waited on; with none at all, it sleeps
+/// `timeout`. For a service that serves several cameras' frames: a camera
+/// that stops announcing delays none of the others.
+pub fn wait_any(subscribers: &[&FrameSubscriber], timeout: Duration) -> Result<(), IpcError> {
+    let listeners: Vec<&Listener> = subscribers
+        .iter()
+        .filter_map(|s| s.listener.as_ref())
+        .collect();
+    let Some(first) = listeners.first() else {
+        std::thread::sleep(timeout);
+        return Ok(());
+    };
+    if listeners.len() == 1 {
+        return first.wait(timeout);
+    }
+    let waitset = WaitSetBuilder::new()
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| IpcError::receive(first.channel, e))?;
+    let mut guards = Vec::with_capacity(listeners.len());
+    for l in &listeners {
+        guards.push(
+            waitset
+                .attach_notification(&l.port)
+                .map_err(|e| IpcError::receive(l.channel, e))?,
+        );
+    }
+    waitset
+        .wait_and_process_once_with_timeout(|_| CallbackProgression::Stop, timeout)
+        .map_err(|e| IpcError::receive(first.channel, e))?;
+    drop(guards);
+    for l in &listeners {
+        l.port
+            .try_wait(|_| {})
+            .map_err(|e| IpcError::receive(l.channel, e))?;
+    }
+    Ok(())
+}

@@ -64,6 +64,109 @@ pub const INPUT_AUDIT: Channel<InputAudit> = Channel::new("audit/inputs", Qos::W
 /// [`DepthFault`] from `phri-fault` to the simulated camera: frames to corrupt or delay (testing only).
 pub const FAULT_DEPTH: Channel<DepthFault> = Channel::new("fault/depth", Qos::INJECTION, false);
 
+/// Cameras a cell may have ([[camera]] entries).
+pub const MAX_CAMERAS: usize = 4;
+
+/// One camera's channels: the first camera's are the constants above
+/// (`camera/depth`, …); camera `i` ≥ 1 has the same channels with its index
+/// after the first segment (`camera/1/depth`, `perception/1/depth`,
+/// `perception/1/repulsion`, `perception/1/skeleton`), same types and QoS.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraChannels {
+    /// raw depth frames from camera `i`
+    pub depth: FrameChannel,
+    /// its validated frames without the robot's pixels
+    pub perception: FrameChannel,
+    /// the repulsion workers' results on its frames (distances bounded by
+    /// what the camera watches when the cell has several)
+    pub repulsion: Channel<RepulsionResult>,
+    /// its body tracker's skeletons
+    pub skeleton: Channel<Skeleton>,
+}
+
+const fn camera_channels(
+    depth: &'static str,
+    perception: &'static str,
+    repulsion: &'static str,
+    skeleton: &'static str,
+) -> CameraChannels {
+    CameraChannels {
+        depth: Channel::new(depth, CAMERA_DEPTH.qos, CAMERA_DEPTH.wakes),
+        perception: Channel::new(perception, PERCEPTION_DEPTH.qos, PERCEPTION_DEPTH.wakes),
+        repulsion: Channel::new(
+            repulsion,
+            PERCEPTION_REPULSION.qos,
+            PERCEPTION_REPULSION.wakes,
+        ),
+        skeleton: Channel::new(skeleton, PERCEPTION_SKELETON.qos, PERCEPTION_SKELETON.wakes),
+    }
+}
+
+/// Every camera's channels, by camera index.
+pub const CAMERAS: [CameraChannels; MAX_CAMERAS] = [
+    CameraChannels {
+        depth: CAMERA_DEPTH,
+        perception: PERCEPTION_DEPTH,
+        repulsion: PERCEPTION_REPULSION,
+        skeleton: PERCEPTION_SKELETON,
+    },
+    camera_channels(
+        "camera/1/depth",
+        "perception/1/depth",
+        "perception/1/repulsion",
+        "perception/1/skeleton",
+    ),
+    camera_channels(
+        "camera/2/depth",
+        "perception/2/depth",
+        "perception/2/repulsion",
+        "perception/2/skeleton",
+    ),
+    camera_channels(
+        "camera/3/depth",
+        "perception/3/depth",
+        "perception/3/repulsion",
+        "perception/3/skeleton",
+    ),
+];
+
+/// Camera `i`'s channels; `None` past [`MAX_CAMERAS`].
+pub fn camera(i: usize) -> Option<&'static CameraChannels> {
+    CAMERAS.get(i)
+}
+
+/// The camera whose channel `name` is (0 for the first camera's constants),
+/// with the first camera's name of the same channel; `None` for a channel
+/// that belongs to no camera.
+pub fn camera_of_channel(name: &str) -> Option<(usize, &'static str)> {
+    CAMERAS.iter().enumerate().find_map(|(i, c)| {
+        [
+            (c.depth.name, CAMERA_DEPTH.name),
+            (c.perception.name, PERCEPTION_DEPTH.name),
+            (c.repulsion.name, PERCEPTION_REPULSION.name),
+            (c.skeleton.name, PERCEPTION_SKELETON.name),
+        ]
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, first)| (i, first))
+    })
+}
+
+/// Camera `camera`'s name of the first camera's channel `first`
+/// (`camera/depth` → `camera/1/depth`); any other name unchanged.
+pub fn for_camera(first: &str, camera: usize) -> &str {
+    let Some(c) = CAMERAS.get(camera) else {
+        return first;
+    };
+    match first {
+        n if n == CAMERA_DEPTH.name => c.depth.name,
+        n if n == PERCEPTION_DEPTH.name => c.perception.name,
+        n if n == PERCEPTION_REPULSION.name => c.repulsion.name,
+        n if n == PERCEPTION_SKELETON.name => c.skeleton.name,
+        other => other,
+    }
+}
+
 // The contract, checked when this crate compiles: one commander, one robot,
 // a worker pool, no history on frames, wake-ups where readers wait on them.
 const _: () = {
@@ -180,6 +283,40 @@ pub fn visit_named(name: &str, v: &mut impl ChannelVisitor) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_camera_has_its_own_channels_of_the_first_cameras_types() {
+        let mut names: Vec<&str> = CAMERAS
+            .iter()
+            .flat_map(|c| {
+                [
+                    c.depth.name,
+                    c.perception.name,
+                    c.repulsion.name,
+                    c.skeleton.name,
+                ]
+            })
+            .collect();
+        assert_eq!(names.len(), 4 * MAX_CAMERAS);
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), 4 * MAX_CAMERAS, "a name used twice");
+        assert_eq!(camera(1).unwrap().depth.name, "camera/1/depth");
+        assert_eq!(
+            camera_of_channel("perception/2/repulsion"),
+            Some((2, "perception/repulsion"))
+        );
+        assert_eq!(
+            camera_of_channel("perception/repulsion"),
+            Some((0, "perception/repulsion"))
+        );
+        assert_eq!(camera_of_channel("robot/state"), None);
+        assert_eq!(for_camera("camera/depth", 3), "camera/3/depth");
+        assert_eq!(for_camera("camera/depth", 0), "camera/depth");
+        assert_eq!(for_camera("robot/state", 1), "robot/state");
+        assert_eq!(for_camera("camera/depth", 9), "camera/depth");
+        assert!(camera(MAX_CAMERAS).is_none());
+    }
 
     #[test]
     fn every_channel_is_visited_once_in_order() {

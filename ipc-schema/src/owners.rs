@@ -41,8 +41,11 @@ impl Owned {
     pub const HRI_REQUEST: Owned = Owned(5);
     pub const AUDIO_MIC: Owned = Owned(6);
 
-    /// The owned channel named `name`, if it is one.
+    /// The owned channel named `name`, if it is one. A further camera's
+    /// channel (`perception/1/repulsion`) is owned as the first camera's
+    /// (its publishers are the same binaries; its refusals count there).
     pub fn of(name: &str) -> Option<Owned> {
+        let name = crate::channels::camera_of_channel(name).map_or(name, |(_, first)| first);
         PUBLISHERS.iter().position(|(c, _)| *c == name).map(Owned)
     }
 
@@ -284,6 +287,8 @@ mod tests {
         // unsupervised: everyone
         assert_eq!(OwnerTable::unchecked().sender(res, 999), Sender::Unchecked);
         assert!(Owned::of("camera/depth").is_none());
+        assert_eq!(Owned::of("perception/1/repulsion"), Some(rep));
+        assert!(Owned::of("camera/1/depth").is_none());
     }
 
     #[test]

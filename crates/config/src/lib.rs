@@ -45,7 +45,7 @@ pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
 pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
-pub use supervisor::{ServiceSpec, SupervisorConfig};
+pub use supervisor::{camera_of, derive_camera_services, ServiceSpec, SupervisorConfig};
 pub use voice::{AudioConfig, AudioSource, VoiceConfig};
 
 /// The default configuration: `deploy/phri.toml` as built.
@@ -415,6 +415,18 @@ impl Config {
                 .enumerate()
                 .map(|(i, c)| camera_from_value(c, i, origin))
                 .collect::<Result<_, _>>()?;
+            if config.cameras.len() > phri_ipc::MAX_CAMERAS {
+                return Err(ConfigError::Key {
+                    origin: origin.to_string(),
+                    key: "camera".into(),
+                    message: format!(
+                        "[[camera]] lists {} cameras, at most {}",
+                        config.cameras.len(),
+                        phri_ipc::MAX_CAMERAS
+                    ),
+                });
+            }
+            derive_camera_services(&mut config.services, config.cameras.len());
             return Ok(config);
         }
         // through text, so that an error's position names the key

@@ -1,5 +1,7 @@
 //! `[supervisor]` and `[services.NAME]`: how the cell is started and watched.
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::check::positive;
@@ -141,7 +143,7 @@ impl ServiceSpec {
             ));
         }
         if let Some(h) = &self.heartbeat {
-            if !phri_ipc::ALL.contains(&h.as_str()) {
+            if !phri_ipc::ALL.contains(&h.as_str()) && phri_ipc::camera_of_channel(h).is_none() {
                 return Err(Invalid::new(
                     key("heartbeat"),
                     format!("'{h}' is not a channel of the cell"),
@@ -149,5 +151,59 @@ impl ServiceSpec {
             }
         }
         Ok(())
+    }
+}
+
+/// The binaries that run once per camera: the camera (or its driver) and
+/// its ingestion. Repulsion workers serve every camera's frames.
+pub const PER_CAMERA_BINARIES: &[&str] = &["phri-camera", "phri-perception"];
+
+/// The services of cameras after the first, derived from the first's: for
+/// each service of a [`PER_CAMERA_BINARIES`] binary that has no `--camera`
+/// argument, and each camera `i` in `1..cameras`, a service `NAME-i` with
+/// `--camera i` added, its heartbeat on camera `i`'s channel and its
+/// dependencies on other per-camera services turned to camera `i`'s. A
+/// service of that name already configured is kept as it is.
+pub fn derive_camera_services(services: &mut BTreeMap<String, ServiceSpec>, cameras: usize) {
+    let per_camera = |s: &ServiceSpec| {
+        PER_CAMERA_BINARIES.contains(&s.binary.as_str())
+            && !s.args.iter().any(|a| a.starts_with("--camera"))
+    };
+    let firsts: Vec<(String, ServiceSpec)> = services
+        .iter()
+        .filter(|(_, s)| per_camera(s))
+        .map(|(n, s)| (n.clone(), s.clone()))
+        .collect();
+    let is_first = |name: &str| firsts.iter().any(|(n, _)| n == name);
+    for i in 1..cameras {
+        for (name, spec) in &firsts {
+            let derived = format!("{name}-{i}");
+            if services.contains_key(&derived) {
+                continue;
+            }
+            let mut s = spec.clone();
+            s.args.extend(["--camera".to_string(), i.to_string()]);
+            s.heartbeat = s.heartbeat.map(|h| phri_ipc::for_camera(&h, i).to_string());
+            s.depends_on = s
+                .depends_on
+                .iter()
+                .map(|d| match is_first(d) {
+                    true => format!("{d}-{i}"),
+                    false => d.clone(),
+                })
+                .collect();
+            services.insert(derived, s);
+        }
+    }
+}
+
+/// The camera index a service's arguments give (`--camera I`; 0 without).
+pub fn camera_of(args: &[String]) -> Option<usize> {
+    match args.iter().position(|a| a == "--camera") {
+        Some(k) => args.get(k + 1)?.parse().ok(),
+        None => match args.iter().find_map(|a| a.strip_prefix("--camera=")) {
+            Some(v) => v.parse().ok(),
+            None => Some(0),
+        },
     }
 }

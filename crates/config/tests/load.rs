@@ -422,3 +422,39 @@ fn several_cameras_are_listed_as_camera_entries_over_the_defaults() {
         .to_string();
     assert!(e.contains("camera"), "{e}");
 }
+
+#[test]
+fn each_further_camera_gets_its_own_camera_and_ingestion_services() {
+    let text = "[[camera]]\nazimuth_rad = 0.6\n\n[[camera]]\nazimuth_rad = -0.6\n";
+    let loaded = Loaded::load_text(text, &deploy(), None, &[]).unwrap();
+    let s = &loaded.config.services;
+    let camera = &s["camera-1"];
+    assert_eq!(camera.binary, "phri-camera");
+    assert_eq!(camera.args, ["--camera", "1"]);
+    assert_eq!(camera.heartbeat.as_deref(), Some("camera/1/depth"));
+    assert_eq!(camera.cpus, s["camera"].cpus);
+    let ingest = &s["perception-1"];
+    assert_eq!(ingest.binary, "phri-perception");
+    assert_eq!(ingest.args, ["--camera", "1"]);
+    assert_eq!(ingest.heartbeat.as_deref(), Some("perception/1/depth"));
+    assert_eq!(ingest.depends_on, ["camera-1"]);
+    // the workers serve every camera: none derived
+    assert!(!s
+        .keys()
+        .any(|k| k.starts_with("repulsion") && k.contains('-')));
+    assert!(!s.contains_key("camera-2"));
+    // the merged copy the services read derives nothing twice
+    let again = Loaded::load_text(&loaded.to_toml(), &deploy(), None, &[]).unwrap();
+    assert_eq!(&again.config.services, s);
+    // a dropped camera service drops its copies' start too
+    let off = Loaded::load_text(text, &deploy(), None, &["services.camera.enabled=false"])
+        .unwrap()
+        .config;
+    assert!(!off.services["camera-1"].enabled);
+    // five cameras: more than the channels
+    let five = "[[camera]]\n".repeat(5);
+    let e = Loaded::load_text(&five, &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("at most 4"), "{e}");
+}

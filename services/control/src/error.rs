@@ -42,6 +42,11 @@ pub enum InputError {
         "perception/repulsion: worker {worker} is not one of the {workers} configured workers"
     )]
     Worker { worker: u32, workers: usize },
+    /// a repulsion result of a camera the cell does not have
+    #[error(
+        "perception/repulsion: camera {camera} is not one of the {cameras} configured cameras"
+    )]
+    Camera { camera: usize, cameras: usize },
     /// a repulsion result that claims more points than the message carries
     #[error("perception/repulsion: worker {worker}: n_points {n_points} is above {max}")]
     PointCount {

@@ -104,23 +104,20 @@ impl<'a> ControlInput<'a> {
     }
 }
 
-/// The repulsion workers' results gathered into the controller's view:
-/// the newest result per control point, and the capture time of each
-/// worker's newest result. Preallocated; [`RepulsionInputs::push`] allocates nothing.
+/// One camera's repulsion results: the newest per control point, and the
+/// capture time of each worker's newest result.
 #[derive(Clone, Debug)]
-pub struct RepulsionInputs {
+struct CameraResults {
     points: Vec<PointRepulsion>,
     /// capture time of the result held per point \[ns\] (0: none yet)
     point_capture_ns: Vec<u64>,
     /// capture time of each worker's newest result \[ns\] (0: none yet)
     worker_capture_ns: Vec<u64>,
-    refused: u64,
 }
 
-impl RepulsionInputs {
-    /// For `workers` workers sharing `points` control points.
-    pub fn new(workers: usize, points: usize) -> RepulsionInputs {
-        RepulsionInputs {
+impl CameraResults {
+    fn new(workers: usize, points: usize) -> CameraResults {
+        CameraResults {
             points: (0..points)
                 .map(|i| PointRepulsion {
                     point: i as u32,
@@ -129,40 +126,133 @@ impl RepulsionInputs {
                 .collect(),
             point_capture_ns: vec![0; points],
             worker_capture_ns: vec![0; workers.max(1)],
+        }
+    }
+
+    /// The capture time of the oldest of the workers' newest results; 0
+    /// while some worker has not answered yet.
+    fn capture_ns(&self) -> u64 {
+        self.worker_capture_ns.iter().copied().min().unwrap_or(0)
+    }
+}
+
+/// The repulsion workers' results gathered into the controller's view,
+/// camera by camera: the newest result per control point, and the capture
+/// time of each worker's newest result. With several cameras each camera's
+/// distances are lower bounds of the true ones (the workers bound them by
+/// what their camera watches), and [`RepulsionInputs::fuse`] takes per point
+/// the largest bound of the cameras that are fresh (answered within the
+/// perception's staleness bound), with that camera's repulsive vector: a
+/// camera gone stale or killed drops out; with none fresh the view is as
+/// stale as the newest camera. Preallocated; nothing here allocates after
+/// construction.
+#[derive(Clone, Debug)]
+pub struct RepulsionInputs {
+    cameras: Vec<CameraResults>,
+    /// the fused view's points and capture time (several cameras)
+    fused: Vec<PointRepulsion>,
+    fused_capture_ns: u64,
+    /// per camera: point-periods it gave the fused distance
+    gave: Vec<u64>,
+    /// a camera older than this is left out of the fusion \[ns\]
+    max_age_ns: u64,
+    refused: u64,
+}
+
+impl RepulsionInputs {
+    /// For `workers` workers sharing `points` control points, one camera.
+    pub fn new(workers: usize, points: usize) -> RepulsionInputs {
+        RepulsionInputs::with_cameras(1, workers, points, u64::MAX)
+    }
+
+    /// For `cameras` cameras (at least one), each answered by `workers`
+    /// workers sharing `points` control points; a camera whose results are
+    /// older than `max_age_ns` is left out of the fusion.
+    pub fn with_cameras(
+        cameras: usize,
+        workers: usize,
+        points: usize,
+        max_age_ns: u64,
+    ) -> RepulsionInputs {
+        let cameras = cameras.max(1);
+        RepulsionInputs {
+            cameras: (0..cameras)
+                .map(|_| CameraResults::new(workers, points))
+                .collect(),
+            fused: (0..points)
+                .map(|i| PointRepulsion {
+                    point: i as u32,
+                    ..PointRepulsion::default()
+                })
+                .collect(),
+            fused_capture_ns: 0,
+            gave: vec![0; cameras],
+            max_age_ns,
             refused: 0,
         }
     }
 
-    /// For the workers and control points of `[repulsion]`.
+    /// For the workers and control points of `[repulsion]`, one camera.
     pub fn from_config(cfg: &RepulsionConfig) -> RepulsionInputs {
         RepulsionInputs::new(cfg.workers as usize, cfg.points.len())
     }
 
-    /// Take one worker's result. A result that names an unknown worker or
-    /// point, claims more points than it carries, or carries a non-finite
-    /// repulsive vector or a NaN distance (+∞: nothing in the region), is refused whole (its capture time does not count:
-    /// perception turns stale rather than trusting it) and counted. A result older than the one held for a point
-    /// (workers answering out of order) does not replace it.
+    /// For the cameras (`[[camera]]`), workers and control points of
+    /// `config`, cameras staler than `[control] perception_max_age_ms` left
+    /// out of the fusion.
+    pub fn for_cell(config: &phri_config::Config) -> RepulsionInputs {
+        RepulsionInputs::with_cameras(
+            config.cameras.len(),
+            config.repulsion.workers as usize,
+            config.repulsion.points.len(),
+            (config.control.perception_max_age_ms * 1e6) as u64,
+        )
+    }
+
+    /// Cameras whose results this gathers.
+    pub fn cameras(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// Take one worker's result on the first camera's frames.
     pub fn push(&mut self, msg: &RepulsionResult) -> Result<(), InputError> {
-        let checked = self.check(msg);
+        self.push_camera(0, msg)
+    }
+
+    /// Take one worker's result on camera `camera`'s frames. A result that
+    /// names an unknown camera, worker or point, claims more points than it
+    /// carries, or carries a non-finite repulsive vector or a NaN distance
+    /// (+∞: nothing in the region), is refused whole (its capture time does
+    /// not count: perception turns stale rather than trusting it) and
+    /// counted. A result older than the one held for a point (workers
+    /// answering out of order) does not replace it.
+    pub fn push_camera(&mut self, camera: usize, msg: &RepulsionResult) -> Result<(), InputError> {
+        let checked = self.check(camera, msg);
         if checked.is_err() {
             self.refused += 1;
             return checked;
         }
-        let w = &mut self.worker_capture_ns[msg.worker as usize];
+        let c = &mut self.cameras[camera];
+        let w = &mut c.worker_capture_ns[msg.worker as usize];
         *w = (*w).max(msg.capture_ns);
         for p in &msg.points[..msg.n_points as usize] {
             let k = p.point as usize;
-            if msg.capture_ns >= self.point_capture_ns[k] {
-                self.points[k] = *p;
-                self.point_capture_ns[k] = msg.capture_ns;
+            if msg.capture_ns >= c.point_capture_ns[k] {
+                c.points[k] = *p;
+                c.point_capture_ns[k] = msg.capture_ns;
             }
         }
         Ok(())
     }
 
-    fn check(&self, msg: &RepulsionResult) -> Result<(), InputError> {
-        let workers = self.worker_capture_ns.len();
+    fn check(&self, camera: usize, msg: &RepulsionResult) -> Result<(), InputError> {
+        let Some(c) = self.cameras.get(camera) else {
+            return Err(InputError::Camera {
+                camera,
+                cameras: self.cameras.len(),
+            });
+        };
+        let workers = c.worker_capture_ns.len();
         if msg.worker as usize >= workers {
             return Err(InputError::Worker {
                 worker: msg.worker,
@@ -176,7 +266,7 @@ impl RepulsionInputs {
                 max: MAX_POINTS_PER_WORKER,
             });
         }
-        let points = self.points.len();
+        let points = c.points.len();
         for p in &msg.points[..msg.n_points as usize] {
             if p.point as usize >= points {
                 return Err(InputError::Point {
@@ -195,14 +285,70 @@ impl RepulsionInputs {
         Ok(())
     }
 
+    /// Fuse the cameras at robot time `now_ns` (several cameras; with one,
+    /// nothing to do): per point, the largest distance among the cameras
+    /// that are fresh, with its camera's repulsive vector. The view's
+    /// capture time is the newest fresh camera's; with none fresh, the
+    /// newest camera's (stale: the controller's stale-perception rule).
+    pub fn fuse(&mut self, now_ns: u64) {
+        if self.cameras.len() == 1 {
+            return;
+        }
+        let (cameras, max_age_ns) = (&self.cameras, self.max_age_ns);
+        let fresh = |c: &CameraResults| {
+            let t = c.capture_ns();
+            t > 0 && now_ns.saturating_sub(t) <= max_age_ns
+        };
+        let any_fresh = cameras.iter().any(fresh);
+        let capture_ns = cameras
+            .iter()
+            .filter(|c| !any_fresh || fresh(c))
+            .map(CameraResults::capture_ns)
+            .max()
+            .unwrap_or(0);
+        self.fused_capture_ns = capture_ns;
+        for (k, slot) in self.fused.iter_mut().enumerate() {
+            let mut best: Option<usize> = None;
+            for (i, c) in cameras.iter().enumerate() {
+                let eligible = match any_fresh {
+                    true => fresh(c),
+                    // none fresh: the newest camera's, whatever it says
+                    false => c.capture_ns() == capture_ns,
+                };
+                if eligible
+                    && best.is_none_or(|b| {
+                        c.points[k].min_distance > cameras[b].points[k].min_distance
+                    })
+                {
+                    best = Some(i);
+                }
+            }
+            if let Some(b) = best {
+                *slot = cameras[b].points[k];
+                self.gave[b] += 1;
+            }
+        }
+    }
+
     /// The controller's view: the newest result per point; the capture time
     /// of the oldest of the workers' newest results, 0 while some worker has
-    /// not answered yet.
+    /// not answered yet. With several cameras: the last [`RepulsionInputs::fuse`].
     pub fn view(&self) -> PerceptionView<'_> {
-        PerceptionView {
-            capture_ns: self.worker_capture_ns.iter().copied().min().unwrap_or(0),
-            points: &self.points,
+        match self.cameras.as_slice() {
+            [one] => PerceptionView {
+                capture_ns: one.capture_ns(),
+                points: &one.points,
+            },
+            _ => PerceptionView {
+                capture_ns: self.fused_capture_ns,
+                points: &self.fused,
+            },
         }
+    }
+
+    /// Per camera: how many point-periods it gave the fused distance.
+    pub fn gave(&self) -> &[u64] {
+        &self.gave
     }
 
     /// Results refused since the start.
@@ -409,6 +555,88 @@ mod tests {
             .iter()
             .enumerate()
             .all(|(i, p)| p.point as usize == i));
+    }
+
+    /// Worker `w`'s result for `points` at `distance` [m], pushing away along +x.
+    fn at(w: u32, capture_ns: u64, points: &[u32], distance: f64, vx: f64) -> RepulsionResult {
+        let mut r = result(w, capture_ns, points);
+        for p in &mut r.points[..points.len()] {
+            p.min_distance = distance;
+            p.v_call = [vx, 0.0, 0.0];
+        }
+        r
+    }
+
+    #[test]
+    fn cameras_fuse_to_the_largest_fresh_bound_with_its_own_direction() {
+        const MS: u64 = 1_000_000;
+        // two cameras, two workers, four points; stale after 100 ms
+        let mut acc = RepulsionInputs::with_cameras(2, 2, 4, 100 * MS);
+        // camera 0 sees the person 2 cm from every point (its shadow),
+        // camera 1 sees 25 cm, pushing the other way
+        for w in 0..2 {
+            let pts: &[u32] = if w == 0 { &[0, 2] } else { &[1, 3] };
+            acc.push_camera(0, &at(w, 1000 * MS, pts, 0.02, 1.0))
+                .unwrap();
+            acc.push_camera(1, &at(w, 1010 * MS, pts, 0.25, -1.0))
+                .unwrap();
+        }
+        acc.fuse(1050 * MS);
+        let v = acc.view();
+        assert_eq!(v.capture_ns, 1010 * MS, "the newest fresh camera's");
+        for (i, p) in v.points.iter().enumerate() {
+            assert_eq!(p.point as usize, i);
+            assert_eq!(p.min_distance, 0.25);
+            assert_eq!(p.v_call, [-1.0, 0.0, 0.0], "camera 1's direction");
+        }
+        assert_eq!(acc.gave(), [0, 4]);
+        // camera 1 goes silent: once stale it drops out, camera 0 answers alone
+        for w in 0..2 {
+            let pts: &[u32] = if w == 0 { &[0, 2] } else { &[1, 3] };
+            acc.push_camera(0, &at(w, 1100 * MS, pts, 0.02, 1.0))
+                .unwrap();
+        }
+        acc.fuse(1105 * MS);
+        assert_eq!(acc.view().points[0].min_distance, 0.25, "still fresh");
+        acc.fuse(1111 * MS + 100 * MS);
+        let v = acc.view();
+        assert_eq!(v.capture_ns, 1100 * MS);
+        assert!(v
+            .points
+            .iter()
+            .all(|p| p.min_distance == 0.02 && p.v_call[0] == 1.0));
+        // both stale: the newest camera's, as stale as it is (the controller stops)
+        acc.fuse(5000 * MS);
+        assert_eq!(acc.view().capture_ns, 1100 * MS);
+        // one camera: the view is its results, no fusion needed
+        let mut one = RepulsionInputs::new(2, 4);
+        one.push(&at(0, 7, &[0, 2], 0.3, 0.0)).unwrap();
+        one.push(&at(1, 8, &[1, 3], 0.4, 0.0)).unwrap();
+        assert_eq!(one.view().capture_ns, 7);
+        assert_eq!(one.view().points[1].min_distance, 0.4);
+        // a result of a camera the cell lacks is refused
+        assert_eq!(
+            one.push_camera(1, &at(0, 9, &[0], 0.3, 0.0)),
+            Err(InputError::Camera {
+                camera: 1,
+                cameras: 1
+            })
+        );
+    }
+
+    #[test]
+    fn a_camera_missing_a_worker_never_gives_the_fused_distance() {
+        const MS: u64 = 1_000_000;
+        let mut acc = RepulsionInputs::with_cameras(2, 2, 2, 100 * MS);
+        acc.push_camera(0, &at(0, 10 * MS, &[0], 0.05, 1.0))
+            .unwrap();
+        acc.push_camera(0, &at(1, 10 * MS, &[1], 0.05, 1.0))
+            .unwrap();
+        // camera 1's worker 1 never answered: camera 1 is not fresh
+        acc.push_camera(1, &at(0, 10 * MS, &[0], 0.4, 1.0)).unwrap();
+        acc.fuse(20 * MS);
+        assert!(acc.view().points.iter().all(|p| p.min_distance == 0.05));
+        assert_eq!(acc.view().capture_ns, 10 * MS);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! `phri-control`: answers every `robot/state` with a `robot/command` (the only
 //! publisher that channel accepts), a `control/status` and a `collab/state`;
 //! reads the collaboration's `hri/request`, `perception/skeleton` and
-//! `perception/hand` besides. Only channel wiring: the conversions are
+//! `perception/hand` besides; with several cameras, every camera's
+//! `perception/C/repulsion`. Only channel wiring: the conversions are
 //! `phri_control::inputs` and `outputs`.
 
 use std::process::ExitCode;
@@ -47,7 +48,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let model = ctx.robot_model()?;
     let n = model.nv();
     let mut controller = Controller::from_config(model, cfg)?;
-    let mut repulsion = RepulsionInputs::from_config(&cfg.repulsion);
+    // every camera's results, fused point by point (phri_control::inputs)
+    let mut repulsion = RepulsionInputs::for_cell(cfg);
     let avoidance = cfg.control.avoidance;
     if ctx.checking() {
         return Ok(());
@@ -63,7 +65,12 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     // a second controller fails here: the command channel accepts exactly one publisher
     let commands = ROBOT_COMMAND.publisher(&node)?;
     let status_pub = CONTROL_STATUS.publisher(&node)?;
-    let results = PERCEPTION_REPULSION.subscriber(&node, Queue::Drain)?;
+    let results = (0..repulsion.cameras())
+        .map(|i| match phri_ipc::camera(i) {
+            Some(c) => c.repulsion.subscriber(&node, Queue::Drain),
+            None => PERCEPTION_REPULSION.subscriber(&node, Queue::Drain),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let collaborating = cfg.collaboration.enabled;
     let requests = HRI_REQUEST.subscriber(&node, Queue::Drain)?;
     let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
@@ -99,11 +106,14 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         // the newest residual of this robot's dof; an older one stays until then
         residuals.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
         // refused results are counted by the accumulator (perception then turns stale)
-        results.drain_from(|pid, r| {
-            if gate.repulsion(pid, r, now) {
-                let _ = repulsion.push(r);
-            }
-        })?;
+        for (camera, results) in results.iter().enumerate() {
+            results.drain_from(|pid, r| {
+                if gate.repulsion(pid, r, now) {
+                    let _ = repulsion.push_camera(camera, r);
+                }
+            })?;
+        }
+        repulsion.fuse(now);
         let perception = avoidance.then_some(&repulsion);
         let mut input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
             Ok(input) => input,

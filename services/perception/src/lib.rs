@@ -10,9 +10,10 @@
 
 pub mod camera;
 pub mod fault;
-pub mod fusion;
+pub mod flag;
 pub mod ingest;
 pub mod mask;
+pub mod pipeline;
 pub mod repulsion;
 pub mod robot;
 pub mod skeleton;
@@ -20,7 +21,8 @@ pub mod source;
 
 pub use camera::{CameraError, CameraSim, HeaderError};
 pub use fault::{FaultAccepted, FaultRefused, FaultState};
-pub use fusion::ResultFusion;
+pub use flag::CameraFlag;
 pub use ingest::{FrameError, Ingest, IngestOutcome, StateHistory};
+pub use pipeline::{Perception, PipelineError};
 pub use repulsion::{RepulsionError, Worker};
 pub use source::{PngReplay, RateLimited, SourceError, Ticks};

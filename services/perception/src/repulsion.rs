@@ -1,10 +1,16 @@
 //! A repulsion worker: for its control points, at the frame's joint state, the
 //! depth-space distance and repulsive vector (eqs. 15-18), and the
-//! `perception/repulsion` message that carries them.
+//! `perception/repulsion` message that carries them. In a cell of several
+//! cameras each camera's answer is a lower bound of the true distance only
+//! over the space that camera watches: a worker then bounds it by the view
+//! too ([`Worker::bounded_by`], [`phri_depth::fusion`]), and the controller
+//! takes, per point, the largest of the fresh cameras' bounds.
 
 use nalgebra::{Point3, Vector3};
 use phri_config::{Invalid, RepulsionConfig};
-use phri_depth::{DepthError, DepthSpaceDistance, PointOfInterest, RepulsionParams};
+use phri_depth::{
+    fuse, CameraView, DepthError, DepthSpaceDistance, PointOfInterest, RepulsionParams,
+};
 use phri_ipc::{FrameHeader, PointRepulsion, RepulsionResult, Zeroed, MAX_POINTS_PER_WORKER};
 use phri_model::{Data, Model, ModelError};
 
@@ -44,6 +50,8 @@ pub struct Worker {
     /// (point index, frame id, point in the link frame [m], radius [m])
     points: Vec<(usize, usize, Vector3<f64>, f64)>,
     distance: Option<(u64, DepthSpaceDistance)>,
+    /// the space its camera watches, when the cell has several cameras
+    view: Option<CameraView>,
     out: [PointRepulsion; MAX_POINTS_PER_WORKER],
     msg: RepulsionResult,
 }
@@ -80,10 +88,27 @@ impl Worker {
             params: cfg.params,
             points,
             distance: None,
+            view: None,
             out: [PointRepulsion::default(); MAX_POINTS_PER_WORKER],
             msg,
             model,
         })
+    }
+
+    /// This worker's answers bounded by what `camera` watches (space outside
+    /// its view or range counts as occupied): each camera's distance is then
+    /// a lower bound of the truth, so the largest over cameras is one too.
+    /// For cells of several cameras; one camera's answers stay the paper's.
+    pub fn bounded_by(mut self, camera: &phri_config::CameraConfig) -> Result<Worker, Invalid> {
+        let view = CameraView::new(
+            &camera.intrinsics,
+            camera.pose()?,
+            camera.render.min_range_m,
+            camera.render.max_range_m,
+        )
+        .map_err(|e| Invalid::new("camera", e.to_string()))?;
+        self.view = Some(view);
+        Ok(self)
     }
 
     pub fn n_points(&self) -> usize {
@@ -128,9 +153,14 @@ impl Worker {
         };
         for (slot, &(index, frame_id, xyz, radius)) in self.out.iter_mut().zip(&self.points) {
             let p = phri_model::frame_placement(&self.model, &self.data, frame_id).apply(&xyz);
-            let r = dist
-                .repulsion(frame, &PointOfInterest::new(Point3::from(p), radius))
+            let poi = PointOfInterest::new(Point3::from(p), radius);
+            let mut r = dist
+                .repulsion(frame, &poi)
                 .map_err(|source| RepulsionError::Depth { seq, source })?;
+            if let Some(view) = self.view.as_ref() {
+                let bound = view.bound(&poi, &r, self.params.rho);
+                r = fuse([(bound, &r)], &self.params).repulsion;
+            }
             *slot = PointRepulsion {
                 point: index as u32,
                 active: r.obstacle_point.is_some() as u32,

@@ -10,6 +10,7 @@
 //! the health, writes the files, every 10 ms.
 
 pub mod box_report;
+pub mod camera_report;
 pub mod collab_report;
 pub mod cpu;
 pub mod error;

@@ -24,8 +24,8 @@ use std::time::{Duration, Instant};
 
 use phri_ipc::{
     node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
-    CAMERA_DEPTH, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, PERCEPTION_DEPTH,
-    PERCEPTION_REPULSION, ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
+    COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS,
+    SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
@@ -121,9 +121,10 @@ struct Ports {
     contacts: Subscriber<phri_ipc::ContactEvent>,
     residual: Subscriber<phri_ipc::Residual>,
     status: Subscriber<phri_ipc::ControlStatus>,
-    frames: FrameSubscriber,
-    filtered: FrameSubscriber,
-    repulsion: Subscriber<phri_ipc::RepulsionResult>,
+    /// per camera: its frames, its ingestion's, its repulsion results
+    frames: Vec<FrameSubscriber>,
+    filtered: Vec<FrameSubscriber>,
+    repulsion: Vec<Subscriber<phri_ipc::RepulsionResult>>,
     collab: Subscriber<phri_ipc::CollabState>,
     requests: Subscriber<phri_ipc::HriRequest>,
     utterances: Subscriber<phri_ipc::Utterance>,
@@ -133,7 +134,8 @@ struct Ports {
 }
 
 impl Ports {
-    fn open(node: &IpcNode) -> Result<Ports, IpcError> {
+    fn open(node: &IpcNode, cameras: usize) -> Result<Ports, IpcError> {
+        let cameras = &phri_ipc::CAMERAS[..cameras.clamp(1, phri_ipc::MAX_CAMERAS)];
         Ok(Ports {
             health: SUPERVISOR_HEALTH.publisher(node)?,
             stats: ROBOT_STATS.subscriber(node, Queue::Drain)?,
@@ -141,9 +143,18 @@ impl Ports {
             contacts: SIM_CONTACTS.subscriber(node, Queue::Drain)?,
             residual: DYNAMICS_RESIDUAL.subscriber(node, Queue::Drain)?,
             status: CONTROL_STATUS.subscriber(node, Queue::Drain)?,
-            frames: CAMERA_DEPTH.frame_subscriber(node, Queue::Latest)?,
-            filtered: PERCEPTION_DEPTH.frame_subscriber(node, Queue::Latest)?,
-            repulsion: PERCEPTION_REPULSION.subscriber(node, Queue::Drain)?,
+            frames: cameras
+                .iter()
+                .map(|c| c.depth.frame_subscriber(node, Queue::Latest))
+                .collect::<Result<_, _>>()?,
+            filtered: cameras
+                .iter()
+                .map(|c| c.perception.frame_subscriber(node, Queue::Latest))
+                .collect::<Result<_, _>>()?,
+            repulsion: cameras
+                .iter()
+                .map(|c| c.repulsion.subscriber(node, Queue::Drain))
+                .collect::<Result<_, _>>()?,
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
@@ -306,7 +317,15 @@ fn owned_publishers(ipc_node: &IpcNode, name: &str) -> Result<Option<Vec<i32>>, 
         n if n == PERCEPTION_HAND.name => PERCEPTION_HAND.publisher_pids(ipc_node),
         n if n == HRI_REQUEST.name => HRI_REQUEST.publisher_pids(ipc_node),
         n if n == AUDIO_MIC.name => AUDIO_MIC.publisher_pids(ipc_node),
-        _ => Ok(None),
+        // a further camera's
+        n => match CAMERAS
+            .iter()
+            .find(|c| c.repulsion.name == n || c.skeleton.name == n)
+        {
+            Some(c) if c.repulsion.name == n => c.repulsion.publisher_pids(ipc_node),
+            Some(c) => c.skeleton.publisher_pids(ipc_node),
+            None => Ok(None),
+        },
     }
 }
 
@@ -567,7 +586,7 @@ fn body() -> Result<(), SupervisorError> {
         close_ipc(node, None, &prefix);
         return Err(e.into());
     }
-    let ports = match Ports::open(&node) {
+    let ports = match Ports::open(&node, plan.loaded.config.cameras.len()) {
         Ok(p) => p,
         Err(e) => {
             close_ipc(node, None, &prefix);
@@ -741,24 +760,33 @@ fn body() -> Result<(), SupervisorError> {
         if ports.status.drain(|m| eval.on_status(m, reaction))? > 0 {
             roster.heard(CONTROL_STATUS.name, now);
         }
-        let mut frames = 0;
-        while let Some(f) = ports.frames.receive()? {
-            eval.on_frame(f.user_header());
-            frames += 1;
-        }
-        if frames > 0 {
-            roster.heard(CAMERA_DEPTH.name, now);
-        }
-        let mut filtered = 0;
-        while let Some(f) = ports.filtered.receive()? {
-            eval.on_filtered(f.user_header());
-            filtered += 1;
-        }
-        if filtered > 0 {
-            roster.heard(PERCEPTION_DEPTH.name, now);
-        }
-        if ports.repulsion.drain(|m| eval.on_repulsion(m))? > 0 {
-            roster.heard(PERCEPTION_REPULSION.name, now);
+        for (camera, channels) in phri_ipc::CAMERAS.iter().enumerate() {
+            let (Some(frames), Some(filtered), Some(results)) = (
+                ports.frames.get(camera),
+                ports.filtered.get(camera),
+                ports.repulsion.get(camera),
+            ) else {
+                break;
+            };
+            let mut n = 0;
+            while let Some(f) = frames.receive()? {
+                eval.on_frame(camera, f.user_header());
+                n += 1;
+            }
+            if n > 0 {
+                roster.heard(channels.depth.name, now);
+            }
+            n = 0;
+            while let Some(f) = filtered.receive()? {
+                eval.on_filtered(camera, f.user_header());
+                n += 1;
+            }
+            if n > 0 {
+                roster.heard(channels.perception.name, now);
+            }
+            if results.drain(|m| eval.on_repulsion(camera, m))? > 0 {
+                roster.heard(channels.repulsion.name, now);
+            }
         }
         if ports.audio.drain(|_| {})? > 0 {
             roster.heard(phri_ipc::AUDIO_MIC.name, now);
@@ -807,13 +835,17 @@ fn body() -> Result<(), SupervisorError> {
             }
             // the owned channels: a stranger's messages are refused by their
             // readers; it is reported here, once per channel and process
-            for (channel, _) in phri_ipc::owners::PUBLISHERS {
+            let further = phri_ipc::CAMERAS[1..ports.frames.len()]
+                .iter()
+                .flat_map(|c| [c.repulsion.name, c.skeleton.name]);
+            let owned = phri_ipc::owners::PUBLISHERS.iter().map(|(c, _)| *c);
+            for channel in owned.chain(further) {
                 let pids = owned_publishers(&node, channel)?.unwrap_or_default();
                 for pid in owned::strangers(channel, &pids, roster, me as i32) {
-                    if strangers_seen.contains(&(*channel, pid)) || !alive(pid) {
+                    if strangers_seen.contains(&(channel, pid)) || !alive(pid) {
                         continue;
                     }
-                    strangers_seen.push((*channel, pid));
+                    strangers_seen.push((channel, pid));
                     let reason = format!(
                         "pid {pid} ({}) published on {channel}, not a service this supervisor started for it: its messages are refused",
                         cmdline_of(pid)

@@ -19,7 +19,11 @@ pub const OPERATOR_CHANNEL: &str = "hri/request";
 /// `roster` whose binary publishes it. `me` (the supervisor) and unknown
 /// pids (≤ 0) are never strangers; on [`OPERATOR_CHANNEL`] nobody is.
 pub fn strangers(channel: &str, publishers: &[i32], roster: &Roster, me: i32) -> Vec<i32> {
-    let Some((_, binaries)) = PUBLISHERS.iter().find(|(c, _)| *c == channel) else {
+    // a further camera's channel is owned as the first camera's
+    let Some(owned) = phri_ipc::Owned::of(channel) else {
+        return Vec::new();
+    };
+    let Some((_, binaries)) = PUBLISHERS.iter().find(|(c, _)| *c == owned.name()) else {
         return Vec::new();
     };
     if channel == OPERATOR_CHANNEL {

@@ -59,17 +59,6 @@ impl Plan {
         duration_s: Option<f64>,
     ) -> Result<Plan, SupervisorError> {
         let model = loaded.model()?;
-        if loaded.config.cameras.len() > 1 {
-            return Err(phri_config::Invalid::new(
-                "camera",
-                format!(
-                    "[[camera]] lists {} cameras: the cell of processes runs one so far \
-                     (phri-lockstep runs them all)",
-                    loaded.config.cameras.len()
-                ),
-            )
-            .into());
-        }
         let detector = DetectorInfo::from_config(&loaded.config.dynamics, model.nv())?;
         let link_names = model.collisions.iter().map(|c| c.link.clone()).collect();
         let services = in_start_order(&loaded.config.services);
@@ -278,15 +267,40 @@ mod tests {
         ));
         assert!(e.contains("/nonexistent/robot.urdf"), "{e}");
         assert_eq!(e.lines().count(), 1, "{e}");
-        // several cameras run in lock-step only so far
+        // a camera past the channels
         let e = err(Plan::load(
+            &deploy(),
+            None,
+            &["camera=[{},{},{},{},{}]"],
+            None,
+        ));
+        assert!(e.contains("camera") && e.contains("at most 4"), "{e}");
+        assert_eq!(e.lines().count(), 1, "{e}");
+    }
+
+    #[test]
+    fn two_cameras_start_a_camera_and_an_ingestion_each_and_share_the_workers() {
+        let p = Plan::load(
             &deploy().with_file_name("two-cameras.toml"),
             None,
             &[],
             None,
-        ));
-        assert!(e.contains("camera") && e.contains("2 cameras"), "{e}");
-        assert_eq!(e.lines().count(), 1, "{e}");
+        )
+        .unwrap();
+        let names: Vec<&str> = p.services.iter().map(|(n, _)| n.as_str()).collect();
+        for n in [
+            "camera",
+            "camera-1",
+            "perception",
+            "perception-1",
+            "repulsion0",
+        ] {
+            assert!(names.contains(&n), "{names:?}");
+        }
+        // the second camera's ingestion starts after its camera
+        let at = |n: &str| names.iter().position(|x| *x == n).unwrap();
+        assert!(at("camera-1") < at("perception-1"));
+        assert!(p.services.len() <= phri_ipc::MAX_SERVICES);
     }
 
     #[test]

@@ -13,24 +13,6 @@ use serde::Serialize;
 use crate::realtime::RealtimeReport;
 use crate::residual_model::ResidualModel;
 
-/// A camera frame some repulsion worker answered, and not every one yet.
-#[derive(Clone, Copy, Debug)]
-struct FrameInFlight {
-    /// the frame's sequence number
-    seq: u64,
-    /// its capture time [ns, CLOCK_MONOTONIC]
-    capture_ns: u64,
-    /// bit i: worker i answered
-    answered: u32,
-    /// the latest answer's publication [ns]
-    last_ns: u64,
-    /// its earliest arrival at ingestion as the answers tell it [ns]
-    /// (`u64::MAX` before the first; `None` once an answer did not carry it)
-    arrival_ns: Option<u64>,
-    /// the answers' compute times, summed [ns]
-    compute_ns: u64,
-}
-
 /// `torque_loop.latency_us`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Percentiles {
@@ -141,6 +123,8 @@ pub struct PerceptionReport {
     /// the distance computation of a frame: the sum over every worker of its
     /// compute time [ms] (complete frames)
     pub repulsion_compute_ms: Percentiles,
+    /// each camera's own figures (the keys above pool every camera's frames)
+    pub cameras: Vec<crate::camera_report::CameraReport>,
 }
 
 /// `robot` in the report: the arm the cell drove.
@@ -219,6 +203,10 @@ pub struct Report {
     /// from the future or past their bound), per reader and channel
     pub inputs: crate::owned::InputsReport,
 }
+
+/// The controller's perception staleness bound until the configuration's
+/// is given ([`Evaluator::with_stale_bounds`]) [ns].
+const DEFAULT_PERCEPTION_MAX_AGE_NS: u64 = 100_000_000;
 
 /// The bounds past which the controller's safety inputs are stale
 /// (`[control] residual_max_age_ms`, `perception_max_age_ms`): a protective
@@ -409,17 +397,8 @@ pub struct Evaluator {
     /// the robot state of the newest truth, and the arm there [rad]
     state_seq: u64,
     state_q: Vec<f64>,
-    /// camera frames: (seq, capture wall time) of the recent ones, and the count
-    frames_seen: u64,
-    last_frame_seq: Option<u64>,
-    /// the frames some repulsion worker answered and not all yet
-    in_flight: Vec<FrameInFlight>,
-    complete_frames: u64,
-    frame_latency_ms: Vec<f64>,
-    arrival_latency_ms: Vec<f64>,
-    ingest_ms: Vec<f64>,
-    last_filtered_seq: Option<u64>,
-    compute_ms: Vec<f64>,
+    /// every camera's frames, results and latencies
+    cameras: crate::camera_report::CamerasEval,
     /// why the run was degraded (see [`Report::degraded`])
     degraded: Vec<String>,
     /// CLOCK_MONOTONIC − robot clock [ns], from the newest controller status
@@ -498,15 +477,7 @@ impl Evaluator {
             max_joint_step_t: None,
             state_seq: 0,
             state_q: Vec::new(),
-            frames_seen: 0,
-            last_frame_seq: None,
-            in_flight: Vec::new(),
-            complete_frames: 0,
-            frame_latency_ms: Vec::new(),
-            arrival_latency_ms: Vec::new(),
-            ingest_ms: Vec::new(),
-            last_filtered_seq: None,
-            compute_ms: Vec::new(),
+            cameras: crate::camera_report::CamerasEval::new(DEFAULT_PERCEPTION_MAX_AGE_NS),
             degraded: Vec::new(),
             robot_to_mono_ns: 0,
             truth_lost: 0,
@@ -524,6 +495,9 @@ impl Evaluator {
 
     /// Tell protective stops apart by cause with these bounds.
     pub fn with_stale_bounds(mut self, bounds: StaleBounds) -> Evaluator {
+        if let Some(b) = bounds.perception_ns {
+            self.cameras = crate::camera_report::CamerasEval::new(b);
+        }
         self.stale = Some(bounds);
         self
     }
@@ -920,101 +894,34 @@ impl Evaluator {
         self.latency_max_ns = self.latency_max_ns.max(m.latency_max_ns);
     }
 
-    /// A camera frame was published.
-    pub fn on_frame(&mut self, h: &FrameHeader) {
-        if self.last_frame_seq != Some(h.seq) {
-            self.frames_seen += 1;
-            self.last_frame_seq = Some(h.seq);
-        }
+    /// Camera `camera` published a frame.
+    pub fn on_frame(&mut self, camera: usize, h: &FrameHeader) {
+        self.cameras.on_frame(camera, h);
     }
 
-    /// Ingestion published a frame on `perception/depth`.
-    pub fn on_filtered(&mut self, h: &FrameHeader) {
-        if self.last_filtered_seq != Some(h.seq) && h.ingest_ns > 0 {
-            self.ingest_ms.push(f64::from(h.ingest_ns) * 1e-6);
-        }
-        self.last_filtered_seq = Some(h.seq);
+    /// Camera `camera`'s ingestion published a frame.
+    pub fn on_filtered(&mut self, camera: usize, h: &FrameHeader) {
+        self.cameras.on_filtered(camera, h);
     }
 
-    /// A repulsion worker answered a frame.
-    pub fn on_repulsion(&mut self, m: &RepulsionResult) {
-        let bit = 1u32 << m.worker.min(31);
-        let all = if m.workers >= 32 {
-            u32::MAX
-        } else {
-            (1u32 << m.workers) - 1
-        };
-        let idx = match self.in_flight.iter().position(|f| f.seq == m.frame_seq) {
-            Some(i) => i,
-            None => {
-                // frames older than a second that never completed are dropped
-                self.in_flight
-                    .retain(|f| m.published_ns.saturating_sub(f.last_ns) < 1_000_000_000);
-                self.in_flight.push(FrameInFlight {
-                    seq: m.frame_seq,
-                    capture_ns: m.frame_capture_wall_ns,
-                    answered: 0,
-                    last_ns: m.published_ns,
-                    arrival_ns: Some(u64::MAX),
-                    compute_ns: 0,
-                });
-                self.in_flight.len() - 1
-            }
-        };
-        let f = &mut self.in_flight[idx];
-        f.answered |= bit;
-        f.last_ns = f.last_ns.max(m.published_ns);
-        f.compute_ns = f.compute_ns.saturating_add(m.compute_ns);
-        // the frame's arrival at ingestion, as each result tells it
-        f.arrival_ns = match (f.arrival_ns, m.since_arrival_ns) {
-            (Some(a), d) if d > 0 => Some(a.min(m.published_ns.saturating_sub(u64::from(d)))),
-            _ => None,
-        };
-        if f.answered & all == all {
-            self.complete_frames += 1;
-            self.frame_latency_ms
-                .push(f.last_ns.saturating_sub(f.capture_ns) as f64 * 1e-6);
-            if let Some(a) = f.arrival_ns.filter(|a| *a != u64::MAX) {
-                self.arrival_latency_ms
-                    .push(f.last_ns.saturating_sub(a) as f64 * 1e-6);
-            }
-            self.compute_ms.push(f.compute_ns as f64 * 1e-6);
-            self.in_flight.swap_remove(idx);
-        }
+    /// A repulsion worker answered a frame of camera `camera`.
+    pub fn on_repulsion(&mut self, camera: usize, m: &RepulsionResult) {
+        self.cameras.on_repulsion(camera, m);
     }
 
     fn perception(&self) -> Option<PerceptionReport> {
-        if self.frames_seen == 0 && self.complete_frames == 0 {
+        if !self.cameras.any() {
             return None;
         }
-        let percentiles = |samples: &[f64]| {
-            let mut v = samples.to_vec();
-            v.sort_by(f64::total_cmp);
-            let at = |p: f64| {
-                if v.is_empty() {
-                    0.0
-                } else {
-                    v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
-                }
-            };
-            Percentiles {
-                p50: at(0.5),
-                p99: at(0.99),
-                max: v.last().copied().unwrap_or(0.0),
-            }
-        };
-        // the frame in flight at the end is not dropped
-        let dropped = self
-            .frames_seen
-            .saturating_sub(self.complete_frames)
-            .saturating_sub(2);
+        let (cameras, all) = self.cameras.report();
         Some(PerceptionReport {
-            frames: self.frames_seen,
-            dropped_frames: dropped,
-            frame_to_repulsion_ms: percentiles(&self.frame_latency_ms),
-            arrival_to_repulsion_ms: percentiles(&self.arrival_latency_ms),
-            ingest_ms: percentiles(&self.ingest_ms),
-            repulsion_compute_ms: percentiles(&self.compute_ms),
+            frames: all.frames,
+            dropped_frames: all.dropped_frames,
+            frame_to_repulsion_ms: all.frame_to_repulsion_ms,
+            arrival_to_repulsion_ms: all.arrival_to_repulsion_ms,
+            ingest_ms: all.ingest_ms,
+            repulsion_compute_ms: all.repulsion_compute_ms,
+            cameras,
         })
     }
 
@@ -1324,14 +1231,14 @@ mod tests {
         let ms = 1_000_000u64;
         let mut cam = FrameHeader::zeroed();
         cam.seq = 7;
-        e.on_frame(&cam);
+        e.on_frame(0, &cam);
         let mut filtered = FrameHeader::zeroed();
         filtered.seq = 7;
         filtered.ingest_ns = (ms / 2) as u32;
-        e.on_filtered(&filtered);
+        e.on_filtered(0, &filtered);
         // the same frame seen again (another header's value) is not counted
         filtered.ingest_ns = ms as u32;
-        e.on_filtered(&filtered);
+        e.on_filtered(0, &filtered);
         // captured at 100 ms, arrived at ingestion at 102 ms
         let answer = |worker: u32, published_ms: u64, compute_ms: u64| {
             let mut m = RepulsionResult::zeroed();
@@ -1344,9 +1251,9 @@ mod tests {
             m.compute_ns = compute_ms * ms / 10;
             m
         };
-        e.on_repulsion(&answer(0, 103, 3));
+        e.on_repulsion(0, &answer(0, 103, 3));
         assert!(e.perception().unwrap().frame_to_repulsion_ms.max == 0.0);
-        e.on_repulsion(&answer(1, 104, 4));
+        e.on_repulsion(0, &answer(1, 104, 4));
         let p = e.perception().unwrap();
         assert_eq!(p.frames, 1);
         assert!((p.frame_to_repulsion_ms.p50 - 4.0).abs() < 1e-9, "{p:?}");

@@ -23,22 +23,18 @@
 
 use std::collections::VecDeque;
 
-use phri_config::CollaborationConfig;
 use phri_config::Loaded;
 use phri_control::inputs::CollabInput;
+use phri_control::write_collab_state;
 use phri_control::{write_messages, ControlInput, Controller, RepulsionInputs, Stamps};
 use phri_dynamics::DynamicsStep;
 use phri_gesture::WaveDetector;
 use phri_ipc::{
-    ControlMode, ControlStatus, FrameHeader, HandObservation, HriRequest, JointState,
+    CollabState, ControlMode, ControlStatus, HandObservation, HriRequest, JointState,
     RepulsionResult, Residual, Skeleton, TorqueCommand, WorldState, Zeroed,
 };
 use phri_model::Model;
-use phri_perception::camera::CameraSim;
-use phri_perception::ingest::{Ingest, StateHistory};
-use phri_perception::mask::{hand_observation, MaskHold};
-use phri_perception::repulsion::Worker;
-use phri_perception::skeleton::SkeletonTracker;
+use phri_perception::ingest::StateHistory;
 use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simulator};
 
 mod outage;
@@ -97,49 +93,25 @@ impl Default for CellOptions {
 /// A frame's repulsion results on their way to the controller.
 struct InFlight {
     ready_ns: u64,
-    results: Vec<RepulsionResult>,
+    /// per camera, its workers' results
+    results: Vec<Vec<RepulsionResult>>,
     /// the frame's skeleton, the request recognised on it, the refined hand
     skeleton: Skeleton,
     request: Option<HriRequest>,
     hand: Option<HandObservation>,
 }
 
-/// A further camera (`[[camera]]` beyond the first) with its own ingestion
-/// and repulsion workers; its results are fused with the first camera's.
-struct Eye {
-    camera: CameraSim,
-    /// its body tracker: a joint either camera sees is seen
-    tracker: SkeletonTracker,
-    skeleton: Skeleton,
-    ingest: Ingest,
-    workers: Vec<Worker>,
-    frame: Vec<u16>,
-    filtered: Vec<u16>,
-}
-
-/// The perception side: camera, ingestion and the repulsion workers.
+/// The perception side: every camera's step ([`phri_perception::Perception`]:
+/// camera, tracker, ingestion, workers) and the wave recogniser.
 struct Perception {
-    /// the cameras after the first, and the fusion of every camera's
-    /// results (with one camera: none, the paper's distances as they are)
-    more: Vec<Eye>,
-    fusion: Option<phri_perception::ResultFusion>,
-    camera: CameraSim,
-    ingest: Ingest,
+    cameras: phri_perception::Perception,
     history: StateHistory,
-    workers: Vec<Worker>,
-    frame: Vec<u16>,
-    filtered: Vec<u16>,
     world: WorldState,
     period_ns: u64,
     next_capture_ns: u64,
     latency_ns: u64,
     in_flight: VecDeque<InFlight>,
-    /// the simulated body tracker and the wave recogniser on its skeletons
-    tracker: SkeletonTracker,
     gesture: WaveDetector,
-    skeleton: Skeleton,
-    /// ingestion's mask of the collaborative hand, held through tracker dropouts
-    mask_hold: MaskHold,
 }
 
 /// The person's voice: the simulated room's audio (a scenario's `[[voice]]`
@@ -175,8 +147,6 @@ pub struct Cell {
     pub hand: Option<HandObservation>,
     /// requests that reached the controller since its last period
     requests: Vec<HriRequest>,
-    /// the collaboration of `[collaboration]` (mask and hand refinement)
-    collab_cfg: CollaborationConfig,
     pub status: ControlStatus,
     link_out: LinkOutput,
     seq: u64,
@@ -207,64 +177,18 @@ impl Cell {
             if !(opts.perception_latency_ms.is_finite() && opts.perception_latency_ms >= 0.0) {
                 return Err(CellError::Latency(opts.perception_latency_ms));
             }
-            let camera =
-                CameraSim::new(model.clone(), &cfg.camera).map_err(|e| step_err("camera")(&e))?;
-            let pixels = camera.pixels();
-            let workers = (0..cfg.repulsion.workers)
-                .map(|w| Worker::new(model.clone(), &cfg.repulsion, w))
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| step_err("repulsion")(&e))?;
             let mut world = WorldState::zeroed();
             world.dof = n as u32;
-            let more = cfg
-                .cameras
-                .iter()
-                .skip(1)
-                .map(|c| {
-                    let camera =
-                        CameraSim::new(model.clone(), c).map_err(|e| step_err("camera")(&e))?;
-                    let pixels = camera.pixels();
-                    Ok(Eye {
-                        tracker: SkeletonTracker::new(&cfg.skeleton, c.intrinsics, camera.pose()),
-                        skeleton: Skeleton::zeroed(),
-                        camera,
-                        ingest: Ingest::new(model.clone(), &cfg.perception)
-                            .map_err(|e| step_err("perception")(&e))?,
-                        workers: (0..cfg.repulsion.workers)
-                            .map(|w| Worker::new(model.clone(), &cfg.repulsion, w))
-                            .collect::<Result<Vec<_>, _>>()
-                            .map_err(|e| step_err("repulsion")(&e))?,
-                        frame: vec![0; pixels],
-                        filtered: vec![0; pixels],
-                    })
-                })
-                .collect::<Result<Vec<_>, CellError>>()?;
-            let fusion = match more.is_empty() {
-                true => None,
-                false => Some(
-                    phri_perception::ResultFusion::new(&cfg.cameras, &cfg.repulsion)
-                        .map_err(|e| step_err("perception")(&e))?,
-                ),
-            };
             Some(Perception {
-                more,
-                fusion,
-                ingest: Ingest::new(model.clone(), &cfg.perception)
-                    .map_err(|e| step_err("perception")(&e))?,
+                cameras: phri_perception::Perception::new(&model, cfg)
+                    .map_err(|e| step_err(e.service())(&e))?,
                 history: StateHistory::new(n, 200),
-                workers,
-                frame: vec![0; pixels],
-                filtered: vec![0; pixels],
                 world,
                 period_ns: (1e9 / cfg.camera.rate_hz) as u64,
                 next_capture_ns: 0,
                 latency_ns: (opts.perception_latency_ms * 1e6) as u64,
                 in_flight: VecDeque::new(),
-                tracker: SkeletonTracker::new(&cfg.skeleton, cfg.camera.intrinsics, camera.pose()),
                 gesture: WaveDetector::new(&cfg.gesture).map_err(|e| step_err("gesture")(&e))?,
-                skeleton: Skeleton::zeroed(),
-                mask_hold: MaskHold::default(),
-                camera,
             })
         } else {
             None
@@ -306,7 +230,7 @@ impl Cell {
             link,
             dynamics,
             controller,
-            repulsion: RepulsionInputs::from_config(&cfg.repulsion),
+            repulsion: RepulsionInputs::for_cell(cfg),
             avoidance,
             perception,
             state,
@@ -316,7 +240,6 @@ impl Cell {
             skeleton: None,
             hand: None,
             requests: Vec::with_capacity(8),
-            collab_cfg: cfg.collaboration.clone(),
             seq: 0,
             t_ns: 0,
             outages: opts.outages.clone(),
@@ -402,7 +325,9 @@ impl Cell {
         );
     }
 
-    /// Camera, ingestion and workers when a frame is due; deliver what is ready.
+    /// Every camera, ingestion and the workers when a frame is due
+    /// ([`phri_perception::Perception`], the steps the binaries run); deliver
+    /// what is ready.
     fn perceive(&mut self) -> Result<(), CellError> {
         let Some(p) = self.perception.as_mut() else {
             return Ok(());
@@ -412,105 +337,30 @@ impl Cell {
         if now >= p.next_capture_ns {
             p.next_capture_ns = now + p.period_ns;
             fill_world(&self.sim, self.seq, now, &mut p.world);
-            let mut header = FrameHeader::zeroed();
-            p.camera
-                .step(&p.world, now, &mut p.frame, &mut header)
-                .map_err(|e| step_err("camera")(&e))?;
             let ready_ns = now + p.latency_ns;
-            p.tracker.step(
-                &p.world,
-                &header,
-                &p.frame,
-                p.period_ns as f64 * 1e-9,
-                &mut p.skeleton,
-            );
-            p.skeleton.published_ns = ready_ns;
-            // the further cameras see the same instant: their frames now,
-            // their trackers' joints merged into the first's
-            let mut more_headers: Vec<FrameHeader> = Vec::with_capacity(p.more.len());
-            for eye in p.more.iter_mut() {
-                let mut h = FrameHeader::zeroed();
-                eye.camera
-                    .step(&p.world, now, &mut eye.frame, &mut h)
-                    .map_err(|e| step_err("camera")(&e))?;
-                eye.tracker.step(
-                    &p.world,
-                    &h,
-                    &eye.frame,
-                    p.period_ns as f64 * 1e-9,
-                    &mut eye.skeleton,
-                );
-                phri_perception::skeleton::merge_views(&mut p.skeleton, &eye.skeleton);
-                more_headers.push(h);
-            }
+            let mut skeleton = *p
+                .cameras
+                .capture(&p.world, now, p.period_ns as f64 * 1e-9)
+                .map_err(|e| step_err(e.service())(&e))?;
+            skeleton.published_ns = ready_ns;
             let mut request = None;
-            if let Some(w) = p.gesture.step(&p.skeleton) {
+            if let Some(w) = p.gesture.step(&skeleton) {
                 self.summary.gesture(&w);
                 request = Some(phri_gesture::follow_request(&w, self.seq, ready_ns));
             }
-            // ingestion masks the collaborative hand while a collaboration is on
-            let collab = self
-                .controller
-                .collaboration()
-                .filter(|c| c.machine().active());
-            let mask = p.mask_hold.mask(
-                Some(&p.skeleton),
-                collab.map(|c| c.machine().part()),
-                &self.collab_cfg,
-                header.capture_ns,
-            );
-            p.ingest.set_mask(mask);
-            let outcome = p
-                .ingest
-                .step(&mut header, &p.frame, &p.history, ready_ns, &mut p.filtered)
-                .map_err(|e| step_err("perception")(&e))?;
-            let hand = match (collab, mask) {
-                (Some(c), Some(m)) => Some(hand_observation(
-                    &header,
-                    c.machine().part(),
-                    &m,
-                    &outcome.masked,
-                    ready_ns,
-                )),
-                _ => None,
-            };
-            let mut results = Vec::with_capacity(p.workers.len());
-            for w in p.workers.iter_mut() {
-                let msg = w
-                    .respond(&header, &p.filtered)
-                    .map_err(|e| step_err("repulsion")(&e))?;
-                msg.published_ns = ready_ns;
-                results.push(*msg);
-            }
-            // the further cameras see the same instant; their results are
-            // fused with the first's, worker by worker
-            if let Some(fusion) = p.fusion.as_ref() {
-                let mut theirs: Vec<Vec<RepulsionResult>> = Vec::with_capacity(p.more.len());
-                for (eye, h) in p.more.iter_mut().zip(more_headers.iter_mut()) {
-                    eye.ingest.set_mask(mask);
-                    eye.ingest
-                        .step(h, &eye.frame, &p.history, ready_ns, &mut eye.filtered)
-                        .map_err(|e| step_err("perception")(&e))?;
-                    let mut rs = Vec::with_capacity(eye.workers.len());
-                    for w in eye.workers.iter_mut() {
-                        let msg = w
-                            .respond(h, &eye.filtered)
-                            .map_err(|e| step_err("repulsion")(&e))?;
-                        rs.push(*msg);
-                    }
-                    theirs.push(rs);
-                }
-                for (w, mine) in results.iter_mut().enumerate() {
-                    let first = *mine;
-                    let mut all: Vec<Option<&RepulsionResult>> = vec![Some(&first)];
-                    all.extend(theirs.iter().map(|rs| rs.get(w)));
-                    fusion.fuse(&all, mine);
-                }
-            }
+            // ingestion reads the controller's collab/state, as the service does
+            let mut collab = CollabState::zeroed();
+            write_collab_state(&self.controller, &self.state, self.seq, now, &mut collab);
+            let hand = p
+                .cameras
+                .perceive(&p.history, Some(&collab), ready_ns)
+                .map_err(|e| step_err(e.service())(&e))?;
             p.in_flight.push_back(InFlight {
                 ready_ns,
-                results,
-                skeleton: p.skeleton,
+                results: (0..p.cameras.cameras())
+                    .map(|c| p.cameras.results(c).to_vec())
+                    .collect(),
+                skeleton,
                 request,
                 hand,
             });
@@ -518,10 +368,12 @@ impl Cell {
         }
         while p.in_flight.front().is_some_and(|x| x.ready_ns <= now) {
             if let Some(done) = p.in_flight.pop_front() {
-                for r in &done.results {
-                    self.repulsion
-                        .push(r)
-                        .map_err(|e| step_err("control")(&e))?;
+                for (camera, results) in done.results.iter().enumerate() {
+                    for r in results {
+                        self.repulsion
+                            .push_camera(camera, r)
+                            .map_err(|e| step_err("control")(&e))?;
+                    }
                 }
                 self.skeleton = Some(done.skeleton);
                 if done.hand.is_some() {
@@ -572,6 +424,7 @@ impl Cell {
     /// The controller answers the newest state with a command and a status.
     fn control(&mut self) -> Result<(), CellError> {
         let n = self.sim.model().nv();
+        self.repulsion.fuse(self.state.stamp_ns);
         let perception = self.avoidance.then_some(&self.repulsion);
         let mut input =
             ControlInput::from_messages(&self.state, self.residual.as_ref(), perception, n)

@@ -4,15 +4,16 @@
 //! the faults `fault/depth` asked for, waits the sensor latency and publishes.
 //! With `[skeleton] enabled` it also stands in for a body tracker: the
 //! person's skeleton of that frame on `perception/skeleton`, right after it.
+//! `--camera I` serves the cell's camera I (`[[camera]]`) on its own channels
+//! (`camera/I/depth`, `perception/I/skeleton`); only the first camera takes
+//! `fault/depth`'s faults.
 
 use std::error::Error;
 use std::process::ExitCode;
 
-use phri_ipc::{
-    Queue, Skeleton, Zeroed, CAMERA_DEPTH, FAULT_DEPTH, PERCEPTION_SKELETON, SIM_WORLD,
-};
+use phri_ipc::{Queue, Skeleton, Zeroed, FAULT_DEPTH, SIM_WORLD};
 use phri_perception::skeleton::SkeletonTracker;
-use phri_perception::{CameraSim, FaultState};
+use phri_perception::{CameraFlag, CameraSim, FaultState};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
 fn main() -> ExitCode {
@@ -20,12 +21,12 @@ fn main() -> ExitCode {
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+    let (ctx, flag) = ServiceContext::from_cli::<CameraFlag>(
         "phri-camera",
         "camera",
         "The simulated depth camera: renders the cell at the camera rate on camera/depth",
     )?;
-    let cfg = &ctx.config().camera;
+    let (cfg, channels) = flag.resolve(ctx.config())?;
     let mut camera = CameraSim::new(ctx.robot_model()?, cfg)?;
     let pixels = camera.pixels();
     let skeleton_cfg = &ctx.config().skeleton;
@@ -37,10 +38,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     let node = ctx.node()?;
     let mut worlds = SIM_WORLD.latest_reader(&node)?;
-    let frames = CAMERA_DEPTH.frame_publisher(&node, pixels)?;
-    let fault_requests = FAULT_DEPTH.subscriber(&node, Queue::Drain)?;
+    let frames = channels.depth.frame_publisher(&node, pixels)?;
+    let fault_requests = match flag.camera {
+        0 => Some(FAULT_DEPTH.subscriber(&node, Queue::Drain)?),
+        _ => None,
+    };
     let skeletons = match tracker {
-        Some(_) => Some(PERCEPTION_SKELETON.publisher(&node)?),
+        Some(_) => Some(channels.skeleton.publisher(&node)?),
         None => None,
     };
     let mut skeleton = Skeleton::zeroed();
@@ -56,13 +60,15 @@ fn body() -> Result<(), Box<dyn Error>> {
         if now_ns() > tick + period {
             tick = now_ns(); // fell behind: skip frames rather than burst
         }
-        fault_requests.drain(|f| {
-            let said = match faults.accept(f, now_ns()) {
-                Ok(accepted) => accepted.to_string(),
-                Err(refused) => refused.to_string(),
-            };
-            tracing::warn!("{}: fault {}: {said}", FAULT_DEPTH.name, f.seq);
-        })?;
+        if let Some(requests) = fault_requests.as_ref() {
+            requests.drain(|f| {
+                let said = match faults.accept(f, now_ns()) {
+                    Ok(accepted) => accepted.to_string(),
+                    Err(refused) => refused.to_string(),
+                };
+                tracing::warn!("{}: fault {}: {said}", FAULT_DEPTH.name, f.seq);
+            })?;
+        }
         worlds.update()?;
         let Some(world) = worlds.get() else { continue };
         let capture_wall = now_ns();

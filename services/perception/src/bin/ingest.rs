@@ -7,6 +7,10 @@
 //! removes the collaborative hand of the newest `perception/skeleton` from
 //! the frame (the paper's Fig. 5) and publishes the hand refined from those
 //! pixels on `perception/hand`.
+//! `--camera I` serves camera I of `[[camera]]`: `camera/I/depth` in,
+//! `perception/I/depth` out; the skeleton it masks by is every camera's
+//! merged (a hand either camera sees is masked), and only the first camera's
+//! ingestion refines and publishes the hand.
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -15,12 +19,17 @@ use std::time::Duration;
 use phri_config::{CollaborationConfig, DepthSource};
 use phri_ipc::{
     CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation, IpcError,
-    LatestReader, Publisher, Queue, Skeleton, CAMERA_DEPTH, COLLAB_STATE, FRAME_PIXELS,
-    PERCEPTION_DEPTH, PERCEPTION_HAND, PERCEPTION_SKELETON, ROBOT_STATE,
+    LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS, PERCEPTION_HAND,
+    ROBOT_STATE,
 };
 use phri_perception::mask::{hand_observation, MaskHold};
-use phri_perception::{Ingest, PngReplay, RateLimited, StateHistory, Ticks};
+use phri_perception::skeleton::merge_views;
+use phri_perception::{CameraFlag, Ingest, PngReplay, RateLimited, StateHistory, Ticks};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
+
+/// A camera's skeleton older than this is left out of the merge [ns]
+/// (six frames at 30 Hz).
+const SKELETON_MAX_AGE_NS: u64 = 200_000_000;
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-perception", body)
@@ -49,8 +58,11 @@ struct Out {
 struct Collab {
     cfg: CollaborationConfig,
     states: LatestReader<CollabState>,
-    skeletons: LatestReader<Skeleton>,
-    hands: Publisher<HandObservation>,
+    /// every camera's body tracker, this one's first
+    skeletons: Vec<LatestReader<Skeleton>>,
+    merged: Skeleton,
+    /// the first camera's ingestion publishes the refined hand
+    hands: Option<Publisher<HandObservation>>,
     hold: MaskHold,
 }
 
@@ -70,12 +82,27 @@ impl Out {
         let mut masking = None;
         if let Some(c) = self.collab.as_mut() {
             c.states.update()?;
-            c.skeletons.update()?;
+            c.merged = Skeleton::zeroed();
+            let mut any = false;
+            let mono = now_ns();
+            for r in c.skeletons.iter_mut() {
+                r.update()?;
+                // a dead camera's last skeleton says nothing of now
+                let fresh =
+                    |s: &&Skeleton| mono.saturating_sub(s.published_ns) <= SKELETON_MAX_AGE_NS;
+                if let Some(s) = r.get().filter(fresh) {
+                    match any {
+                        false => c.merged = *s,
+                        true => merge_views(&mut c.merged, s),
+                    }
+                    any = true;
+                }
+            }
             // a stale state (its controller stopped or dead) masks nothing
             let part = phri_perception::mask::collaborating_part(c.states.get(), now_ns());
             masking = c
                 .hold
-                .mask(c.skeletons.get(), part, &c.cfg, header.capture_ns)
+                .mask(any.then_some(&c.merged), part, &c.cfg, header.capture_ns)
                 .zip(part)
                 .map(|(m, p)| (p, m));
         }
@@ -90,8 +117,10 @@ impl Out {
                 *sample.user_header_mut() = *header;
                 self.frames.send(sample)?;
                 if let (Some(c), Some((part, mask))) = (self.collab.as_ref(), masking) {
-                    let h = hand_observation(header, part, &mask, &outcome.masked, now_ns());
-                    c.hands.publish(&h)?;
+                    if let Some(hands) = c.hands.as_ref() {
+                        let h = hand_observation(header, part, &mask, &outcome.masked, now_ns());
+                        hands.publish(&h)?;
+                    }
                 }
             }
             Err(e) => {
@@ -106,13 +135,20 @@ impl Out {
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+    let (ctx, flag) = ServiceContext::from_cli::<CameraFlag>(
         "phri-perception",
         "perception",
         "Depth ingestion: filters camera/depth, removes the robot, publishes perception/depth, the skeleton and the hand",
     )?;
     let cfg = &ctx.config().perception;
-    let camera_cfg = &ctx.config().camera;
+    let (camera_cfg, channels) = flag.resolve(ctx.config())?;
+    if flag.camera > 0 && matches!(cfg.source, DepthSource::Png) {
+        return Err(format!(
+            "--camera {}: perception.source = \"png\" replays the first camera only",
+            flag.camera
+        )
+        .into());
+    }
     let model = ctx.robot_model()?;
     let n = model.nv();
     let ingest = Ingest::new(model, cfg)?;
@@ -128,23 +164,33 @@ fn body() -> Result<(), Box<dyn Error>> {
     let mut out = Out {
         ingest,
         history: StateHistory::new(n, 2000),
-        frames: PERCEPTION_DEPTH.frame_publisher(&node, pixels_max)?,
+        frames: channels.perception.frame_publisher(&node, pixels_max)?,
         refused: 0,
         collab: match ctx.config().collaboration.enabled {
             true => Some(Collab {
                 cfg: ctx.config().collaboration.clone(),
                 states: COLLAB_STATE.latest_reader(&node)?,
-                skeletons: PERCEPTION_SKELETON.latest_reader(&node)?,
-                hands: PERCEPTION_HAND.publisher(&node)?,
+                skeletons: std::iter::once(flag.camera)
+                    .chain((0..ctx.config().cameras.len()).filter(|&i| i != flag.camera))
+                    .filter_map(phri_ipc::camera)
+                    .map(|c| c.skeleton.latest_reader(&node))
+                    .collect::<Result<_, _>>()?,
+                merged: Skeleton::zeroed(),
+                hands: match flag.camera {
+                    0 => Some(PERCEPTION_HAND.publisher(&node)?),
+                    _ => None,
+                },
                 hold: MaskHold::default(),
             }),
             false => None,
         },
     };
     let mut source = match cfg.source {
-        DepthSource::Camera => {
-            Source::Camera(CAMERA_DEPTH.waking_frame_subscriber(&node, Queue::Latest)?)
-        }
+        DepthSource::Camera => Source::Camera(
+            channels
+                .depth
+                .waking_frame_subscriber(&node, Queue::Latest)?,
+        ),
         DepthSource::Png => {
             let replay = PngReplay::open(cfg, camera_cfg, &ctx.loaded.origin)?;
             Source::Png {

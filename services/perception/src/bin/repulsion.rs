@@ -1,13 +1,17 @@
 //! `phri-repulsion --worker I`: for the control points worker I owns, the
-//! depth-space distance and repulsive vector of the newest
-//! `perception/depth` frame (eqs. 15-18, [`Worker::respond`]), published on
-//! `perception/repulsion` with the frame's sequence and the processing time.
+//! depth-space distance and repulsive vector of the newest frame of every
+//! camera of the cell (eqs. 15-18, [`Worker::respond`]): `perception/depth`
+//! answered on `perception/repulsion`, camera C's `perception/C/depth` on
+//! `perception/C/repulsion`, each with the frame's sequence and the
+//! processing time. With several cameras each answer is bounded by what its
+//! camera watches ([`Worker::bounded_by`]). A camera that stops sending
+//! frames delays none of the others' answers.
 
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_ipc::{Queue, PERCEPTION_DEPTH, PERCEPTION_REPULSION};
+use phri_ipc::{wait_any, FrameSubscriber, Publisher, Queue, RepulsionResult};
 use phri_perception::Worker;
 use phri_runtime::{now_ns, ServiceContext};
 
@@ -17,6 +21,14 @@ struct WorkerFlag {
     /// Index of this worker: it owns the control points `[repulsion]` assigns to it
     #[arg(long, value_name = "I", required = true)]
     worker: Option<u32>,
+}
+
+/// One camera as this worker serves it.
+struct Served {
+    worker: Worker,
+    frames: FrameSubscriber,
+    results: Publisher<RepulsionResult>,
+    errors: u64,
 }
 
 fn main() -> ExitCode {
@@ -31,46 +43,72 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     // required by clap unless `completions` ran (and exited)
     let worker = worker.ok_or("--worker is required")?;
-    let mut w = Worker::new(ctx.robot_model()?, &ctx.config().repulsion, worker)?;
+    let cfg = ctx.config();
+    let cameras = &cfg.cameras;
+    let mut workers = Vec::with_capacity(cameras.len());
+    for camera in cameras {
+        let w = Worker::new(ctx.robot_model()?, &cfg.repulsion, worker)?;
+        workers.push(match cameras.len() {
+            1 => w,
+            _ => w.bounded_by(camera)?,
+        });
+    }
     if ctx.checking() {
         return Ok(());
     }
     let node = ctx.node()?;
-    let frames = PERCEPTION_DEPTH.waking_frame_subscriber(&node, Queue::Latest)?;
-    let results = PERCEPTION_REPULSION.publisher(&node)?;
+    let mut served = Vec::with_capacity(workers.len());
+    for (i, w) in workers.into_iter().enumerate() {
+        let channels = phri_ipc::camera(i).ok_or("more cameras than channels")?;
+        served.push(Served {
+            worker: w,
+            frames: channels
+                .perception
+                .waking_frame_subscriber(&node, Queue::Latest)?,
+            results: channels.repulsion.publisher(&node)?,
+            errors: 0,
+        });
+    }
     ctx.start_deadman()?;
     ctx.go_realtime();
-    let mut errors = 0u64;
     while !ctx.shutdown.requested() {
-        let _ = frames.wait(Duration::from_millis(50));
-        // the newest frame only: an old one is worth nothing to avoidance
-        let Some(frame) = frames.latest()? else {
-            continue;
-        };
-        let t0 = now_ns();
-        let header = *frame.user_header();
-        let msg = match w.respond(frame.user_header(), frame.payload()) {
-            Ok(msg) => msg,
-            Err(e) => {
-                errors += 1;
-                if errors.is_power_of_two() {
-                    tracing::warn!("worker {worker}: {e} ({errors} frames failed)");
-                }
+        {
+            let subs: Vec<&FrameSubscriber> = served.iter().map(|s| &s.frames).collect();
+            let _ = wait_any(&subs, Duration::from_millis(50));
+        }
+        for (camera, s) in served.iter_mut().enumerate() {
+            // the newest frame only: an old one is worth nothing to avoidance
+            let Some(frame) = s.frames.latest()? else {
                 continue;
-            }
-        };
-        drop(frame);
-        msg.compute_ns = now_ns() - t0;
-        msg.published_ns = now_ns();
-        // the frame arrived at ingestion ingest_ns before ingestion published it
-        msg.since_arrival_ns = match header.ingest_ns {
-            0 => 0,
-            ingest => {
-                let arrived = header.published_ns.saturating_sub(u64::from(ingest));
-                u32::try_from(msg.published_ns.saturating_sub(arrived)).unwrap_or(u32::MAX)
-            }
-        };
-        results.publish(msg)?;
+            };
+            let t0 = now_ns();
+            let header = *frame.user_header();
+            let msg = match s.worker.respond(frame.user_header(), frame.payload()) {
+                Ok(msg) => msg,
+                Err(e) => {
+                    s.errors += 1;
+                    if s.errors.is_power_of_two() {
+                        tracing::warn!(
+                            "worker {worker}, camera {camera}: {e} ({} frames failed)",
+                            s.errors
+                        );
+                    }
+                    continue;
+                }
+            };
+            drop(frame);
+            msg.compute_ns = now_ns() - t0;
+            msg.published_ns = now_ns();
+            // the frame arrived at ingestion ingest_ns before ingestion published it
+            msg.since_arrival_ns = match header.ingest_ns {
+                0 => 0,
+                ingest => {
+                    let arrived = header.published_ns.saturating_sub(u64::from(ingest));
+                    u32::try_from(msg.published_ns.saturating_sub(arrived)).unwrap_or(u32::MAX)
+                }
+            };
+            s.results.publish(msg)?;
+        }
     }
     Ok(())
 }

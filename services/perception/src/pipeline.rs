@@ -1,0 +1,223 @@
+//! Every camera's perception as one step, for the runners that hold the
+//! whole cell in one process (the lock-step cell, its sweeps, the tests):
+//! camera frame → ingestion → repulsion workers, camera by camera, with the
+//! same steps the binaries call ([`CameraSim`], [`SkeletonTracker`],
+//! [`Ingest`], [`Worker`]) and the same rules: the body trackers' skeletons
+//! merged ([`merge_views`]), the collaborative hand masked from every
+//! camera's frame while the newest `collab/state` says a collaboration is on
+//! and is fresh ([`collaborating_part`]), the hand refined from the first
+//! camera's frame, and each camera's distances bounded by what it watches
+//! when the cell has several ([`Worker::bounded_by`]). The controller fuses
+//! the cameras' results (`phri_control::RepulsionInputs`).
+
+use phri_config::{Config, Invalid};
+use phri_ipc::{
+    CollabState, FrameHeader, HandObservation, RepulsionResult, Skeleton, WorldState, Zeroed,
+};
+use phri_model::Model;
+
+use crate::camera::{CameraError, CameraSim};
+use crate::ingest::{FrameError, Ingest, StateHistory};
+use crate::mask::{collaborating_part, hand_observation, MaskHold};
+use crate::repulsion::{RepulsionError, Worker};
+use crate::skeleton::{merge_views, SkeletonTracker};
+
+/// Why a perception step failed, by the service whose step it was.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    #[error("camera {camera}: {source}")]
+    Camera {
+        camera: usize,
+        #[source]
+        source: CameraError,
+    },
+    #[error("camera {camera}: {source}")]
+    Frame {
+        camera: usize,
+        #[source]
+        source: FrameError,
+    },
+    #[error("camera {camera}: {source}")]
+    Repulsion {
+        camera: usize,
+        #[source]
+        source: RepulsionError,
+    },
+    #[error(transparent)]
+    Config(#[from] Invalid),
+}
+
+impl PipelineError {
+    /// The service whose step failed (`camera`, `perception`, `repulsion`).
+    pub fn service(&self) -> &'static str {
+        match self {
+            PipelineError::Camera { .. } => "camera",
+            PipelineError::Frame { .. } | PipelineError::Config(_) => "perception",
+            PipelineError::Repulsion { .. } => "repulsion",
+        }
+    }
+}
+
+/// One camera with its tracker, its ingestion and its repulsion workers.
+struct Eye {
+    camera: CameraSim,
+    tracker: SkeletonTracker,
+    skeleton: Skeleton,
+    ingest: Ingest,
+    workers: Vec<Worker>,
+    header: FrameHeader,
+    frame: Vec<u16>,
+    filtered: Vec<u16>,
+    results: Vec<RepulsionResult>,
+}
+
+/// Every camera of a cell, stepped together.
+pub struct Perception {
+    eyes: Vec<Eye>,
+    /// the trackers' skeletons merged, the first camera's first
+    skeleton: Skeleton,
+    mask_hold: MaskHold,
+    collab: phri_config::CollaborationConfig,
+}
+
+impl Perception {
+    /// The cameras (`[[camera]]`), ingestion, workers and trackers of `config`.
+    pub fn new(model: &Model, config: &Config) -> Result<Perception, PipelineError> {
+        let several = config.cameras.len() > 1;
+        let mut eyes = Vec::with_capacity(config.cameras.len());
+        for (i, c) in config.cameras.iter().enumerate() {
+            let camera = CameraSim::new(model.clone(), c)
+                .map_err(|source| PipelineError::Camera { camera: i, source })?;
+            let pixels = camera.pixels();
+            let mut workers = Vec::with_capacity(config.repulsion.workers as usize);
+            for w in 0..config.repulsion.workers {
+                let repulsion = |source| PipelineError::Repulsion { camera: i, source };
+                let worker = Worker::new(model.clone(), &config.repulsion, w).map_err(repulsion)?;
+                workers.push(match several {
+                    true => worker.bounded_by(c)?,
+                    false => worker,
+                });
+            }
+            eyes.push(Eye {
+                tracker: SkeletonTracker::new(&config.skeleton, c.intrinsics, camera.pose()),
+                skeleton: Skeleton::zeroed(),
+                ingest: Ingest::new(model.clone(), &config.perception)?,
+                header: FrameHeader::zeroed(),
+                frame: vec![0; pixels],
+                filtered: vec![0; pixels],
+                results: Vec::with_capacity(workers.len()),
+                workers,
+                camera,
+            });
+        }
+        Ok(Perception {
+            eyes,
+            skeleton: Skeleton::zeroed(),
+            mask_hold: MaskHold::default(),
+            collab: config.collaboration.clone(),
+        })
+    }
+
+    /// Cameras.
+    pub fn cameras(&self) -> usize {
+        self.eyes.len()
+    }
+
+    /// Every camera captures `world` at `now_ns` (robot clock, also its
+    /// capture wall time), and its tracker finds the people of that frame
+    /// (`frame_period_s` apart); the skeletons are merged (a joint either
+    /// camera sees is seen). Returns the merged skeleton.
+    pub fn capture(
+        &mut self,
+        world: &WorldState,
+        now_ns: u64,
+        frame_period_s: f64,
+    ) -> Result<&Skeleton, PipelineError> {
+        for (i, eye) in self.eyes.iter_mut().enumerate() {
+            eye.header = FrameHeader::zeroed();
+            eye.camera
+                .step(world, now_ns, &mut eye.frame, &mut eye.header)
+                .map_err(|source| PipelineError::Camera { camera: i, source })?;
+            eye.tracker.step(
+                world,
+                &eye.header,
+                &eye.frame,
+                frame_period_s,
+                &mut eye.skeleton,
+            );
+            match i {
+                0 => self.skeleton = eye.skeleton,
+                _ => merge_views(&mut self.skeleton, &eye.skeleton),
+            }
+        }
+        Ok(&self.skeleton)
+    }
+
+    /// The merged skeleton of the last capture.
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.skeleton
+    }
+
+    /// Ingestion and the workers on every camera's last capture, handled at
+    /// `ready_ns` (robot clock). While `collab` (the newest `collab/state`,
+    /// stamped on the same clock as `ready_ns`) says a collaboration is on,
+    /// its hand is masked from every frame and refined from the first
+    /// camera's: the returned `perception/hand` message.
+    pub fn perceive(
+        &mut self,
+        history: &StateHistory,
+        collab: Option<&CollabState>,
+        ready_ns: u64,
+    ) -> Result<Option<HandObservation>, PipelineError> {
+        let part = collaborating_part(collab, ready_ns);
+        let capture_ns = self.eyes.first().map_or(0, |e| e.header.capture_ns);
+        let mask = self
+            .mask_hold
+            .mask(Some(&self.skeleton), part, &self.collab, capture_ns);
+        let mut hand = None;
+        for (i, eye) in self.eyes.iter_mut().enumerate() {
+            eye.ingest.set_mask(mask);
+            let outcome = eye
+                .ingest
+                .step(
+                    &mut eye.header,
+                    &eye.frame,
+                    history,
+                    ready_ns,
+                    &mut eye.filtered,
+                )
+                .map_err(|source| PipelineError::Frame { camera: i, source })?;
+            if let (0, Some(p), Some(m)) = (i, part, mask) {
+                hand = Some(hand_observation(
+                    &eye.header,
+                    p,
+                    &m,
+                    &outcome.masked,
+                    ready_ns,
+                ));
+            }
+            eye.results.clear();
+            for w in eye.workers.iter_mut() {
+                let msg = w
+                    .respond(&eye.header, &eye.filtered)
+                    .map_err(|source| PipelineError::Repulsion { camera: i, source })?;
+                msg.published_ns = ready_ns;
+                eye.results.push(*msg);
+            }
+        }
+        Ok(hand)
+    }
+
+    /// Camera `camera`'s workers' results of the last [`Perception::perceive`].
+    pub fn results(&self, camera: usize) -> &[RepulsionResult] {
+        self.eyes.get(camera).map_or(&[], |e| &e.results)
+    }
+
+    /// Camera `camera`'s last frame: its header and its depths [mm] as
+    /// captured and as filtered by ingestion.
+    pub fn frame(&self, camera: usize) -> Option<(&FrameHeader, &[u16], &[u16])> {
+        self.eyes
+            .get(camera)
+            .map(|e| (&e.header, e.frame.as_slice(), e.filtered.as_slice()))
+    }
+}
