@@ -16,6 +16,7 @@ pub mod json;
 pub mod messages;
 pub mod owners;
 pub mod qos;
+pub mod views;
 
 pub use channel::*;
 pub use channels::*;
@@ -25,3 +26,4 @@ pub use error::IpcError;
 pub use messages::*;
 pub use owners::{Owned, OwnerTable, Refusal, Sender, ServiceRole};
 pub use qos::*;
+pub use views::{merge_newest, merge_views};

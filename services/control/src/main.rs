@@ -73,7 +73,15 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         .collect::<Result<Vec<_>, _>>()?;
     let collaborating = cfg.collaboration.enabled;
     let requests = HRI_REQUEST.subscriber(&node, Queue::Drain)?;
-    let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
+    // every camera's body tracker, merged (a joint either camera sees is seen)
+    let mut skeletons = (0..repulsion.cameras())
+        .map(|i| match phri_ipc::camera(i) {
+            Some(c) => c.skeleton.latest_reader(&node),
+            None => PERCEPTION_SKELETON.latest_reader(&node),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut skeleton = phri_ipc::Skeleton::zeroed();
+    let skeleton_spread_ns = (cfg.control.perception_max_age_ms * 1e6) as u64;
     let mut hands = PERCEPTION_HAND.latest_reader(&node)?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
     // only the services the supervisor started for a channel, and no stamp
@@ -142,11 +150,16 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                     None => break,
                 }
             }
-            skeletons.update_from(|pid, s| gate.skeleton(pid, s, now))?;
+            let mut views = [None; phri_ipc::MAX_CAMERAS];
+            for (v, r) in views.iter_mut().zip(skeletons.iter_mut()) {
+                r.update_from(|pid, s| gate.skeleton(pid, s, now))?;
+                *v = r.get();
+            }
+            let seen = phri_ipc::merge_newest(&views, skeleton_spread_ns, &mut skeleton);
             hands.update_from(|pid, h| gate.hand(pid, h, now))?;
             input.collab = CollabInput {
                 requests: &pending[..k],
-                skeleton: skeletons.get(),
+                skeleton: seen.then_some(&skeleton),
                 hand: hands.get(),
             };
         }

@@ -209,40 +209,7 @@ impl SkeletonTracker {
     }
 }
 
-/// Another camera's view of the same people (`other`, same instant, the
-/// same tracker ids) merged into `into`: a joint seen by either camera is
-/// seen, with the position of the camera that sees it more surely; a
-/// person tracked by either is tracked. People `into` lacks are added.
-pub fn merge_views(into: &mut Skeleton, other: &Skeleton) {
-    let n_other = (other.n_people as usize).min(other.people.len());
-    for theirs in &other.people[..n_other] {
-        let n = (into.n_people as usize).min(into.people.len());
-        let capacity = into.people.len();
-        match into.people[..n].iter().position(|p| p.id == theirs.id) {
-            Some(k) => {
-                let mine = &mut into.people[k];
-                if theirs.tracked == 0 {
-                    continue;
-                }
-                if mine.tracked == 0 {
-                    *mine = *theirs;
-                    continue;
-                }
-                for j in 0..SKELETON_JOINTS {
-                    if theirs.confidence[j] > mine.confidence[j] {
-                        mine.confidence[j] = theirs.confidence[j];
-                        mine.joints[j] = theirs.joints[j];
-                    }
-                }
-            }
-            None if n < capacity => {
-                into.people[n] = *theirs;
-                into.n_people += 1;
-            }
-            None => {}
-        }
-    }
-}
+pub use phri_ipc::merge_views;
 
 #[cfg(test)]
 mod tests {

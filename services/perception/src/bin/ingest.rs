@@ -19,11 +19,10 @@ use std::time::Duration;
 use phri_config::{CollaborationConfig, DepthSource};
 use phri_ipc::{
     CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation, IpcError,
-    LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS, PERCEPTION_HAND,
+    merge_newest, LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS, PERCEPTION_HAND,
     ROBOT_STATE,
 };
 use phri_perception::mask::{hand_observation, MaskHold};
-use phri_perception::skeleton::merge_views;
 use phri_perception::{CameraFlag, Ingest, PngReplay, RateLimited, StateHistory, Ticks};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
@@ -58,7 +57,7 @@ struct Out {
 struct Collab {
     cfg: CollaborationConfig,
     states: LatestReader<CollabState>,
-    /// every camera's body tracker, this one's first
+    /// every camera's body tracker
     skeletons: Vec<LatestReader<Skeleton>>,
     merged: Skeleton,
     /// the first camera's ingestion publishes the refined hand
@@ -82,22 +81,16 @@ impl Out {
         let mut masking = None;
         if let Some(c) = self.collab.as_mut() {
             c.states.update()?;
-            c.merged = Skeleton::zeroed();
-            let mut any = false;
             let mono = now_ns();
-            for r in c.skeletons.iter_mut() {
+            let mut views = [None; phri_ipc::MAX_CAMERAS];
+            for (v, r) in views.iter_mut().zip(c.skeletons.iter_mut()) {
                 r.update()?;
                 // a dead camera's last skeleton says nothing of now
-                let fresh =
-                    |s: &&Skeleton| mono.saturating_sub(s.published_ns) <= SKELETON_MAX_AGE_NS;
-                if let Some(s) = r.get().filter(fresh) {
-                    match any {
-                        false => c.merged = *s,
-                        true => merge_views(&mut c.merged, s),
-                    }
-                    any = true;
-                }
+                *v = r
+                    .get()
+                    .filter(|s| mono.saturating_sub(s.published_ns) <= SKELETON_MAX_AGE_NS);
             }
+            let any = merge_newest(&views, SKELETON_MAX_AGE_NS, &mut c.merged);
             // a stale state (its controller stopped or dead) masks nothing
             let part = phri_perception::mask::collaborating_part(c.states.get(), now_ns());
             masking = c
@@ -170,8 +163,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             true => Some(Collab {
                 cfg: ctx.config().collaboration.clone(),
                 states: COLLAB_STATE.latest_reader(&node)?,
-                skeletons: std::iter::once(flag.camera)
-                    .chain((0..ctx.config().cameras.len()).filter(|&i| i != flag.camera))
+                skeletons: (0..ctx.config().cameras.len())
                     .filter_map(phri_ipc::camera)
                     .map(|c| c.skeleton.latest_reader(&node))
                     .collect::<Result<_, _>>()?,

@@ -1,0 +1,107 @@
+//! Several body trackers' views of the same people merged into one
+//! [`Skeleton`]: a joint either camera sees is seen, a person either tracks
+//! is tracked. Every reader of skeletons (ingestion's mask, the wave
+//! recogniser, the controller's collaboration) merges the same way. Nothing
+//! here allocates.
+
+use crate::messages::{Skeleton, SKELETON_JOINTS};
+
+/// Another camera's view of the same people (`other`, the same tracker
+/// ids) merged into `into`: a joint seen by either camera is seen, with the
+/// position of the camera that sees it more surely; a person tracked by
+/// either is tracked. People `into` lacks are added.
+pub fn merge_views(into: &mut Skeleton, other: &Skeleton) {
+    let n_other = (other.n_people as usize).min(other.people.len());
+    for theirs in &other.people[..n_other] {
+        let n = (into.n_people as usize).min(into.people.len());
+        let capacity = into.people.len();
+        match into.people[..n].iter().position(|p| p.id == theirs.id) {
+            Some(k) => {
+                let mine = &mut into.people[k];
+                if theirs.tracked == 0 {
+                    continue;
+                }
+                if mine.tracked == 0 {
+                    *mine = *theirs;
+                    continue;
+                }
+                for j in 0..SKELETON_JOINTS {
+                    if theirs.confidence[j] > mine.confidence[j] {
+                        mine.confidence[j] = theirs.confidence[j];
+                        mine.joints[j] = theirs.joints[j];
+                    }
+                }
+            }
+            None if n < capacity => {
+                into.people[n] = *theirs;
+                into.n_people += 1;
+            }
+            None => {}
+        }
+    }
+}
+
+/// The newest of `views` (by capture time), with every other view captured
+/// at most `spread_ns` before it merged in ([`merge_views`]), into `out`: its
+/// stamps are the newest view's. A camera whose tracker stopped leaves an
+/// old view behind, which then takes no part. False (and `out` untouched)
+/// when there is no view.
+pub fn merge_newest(views: &[Option<&Skeleton>], spread_ns: u64, out: &mut Skeleton) -> bool {
+    let Some(newest) = views
+        .iter()
+        .flatten()
+        .max_by_key(|s| s.capture_ns)
+        .copied()
+    else {
+        return false;
+    };
+    *out = *newest;
+    let mut merged_self = false;
+    for v in views.iter().flatten() {
+        if std::ptr::eq(*v, newest) && !merged_self {
+            merged_self = true;
+            continue;
+        }
+        if newest.capture_ns.saturating_sub(v.capture_ns) <= spread_ns {
+            merge_views(out, v);
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::messages::Zeroed;
+
+    fn view(capture_ms: u64, joint: usize, confidence: f64) -> Skeleton {
+        let mut s = Skeleton::zeroed();
+        s.capture_ns = capture_ms * 1_000_000;
+        s.n_people = 1;
+        let mut p = s.people[0];
+        p.id = 7;
+        p.tracked = 1;
+        p.confidence[joint] = confidence;
+        p.joints[joint] = [capture_ms as f64, 0.0, 0.0];
+        s.people[0] = p;
+        s
+    }
+
+    #[test]
+    fn a_joint_either_camera_sees_is_seen_and_an_old_view_takes_no_part() {
+        let a = view(100, 3, 1.0); // sees joint 3
+        let b = view(110, 5, 1.0); // sees joint 5, newer
+        let mut out = Skeleton::zeroed();
+        assert!(merge_newest(&[Some(&a), Some(&b)], 50_000_000, &mut out));
+        assert_eq!(out.capture_ns, b.capture_ns, "the newest view's stamps");
+        assert_eq!(out.n_people, 1);
+        assert_eq!(out.people[0].confidence[3], 1.0);
+        assert_eq!(out.people[0].confidence[5], 1.0);
+        // a dead camera's view 200 ms old is left out
+        let old = view(0, 3, 1.0);
+        let mut out = Skeleton::zeroed();
+        assert!(merge_newest(&[Some(&old), Some(&b)], 50_000_000, &mut out));
+        assert_eq!(out.people[0].confidence[3], 0.0);
+        assert!(!merge_newest(&[None, None], 50_000_000, &mut out));
+    }
+}
