@@ -70,7 +70,8 @@ pub const MAX_CAMERAS: usize = 4;
 /// One camera's channels: the first camera's are the constants above
 /// (`camera/depth`, …); camera `i` ≥ 1 has the same channels with its index
 /// after the first segment (`camera/1/depth`, `perception/1/depth`,
-/// `perception/1/repulsion`, `perception/1/skeleton`), same types and QoS.
+/// `perception/1/repulsion`, `perception/1/skeleton`, `perception/1/hand`),
+/// same types and QoS.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraChannels {
     /// raw depth frames from camera `i`
@@ -82,6 +83,8 @@ pub struct CameraChannels {
     pub repulsion: Channel<RepulsionResult>,
     /// its body tracker's skeletons
     pub skeleton: Channel<Skeleton>,
+    /// the collaborative hand its ingestion refined from its frames
+    pub hand: Channel<HandObservation>,
 }
 
 const fn camera_channels(
@@ -89,6 +92,7 @@ const fn camera_channels(
     perception: &'static str,
     repulsion: &'static str,
     skeleton: &'static str,
+    hand: &'static str,
 ) -> CameraChannels {
     CameraChannels {
         depth: Channel::new(depth, CAMERA_DEPTH.qos, CAMERA_DEPTH.wakes),
@@ -99,6 +103,7 @@ const fn camera_channels(
             PERCEPTION_REPULSION.wakes,
         ),
         skeleton: Channel::new(skeleton, PERCEPTION_SKELETON.qos, PERCEPTION_SKELETON.wakes),
+        hand: Channel::new(hand, PERCEPTION_HAND.qos, PERCEPTION_HAND.wakes),
     }
 }
 
@@ -109,24 +114,28 @@ pub const CAMERAS: [CameraChannels; MAX_CAMERAS] = [
         perception: PERCEPTION_DEPTH,
         repulsion: PERCEPTION_REPULSION,
         skeleton: PERCEPTION_SKELETON,
+        hand: PERCEPTION_HAND,
     },
     camera_channels(
         "camera/1/depth",
         "perception/1/depth",
         "perception/1/repulsion",
         "perception/1/skeleton",
+        "perception/1/hand",
     ),
     camera_channels(
         "camera/2/depth",
         "perception/2/depth",
         "perception/2/repulsion",
         "perception/2/skeleton",
+        "perception/2/hand",
     ),
     camera_channels(
         "camera/3/depth",
         "perception/3/depth",
         "perception/3/repulsion",
         "perception/3/skeleton",
+        "perception/3/hand",
     ),
 ];
 
@@ -145,6 +154,7 @@ pub fn camera_of_channel(name: &str) -> Option<(usize, &'static str)> {
             (c.perception.name, PERCEPTION_DEPTH.name),
             (c.repulsion.name, PERCEPTION_REPULSION.name),
             (c.skeleton.name, PERCEPTION_SKELETON.name),
+            (c.hand.name, PERCEPTION_HAND.name),
         ]
         .into_iter()
         .find(|(n, _)| *n == name)
@@ -163,6 +173,7 @@ pub fn for_camera(first: &str, camera: usize) -> &str {
         n if n == PERCEPTION_DEPTH.name => c.perception.name,
         n if n == PERCEPTION_REPULSION.name => c.repulsion.name,
         n if n == PERCEPTION_SKELETON.name => c.skeleton.name,
+        n if n == PERCEPTION_HAND.name => c.hand.name,
         other => other,
     }
 }

@@ -26,4 +26,4 @@ pub use error::IpcError;
 pub use messages::*;
 pub use owners::{Owned, OwnerTable, Refusal, Sender, ServiceRole};
 pub use qos::*;
-pub use views::{merge_newest, merge_views};
+pub use views::{best_hand, merge_newest, merge_views};

@@ -1,10 +1,11 @@
-//! Several body trackers' views of the same people merged into one
-//! [`Skeleton`]: a joint either camera sees is seen, a person either tracks
-//! is tracked. Every reader of skeletons (ingestion's mask, the wave
-//! recogniser, the controller's collaboration) merges the same way. Nothing
-//! here allocates.
+//! Several cameras' views of the same people as one: body trackers'
+//! [`Skeleton`]s merged (a joint either camera sees is seen, a person
+//! either tracks is tracked), and of the collaborative hand each camera's
+//! ingestion refined, the one to act on ([`best_hand`]). Every reader (ingestion's
+//! mask, the wave recogniser, the controller's collaboration, the lock-step
+//! cell) chooses the same way. Nothing here allocates.
 
-use crate::messages::{Skeleton, SKELETON_JOINTS};
+use crate::messages::{HandObservation, Skeleton, SKELETON_JOINTS};
 
 /// Another camera's view of the same people (`other`, the same tracker
 /// ids) merged into `into`: a joint seen by either camera is seen, with the
@@ -47,12 +48,7 @@ pub fn merge_views(into: &mut Skeleton, other: &Skeleton) {
 /// old view behind, which then takes no part. False (and `out` untouched)
 /// when there is no view.
 pub fn merge_newest(views: &[Option<&Skeleton>], spread_ns: u64, out: &mut Skeleton) -> bool {
-    let Some(newest) = views
-        .iter()
-        .flatten()
-        .max_by_key(|s| s.capture_ns)
-        .copied()
-    else {
+    let Some(newest) = views.iter().flatten().max_by_key(|s| s.capture_ns).copied() else {
         return false;
     };
     *out = *newest;
@@ -67,6 +63,27 @@ pub fn merge_newest(views: &[Option<&Skeleton>], spread_ns: u64, out: &mut Skele
         }
     }
     true
+}
+
+/// Of the cameras' observations of the collaborative hand (`None`: that
+/// camera has none), in camera order, the one to act on among those
+/// captured at most `spread_ns` before the newest: the first camera's that
+/// has one, refined or not. A later camera's refinement is taken only when
+/// no earlier camera observes the hand (a camera down): each camera's
+/// refinement is biased toward its own side of the hand, and in
+/// `collaboration-mirrored` the second camera's, taken whenever it had more
+/// pixels, declared the contact 4 s before the hand was there (the robot's
+/// flange beside the hand in its mask). `None` without any.
+pub fn best_hand<'a>(
+    hands: &[Option<&'a HandObservation>],
+    spread_ns: u64,
+) -> Option<&'a HandObservation> {
+    let newest = hands.iter().flatten().map(|h| h.capture_ns).max()?;
+    hands
+        .iter()
+        .flatten()
+        .find(|h| newest.saturating_sub(h.capture_ns) <= spread_ns)
+        .copied()
 }
 
 #[cfg(test)]
@@ -103,5 +120,29 @@ mod tests {
         assert!(merge_newest(&[Some(&old), Some(&b)], 50_000_000, &mut out));
         assert_eq!(out.people[0].confidence[3], 0.0);
         assert!(!merge_newest(&[None, None], 50_000_000, &mut out));
+    }
+
+    #[test]
+    fn the_first_camera_that_observes_the_hand_is_taken() {
+        let hand = |capture_ms: u64, refined: u32, pixels: u32| {
+            let mut h = HandObservation::zeroed();
+            h.capture_ns = capture_ms * 1_000_000;
+            h.refined = refined;
+            h.masked_pixels = pixels;
+            h
+        };
+        let hidden = hand(100, 0, 3); // the robot hides it from camera 0
+        let seen = hand(90, 1, 400);
+        let spread = 50_000_000;
+        let best = best_hand(&[Some(&hidden), Some(&seen)], spread);
+        assert_eq!(best.map(|h| h.masked_pixels), Some(3));
+        // camera 0 down: the next camera's
+        let best = best_hand(&[None, Some(&seen)], spread);
+        assert_eq!(best.map(|h| h.masked_pixels), Some(400));
+        // an old observation of a dead camera takes no part
+        let old = hand(10, 1, 900);
+        let best = best_hand(&[Some(&old), Some(&hidden)], spread);
+        assert_eq!(best.map(|h| h.masked_pixels), Some(3));
+        assert!(best_hand(&[None, None], spread).is_none());
     }
 }

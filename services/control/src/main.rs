@@ -2,7 +2,8 @@
 //! publisher that channel accepts), a `control/status` and a `collab/state`;
 //! reads the collaboration's `hri/request`, `perception/skeleton` and
 //! `perception/hand` besides; with several cameras, every camera's
-//! `perception/C/repulsion`. Only channel wiring: the conversions are
+//! `perception/C/repulsion`, `perception/C/skeleton` (merged) and
+//! `perception/C/hand` (`phri_ipc::best_hand`). Only channel wiring: the conversions are
 //! `phri_control::inputs` and `outputs`.
 
 use std::process::ExitCode;
@@ -82,7 +83,13 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         .collect::<Result<Vec<_>, _>>()?;
     let mut skeleton = phri_ipc::Skeleton::zeroed();
     let skeleton_spread_ns = (cfg.control.perception_max_age_ms * 1e6) as u64;
-    let mut hands = PERCEPTION_HAND.latest_reader(&node)?;
+    // every camera's refined hand; the first camera's that observes it counts (phri_ipc::best_hand)
+    let mut hands = (0..repulsion.cameras())
+        .map(|i| match phri_ipc::camera(i) {
+            Some(c) => c.hand.latest_reader(&node),
+            None => PERCEPTION_HAND.latest_reader(&node),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
     // only the services the supervisor started for a channel, and no stamp
     // from the future or past its bound (counted on audit/inputs)
@@ -156,11 +163,16 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 *v = r.get();
             }
             let seen = phri_ipc::merge_newest(&views, skeleton_spread_ns, &mut skeleton);
-            hands.update_from(|pid, h| gate.hand(pid, h, now))?;
+            let mut seen_hands = [None; phri_ipc::MAX_CAMERAS];
+            for (v, r) in seen_hands.iter_mut().zip(hands.iter_mut()) {
+                r.update_from(|pid, h| gate.hand(pid, h, now))?;
+                *v = r.get();
+            }
+            let hand = phri_ipc::best_hand(&seen_hands, skeleton_spread_ns);
             input.collab = CollabInput {
                 requests: &pending[..k],
                 skeleton: seen.then_some(&skeleton),
-                hand: hands.get(),
+                hand,
             };
         }
         controller.step(&input);

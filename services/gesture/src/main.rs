@@ -72,7 +72,9 @@ fn body() -> Result<(), Box<dyn Error>> {
             if let Some(lead) = lead.filter(|l| l.capture_ns > last_capture_ns) {
                 let mut views = [None; MAX_CAMERAS];
                 for (v, s) in views.iter_mut().zip(&newest) {
-                    *v = s.as_ref().filter(|s| mono.saturating_sub(s.published_ns) <= max_age_ns);
+                    *v = s
+                        .as_ref()
+                        .filter(|s| mono.saturating_sub(s.published_ns) <= max_age_ns);
                 }
                 if merge_newest(&views, max_age_ns, &mut merged) {
                     last_capture_ns = lead.capture_ns;

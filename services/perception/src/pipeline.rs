@@ -5,14 +5,15 @@
 //! [`Ingest`], [`Worker`]) and the same rules: the body trackers' skeletons
 //! merged ([`merge_views`]), the collaborative hand masked from every
 //! camera's frame while the newest `collab/state` says a collaboration is on
-//! and is fresh ([`collaborating_part`]), the hand refined from the first
-//! camera's frame, and each camera's distances bounded by what it watches
+//! and is fresh ([`collaborating_part`]), the hand refined from every
+//! camera's frame and the first camera's that observes it kept ([`best_hand`]), and each camera's distances bounded by what it watches
 //! when the cell has several ([`Worker::bounded_by`]). The controller fuses
 //! the cameras' results (`phri_control::RepulsionInputs`).
 
 use phri_config::{Config, Invalid};
 use phri_ipc::{
-    CollabState, FrameHeader, HandObservation, RepulsionResult, Skeleton, WorldState, Zeroed,
+    best_hand, CollabState, FrameHeader, HandObservation, RepulsionResult, Skeleton, WorldState,
+    Zeroed,
 };
 use phri_model::Model;
 
@@ -161,8 +162,8 @@ impl Perception {
     /// Ingestion and the workers on every camera's last capture, handled at
     /// `ready_ns` (robot clock). While `collab` (the newest `collab/state`,
     /// stamped on the same clock as `ready_ns`) says a collaboration is on,
-    /// its hand is masked from every frame and refined from the first
-    /// camera's: the returned `perception/hand` message.
+    /// its hand is masked from every frame and refined from each: the one
+    /// [`best_hand`] takes is the returned `perception/hand` message.
     pub fn perceive(
         &mut self,
         history: &StateHistory,
@@ -174,7 +175,7 @@ impl Perception {
         let mask = self
             .mask_hold
             .mask(Some(&self.skeleton), part, &self.collab, capture_ns);
-        let mut hand = None;
+        let mut hands = [None; phri_ipc::MAX_CAMERAS];
         for (i, eye) in self.eyes.iter_mut().enumerate() {
             eye.ingest.set_mask(mask);
             let outcome = eye
@@ -187,8 +188,8 @@ impl Perception {
                     &mut eye.filtered,
                 )
                 .map_err(|source| PipelineError::Frame { camera: i, source })?;
-            if let (0, Some(p), Some(m)) = (i, part, mask) {
-                hand = Some(hand_observation(
+            if let (Some(slot), Some(p), Some(m)) = (hands.get_mut(i), part, mask) {
+                *slot = Some(hand_observation(
                     &eye.header,
                     p,
                     &m,
@@ -205,7 +206,10 @@ impl Perception {
                 eye.results.push(*msg);
             }
         }
-        Ok(hand)
+        // the controller's choice among the cameras' channels
+        let seen: [Option<&HandObservation>; phri_ipc::MAX_CAMERAS] =
+            std::array::from_fn(|i| hands[i].as_ref());
+        Ok(best_hand(&seen, u64::MAX).copied())
     }
 
     /// Camera `camera`'s workers' results of the last [`Perception::perceive`].

@@ -320,10 +320,11 @@ fn owned_publishers(ipc_node: &IpcNode, name: &str) -> Result<Option<Vec<i32>>, 
         // a further camera's
         n => match CAMERAS
             .iter()
-            .find(|c| c.repulsion.name == n || c.skeleton.name == n)
+            .find(|c| [c.repulsion.name, c.skeleton.name, c.hand.name].contains(&n))
         {
             Some(c) if c.repulsion.name == n => c.repulsion.publisher_pids(ipc_node),
-            Some(c) => c.skeleton.publisher_pids(ipc_node),
+            Some(c) if c.skeleton.name == n => c.skeleton.publisher_pids(ipc_node),
+            Some(c) => c.hand.publisher_pids(ipc_node),
             None => Ok(None),
         },
     }
@@ -837,7 +838,7 @@ fn body() -> Result<(), SupervisorError> {
             // readers; it is reported here, once per channel and process
             let further = phri_ipc::CAMERAS[1..ports.frames.len()]
                 .iter()
-                .flat_map(|c| [c.repulsion.name, c.skeleton.name]);
+                .flat_map(|c| [c.repulsion.name, c.skeleton.name, c.hand.name]);
             let owned = phri_ipc::owners::PUBLISHERS.iter().map(|(c, _)| *c);
             for channel in owned.chain(further) {
                 let pids = owned_publishers(&node, channel)?.unwrap_or_default();

@@ -9,8 +9,9 @@
 //! pixels on `perception/hand`.
 //! `--camera I` serves camera I of `[[camera]]`: `camera/I/depth` in,
 //! `perception/I/depth` out; the skeleton it masks by is every camera's
-//! merged (a hand either camera sees is masked), and only the first camera's
-//! ingestion refines and publishes the hand.
+//! merged (a hand either camera sees is masked), and the hand it refines
+//! goes out on `perception/I/hand` (the controller takes the first camera's
+//! that observes it, `phri_ipc::best_hand`).
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -18,8 +19,8 @@ use std::time::Duration;
 
 use phri_config::{CollaborationConfig, DepthSource};
 use phri_ipc::{
-    CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation, IpcError,
-    merge_newest, LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS, PERCEPTION_HAND,
+    merge_newest, CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation,
+    IpcError, LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS,
     ROBOT_STATE,
 };
 use phri_perception::mask::{hand_observation, MaskHold};
@@ -60,7 +61,7 @@ struct Collab {
     /// every camera's body tracker
     skeletons: Vec<LatestReader<Skeleton>>,
     merged: Skeleton,
-    /// the first camera's ingestion publishes the refined hand
+    /// where the refined hand goes (this camera's channel)
     hands: Option<Publisher<HandObservation>>,
     hold: MaskHold,
 }
@@ -168,10 +169,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                     .map(|c| c.skeleton.latest_reader(&node))
                     .collect::<Result<_, _>>()?,
                 merged: Skeleton::zeroed(),
-                hands: match flag.camera {
-                    0 => Some(PERCEPTION_HAND.publisher(&node)?),
-                    _ => None,
-                },
+                hands: Some(channels.hand.publisher(&node)?),
                 hold: MaskHold::default(),
             }),
             false => None,
