@@ -39,7 +39,9 @@ pub use error::{ConfigError, Invalid};
 pub use human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};
 pub use merge::{apply_set, merge};
 pub use per_joint::PerJoint;
-pub use perception::{CameraConfig, DepthSource, IngestConfig, PointConfig, RepulsionConfig};
+pub use perception::{
+    CameraConfig, DepthSource, FusedDirection, IngestConfig, PointConfig, RepulsionConfig,
+};
 pub use record::{Compression, RecordConfig};
 pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
 pub use scenario::VoiceLine;

@@ -137,6 +137,21 @@ pub struct RepulsionConfig {
     pub params: RepulsionParams,
     /// control points; the first is the end effector (eq. 19), the others shape velocity bounds (eq. 20)
     pub points: Vec<PointConfig>,
+    /// with several cameras, whose repulsive direction a fused point takes
+    pub fused_direction: FusedDirection,
+}
+
+/// With several cameras, the direction of a point's fused repulsion
+/// (`[repulsion] fused_direction`); its distance is always the largest of
+/// the fresh cameras' bounds, and its magnitude that distance's (eq. 16).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FusedDirection {
+    /// the first camera's direction whenever it is fresh and sees an
+    /// obstacle near the point; otherwise the camera's that gives the distance
+    First,
+    /// always the camera's that gives the distance
+    Largest,
 }
 
 impl RepulsionConfig {

@@ -3,7 +3,8 @@
 //! and [`RepulsionInputs`] the same `robot/state`, `dynamics/residual` and
 //! `perception/repulsion` messages.
 
-use phri_config::RepulsionConfig;
+use nalgebra::Vector3;
+use phri_config::{FusedDirection, RepulsionConfig};
 use phri_ipc::{
     owners, residual_flags, HriRequest, JointState, Owned, OwnerTable, PointRepulsion, Refusal,
     RepulsionResult, RequestSource, Residual, Sender, DYNAMICS_RESIDUAL, MAX_POINTS_PER_WORKER,
@@ -156,6 +157,8 @@ pub struct RepulsionInputs {
     gave: Vec<u64>,
     /// a camera older than this is left out of the fusion \[ns\]
     max_age_ns: u64,
+    /// whose direction a fused point takes
+    direction: FusedDirection,
     refused: u64,
 }
 
@@ -188,8 +191,16 @@ impl RepulsionInputs {
             fused_capture_ns: 0,
             gave: vec![0; cameras],
             max_age_ns,
+            direction: FusedDirection::Largest,
             refused: 0,
         }
+    }
+
+    /// Fused points take `direction`'s repulsive direction (default:
+    /// [`FusedDirection::Largest`], the baseline).
+    pub fn with_direction(mut self, direction: FusedDirection) -> RepulsionInputs {
+        self.direction = direction;
+        self
     }
 
     /// For the workers and control points of `[repulsion]`, one camera.
@@ -207,6 +218,7 @@ impl RepulsionInputs {
             config.repulsion.points.len(),
             (config.control.perception_max_age_ms * 1e6) as u64,
         )
+        .with_direction(config.repulsion.fused_direction)
     }
 
     /// Cameras whose results this gathers.
@@ -287,7 +299,10 @@ impl RepulsionInputs {
 
     /// Fuse the cameras at robot time `now_ns` (several cameras; with one,
     /// nothing to do): per point, the largest distance among the cameras
-    /// that are fresh, with its camera's repulsive vector. The view's
+    /// that are fresh, with its camera's repulsive vector, or, with
+    /// [`FusedDirection::First`], the first camera's direction at that
+    /// vector's magnitude while the first camera is fresh and sees
+    /// something near the point. The view's
     /// capture time is the newest fresh camera's; with none fresh, the
     /// newest camera's (stale: the controller's stale-perception rule).
     pub fn fuse(&mut self, now_ns: u64) {
@@ -326,6 +341,20 @@ impl RepulsionInputs {
             if let Some(b) = best {
                 *slot = cameras[b].points[k];
                 self.gave[b] += 1;
+                // the first camera's direction at the fused magnitude
+                let first = &cameras[0].points[k];
+                let v_first = Vector3::from(first.v_call);
+                let v = Vector3::from(slot.v_call);
+                if self.direction == FusedDirection::First
+                    && b != 0
+                    && any_fresh
+                    && fresh(&cameras[0])
+                    && first.active != 0
+                    && slot.active != 0
+                    && v_first.norm() > 0.0
+                {
+                    slot.v_call = (v_first * (v.norm() / v_first.norm())).into();
+                }
             }
         }
     }
@@ -622,6 +651,39 @@ mod tests {
                 cameras: 1
             })
         );
+    }
+
+    #[test]
+    fn the_first_camera_s_direction_at_the_fused_magnitude_when_asked() {
+        const MS: u64 = 1_000_000;
+        let mut acc =
+            RepulsionInputs::with_cameras(2, 1, 1, 100 * MS).with_direction(FusedDirection::First);
+        let mut a = at(0, 10 * MS, &[0], 0.05, 0.0);
+        a.points[0].v_call = [0.0, 0.2, 0.0];
+        let mut b = at(0, 10 * MS, &[0], 0.25, 0.0);
+        b.points[0].v_call = [-0.03, 0.0, 0.04];
+        acc.push_camera(0, &a).unwrap();
+        acc.push_camera(1, &b).unwrap();
+        acc.fuse(20 * MS);
+        let p = acc.view().points[0];
+        assert_eq!(p.min_distance, 0.25, "the largest bound");
+        let v = Vector3::from(p.v_call);
+        assert!((v.norm() - 0.05).abs() < 1e-12, "camera 1's magnitude");
+        assert!(
+            v.x.abs() < 1e-12 && v.y > 0.0,
+            "camera 0's direction: {v:?}"
+        );
+        assert_eq!(acc.gave(), [0, 1]);
+        // the first camera sees nothing near (its bound is its view's edge):
+        // the distance's camera's vector
+        let mut none = at(0, 40 * MS, &[0], 0.02, 0.0);
+        none.points[0].active = 0;
+        let mut b2 = b;
+        b2.capture_ns = 40 * MS;
+        acc.push_camera(0, &none).unwrap();
+        acc.push_camera(1, &b2).unwrap();
+        acc.fuse(50 * MS);
+        assert_eq!(acc.view().points[0].v_call, [-0.03, 0.0, 0.04]);
     }
 
     #[test]
