@@ -139,6 +139,12 @@ pub const CAMERAS: [CameraChannels; MAX_CAMERAS] = [
     ),
 ];
 
+/// The channels of a cell's `n` cameras (at least the first, at most
+/// [`MAX_CAMERAS`]).
+pub fn cameras(n: usize) -> &'static [CameraChannels] {
+    &CAMERAS[..n.clamp(1, MAX_CAMERAS)]
+}
+
 /// Camera `i`'s channels; `None` past [`MAX_CAMERAS`].
 pub fn camera(i: usize) -> Option<&'static CameraChannels> {
     CAMERAS.get(i)
@@ -327,6 +333,8 @@ mod tests {
         assert_eq!(for_camera("robot/state", 1), "robot/state");
         assert_eq!(for_camera("camera/depth", 9), "camera/depth");
         assert!(camera(MAX_CAMERAS).is_none());
+        assert_eq!(cameras(0).len(), 1);
+        assert_eq!(cameras(9).len(), MAX_CAMERAS);
     }
 
     #[test]

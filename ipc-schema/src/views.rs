@@ -105,6 +105,37 @@ mod tests {
     }
 
     #[test]
+    fn a_joint_either_camera_sees_is_seen() {
+        let mut a = Skeleton::zeroed();
+        a.n_people = 1;
+        a.people[0].id = 7;
+        a.people[0].tracked = 1;
+        a.people[0].confidence[3] = 0.9;
+        a.people[0].joints[3] = [1.0, 0.0, 0.0];
+        let mut b = a;
+        b.people[0].confidence = [0.0; crate::messages::SKELETON_JOINTS];
+        b.people[0].confidence[5] = 0.9;
+        b.people[0].joints[5] = [0.0, 2.0, 0.0];
+        b.people[0].joints[3] = [9.0, 9.0, 9.0];
+        merge_views(&mut a, &b);
+        let p = a.people[0];
+        assert_eq!((p.confidence[3], p.joints[3]), (0.9, [1.0, 0.0, 0.0]));
+        assert_eq!((p.confidence[5], p.joints[5]), (0.9, [0.0, 2.0, 0.0]));
+        assert_eq!(p.confidence[0], 0.0);
+        // lost by the first camera, tracked by the other: the other's
+        let mut lost = a;
+        lost.people[0].tracked = 0;
+        merge_views(&mut lost, &b);
+        assert_eq!(lost.people[0].tracked, 1);
+        assert_eq!(lost.people[0].confidence[3], 0.0);
+        // someone only the other camera sees is added
+        let mut none = Skeleton::zeroed();
+        merge_views(&mut none, &b);
+        assert_eq!(none.n_people, 1);
+        assert_eq!(none.people[0].id, 7);
+    }
+
+    #[test]
     fn a_joint_either_camera_sees_is_seen_and_an_old_view_takes_no_part() {
         let a = view(100, 3, 1.0); // sees joint 3
         let b = view(110, 5, 1.0); // sees joint 5, newer

@@ -15,8 +15,7 @@ use phri_control::{
 };
 use phri_ipc::{
     CollabState, ControlStatus, HriRequest, Queue, TorqueCommand, Zeroed, COLLAB_STATE,
-    CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, PERCEPTION_HAND, PERCEPTION_REPULSION,
-    PERCEPTION_SKELETON, ROBOT_COMMAND, ROBOT_STATE,
+    CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, ROBOT_COMMAND, ROBOT_STATE,
 };
 
 /// Requests handled per period at most (more wait for the next one).
@@ -66,29 +65,23 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     // a second controller fails here: the command channel accepts exactly one publisher
     let commands = ROBOT_COMMAND.publisher(&node)?;
     let status_pub = CONTROL_STATUS.publisher(&node)?;
-    let results = (0..repulsion.cameras())
-        .map(|i| match phri_ipc::camera(i) {
-            Some(c) => c.repulsion.subscriber(&node, Queue::Drain),
-            None => PERCEPTION_REPULSION.subscriber(&node, Queue::Drain),
-        })
+    let results = phri_ipc::cameras(repulsion.cameras())
+        .iter()
+        .map(|c| c.repulsion.subscriber(&node, Queue::Drain))
         .collect::<Result<Vec<_>, _>>()?;
     let collaborating = cfg.collaboration.enabled;
     let requests = HRI_REQUEST.subscriber(&node, Queue::Drain)?;
     // every camera's body tracker, merged (a joint either camera sees is seen)
-    let mut skeletons = (0..repulsion.cameras())
-        .map(|i| match phri_ipc::camera(i) {
-            Some(c) => c.skeleton.latest_reader(&node),
-            None => PERCEPTION_SKELETON.latest_reader(&node),
-        })
+    let mut skeletons = phri_ipc::cameras(repulsion.cameras())
+        .iter()
+        .map(|c| c.skeleton.latest_reader(&node))
         .collect::<Result<Vec<_>, _>>()?;
     let mut skeleton = phri_ipc::Skeleton::zeroed();
     let skeleton_spread_ns = (cfg.control.perception_max_age_ms * 1e6) as u64;
     // every camera's refined hand; the first camera's that observes it counts (phri_ipc::best_hand)
-    let mut hands = (0..repulsion.cameras())
-        .map(|i| match phri_ipc::camera(i) {
-            Some(c) => c.hand.latest_reader(&node),
-            None => PERCEPTION_HAND.latest_reader(&node),
-        })
+    let mut hands = phri_ipc::cameras(repulsion.cameras())
+        .iter()
+        .map(|c| c.hand.latest_reader(&node))
         .collect::<Result<Vec<_>, _>>()?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
     // only the services the supervisor started for a channel, and no stamp

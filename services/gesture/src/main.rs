@@ -29,8 +29,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     ctx.start_deadman()?;
     let node = ctx.node()?;
-    let cameras = ctx.config().cameras.len().clamp(1, MAX_CAMERAS);
-    let skeletons = phri_ipc::CAMERAS[..cameras]
+    let channels = phri_ipc::cameras(ctx.config().cameras.len());
+    let cameras = channels.len();
+    let skeletons = channels
         .iter()
         .map(|c| c.skeleton.waking_subscriber(&node, Queue::Drain))
         .collect::<Result<Vec<_>, _>>()?;

@@ -10,7 +10,7 @@
 use phri_ipc::{FrameHeader, RepulsionResult};
 use serde::Serialize;
 
-use crate::report::Percentiles;
+use crate::report::{Percentiles, PerceptionReport};
 
 /// A frame some repulsion worker answered and not all yet.
 #[derive(Debug, Clone, Copy)]
@@ -196,66 +196,51 @@ impl CamerasEval {
         }
     }
 
-    /// Frames seen on any camera (nothing to report without).
-    pub fn any(&self) -> bool {
-        self.cameras
-            .iter()
-            .any(|c| c.frames_seen > 0 || c.complete_frames > 0)
-    }
-
-    /// Every camera's figures, and all cameras' pooled as the report's
-    /// `perception` keys: frames, dropped frames, capture → result,
-    /// arrival → result, ingestion, compute.
-    pub fn report(&self) -> (Vec<CameraReport>, Pooled) {
-        let mut pooled = Pooled::default();
-        let mut all: [Vec<f64>; 4] = Default::default();
-        let cameras = self
+    /// The report's `perception`: every camera's frames pooled in its own
+    /// keys (frames, dropped frames, capture → result, arrival → result,
+    /// ingestion, compute) and each camera's in `cameras`. `None` before
+    /// any camera was seen.
+    pub fn report(&self) -> Option<PerceptionReport> {
+        if !self
             .cameras
             .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                // the frame in flight at the end is not dropped
-                let dropped = c
-                    .frames_seen
-                    .saturating_sub(c.complete_frames)
-                    .saturating_sub(2);
-                pooled.frames += c.frames_seen;
-                pooled.dropped_frames += dropped;
-                all[0].extend_from_slice(&c.frame_latency_ms);
-                all[1].extend_from_slice(&c.arrival_latency_ms);
-                all[2].extend_from_slice(&c.ingest_ms);
-                all[3].extend_from_slice(&c.compute_ms);
-                CameraReport {
-                    camera: i,
-                    frames: c.frames_seen,
-                    dropped_frames: dropped,
-                    frame_to_repulsion_ms: percentiles(&c.frame_latency_ms),
-                    arrival_to_repulsion_ms: percentiles(&c.arrival_latency_ms),
-                    ingest_ms: percentiles(&c.ingest_ms),
-                    fused_share: match self.decisions {
-                        0 => 0.0,
-                        d => c.gave as f64 / d as f64,
-                    },
-                }
-            })
-            .collect();
+            .any(|c| c.frames_seen > 0 || c.complete_frames > 0)
+        {
+            return None;
+        }
+        let mut pooled = PerceptionReport::default();
+        let mut all: [Vec<f64>; 4] = Default::default();
+        for (i, c) in self.cameras.iter().enumerate() {
+            // the frame in flight at the end is not dropped
+            let dropped = c
+                .frames_seen
+                .saturating_sub(c.complete_frames)
+                .saturating_sub(2);
+            pooled.frames += c.frames_seen;
+            pooled.dropped_frames += dropped;
+            all[0].extend_from_slice(&c.frame_latency_ms);
+            all[1].extend_from_slice(&c.arrival_latency_ms);
+            all[2].extend_from_slice(&c.ingest_ms);
+            all[3].extend_from_slice(&c.compute_ms);
+            pooled.cameras.push(CameraReport {
+                camera: i,
+                frames: c.frames_seen,
+                dropped_frames: dropped,
+                frame_to_repulsion_ms: percentiles(&c.frame_latency_ms),
+                arrival_to_repulsion_ms: percentiles(&c.arrival_latency_ms),
+                ingest_ms: percentiles(&c.ingest_ms),
+                fused_share: match self.decisions {
+                    0 => 0.0,
+                    d => c.gave as f64 / d as f64,
+                },
+            });
+        }
         pooled.frame_to_repulsion_ms = percentiles(&all[0]);
         pooled.arrival_to_repulsion_ms = percentiles(&all[1]);
         pooled.ingest_ms = percentiles(&all[2]);
         pooled.repulsion_compute_ms = percentiles(&all[3]);
-        (cameras, pooled)
+        Some(pooled)
     }
-}
-
-/// All cameras' figures pooled (the report's top-level `perception` keys).
-#[derive(Debug, Clone, Default)]
-pub struct Pooled {
-    pub frames: u64,
-    pub dropped_frames: u64,
-    pub frame_to_repulsion_ms: Percentiles,
-    pub arrival_to_repulsion_ms: Percentiles,
-    pub ingest_ms: Percentiles,
-    pub repulsion_compute_ms: Percentiles,
 }
 
 /// p50, p99 and the largest of `samples`.
@@ -310,7 +295,8 @@ mod tests {
             e.on_repulsion(0, &answer(0, k, 1000 + 33 * k, 0.02));
             e.on_repulsion(1, &answer(0, k, 1010 + 33 * k, 0.25));
         }
-        let (cams, pooled) = e.report();
+        let pooled = e.report().unwrap();
+        let cams = &pooled.cameras;
         assert_eq!(cams.len(), 2);
         assert_eq!(pooled.frames, 20);
         assert_eq!(cams[1].frames, 10);
@@ -322,7 +308,7 @@ mod tests {
         for k in 10..20u64 {
             e.on_repulsion(0, &answer(0, k, 2000 + 33 * k, 0.02));
         }
-        let (cams, _) = e.report();
+        let cams = e.report().unwrap().cameras;
         assert!(
             (cams[0].fused_share - 22.0 / 60.0).abs() < 1e-12,
             "{cams:?}"

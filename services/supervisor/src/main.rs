@@ -135,7 +135,7 @@ struct Ports {
 
 impl Ports {
     fn open(node: &IpcNode, cameras: usize) -> Result<Ports, IpcError> {
-        let cameras = &phri_ipc::CAMERAS[..cameras.clamp(1, phri_ipc::MAX_CAMERAS)];
+        let cameras = phri_ipc::cameras(cameras);
         Ok(Ports {
             health: SUPERVISOR_HEALTH.publisher(node)?,
             stats: ROBOT_STATS.subscriber(node, Queue::Drain)?,

@@ -910,19 +910,7 @@ impl Evaluator {
     }
 
     fn perception(&self) -> Option<PerceptionReport> {
-        if !self.cameras.any() {
-            return None;
-        }
-        let (cameras, all) = self.cameras.report();
-        Some(PerceptionReport {
-            frames: all.frames,
-            dropped_frames: all.dropped_frames,
-            frame_to_repulsion_ms: all.frame_to_repulsion_ms,
-            arrival_to_repulsion_ms: all.arrival_to_repulsion_ms,
-            ingest_ms: all.ingest_ms,
-            repulsion_compute_ms: all.repulsion_compute_ms,
-            cameras,
-        })
+        self.cameras.report()
     }
 
     fn percentile(hist: &[u64], p: f64) -> f64 {

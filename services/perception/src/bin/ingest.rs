@@ -62,7 +62,7 @@ struct Collab {
     skeletons: Vec<LatestReader<Skeleton>>,
     merged: Skeleton,
     /// where the refined hand goes (this camera's channel)
-    hands: Option<Publisher<HandObservation>>,
+    hands: Publisher<HandObservation>,
     hold: MaskHold,
 }
 
@@ -111,10 +111,8 @@ impl Out {
                 *sample.user_header_mut() = *header;
                 self.frames.send(sample)?;
                 if let (Some(c), Some((part, mask))) = (self.collab.as_ref(), masking) {
-                    if let Some(hands) = c.hands.as_ref() {
-                        let h = hand_observation(header, part, &mask, &outcome.masked, now_ns());
-                        hands.publish(&h)?;
-                    }
+                    let h = hand_observation(header, part, &mask, &outcome.masked, now_ns());
+                    c.hands.publish(&h)?;
                 }
             }
             Err(e) => {
@@ -164,12 +162,12 @@ fn body() -> Result<(), Box<dyn Error>> {
             true => Some(Collab {
                 cfg: ctx.config().collaboration.clone(),
                 states: COLLAB_STATE.latest_reader(&node)?,
-                skeletons: (0..ctx.config().cameras.len())
-                    .filter_map(phri_ipc::camera)
+                skeletons: phri_ipc::cameras(ctx.config().cameras.len())
+                    .iter()
                     .map(|c| c.skeleton.latest_reader(&node))
                     .collect::<Result<_, _>>()?,
                 merged: Skeleton::zeroed(),
-                hands: Some(channels.hand.publisher(&node)?),
+                hands: channels.hand.publisher(&node)?,
                 hold: MaskHold::default(),
             }),
             false => None,

@@ -58,8 +58,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     let node = ctx.node()?;
     let mut served = Vec::with_capacity(workers.len());
-    for (i, w) in workers.into_iter().enumerate() {
-        let channels = phri_ipc::camera(i).ok_or("more cameras than channels")?;
+    for (w, channels) in workers.into_iter().zip(phri_ipc::cameras(cameras.len())) {
         served.push(Served {
             worker: w,
             frames: channels
