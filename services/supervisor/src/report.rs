@@ -878,6 +878,18 @@ impl Evaluator {
             }
             self.stats.last = (0, 0, 0, 0, 0);
         }
+        if now.1 > self.stats.last.1 {
+            // when the loop missed, to the statistics' resolution (10 Hz)
+            self.events.push(Event {
+                t_s: t,
+                kind: "missed_deadlines".into(),
+                service: self.robot_service.clone(),
+                detail: format!(
+                    "{} commands missed since the last statistics",
+                    now.1 - self.stats.last.1
+                ),
+            });
+        }
         if now.3 > self.stats.last.3 {
             self.events.push(Event {
                 t_s: t,
@@ -1300,6 +1312,14 @@ mod tests {
         assert_eq!(r.torque_loop.missed_deadlines, 2);
         assert_eq!(r.torque_loop.latency_us.p50, 51.0);
         assert_eq!(r.torque_loop.latency_us.p99, 101.0);
+        // the misses are placed in time: one event where they grew
+        let missed: Vec<_> = r
+            .events
+            .iter()
+            .filter(|e| e.kind == "missed_deadlines")
+            .collect();
+        assert_eq!(missed.len(), 1, "{missed:?}");
+        assert!(missed[0].detail.starts_with("2 "), "{}", missed[0].detail);
     }
 
     #[test]
