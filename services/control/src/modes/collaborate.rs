@@ -47,6 +47,10 @@ const WRIST_SEEN_M: f64 = 0.08;
 /// The desired end effector stays this close to the measured one \[m\]:
 /// blocked by avoidance or by the hand, the reference waits instead of winding up.
 const MAX_LEAD_M: f64 = 0.05;
+/// ... and at the hand, following it \[m\]: the lead falls
+/// linearly to this over `slow_down_m`, so that the end effector touches at
+/// about `contact_speed`.
+const MIN_NEAR_LEAD_M: f64 = 0.003;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
@@ -899,9 +903,23 @@ impl Collaboration {
             }
             CollabPhase::Idle => self.x_d = ee,
         }
+        // following, near the hand the lead shrinks with the gap: a
+        // reference that ran ahead while the hand moved away would otherwise
+        // pull the end effector into it at the feedback's cap on top of
+        // `contact_speed` (the new touch at 0.14 m/s: 60-71 N on the hand).
+        // The first approach keeps its lead: the arm comes from afar, and
+        // near a hand held out beside the body the lead is what carries
+        // the end effector through the body points' repulsion to the touch
+        let max_lead = match phase {
+            CollabPhase::Follow => {
+                let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
+                MIN_NEAR_LEAD_M + (MAX_LEAD_M - MIN_NEAR_LEAD_M) * near
+            }
+            _ => MAX_LEAD_M,
+        };
         let lead = self.x_d - ee;
-        if lead.norm() > MAX_LEAD_M {
-            self.x_d = ee + lead * (MAX_LEAD_M / lead.norm());
+        if lead.norm() > max_lead {
+            self.x_d = ee + lead * (max_lead / lead.norm());
         }
         CartesianRef {
             x_d: self.x_d,
