@@ -18,12 +18,11 @@ use nalgebra::{Point3, Vector3};
 use phri_cell::CellOptions;
 use phri_config::Loaded;
 use phri_control::clik::{Clik, ClikGains};
-use phri_depth::{CameraView, Capsule, PointOfInterest, Repulsion};
-use phri_ipc::{FrameHeader, WorldState, Zeroed};
+use phri_depth::{Capsule, PointOfInterest};
+use phri_ipc::{WorldState, Zeroed};
 use phri_model::{forward_kinematics, frame_placement, Data, Model};
-use phri_perception::camera::CameraSim;
-use phri_perception::ingest::{Ingest, StateHistory};
-use phri_perception::repulsion::Worker;
+use phri_perception::ingest::StateHistory;
+use phri_perception::Perception;
 use phri_sim::{fill_world, Simulator};
 
 /// A deterministic uniform sequence in [0, 1) (xorshift64*).
@@ -126,106 +125,75 @@ fn postures(
     out
 }
 
-/// One camera's depth-space view of the arm: the camera's frame,
-/// ingestion's self-filter and every repulsion worker, as the cell runs
-/// them, and the space the camera watches.
-struct Eye {
-    camera: CameraSim,
-    view: CameraView,
-    ingest: Ingest,
-    workers: Vec<Worker>,
-    frame: Vec<u16>,
-    filtered: Vec<u16>,
-}
-
 /// The depth-space view of the arm at the simulator's state, from one
-/// camera per azimuth (the paper's set-up around the base).
+/// camera per azimuth (the paper's set-up around the base): the cell's own
+/// perception step ([`Perception`]: every camera, its ingestion with the
+/// self-filter, the repulsion workers), each camera's distance bounded by
+/// the space it watches, as the cell with several cameras runs it.
 struct Perceiver {
-    eyes: Vec<Eye>,
+    perception: Perception,
     history: StateHistory,
     world: WorldState,
     /// the control points' link radii [m]
     radii: Vec<f64>,
     /// the depth-space scan's reach ρ [m]
     rho: f64,
+    /// the camera's frame period [s]
+    frame_period_s: f64,
     now_ns: u64,
 }
 
 impl Perceiver {
     fn new(l: &Loaded, azimuths: &[f64]) -> Perceiver {
-        let cfg = &l.config;
-        let model = l.model().unwrap();
-        let eyes = azimuths
+        let mut cfg = l.config.clone();
+        cfg.cameras = azimuths
             .iter()
             .map(|&azimuth_rad| {
                 let mut c = cfg.camera.clone();
                 c.azimuth_rad = azimuth_rad;
-                let camera = CameraSim::new(model.clone(), &c).unwrap();
-                let pixels = camera.pixels();
-                let (near, far) = (c.render.min_range_m, c.render.max_range_m);
-                Eye {
-                    camera,
-                    view: CameraView::new(&c.intrinsics, c.pose().unwrap(), near, far).unwrap(),
-                    ingest: Ingest::new(model.clone(), &cfg.perception).unwrap(),
-                    workers: (0..cfg.repulsion.workers)
-                        .map(|w| Worker::new(model.clone(), &cfg.repulsion, w).unwrap())
-                        .collect(),
-                    frame: vec![0; pixels],
-                    filtered: vec![0; pixels],
-                }
+                c
             })
             .collect();
+        cfg.camera = cfg.cameras[0].clone();
+        let model = l.model().unwrap();
         Perceiver {
-            eyes,
+            perception: Perception::new(&model, &cfg).unwrap(),
             history: StateHistory::new(model.nv(), 8),
             world: WorldState::zeroed(),
             radii: cfg.repulsion.points.iter().map(|p| p.radius).collect(),
             rho: cfg.repulsion.params.rho,
+            frame_period_s: 1.0 / cfg.camera.rate_hz,
             now_ns: 1_000_000_000,
         }
     }
 
-    /// Per camera, per control point: its depth-space distance [m] (ρ when
-    /// nothing is near) and its lower bound of the clearance (no farther
-    /// than the space the camera does not watch); then per control point
+    /// Per camera, per control point: its lower bound of the clearance
+    /// [m]: the depth-space distance (ρ when nothing is near), no farther
+    /// than the space the camera does not watch; then per control point
     /// the true clearance from the person [m].
-    fn perceive(&mut self, sim: &Simulator) -> (Vec<Vec<(f64, f64)>>, Vec<f64>) {
-        self.now_ns += 33_000_000;
+    fn perceive(&mut self, sim: &Simulator) -> (Vec<Vec<f64>>, Vec<f64>) {
+        self.now_ns += (self.frame_period_s * 1e9) as u64;
         let now = self.now_ns;
         fill_world(sim, 0, now, &mut self.world);
         self.history.push(now, &sim.truth().q);
-        let n = self.radii.len();
         let person: Vec<Capsule> = self.world.human[..self.world.n_human as usize]
             .iter()
             .map(|c| Capsule::new(Point3::from(c.a), Point3::from(c.b), c.radius))
             .collect();
+        self.perception
+            .capture(&self.world, now, self.frame_period_s)
+            .unwrap();
+        self.perception.perceive(&self.history, None, now).unwrap();
+        let n = self.radii.len();
         let mut truth = vec![f64::INFINITY; n];
-        let mut out = Vec::with_capacity(self.eyes.len());
-        for eye in self.eyes.iter_mut() {
-            let mut header = FrameHeader::zeroed();
-            eye.camera
-                .step(&self.world, now, &mut eye.frame, &mut header)
-                .unwrap();
-            eye.ingest
-                .step(
-                    &mut header,
-                    &eye.frame,
-                    &self.history,
-                    now,
-                    &mut eye.filtered,
-                )
-                .unwrap();
-            let mut points = vec![(f64::INFINITY, f64::INFINITY); n];
-            for w in eye.workers.iter_mut() {
-                let r = w.respond(&header, &eye.filtered).unwrap();
+        let mut out = Vec::with_capacity(self.perception.cameras());
+        for camera in 0..self.perception.cameras() {
+            let mut points = vec![f64::INFINITY; n];
+            for r in self.perception.results(camera) {
                 for p in &r.points[..r.n_points as usize] {
                     let i = p.point as usize;
+                    points[i] = p.min_distance;
                     let point = PointOfInterest::new(Point3::from(p.position), self.radii[i]);
-                    let seen = Repulsion {
-                        min_distance: p.min_distance,
-                        ..Repulsion::NONE
-                    };
-                    points[i] = (p.min_distance, eye.view.bound(&point, &seen, self.rho));
                     truth[i] = person
                         .iter()
                         .map(|c| c.distance_to_point(&point.position) - point.radius)
@@ -387,15 +355,13 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
         for (_, q) in found.iter().take(40) {
             sim.set_state(q, &zeros).unwrap();
             let (seen, truth) = eyes.perceive(&sim);
-            let raw = &seen[0];
-            first.0 = first.0.max(raw[0].0);
-            first.1 = first
-                .1
-                .max(raw.iter().map(|p| p.0).fold(f64::INFINITY, f64::min));
+            let own = &seen[0];
+            first.0 = first.0.max(own[0]);
+            first.1 = first.1.max(own.iter().copied().fold(f64::INFINITY, f64::min));
             for (k, (b, f)) in best.iter_mut().zip(figures.iter_mut()).enumerate() {
                 let fused = |p: usize| match k {
-                    0 => seen[0][p].1,
-                    _ => seen[0][p].1.max(seen[k][p].1),
+                    0 => seen[0][p],
+                    _ => seen[0][p].max(seen[k][p]),
                 };
                 for (p, t) in truth.iter().enumerate() {
                     // beyond ρ depth space says nothing
