@@ -267,7 +267,41 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(ROBOT_BOX);
 }
 
-/// Visit the channel called `name`; `false` when the cell has none of that name.
+/// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s
+/// order, each camera's in [`visit_camera`]'s), for tools that take them
+/// beside [`ALL`] in a cell of several cameras.
+pub const FURTHER_CAMERAS: &[&str] = &[
+    CAMERAS[1].depth.name,
+    CAMERAS[1].perception.name,
+    CAMERAS[1].repulsion.name,
+    CAMERAS[1].skeleton.name,
+    CAMERAS[1].hand.name,
+    CAMERAS[2].depth.name,
+    CAMERAS[2].perception.name,
+    CAMERAS[2].repulsion.name,
+    CAMERAS[2].skeleton.name,
+    CAMERAS[2].hand.name,
+    CAMERAS[3].depth.name,
+    CAMERAS[3].perception.name,
+    CAMERAS[3].repulsion.name,
+    CAMERAS[3].skeleton.name,
+    CAMERAS[3].hand.name,
+];
+
+/// Visit camera `i`'s channels: its raw and ingested frames, its repulsion
+/// results, its skeletons and its hand; nothing past [`MAX_CAMERAS`].
+pub fn visit_camera(i: usize, v: &mut impl ChannelVisitor) {
+    if let Some(c) = CAMERAS.get(i) {
+        v.frames(c.depth);
+        v.frames(c.perception);
+        v.message(c.repulsion);
+        v.message(c.skeleton);
+        v.message(c.hand);
+    }
+}
+
+/// Visit the channel called `name`, a further camera's included; `false`
+/// when the cell has none of that name.
 pub fn visit_named(name: &str, v: &mut impl ChannelVisitor) -> bool {
     struct One<'a, V> {
         name: &'a str,
@@ -294,12 +328,43 @@ pub fn visit_named(name: &str, v: &mut impl ChannelVisitor) -> bool {
         found: false,
     };
     visit_all(&mut one);
+    for i in 1..MAX_CAMERAS {
+        visit_camera(i, &mut one);
+    }
     one.found
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn further_cameras_channels_are_listed_and_found_by_name() {
+        struct Names(Vec<&'static str>);
+        impl ChannelVisitor for Names {
+            fn message<T: Message>(&mut self, c: Channel<T>) {
+                self.0.push(c.name);
+            }
+            fn frames(&mut self, c: FrameChannel) {
+                self.0.push(c.name);
+            }
+        }
+        let mut names = Names(Vec::new());
+        for i in 1..MAX_CAMERAS {
+            visit_camera(i, &mut names);
+        }
+        assert_eq!(names.0, FURTHER_CAMERAS);
+        for name in FURTHER_CAMERAS {
+            assert!(visit_named(name, &mut Names(Vec::new())), "{name}");
+            assert!(!ALL.contains(name), "{name}");
+        }
+        let mut first = Names(Vec::new());
+        visit_camera(0, &mut first);
+        assert!(first.0.iter().all(|n| ALL.contains(n)));
+        let mut past = Names(Vec::new());
+        visit_camera(MAX_CAMERAS, &mut past);
+        assert!(past.0.is_empty());
+    }
 
     #[test]
     fn each_camera_has_its_own_channels_of_the_first_cameras_types() {

@@ -126,9 +126,10 @@ enum Cmd {
     },
 }
 
-/// The cell's channel names, for the CHANNEL argument (and its completion).
+/// The cell's channel names, for the CHANNEL argument (and its completion):
+/// every channel, then the further cameras' (`camera/1/depth`, …).
 fn channel_names() -> PossibleValuesParser {
-    PossibleValuesParser::new(ALL.iter().copied())
+    PossibleValuesParser::new(ALL.iter().chain(FURTHER_CAMERAS).copied())
 }
 
 /// A finite number of seconds above 0.

@@ -81,7 +81,7 @@ struct Cli {
     /// Chunk compression: zstd, lz4 or none [default: [record] compression, zstd]
     #[arg(long, value_name = "zstd|lz4|none")]
     compression: Option<String>,
-    /// Cell configuration: [record], the robot model and the collision threshold
+    /// Cell configuration: [record], the robot model, the collision threshold and the cameras (a further camera's channels, `camera/1/depth`, …, are recorded too)
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Collision norm threshold written into the metadata for phri-plot [Nm] [default: the configuration's]
@@ -303,6 +303,20 @@ impl ChannelVisitor for Recs<'_> {
     }
 }
 
+/// A recorder per channel of a cell of `cameras` cameras: every channel of
+/// [`ALL`], then each further camera's.
+fn recorders(rc: &RecordConfig, cameras: usize) -> Vec<Box<dyn Rec>> {
+    let mut recs = Recs {
+        rc,
+        recs: Vec::new(),
+    };
+    visit_all(&mut recs);
+    for i in 1..cameras {
+        visit_camera(i, &mut recs);
+    }
+    recs.recs
+}
+
 fn mcap_err(e: mcap::McapError) -> String {
     format!("mcap: {e}")
 }
@@ -386,12 +400,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
         .create(BufWriter::new(file))
         .map_err(mcap_err)?;
 
-    let mut recs = Recs {
-        rc: &rc,
-        recs: Vec::new(),
-    };
-    visit_all(&mut recs);
-    let mut recs = recs.recs;
+    let mut recs = recorders(&rc, loaded.config.cameras.len());
     // ids[rec][topic]: MCAP channel ids
     let mut ids: Vec<Vec<u16>> = Vec::with_capacity(recs.len());
     for r in &recs {
@@ -624,18 +633,22 @@ mod tests {
     #[test]
     fn every_channel_is_recorded() {
         let rc = config::defaults();
-        let mut recs = Recs {
-            rc: &rc,
-            recs: Vec::new(),
-        };
-        visit_all(&mut recs);
-        let names: Vec<&str> = recs.recs.iter().map(|r| r.name()).collect();
+        let recs = recorders(&rc, 1);
+        let names: Vec<&str> = recs.iter().map(|r| r.name()).collect();
         assert_eq!(names, ALL);
-        let topics: Vec<usize> = recs.recs.iter().map(|r| r.topics().len()).collect();
+        let topics: Vec<usize> = recs.iter().map(|r| r.topics().len()).collect();
         assert_eq!(
             topics.iter().sum::<usize>(),
             ALL.len() + 2,
             "frames add an image topic"
         );
+        // two cameras: the second's five channels after them, its two
+        // frame channels with their image topics
+        let recs = recorders(&rc, 2);
+        let names: Vec<&str> = recs.iter().map(|r| r.name()).collect();
+        assert_eq!(names[..ALL.len()], *ALL);
+        assert_eq!(names[ALL.len()..], FURTHER_CAMERAS[..5]);
+        let topics: usize = recs.iter().map(|r| r.topics().len()).sum();
+        assert_eq!(topics, ALL.len() + 2 + 5 + 2);
     }
 }
