@@ -461,10 +461,15 @@ impl Config {
         for (name, s) in &self.services {
             s.validate(name)?;
         }
-        if self.services.values().filter(|s| s.enabled).count() > phri_ipc::MAX_SERVICES {
+        let enabled = self.services.values().filter(|s| s.enabled).count();
+        if enabled > phri_ipc::MAX_SERVICES {
             return Err(Invalid::new(
                 "services",
-                format!("at most {} enabled services", phri_ipc::MAX_SERVICES),
+                format!(
+                    "at most {} enabled services, got {enabled} (each further camera adds two; \
+                     disable some, e.g. services.voice.enabled = false)",
+                    phri_ipc::MAX_SERVICES
+                ),
             ));
         }
         self.sim.validate()?;

@@ -457,4 +457,14 @@ fn each_further_camera_gets_its_own_camera_and_ingestion_services() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("at most 4"), "{e}");
+    // three fit the roster of 16 services; a fourth needs two disabled
+    let three = "[[camera]]\n".repeat(3);
+    assert!(Loaded::load_text(&three, &deploy(), None, &[]).is_ok());
+    let four = "[[camera]]\n".repeat(4);
+    let e = Loaded::load_text(&four, &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("services") && e.contains("got 18"), "{e}");
+    let quiet = ["services.voice.enabled=false", "services.mic.enabled=false"];
+    assert!(Loaded::load_text(&four, &deploy(), None, &quiet).is_ok());
 }
