@@ -230,15 +230,20 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
     assert!(hand.iter().all(|c| c.link == "lwr_link_7" && c.intended));
     let peak = hand.iter().map(|c| c.peak_force_n).fold(0.0, f64::max);
     assert!(peak <= 70.0, "peak intended force {peak:.1} N");
+    // the follow's new touch at about contact_speed (below)
+    let follow = hand.iter().filter(|c| c.mode == "follow");
+    let peak = follow.map(|c| c.peak_force_n).fold(0.0, f64::max);
+    assert!(peak > 0.0 && peak <= 50.0, "the follow's new touch: {peak:.1} N");
 }
 
 /// The robot following a hand that moved away touches it again at about
 /// `contact_speed`: near the hand its reference no longer leads the end
 /// effector by up to 5 cm, which pulled it in at the feedback's cap on top
-/// (60-71 N on the LWR's new touch). Every script offset, both 7-DOF arms.
+/// (56-71 N on the LWR's new touch). Two more script offsets than the
+/// collaboration test's (which checks its own), two 7-DOF arms.
 #[test]
 fn following_a_moved_hand_touches_it_again_gently() {
-    for (robot, offset) in [("lwr4", -0.7), ("lwr4", 0.4), ("fr3", -0.2), ("fr3", 0.2)] {
+    for (robot, offset) in [("lwr4", 0.4), ("fr3", -0.2)] {
         let opts = phri_cell::CellOptions {
             human_time_offset_s: offset,
             ..phri_cell::CellOptions::default()
