@@ -50,6 +50,10 @@ pub struct Observation {
     /// the residual the intended contact does not explain crosses the
     /// collision thresholds
     pub collision: bool,
+    /// another part of the person (the collaborative hand is masked from
+    /// depth) is seen touching the robot: a force is then no touch of the
+    /// hand
+    pub other_touch: bool,
     /// a safety input (residual, perception) is stale
     pub stale: bool,
     /// backing off: the end effector got `back_off_m` away
@@ -285,9 +289,13 @@ impl CollabMachine {
             return self.phase;
         }
         // a force alone is no contact far from the hand (the residual of a
-        // moving arm is never quite zero)
+        // moving arm is never quite zero), nor while another part of the
+        // person touches the robot (a hand crossing the approach: pressing
+        // it with the contact's hold would crush it)
         let touching = obs.gap_m <= self.cfg.contact_gap_m
-            || (obs.force_n >= self.cfg.contact_force_n && obs.gap_m <= self.cfg.slow_down_m);
+            || (obs.force_n >= self.cfg.contact_force_n
+                && obs.gap_m <= self.cfg.slow_down_m
+                && !obs.other_touch);
         match self.phase {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
                 self.enter(CollabPhase::Contact, CollabReason::ContactMade, obs.t)
@@ -351,6 +359,20 @@ mod tests {
         );
         assert!(a.accepted && m.phase() == CollabPhase::Approach);
         m
+    }
+
+    #[test]
+    fn a_force_while_another_part_touches_the_robot_is_no_contact() {
+        let mut m = approaching_left_hand();
+        let mut obs = seen(1.0, 0.1, 10.0);
+        obs.other_touch = true;
+        assert_eq!(m.step(&obs), CollabPhase::Approach);
+        // the hand itself at the surface still is
+        obs.gap_m = m.cfg.contact_gap_m;
+        assert_eq!(m.step(&obs), CollabPhase::Contact);
+        // and the same force with nothing else at the robot
+        let mut m = approaching_left_hand();
+        assert_eq!(m.step(&seen(1.0, 0.1, 10.0)), CollabPhase::Contact);
     }
 
     fn seen(t: f64, gap_m: f64, force_n: f64) -> Observation {

@@ -66,3 +66,34 @@ fn the_mirrored_wave_is_seen_by_two_cameras_and_not_by_one() {
     // the push on the wrist ends it: the task again
     assert_eq!(modes.last(), Some(&"task"), "{modes:?}");
 }
+
+/// `safe-collaboration` with the mirrored pair: the robot, no longer held
+/// back by the crossing arm hiding the hand it approaches, is struck by the
+/// crossing left hand (a person's hand at 0.6 m/s, faster than the
+/// repulsion's 0.3 m/s). Its force at the robot must never be taken for
+/// the touch of the collaborative right hand: depth sees another part at
+/// the robot, so no contact phase begins (before, one did, and its hold
+/// pressed the left hand with 170 N), and no contact with it happens in one.
+#[test]
+fn a_hand_striking_the_arm_is_never_taken_for_the_collaborative_touch() {
+    let file = common::deploy().with_file_name("two-cameras.toml");
+    let l = Loaded::load(&file, Some("safe-collaboration"), &[]).unwrap();
+    let mut c = common::cell_of(&l, &CellOptions::default());
+    for _ in 0..9_000 {
+        c.tick().unwrap();
+    }
+    let s = c.summary();
+    let strikes: Vec<_> = s.contacts.iter().filter(|k| !k.intended).collect();
+    // not vacuous: the left hand does strike the arm here
+    assert!(
+        strikes.iter().any(|k| k.part == "hand_left"),
+        "{:?}",
+        s.contacts
+    );
+    assert!(
+        strikes.iter().all(|k| k.mode != "contact"),
+        "a strike in a contact phase: {strikes:?}"
+    );
+    let modes: Vec<&str> = s.modes.iter().map(|m| m.1.as_str()).collect();
+    assert!(!modes.contains(&"contact"), "{modes:?}");
+}

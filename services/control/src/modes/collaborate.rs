@@ -51,6 +51,13 @@ const MAX_LEAD_M: f64 = 0.05;
 /// linearly to this over `slow_down_m`, so that the end effector touches at
 /// about `contact_speed`.
 const MIN_NEAR_LEAD_M: f64 = 0.003;
+/// A control point's obstacle this near \[m\] touches the robot (depth's
+/// noise is a few millimetres at the cell's range) ...
+const OTHER_TOUCH_M: f64 = 0.02;
+/// ... unless it lies this near the collaborative hand's centre \[m\]: the
+/// hand itself, where the mask left its edge (the hand's radius 4.5 cm,
+/// depth's error of the centre 3-5 cm)
+const AT_THE_HAND_M: f64 = 0.10;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
@@ -490,6 +497,18 @@ impl Collaboration {
         let backed_off = self
             .back_off
             .is_some_and(|b| (origin - b.from).dot(&b.dir) >= 0.9 * self.cfg.back_off_m);
+        // another part of the person at the robot: a control point's obstacle
+        // (the collaborative hand is masked from depth) within `OTHER_TOUCH_M`
+        // and not at the hand (what the mask left of its edge)
+        let other_touch = perception.is_some_and(|v| {
+            v.points.iter().any(|p| {
+                let o = Vector3::from(p.obstacle);
+                p.active != 0
+                    && p.min_distance <= OTHER_TOUCH_M
+                    && o.iter().all(|x| x.is_finite())
+                    && self.hand.is_none_or(|h| (o - h).norm() > AT_THE_HAND_M)
+            })
+        });
         let was = self.machine.active();
         let phase = self.machine.step(&Observation {
             t,
@@ -498,6 +517,7 @@ impl Collaboration {
             force_n,
             wrist_push,
             collision: self.collision,
+            other_touch,
             stale,
             backed_off,
         });
