@@ -498,11 +498,7 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         assert!(c["fused_share"].as_f64().unwrap() > 0.05, "{c}");
     }
     assert!(events(&r, "brake", "sim").is_empty());
-    assert_eq!(
-        r["torque_loop"]["missed_deadlines"], 0,
-        "{}",
-        r["events"]
-    );
+    assert_eq!(r["torque_loop"]["missed_deadlines"], 0, "{}", r["events"]);
     assert_untouched(&r);
 }
 

@@ -233,7 +233,10 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
     // the follow's new touch at about contact_speed (below)
     let follow = hand.iter().filter(|c| c.mode == "follow");
     let peak = follow.map(|c| c.peak_force_n).fold(0.0, f64::max);
-    assert!(peak > 0.0 && peak <= 50.0, "the follow's new touch: {peak:.1} N");
+    assert!(
+        peak > 0.0 && peak <= 50.0,
+        "the follow's new touch: {peak:.1} N"
+    );
 }
 
 /// The robot following a hand that moved away touches it again at about
@@ -255,7 +258,11 @@ fn following_a_moved_hand_touches_it_again_gently() {
             .iter()
             .filter(|c| c.part == "hand_right" && c.mode == "follow")
             .collect();
-        assert!(!follow.is_empty(), "{robot} {offset}: no new touch: {:?}", s.contacts);
+        assert!(
+            !follow.is_empty(),
+            "{robot} {offset}: no new touch: {:?}",
+            s.contacts
+        );
         let peak = follow.iter().map(|c| c.peak_force_n).fold(0.0, f64::max);
         eprintln!("{robot}, offset {offset}: the follow's new touch peaks at {peak:.1} N");
         // the hold is 25 N; the first touch of the approach peaks at 20-36 N

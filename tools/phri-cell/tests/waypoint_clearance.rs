@@ -357,7 +357,9 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
             let (seen, truth) = eyes.perceive(&sim);
             let own = &seen[0];
             first.0 = first.0.max(own[0]);
-            first.1 = first.1.max(own.iter().copied().fold(f64::INFINITY, f64::min));
+            first.1 = first
+                .1
+                .max(own.iter().copied().fold(f64::INFINITY, f64::min));
             for (k, (b, f)) in best.iter_mut().zip(figures.iter_mut()).enumerate() {
                 let fused = |p: usize| match k {
                     0 => seen[0][p],
