@@ -338,17 +338,20 @@ pub fn visit_named(name: &str, v: &mut impl ChannelVisitor) -> bool {
 mod tests {
     use super::*;
 
+    /// The names a visit gives, in its order.
+    struct Names(Vec<&'static str>);
+
+    impl ChannelVisitor for Names {
+        fn message<T: Message>(&mut self, c: Channel<T>) {
+            self.0.push(c.name);
+        }
+        fn frames(&mut self, c: FrameChannel) {
+            self.0.push(c.name);
+        }
+    }
+
     #[test]
     fn further_cameras_channels_are_listed_and_found_by_name() {
-        struct Names(Vec<&'static str>);
-        impl ChannelVisitor for Names {
-            fn message<T: Message>(&mut self, c: Channel<T>) {
-                self.0.push(c.name);
-            }
-            fn frames(&mut self, c: FrameChannel) {
-                self.0.push(c.name);
-            }
-        }
         let mut names = Names(Vec::new());
         for i in 1..MAX_CAMERAS {
             visit_camera(i, &mut names);
@@ -404,15 +407,6 @@ mod tests {
 
     #[test]
     fn every_channel_is_visited_once_in_order() {
-        struct Names(Vec<&'static str>);
-        impl ChannelVisitor for Names {
-            fn message<T: Message>(&mut self, c: Channel<T>) {
-                self.0.push(c.name);
-            }
-            fn frames(&mut self, c: FrameChannel) {
-                self.0.push(c.name);
-            }
-        }
         let mut n = Names(Vec::new());
         visit_all(&mut n);
         assert_eq!(n.0, ALL);
