@@ -67,33 +67,38 @@ fn the_mirrored_wave_is_seen_by_two_cameras_and_not_by_one() {
     assert_eq!(modes.last(), Some(&"task"), "{modes:?}");
 }
 
-/// `safe-collaboration` with the mirrored pair: the robot, no longer held
-/// back by the crossing arm hiding the hand it approaches, is struck by the
-/// crossing left hand (a person's hand at 0.6 m/s, faster than the
-/// repulsion's 0.3 m/s). Its force at the robot must never be taken for
-/// the touch of the collaborative right hand: depth sees another part at
-/// the robot, so no contact phase begins (before, one did, and its hold
-/// pressed the left hand with 170 N), and no contact with it happens in one.
+/// `safe-collaboration` with the mirrored pair: the other camera still sees
+/// the right hand while the crossing left arm hides it from the first, so
+/// the approach goes on while the left hand is raised across the arm's
+/// wrist at about 0.6 m/s, twice the repulsion's V_max. The robot must yield
+/// to that hand (the approach holds and backs away from the other hand
+/// closing in faster than V_max): it never touches the arm, and the right
+/// hand is still reached.
 #[test]
-fn a_hand_striking_the_arm_is_never_taken_for_the_collaborative_touch() {
+fn the_crossing_hand_holds_the_approach_and_never_strikes_the_arm() {
     let file = common::deploy().with_file_name("two-cameras.toml");
-    let l = Loaded::load(&file, Some("safe-collaboration"), &[]).unwrap();
-    let mut c = common::cell_of(&l, &CellOptions::default());
-    for _ in 0..9_000 {
-        c.tick().unwrap();
+    for offset in [0.0, 0.4] {
+        let l = Loaded::load(&file, Some("safe-collaboration"), &[]).unwrap();
+        let opts = CellOptions {
+            human_time_offset_s: offset,
+            ..CellOptions::default()
+        };
+        let mut c = common::cell_of(&l, &opts);
+        for _ in 0..15_000 {
+            c.tick().unwrap();
+        }
+        let s = c.summary();
+        assert_eq!(
+            s.unintended_contacts, 0,
+            "offset {offset}: {:?}",
+            s.contacts
+        );
+        assert!(
+            s.contacts
+                .iter()
+                .any(|k| k.intended && k.part == "hand_right"),
+            "offset {offset}: the right hand never reached: {:?}",
+            s.contacts
+        );
     }
-    let s = c.summary();
-    let strikes: Vec<_> = s.contacts.iter().filter(|k| !k.intended).collect();
-    // not vacuous: the left hand does strike the arm here
-    assert!(
-        strikes.iter().any(|k| k.part == "hand_left"),
-        "{:?}",
-        s.contacts
-    );
-    assert!(
-        strikes.iter().all(|k| k.mode != "contact"),
-        "a strike in a contact phase: {strikes:?}"
-    );
-    let modes: Vec<&str> = s.modes.iter().map(|m| m.1.as_str()).collect();
-    assert!(!modes.contains(&"contact"), "{modes:?}");
 }

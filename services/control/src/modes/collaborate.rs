@@ -58,6 +58,13 @@ const OTHER_TOUCH_M: f64 = 0.02;
 /// hand itself, where the mask left its edge (the hand's radius 4.5 cm,
 /// depth's error of the centre 3-5 cm)
 const AT_THE_HAND_M: f64 = 0.10;
+/// The other hand this near the robot part's surface \[m\] and closing in
+/// holds the approach and backs the robot away from it.
+const OTHER_HAND_NEAR_M: f64 = 0.3;
+/// ... closing in faster than this \[m/s\]: the repulsion's V_max (0.3 m/s,
+/// `[repulsion] v_max`), as fast as the avoidance alone moves a robot point
+/// away.
+const OTHER_CLOSING_MIN: f64 = 0.3;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
@@ -118,6 +125,11 @@ pub struct Collaboration {
     sighting: Option<(Vector3<f64>, u64)>,
     /// the hand's velocity from its sightings, low-passed \[m/s\], base frame
     hand_velocity: Vector3<f64>,
+    /// the person's other hand: its newest sighting (position \[m\],
+    /// capture \[ns\]) and its velocity from the sightings, low-passed
+    /// \[m/s\], base frame (a hand that may cross the approach)
+    other: Option<(Vector3<f64>, u64)>,
+    other_velocity: Vector3<f64>,
     /// the hand was seen in this period
     hand_seen: bool,
     /// desired end-effector position \[m\], base frame
@@ -221,6 +233,8 @@ impl Collaboration {
             hand_lp: None,
             sighting: None,
             hand_velocity: Vector3::zeros(),
+            other: None,
+            other_velocity: Vector3::zeros(),
             hand_seen: false,
             x_d: Vector3::zeros(),
             robot_point: Vector3::zeros(),
@@ -445,6 +459,33 @@ impl Collaboration {
                     }
                     _ => lp,
                 });
+            }
+        }
+        // 2b. the other hand, tracked, and how fast it moves
+        if self.machine.active() {
+            let other = match self.machine.part() {
+                CollabPart::RightHand => CollabPart::LeftHand,
+                CollabPart::LeftHand => CollabPart::RightHand,
+                CollabPart::None => CollabPart::None,
+            };
+            let seen = fresh_skeleton
+                .and_then(|sk| Self::find_hand(sk, other, self.machine.person()))
+                .filter(|(_, c, _)| *c >= self.cfg.min_hand_confidence);
+            if let (Some((x, _, _)), Some(sk)) = (seen, fresh_skeleton) {
+                let x = Vector3::from(x);
+                let capture = sk.capture_ns;
+                if let Some((x0, t0)) = self.other.filter(|(_, t0)| capture > *t0) {
+                    let gap_s = capture.saturating_sub(t0) as f64 * 1e-9;
+                    if gap_s <= MAX_SKELETON_AGE_S {
+                        let a = 1.0 - (-gap_s / self.cfg.hand_filter_s.max(1e-3)).exp();
+                        self.other_velocity += ((x - x0) / gap_s - self.other_velocity) * a;
+                    } else {
+                        self.other_velocity = Vector3::zeros();
+                    }
+                }
+                if self.other.is_none_or(|(_, t0)| capture > t0) {
+                    self.other = Some((x, capture));
+                }
             }
         }
         // 3. the force at the robot point, what it leaves unexplained, the
@@ -702,6 +743,24 @@ impl Collaboration {
         self.hand_lp = None;
         self.sighting = None;
         self.hand_velocity = Vector3::zeros();
+        self.other = None;
+        self.other_velocity = Vector3::zeros();
+    }
+
+    /// The other hand near the robot part and closing in on it faster than
+    /// [`OTHER_CLOSING_MIN`]: the direction away from it (unit, base frame) and
+    /// its closing speed \[m/s\], capped at the approach speed.
+    fn other_closing(&self) -> Option<(Vector3<f64>, f64)> {
+        let (x, _) = self.other?;
+        let from = self.robot_point - x;
+        let d = from.norm();
+        let gap = d - self.cfg.robot_radius_m - self.cfg.hand_radius_m;
+        if d < 1e-6 || gap > OTHER_HAND_NEAR_M {
+            return None;
+        }
+        let away = from / d;
+        let closing = self.other_velocity.dot(&away);
+        (closing > OTHER_CLOSING_MIN).then(|| (away, closing.min(self.cfg.approach_speed)))
     }
 
     /// The distance \[m\] from `x` (base frame) to the surface of the
@@ -847,6 +906,15 @@ impl Collaboration {
         }
         self.ref_phase = phase;
         match phase {
+            CollabPhase::Approach | CollabPhase::Follow if self.other_closing().is_some() => {
+                // the other hand closes in on the robot part: away from it
+                // at its speed, and no approach (the repulsion alone is
+                // slower than a hand thrust across the arm)
+                if let Some((away, speed)) = self.other_closing() {
+                    velocity = away * speed;
+                    self.x_d += velocity * dt;
+                }
+            }
             CollabPhase::Approach | CollabPhase::Follow => {
                 if let Some(h) = self.hand {
                     let to = h - self.robot_point;
