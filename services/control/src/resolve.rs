@@ -369,7 +369,7 @@ const BEHIND_HYSTERESIS_M: f64 = 0.03;
 /// While touching the collaborative hand, an obstacle this near the hand's
 /// centre as the controller sees it \[m\] is the hand itself or its mask's
 /// edge (the hand's radius 4.5 cm, depth's error of the centre 3-5 cm).
-const AT_THE_HAND_M: f64 = 0.10;
+pub(crate) const AT_THE_HAND_M: f64 = 0.10;
 
 /// The obstacle of `p` is the collaborative hand `h` itself ([`AT_THE_HAND_M`]).
 fn at_the_hand(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {

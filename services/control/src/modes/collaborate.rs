@@ -36,6 +36,7 @@ use crate::collab::{Answer, CollabMachine, Observation, RobotState};
 use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
+use crate::resolve::AT_THE_HAND_M;
 
 /// A skeleton older than this is no sighting of the hand \[s\].
 const MAX_SKELETON_AGE_S: f64 = 0.2;
@@ -52,12 +53,10 @@ const MAX_LEAD_M: f64 = 0.05;
 /// about `contact_speed`.
 const MIN_NEAR_LEAD_M: f64 = 0.003;
 /// A control point's obstacle this near \[m\] touches the robot (depth's
-/// noise is a few millimetres at the cell's range) ...
+/// noise is a few millimetres at the cell's range), unless it lies within
+/// [`AT_THE_HAND_M`] of the collaborative hand (the hand itself, where the
+/// mask left its edge).
 const OTHER_TOUCH_M: f64 = 0.02;
-/// ... unless it lies this near the collaborative hand's centre \[m\]: the
-/// hand itself, where the mask left its edge (the hand's radius 4.5 cm,
-/// depth's error of the centre 3-5 cm)
-const AT_THE_HAND_M: f64 = 0.10;
 /// The other hand this near the robot part's surface \[m\] and closing in
 /// holds the approach and backs the robot away from it.
 const OTHER_HAND_NEAR_M: f64 = 0.3;
@@ -68,6 +67,33 @@ const OTHER_CLOSING_MIN: f64 = 0.3;
 /// A hand closing in slower than this is still \[m/s\] (the refined hand's
 /// velocity jitters by up to 0.09 m/s in depth's noise).
 const CLOSING_MIN: f64 = 0.1;
+
+/// The person's hand other than `part` (`None` for none).
+fn other_hand(part: CollabPart) -> CollabPart {
+    match part {
+        CollabPart::RightHand => CollabPart::LeftHand,
+        CollabPart::LeftHand => CollabPart::RightHand,
+        CollabPart::None => CollabPart::None,
+    }
+}
+
+/// A hand's velocity \[m/s\], base frame, after a sighting `to` (position
+/// \[m\], capture \[ns\]) that follows `from`: `v` low-passed like the
+/// position (time constant `tau_s` \[s\]) toward the velocity between them;
+/// `None` when they are not in order or further apart than a skeleton's
+/// life, which says nothing of the motion.
+fn sighted_velocity(
+    v: Vector3<f64>,
+    (x0, t0): (Vector3<f64>, u64),
+    (x, t): (Vector3<f64>, u64),
+    tau_s: f64,
+) -> Option<Vector3<f64>> {
+    let gap_s = t.saturating_sub(t0) as f64 * 1e-9;
+    (gap_s > 0.0 && gap_s <= MAX_SKELETON_AGE_S).then(|| {
+        let a = 1.0 - (-gap_s / tau_s.max(1e-3)).exp();
+        v + ((x - x0) / gap_s - v) * a
+    })
+}
 
 /// The collaboration's inputs of one period.
 #[derive(Clone, Copy, Debug, Default)]
@@ -130,6 +156,9 @@ pub struct Collaboration {
     /// \[m/s\], base frame (a hand that may cross the approach)
     other: Option<(Vector3<f64>, u64)>,
     other_velocity: Vector3<f64>,
+    /// this period: the other hand near the robot part and closing in
+    /// (see [`Collaboration::other_closing`])
+    other_closing: Option<(Vector3<f64>, f64)>,
     /// the hand was seen in this period
     hand_seen: bool,
     /// desired end-effector position \[m\], base frame
@@ -235,6 +264,7 @@ impl Collaboration {
             hand_velocity: Vector3::zeros(),
             other: None,
             other_velocity: Vector3::zeros(),
+            other_closing: None,
             hand_seen: false,
             x_d: Vector3::zeros(),
             robot_point: Vector3::zeros(),
@@ -427,15 +457,11 @@ impl Collaboration {
                 let new = self.sighting.is_none_or(|(_, t0)| capture > t0);
                 if c >= self.cfg.min_hand_confidence && new {
                     let x = Vector3::from(x);
-                    // the velocity between consecutive sightings, low-passed
-                    // like the position (a gap longer than a skeleton's
-                    // life says nothing of the motion)
-                    if let Some((x0, t0)) = self.sighting {
-                        let gap_s = capture.saturating_sub(t0) as f64 * 1e-9;
-                        if gap_s > 0.0 && gap_s <= MAX_SKELETON_AGE_S {
-                            let a = 1.0 - (-gap_s / self.cfg.hand_filter_s.max(1e-3)).exp();
-                            self.hand_velocity += ((x - x0) / gap_s - self.hand_velocity) * a;
-                        }
+                    let tau = self.cfg.hand_filter_s;
+                    if let Some(v) = self.sighting.and_then(|from| {
+                        sighted_velocity(self.hand_velocity, from, (x, capture), tau)
+                    }) {
+                        self.hand_velocity = v;
                     }
                     self.sighting = Some((x, capture));
                     self.hand_seen = true;
@@ -461,31 +487,21 @@ impl Collaboration {
                 });
             }
         }
-        // 2b. the other hand, tracked, and how fast it moves
+        // 2b. the other hand, tracked, and how fast it moves (after a gap
+        // longer than a skeleton's life, as if still)
         if self.machine.active() {
-            let other = match self.machine.part() {
-                CollabPart::RightHand => CollabPart::LeftHand,
-                CollabPart::LeftHand => CollabPart::RightHand,
-                CollabPart::None => CollabPart::None,
-            };
-            let seen = fresh_skeleton
-                .and_then(|sk| Self::find_hand(sk, other, self.machine.person()))
-                .filter(|(_, c, _)| *c >= self.cfg.min_hand_confidence);
-            if let (Some((x, _, _)), Some(sk)) = (seen, fresh_skeleton) {
-                let x = Vector3::from(x);
-                let capture = sk.capture_ns;
-                if let Some((x0, t0)) = self.other.filter(|(_, t0)| capture > *t0) {
-                    let gap_s = capture.saturating_sub(t0) as f64 * 1e-9;
-                    if gap_s <= MAX_SKELETON_AGE_S {
-                        let a = 1.0 - (-gap_s / self.cfg.hand_filter_s.max(1e-3)).exp();
-                        self.other_velocity += ((x - x0) / gap_s - self.other_velocity) * a;
-                    } else {
-                        self.other_velocity = Vector3::zeros();
-                    }
+            let seen = fresh_skeleton.and_then(|sk| {
+                Self::find_hand(sk, other_hand(self.machine.part()), self.machine.person())
+                    .filter(|(_, c, _)| *c >= self.cfg.min_hand_confidence)
+                    .map(|(x, _, _)| (Vector3::from(x), sk.capture_ns))
+            });
+            if let Some(now) = seen.filter(|(_, t)| self.other.is_none_or(|(_, t0)| *t > t0)) {
+                if let Some(from) = self.other {
+                    self.other_velocity =
+                        sighted_velocity(self.other_velocity, from, now, self.cfg.hand_filter_s)
+                            .unwrap_or_else(Vector3::zeros);
                 }
-                if self.other.is_none_or(|(_, t0)| capture > t0) {
-                    self.other = Some((x, capture));
-                }
+                self.other = Some(now);
             }
         }
         // 3. the force at the robot point, what it leaves unexplained, the
@@ -550,6 +566,7 @@ impl Collaboration {
                     && self.hand.is_none_or(|h| (o - h).norm() > AT_THE_HAND_M)
             })
         });
+        self.other_closing = self.other_closing(stamp_ns);
         let was = self.machine.active();
         let phase = self.machine.step(&Observation {
             t,
@@ -745,13 +762,18 @@ impl Collaboration {
         self.hand_velocity = Vector3::zeros();
         self.other = None;
         self.other_velocity = Vector3::zeros();
+        self.other_closing = None;
     }
 
-    /// The other hand near the robot part and closing in on it faster than
-    /// [`OTHER_CLOSING_MIN`]: the direction away from it (unit, base frame) and
-    /// its closing speed \[m/s\], capped at the approach speed.
-    fn other_closing(&self) -> Option<(Vector3<f64>, f64)> {
-        let (x, _) = self.other?;
+    /// The other hand, seen within a skeleton's life of `stamp_ns`, near the
+    /// robot part and closing in on it faster than [`OTHER_CLOSING_MIN`]:
+    /// the direction away from it (unit, base frame) and its closing speed
+    /// \[m/s\], capped at the approach speed.
+    fn other_closing(&self, stamp_ns: u64) -> Option<(Vector3<f64>, f64)> {
+        let (x, capture) = self.other?;
+        if stamp_ns.saturating_sub(capture) as f64 * 1e-9 > MAX_SKELETON_AGE_S {
+            return None;
+        }
         let from = self.robot_point - x;
         let d = from.norm();
         let gap = d - self.cfg.robot_radius_m - self.cfg.hand_radius_m;
@@ -906,11 +928,11 @@ impl Collaboration {
         }
         self.ref_phase = phase;
         match phase {
-            CollabPhase::Approach | CollabPhase::Follow if self.other_closing().is_some() => {
+            CollabPhase::Approach | CollabPhase::Follow if self.other_closing.is_some() => {
                 // the other hand closes in on the robot part: away from it
                 // at its speed, and no approach (the repulsion alone is
                 // slower than a hand thrust across the arm)
-                if let Some((away, speed)) = self.other_closing() {
+                if let Some((away, speed)) = self.other_closing {
                     velocity = away * speed;
                     self.x_d += velocity * dt;
                 }
@@ -1027,5 +1049,35 @@ impl Collaboration {
     /// The wrist centre \[m\], base frame: the origin of `wrist_link`.
     pub fn wrist_centre(&self) -> Vector3<f64> {
         self.forces.frame_origin(self.wrist_frame)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_hands_velocity_comes_from_sightings_in_order_within_a_skeletons_life() {
+        let at = |x: f64, t_ms: u64| (Vector3::new(x, 0.0, 0.0), t_ms * 1_000_000);
+        // a hand at 0.6 m/s, seen every 33 ms: the low-pass reaches its speed
+        let mut v = Vector3::zeros();
+        for k in 0..30 {
+            let (from, to) = (
+                at(0.0198 * k as f64, 33 * k),
+                at(0.0198 * (k + 1) as f64, 33 * (k + 1)),
+            );
+            v = sighted_velocity(v, from, to, 0.1).unwrap();
+        }
+        assert!((v.x - 0.6).abs() < 1e-3 && v.y == 0.0, "{v}");
+        // the first step is the filter's share of it: 1 − e^(−33/100)
+        let first = sighted_velocity(Vector3::zeros(), at(0.0, 0), at(0.0198, 33), 0.1).unwrap();
+        assert!((first.x - 0.6 * (1.0 - (-0.33f64).exp())).abs() < 1e-9);
+        // out of order, the same capture, or a gap longer than a skeleton's life: nothing
+        assert!(sighted_velocity(v, at(0.0, 50), at(0.1, 20), 0.1).is_none());
+        assert!(sighted_velocity(v, at(0.0, 50), at(0.1, 50), 0.1).is_none());
+        assert!(sighted_velocity(v, at(0.0, 0), at(0.1, 250), 0.1).is_none());
+        assert_eq!(other_hand(CollabPart::LeftHand), CollabPart::RightHand);
+        assert_eq!(other_hand(CollabPart::RightHand), CollabPart::LeftHand);
+        assert_eq!(other_hand(CollabPart::None), CollabPart::None);
     }
 }
