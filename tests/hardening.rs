@@ -1409,9 +1409,10 @@ fn a_dead_man_stop_stays_stopped_until_an_operator_resumes() {
         .unwrap();
     assert!(
         out.status.success(),
-        "{}{}",
+        "{}{}\nthe supervisor's log:\n{}",
         String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
+        String::from_utf8_lossy(&out.stderr),
+        cell.stderr()
     );
     let st = cell.state(&rd);
     assert_ne!(st["services"]["sim"]["pid"].as_i64().unwrap() as i32, sim);

@@ -184,11 +184,17 @@ macro_rules! opening {
             }
 
             /// The channel's service if it exists, for tools that watch a cell and must
-            /// never create one: `Ok(None)` while it does not exist (yet).
+            /// never create one: `Ok(None)` while it does not exist (yet), and while
+            /// it is half there: being removed by its last user (a service that just
+            /// exited) or not finished by its creator.
             fn open_existing(&self, node: &IpcNode) -> Result<Option<Factory<$payload, $header>>, IpcError> {
                 match self.builder(node)?.open() {
                     Ok(f) => Ok(Some(f)),
-                    Err(PublishSubscribeOpenError::DoesNotExist) => Ok(None),
+                    Err(
+                        PublishSubscribeOpenError::DoesNotExist
+                        | PublishSubscribeOpenError::IsMarkedForDestruction
+                        | PublishSubscribeOpenError::HangsInCreation,
+                    ) => Ok(None),
                     Err(e) => Err(IpcError::open(self.name, e)),
                 }
             }

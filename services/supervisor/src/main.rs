@@ -330,6 +330,16 @@ fn owned_publishers(ipc_node: &IpcNode, name: &str) -> Result<Option<Vec<i32>>, 
     }
 }
 
+/// A channel the supervisor's watch could not read: logged (the first and
+/// then every 100th), the channel taken as having no publisher this time.
+fn watch_error(e: IpcError, count: &mut u64) -> Option<Vec<i32>> {
+    *count += 1;
+    if *count == 1 || count.is_multiple_of(100) {
+        tracing::warn!("watch ({count} so far): {e}");
+    }
+    None
+}
+
 /// What `[services.*]` asks for a service: its priority and its CPUs.
 fn wanted_of(spec: &phri_config::ServiceSpec) -> realtime::Wanted {
     realtime::Wanted {
@@ -613,6 +623,7 @@ fn body() -> Result<(), SupervisorError> {
     let mut box_eval = phri_supervisor::box_report::BoxEval::new(cell_start_ns);
     // (owned channel, pid) of every stranger reported, each once
     let mut strangers_seen: Vec<(&'static str, i32)> = Vec::new();
+    let mut watch_errors = 0u64;
     let deadman_ns = (plan.loaded.config.supervisor.deadman_s * 1e9) as u64;
     let mut collab_eval = plan.collab_evaluator(cell_start_ns);
     let reaction = plan.reaction().name();
@@ -815,8 +826,11 @@ fn body() -> Result<(), SupervisorError> {
         }
         if now >= next_watch {
             next_watch = now + WATCH_NS;
+            // a channel that cannot be read now (being removed as its last
+            // user exits) is read again at the next watch
             let intruder = ROBOT_COMMAND
-                .publisher_pids(&node)?
+                .publisher_pids(&node)
+                .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
                 .unwrap_or_default()
                 .into_iter()
                 .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
@@ -841,7 +855,9 @@ fn body() -> Result<(), SupervisorError> {
                 .flat_map(|c| [c.repulsion.name, c.skeleton.name, c.hand.name]);
             let owned = phri_ipc::owners::PUBLISHERS.iter().map(|(c, _)| *c);
             for channel in owned.chain(further) {
-                let pids = owned_publishers(&node, channel)?.unwrap_or_default();
+                let pids = owned_publishers(&node, channel)
+                    .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
+                    .unwrap_or_default();
                 for pid in owned::strangers(channel, &pids, roster, me as i32) {
                     if strangers_seen.contains(&(channel, pid)) || !alive(pid) {
                         continue;
