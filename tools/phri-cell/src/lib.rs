@@ -40,6 +40,7 @@ use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simul
 mod outage;
 mod summary;
 pub mod trace;
+pub mod truth;
 
 pub use outage::{Down, Outage, OutageError};
 pub use summary::{CellSummary, ContactEpisode, GestureRequest};
@@ -77,6 +78,9 @@ pub struct CellOptions {
     pub perception: bool,
     /// services that are down for a while (deterministic fault injection)
     pub outages: Vec<Outage>,
+    /// replace every camera's distances by the truth ([`truth::rewrite`]):
+    /// what the avoidance does with perception that hides nothing
+    pub truth_perception: bool,
 }
 
 impl Default for CellOptions {
@@ -86,6 +90,7 @@ impl Default for CellOptions {
             perception_latency_ms: 6.5,
             perception: true,
             outages: Vec::new(),
+            truth_perception: false,
         }
     }
 }
@@ -112,6 +117,9 @@ struct Perception {
     latency_ns: u64,
     in_flight: VecDeque<InFlight>,
     gesture: WaveDetector,
+    /// with [`CellOptions::truth_perception`]: the control points' link
+    /// radii \[m\] and eq. 16's parameters
+    truth: Option<(Vec<f64>, phri_depth::RepulsionParams)>,
 }
 
 /// The person's voice: the simulated room's audio (a scenario's `[[voice]]`
@@ -189,6 +197,10 @@ impl Cell {
                 latency_ns: (opts.perception_latency_ms * 1e6) as u64,
                 in_flight: VecDeque::new(),
                 gesture: WaveDetector::new(&cfg.gesture).map_err(|e| step_err("gesture")(&e))?,
+                truth: opts.truth_perception.then(|| {
+                    let radii = cfg.repulsion.points.iter().map(|p| p.radius).collect();
+                    (radii, cfg.repulsion.params)
+                }),
             })
         } else {
             None
@@ -355,11 +367,17 @@ impl Cell {
                 .cameras
                 .perceive(&p.history, Some(&collab), ready_ns)
                 .map_err(|e| step_err(e.service())(&e))?;
+            let mut results: Vec<Vec<RepulsionResult>> = (0..p.cameras.cameras())
+                .map(|c| p.cameras.results(c).to_vec())
+                .collect();
+            if let Some((radii, params)) = &p.truth {
+                for r in results.iter_mut().flatten() {
+                    truth::rewrite(r, self.sim.human_capsules(), radii, params);
+                }
+            }
             p.in_flight.push_back(InFlight {
                 ready_ns,
-                results: (0..p.cameras.cameras())
-                    .map(|c| p.cameras.results(c).to_vec())
-                    .collect(),
+                results,
                 skeleton,
                 request,
                 hand,

@@ -65,6 +65,11 @@ struct Cli {
     /// Run without the camera and perception
     #[arg(long)]
     no_perception: bool,
+    /// Perception that hides nothing: every control point's distance, closest point and repulsion
+    /// from the simulated person's body itself (the cameras still run, for the skeleton and the
+    /// hand); what the avoidance does when no camera limits it
+    #[arg(long, conflicts_with = "no_perception")]
+    truth_perception: bool,
     /// Write the run's time series as CSV to FILE (one run only): end effector and its path
     /// reference, waypoints, the closest human–robot pair (ground truth), what perception told the
     /// controller
@@ -157,6 +162,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     };
     let mut opts = CellOptions {
         perception: !cli.no_perception,
+        truth_perception: cli.truth_perception,
         ..CellOptions::default()
     };
     opts.outages.extend(cli.outage.iter().copied());
