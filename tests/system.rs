@@ -231,6 +231,55 @@ fn collisions_are_detected_within_the_bound_and_the_reaction_ends_them() {
     }
     assert!(!events(&r, "reaction", "control").is_empty());
     assert_eq!(r["false_detections"], 0, "{}", r["events"]);
+    // ISO/TS 15066: every contact judged against its region's limit; the
+    // thrown hand's impacts against the hand's transient limit
+    let iso = &r["iso_ts_15066"];
+    assert_judged(&r);
+    let hand: Vec<&Value> = iso["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["region"] == "hand_and_fingers" && c["kind"] == "transient")
+        .collect();
+    assert!(!hand.is_empty(), "{iso}");
+    for c in hand {
+        assert_eq!(c["limit_n"], 280.0, "{c}");
+    }
+}
+
+/// The report's `iso_ts_15066` section lists every contact of `contacts`,
+/// each with its region, the limit of its kind and the margin to it.
+fn assert_judged(r: &Value) {
+    let iso = &r["iso_ts_15066"];
+    let judged = iso["contacts"].as_array().unwrap();
+    let contacts = r["contacts"].as_array().unwrap();
+    assert_eq!(judged.len(), contacts.len(), "{iso}");
+    let mut over = 0;
+    for (j, c) in judged.iter().zip(contacts) {
+        assert_eq!(j["part"], c["part"], "{j}");
+        assert_eq!(j["peak_force_n"], c["peak_force_n"], "{j}");
+        assert!(j["region"].as_str().is_some_and(|s| s != "unknown"), "{j}");
+        let (limit, peak) = (
+            j["limit_n"].as_f64().unwrap(),
+            j["peak_force_n"].as_f64().unwrap(),
+        );
+        assert!(
+            (j["margin_n"].as_f64().unwrap() - (limit - peak)).abs() < 1e-9,
+            "{j}"
+        );
+        let transient = j["t_end_s"].as_f64().unwrap() - j["t_start_s"].as_f64().unwrap() <= 0.5;
+        assert_eq!(
+            j["kind"],
+            if transient {
+                "transient"
+            } else {
+                "quasi_static"
+            },
+            "{j}"
+        );
+        over += usize::from(j["within_limit"] == false);
+    }
+    assert_eq!(iso["over_limit"], over, "{iso}");
 }
 
 #[test]
@@ -756,6 +805,14 @@ fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else()
     assert!(c["force_error"]["samples"].as_u64().unwrap() > 500, "{c}");
     assert!(c["force_error"]["p50"].as_f64().unwrap() <= 0.15, "{c}");
     assert!(c["peak_intended_force_n"].as_f64().unwrap() <= 70.0, "{c}");
+    // ISO/TS 15066: the intended touches within the hand's quasi-static limit
+    assert_judged(&r);
+    for j in r["iso_ts_15066"]["contacts"].as_array().unwrap() {
+        if j["intended"] == true && j["region"] == "hand_and_fingers" {
+            assert!(j["peak_force_n"].as_f64().unwrap() <= 140.0, "{j}");
+            assert_eq!(j["within_limit"], true, "{j}");
+        }
+    }
     // the wrist push (15.5-16.5 s) ended it and the task resumed
     let resumed = events(&r, "resume", "control");
     assert!(

@@ -190,6 +190,9 @@ pub struct Report {
     pub perception: Option<PerceptionReport>,
     /// the collaboration layer (empty lists when nothing happened)
     pub collaboration: crate::collab_report::CollabReport,
+    /// ISO/TS 15066: every contact against its body region's force limit
+    /// (Annex A): region, transient or quasi-static, limit and margin
+    pub iso_ts_15066: phri_iso15066::Judged,
     /// real-time scheduling as the services got it
     pub realtime: RealtimeReport,
     /// protective stops by cause: `stale_residual`, `stale_perception`
@@ -1110,6 +1113,11 @@ impl Evaluator {
         events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
         let missed = s.1 + b.1;
         let (degraded, summary) = self.verdict(missed, &services);
+        let mut iso_ts_15066 = phri_iso15066::Judged::default();
+        for c in &contacts {
+            let span = (c.t_start_s, c.t_end_s);
+            iso_ts_15066.truth(span, &c.link, &c.part, c.peak_force_n, c.intended);
+        }
         Report {
             clean: degraded.is_empty(),
             degraded,
@@ -1150,6 +1158,7 @@ impl Evaluator {
             sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
             collaboration: Default::default(),
+            iso_ts_15066,
         }
     }
 }
@@ -1482,6 +1491,16 @@ mod tests {
         assert!((r.contacts[0].t_start_s - 2.0).abs() < 1e-9);
         assert!((r.contacts[0].t_end_s - 2.4).abs() < 1e-9);
         assert!(r.clean, "{:?}", r.degraded);
+        // judged against its region (part 0 is the head: the face, where no
+        // transient contact is allowed)
+        let iso = &r.iso_ts_15066;
+        assert_eq!(iso.contacts.len(), 1);
+        let c = &iso.contacts[0];
+        assert_eq!(
+            (c.part.as_str(), c.region, c.kind),
+            ("head", "face", "transient")
+        );
+        assert_eq!((c.limit_n, c.within_limit, iso.over_limit), (0.0, false, 1));
         // a lost contact event makes the run's evaluation degraded
         let mut e = eval();
         e.on_contact_event(&event(1, 2000, 2000, ContactPhase::Begin, 20.0));

@@ -46,6 +46,9 @@ pub struct CellSummary {
     pub voice: Vec<VoiceHeard>,
     /// every change of the controller's mode: (robot time \[s\], new mode)
     pub modes: Vec<(f64, String)>,
+    /// ISO/TS 15066: every contact against its body region's force limit,
+    /// as the multi-process report's section
+    pub iso_ts_15066: phri_iso15066::Judged,
 }
 
 /// One wave recognised in a run.
@@ -184,6 +187,11 @@ impl Accounting {
         let mut s = self.s.clone();
         s.waypoints = counters.waypoints_reached;
         s.detections = counters.detections;
+        for c in &s.contacts {
+            let span = (c.t_start_s, c.t_end_s);
+            s.iso_ts_15066
+                .truth(span, &c.link, &c.part, c.peak_force_n, c.intended);
+        }
         s
     }
 }

@@ -29,7 +29,11 @@ pub fn rewrite(
                 let away = at - axis;
                 let len = away.norm();
                 let dir = if len > 1e-9 { away / len } else { Vector3::z() };
-                ((len - c.radius - radius).max(0.0), axis + dir * c.radius, dir)
+                (
+                    (len - c.radius - radius).max(0.0),
+                    axis + dir * c.radius,
+                    dir,
+                )
             })
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match closest {
@@ -52,8 +56,8 @@ pub fn rewrite(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use phri_ipc::Zeroed;
     use phri_ipc::BodyPart;
+    use phri_ipc::Zeroed;
 
     #[test]
     fn the_truth_is_the_clearance_to_the_closest_capsule() {
