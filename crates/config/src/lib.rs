@@ -23,6 +23,7 @@ pub mod record;
 pub mod robot;
 pub mod scenario;
 pub mod sim;
+pub mod ssm;
 pub mod supervisor;
 pub mod voice;
 
@@ -47,6 +48,7 @@ pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
 pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
+pub use ssm::{HumanSpeed, SsmConfig};
 pub use supervisor::{camera_of, derive_camera_services, ServiceSpec, SupervisorConfig};
 pub use voice::{AudioConfig, AudioSource, VoiceConfig};
 
@@ -85,6 +87,7 @@ pub struct Config {
     pub repulsion: RepulsionConfig,
     pub dynamics: ResidualConfig,
     pub control: ControlConfig,
+    pub ssm: SsmConfig,
     pub record: RecordConfig,
     pub skeleton: SkeletonConfig,
     pub gesture: GestureConfig,
@@ -377,6 +380,7 @@ impl Config {
             "repulsion",
             "dynamics",
             "control",
+            "ssm",
             "record",
             "skeleton",
             "gesture",
@@ -486,6 +490,7 @@ impl Config {
         self.repulsion.validate()?;
         self.dynamics.validate()?;
         self.control.validate()?;
+        self.ssm.validate()?;
         self.record.validate()?;
         self.skeleton.validate()?;
         self.gesture.validate()?;

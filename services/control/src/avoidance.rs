@@ -438,6 +438,56 @@ impl Avoidance {
         Ok(f)
     }
 
+    /// Speed and separation monitoring for one control point (after
+    /// [`Avoidance::begin`]): bound its speed toward its obstacle, along
+    /// unit `away` (from the obstacle to the point, base frame), to
+    /// `allowed` \[m/s\], by eq. 20's shaping with the risk
+    /// `f = 1 − allowed / Σ_j |awayᵀ J_j| V_max,j` (the point's fastest
+    /// approach within the joint limits): after it the point approaches at
+    /// most `allowed`. `jacobian`: the point's (at least 3 rows, the first
+    /// three linear). Returns `f` (0: no bound needed; a NaN `allowed`
+    /// holds every joint that moves the point toward the obstacle).
+    pub fn limit_approach<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        &mut self,
+        jacobian: &Matrix<f64, R, C, S>,
+        away: &Vector3<f64>,
+        allowed: f64,
+    ) -> Result<f64, SnsError> {
+        let n = self.n();
+        if jacobian.nrows() < 3 {
+            return Err(SnsError::TooFewRows {
+                what: "control point jacobian",
+                min: 3,
+                got: jacobian.nrows(),
+            });
+        }
+        check_len("control point jacobian columns", n, jacobian.ncols())?;
+        let mut reach = 0.0;
+        for k in 0..n {
+            let along =
+                away.x * jacobian[(0, k)] + away.y * jacobian[(1, k)] + away.z * jacobian[(2, k)];
+            reach += along.abs() * self.v_max[k].abs();
+        }
+        if !(reach > 0.0) {
+            return Ok(0.0);
+        }
+        let f = match allowed.is_nan() {
+            true => 1.0,
+            false => (1.0 - allowed / reach).clamp(0.0, 1.0),
+        };
+        if f <= 0.0 {
+            return Ok(0.0);
+        }
+        Ok(shape_bounds_for_point(
+            jacobian,
+            away * f,
+            1.0,
+            &self.v_max,
+            &mut self.qd_min,
+            &mut self.qd_max,
+        ))
+    }
+
     /// Finish a cycle: scale the bounds by `speed_scale` (clamped to [0, 1];
     /// NaN counts as 0; the cycle's bounds are kept, so `solve` may be called
     /// again, e.g. with another task) and resolve `ẋ_r = ẋ_t + V_Call(P_e)` (eq. 19) by SNS
@@ -573,6 +623,43 @@ mod tests {
         );
         assert!((f - 0.5).abs() < 1e-12);
         assert_eq!((lo, hi), ([-0.5, -1.0], [1.0, 1.0]));
+    }
+
+    #[test]
+    fn a_limited_approach_is_at_most_the_allowed_speed_at_every_corner_of_the_bounds() {
+        // three joints; the point moves along x with joints 0 and 1, along y with 2
+        let jp = Matrix3xX::from_column_slice(&[0.5, 0.0, 0.0, -0.3, 0.0, 0.0, 0.0, 0.4, 0.0]);
+        let params = phri_config::Config::defaults().control.avoidance_params;
+        let mut a = Avoidance::from_limits(&[-3.0; 3], &[3.0; 3], &[2.0; 3], params);
+        // the obstacle lies ahead in +x: away is −x
+        let away = Vector3::new(-1.0, 0.0, 0.0);
+        let toward = |qd: &[f64]| -(away.x * (0.5 * qd[0] - 0.3 * qd[1]));
+        for allowed in [0.0, 0.2, 0.9] {
+            a.begin(&[0.0; 3]).unwrap();
+            let before = (a.bounds().0[2], a.bounds().1[2]);
+            let f = a.limit_approach(&jp, &away, allowed).unwrap();
+            // fastest approach within the joint limits: (0.5 + 0.3) · 2 = 1.6 m/s
+            assert!((f - (1.0 - allowed / 1.6)).abs() < 1e-12, "{f}");
+            let (lo, hi) = a.bounds();
+            let mut fastest = f64::NEG_INFINITY;
+            for corner in 0..8 {
+                let qd: Vec<f64> = (0..3)
+                    .map(|j| if corner >> j & 1 == 1 { hi[j] } else { lo[j] })
+                    .collect();
+                fastest = fastest.max(toward(&qd));
+            }
+            assert!(fastest <= allowed + 1e-12, "allowed {allowed}: {fastest}");
+            // the joint that does not move the point keeps its whole range
+            assert_eq!((lo[2], hi[2]), before);
+            // moving away stays free: both joints keep their escape side
+            assert!(hi[1] > 0.0 && lo[0] < 0.0);
+        }
+        // nothing to bound: an allowed speed above the fastest approach
+        a.begin(&[0.0; 3]).unwrap();
+        assert_eq!(a.limit_approach(&jp, &away, 5.0).unwrap(), 0.0);
+        // no number: hold the approach
+        a.begin(&[0.0; 3]).unwrap();
+        assert_eq!(a.limit_approach(&jp, &away, f64::NAN).unwrap(), 1.0);
     }
 
     #[test]

@@ -72,6 +72,13 @@ pub struct ControlCounters {
     pub avoidance_errors: u64,
 }
 
+impl Controller {
+    /// What speed and separation monitoring did so far.
+    pub fn ssm_counters(&self) -> crate::resolve::SsmCounters {
+        self.resolver.ssm_counters()
+    }
+}
+
 /// The torque-loop controller. `step` is pure and allocation-free.
 pub struct Controller {
     model: Model,
@@ -211,6 +218,7 @@ impl Controller {
             if cfg.repulsion.workers == 0 || cfg.repulsion.points.is_empty() {
                 return Err(ControlError::NoControlPoints);
             }
+            c.resolver.set_ssm(cfg.ssm.enabled.then_some(&cfg.ssm));
             c.set_control_points(&cfg.repulsion.points)?;
         }
         if cfg.collaboration.enabled {
@@ -552,9 +560,19 @@ impl Controller {
         fresh: Option<PerceptionView<'_>>,
     ) {
         let (model, data, rf, cfg) = (&self.model, &mut self.data, &mut self.reference, &self.cfg);
+        // speed and separation monitoring outside the collaboration, on the
+        // perception's age now (capture → this command)
+        let ssm = matches!(
+            self.mode,
+            ControlMode::Task | ControlMode::Slow | ControlMode::Recover
+        )
+        .then(|| {
+            let age = self.safety.perception_age_ns as f64 * 1e-9;
+            (age + self.params.period_s, self.t)
+        });
         let faults: Faults = if with_perception {
             self.resolver
-                .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh)
+                .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh, ssm)
         } else {
             self.resolver
                 .clik(model, data, rf, c, dt, cfg, &self.posture, &self.vmax_ref)

@@ -39,6 +39,7 @@ pub mod reference;
 pub mod resolve;
 pub mod safety;
 pub mod sns;
+pub mod ssm;
 pub mod terms;
 
 pub use controller::{ControlCounters, ControlOutput, Controller, ControllerParams};

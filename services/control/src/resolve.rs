@@ -17,6 +17,28 @@ use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
 use crate::reference::JointReference;
+use crate::ssm::SsmMonitor;
+
+/// A point whose allowed approach is above this needs no bound [m/s] (no
+/// joint moves a point that fast).
+const SSM_UNBOUNDED_M_S: f64 = 5.0;
+
+/// A point approaching its obstacle slower than this is not moving toward
+/// it, for counting violations [m/s].
+const SSM_MOVING_M_S: f64 = 0.01;
+
+/// What speed and separation monitoring did, counted over the run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SsmCounters {
+    /// periods in which it bounded some control point's approach
+    pub limited_periods: u64,
+    /// periods in which some control point moved toward its obstacle
+    /// (faster than 1 cm/s) with its clearance below the protective
+    /// separation distance
+    pub violation_periods: u64,
+    /// robot time of the last such period \[s\] (NaN: none)
+    pub last_violation_s: f64,
+}
 
 /// Failures met while resolving, counted (each leaves the fail-safe it always had).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -44,6 +66,9 @@ pub struct Resolver {
     behind_before: Vec<bool>,
     /// task scale of the last SNS solution
     task_scale: f64,
+    /// speed and separation monitoring (`None`: `[ssm] enabled = false`)
+    ssm: Option<SsmMonitor>,
+    ssm_counters: SsmCounters,
 }
 
 impl Resolver {
@@ -64,6 +89,11 @@ impl Resolver {
             v_call_filtered: Vec::new(),
             behind_before: Vec::new(),
             task_scale: 1.0,
+            ssm: None,
+            ssm_counters: SsmCounters {
+                last_violation_s: f64::NAN,
+                ..SsmCounters::default()
+            },
         }
     }
 
@@ -89,7 +119,20 @@ impl Resolver {
             .collect::<Result<_, ControlError>>()?;
         self.v_call_filtered = vec![Vector3::zeros(); points.len()];
         self.behind_before = vec![false; points.len()];
+        if let Some(m) = self.ssm.as_mut() {
+            *m = SsmMonitor::new(m.config(), points.len());
+        }
         Ok(())
+    }
+
+    /// Speed and separation monitoring after `[ssm]` (`None`: off).
+    pub fn set_ssm(&mut self, cfg: Option<&phri_config::SsmConfig>) {
+        self.ssm = cfg.map(|c| SsmMonitor::new(c, self.points.len()));
+    }
+
+    /// What speed and separation monitoring did so far.
+    pub fn ssm_counters(&self) -> SsmCounters {
+        self.ssm_counters
     }
 
     /// Position of the end effector at `q` \[m\], base frame.
@@ -149,7 +192,9 @@ impl Resolver {
     /// shapes the joint velocity bounds (eq. 20); SNS solves the task within
     /// them and the joint-limit bounds. Moves `q_ref`, writes `qd_ref`.
     /// `perception`: fresh results (`None`: stale, no repulsion); `posture`:
-    /// the body task's lowest level (empty: none).
+    /// the body task's lowest level (empty: none). `ssm`: speed and
+    /// separation monitoring applies this period, with the results `t_r`
+    /// \[s\] old (capture → this command), at robot time `now_s` \[s\].
     #[allow(clippy::too_many_arguments)]
     pub fn avoid(
         &mut self,
@@ -161,6 +206,7 @@ impl Resolver {
         cfg: &ControlConfig,
         posture: &[f64],
         perception: Option<PerceptionView<'_>>,
+        ssm: Option<(f64, f64)>,
     ) -> Faults {
         let mut faults = Faults::default();
         let ee = self.clik.frame();
@@ -195,7 +241,12 @@ impl Resolver {
         } else {
             1.0
         };
+        let (mut ssm_limited, mut ssm_violated) = (false, false);
         if let Some(v) = perception {
+            if let Some(m) = self.ssm.as_mut() {
+                m.observe(&v);
+            }
+            let monitor = self.ssm.as_ref().zip(ssm);
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
                 let was_behind = self.behind_before.get(k).copied().unwrap_or(false);
@@ -220,6 +271,56 @@ impl Resolver {
                 if k == 0 && p.active != 0 && !behind_the_hand && !p.min_distance.is_nan() {
                     ee_clearance = p.min_distance;
                 }
+                // speed and separation monitoring: the point approaches its
+                // obstacle no faster than the separation allows
+                if let Some((m, (t_r, now_s))) = monitor.filter(|_| p.active != 0) {
+                    let allowed = m.allowed_speed(k, p.min_distance, t_r);
+                    let away = Vector3::from(p.position) - Vector3::from(p.obstacle);
+                    let away = match away.norm() > 1e-9 && away.iter().all(|x| x.is_finite()) {
+                        true => away.normalize(),
+                        // touching (or no direction): away from the repulsion's side
+                        false => Vector3::from(p.v_call)
+                            .try_normalize(1e-12)
+                            .unwrap_or_default(),
+                    };
+                    if allowed < SSM_UNBOUNDED_M_S && away != Vector3::zeros() {
+                        let jac = if k == 0 {
+                            Ok(&self.jac_ee)
+                        } else {
+                            phri_model::point_jacobian(
+                                model,
+                                data,
+                                frame,
+                                &xyz,
+                                &mut self.jac_point,
+                            )
+                            .map(|_| &self.jac_point)
+                        };
+                        match jac {
+                            Ok(j) => {
+                                // the point's speed toward its obstacle at last period's reference
+                                let mut v_r = 0.0;
+                                for (col, qd) in reference.qd_ref.iter().enumerate() {
+                                    let along = away.x * j[(0, col)]
+                                        + away.y * j[(1, col)]
+                                        + away.z * j[(2, col)];
+                                    v_r -= along * qd;
+                                }
+                                if v_r > SSM_MOVING_M_S
+                                    && p.min_distance < m.separation(k, p.min_distance, v_r, t_r)
+                                {
+                                    ssm_violated = true;
+                                    self.ssm_counters.last_violation_s = now_s;
+                                }
+                                match self.avoidance.limit_approach(j, &away, allowed) {
+                                    Ok(f) => ssm_limited |= f > 0.0,
+                                    Err(_) => faults.avoidance += 1,
+                                }
+                            }
+                            Err(_) => faults.model += 1,
+                        }
+                    }
+                }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
                     break;
                 };
@@ -239,6 +340,8 @@ impl Resolver {
                 }
             }
         }
+        self.ssm_counters.limited_periods += u64::from(ssm_limited);
+        self.ssm_counters.violation_periods += u64::from(ssm_violated);
         // position feedback: toward the end effector's obstacle capped below
         // the repulsion's V_max; the task's elsewhere faster (to rejoin its
         // path), the collaboration's at the cautious cap everywhere (it

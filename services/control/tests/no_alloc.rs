@@ -58,6 +58,10 @@ fn the_control_period_allocates_nothing_in_any_mode() {
     ] {
         let mut cfg = Config::defaults();
         cfg.control.reaction = reaction;
+        // speed and separation monitoring on the 1 kHz path too, its
+        // intrusion distance such that it bounds every point's approach
+        cfg.ssm.enabled = true;
+        cfg.ssm.intrusion_m = 0.7;
         cfg.control.posture.clear(); // taken from the arm at the first start
         let model = cfg_model(&cfg);
         let mut ctl = Controller::from_config(model.clone(), &cfg).unwrap();
@@ -215,6 +219,10 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             );
         }
         assert_eq!(ctl.model_errors(), 0);
+        assert!(
+            ctl.ssm_counters().limited_periods > 0,
+            "{reaction:?}: the monitor never bounded"
+        );
         assert_eq!(ctl.counters().avoidance_errors, 0);
     }
 }
@@ -239,6 +247,8 @@ fn worker_result(cfg: &Config, w: u32, capture_ns: u64, t_s: f64) -> RepulsionRe
             active: u32::from(a > 0.0),
             v_call: [a, 0.5 * a, 0.0],
             min_distance: 0.8,
+            position: [0.5, 0.0, 0.4],
+            obstacle: [1.3, 0.0, 0.4],
             ..PointRepulsion::default()
         };
     }

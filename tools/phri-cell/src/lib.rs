@@ -496,6 +496,10 @@ impl Cell {
 
     /// The run so far.
     pub fn summary(&self) -> CellSummary {
-        self.summary.summary(&self.sim, self.controller.counters())
+        self.summary.summary(
+            &self.sim,
+            self.controller.counters(),
+            self.controller.ssm_counters(),
+        )
     }
 }

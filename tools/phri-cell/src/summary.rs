@@ -49,6 +49,11 @@ pub struct CellSummary {
     /// ISO/TS 15066: every contact against its body region's force limit,
     /// as the multi-process report's section
     pub iso_ts_15066: phri_iso15066::Judged,
+    /// speed and separation monitoring: time it bounded some control
+    /// point's approach \[s\], and periods a point moved toward its obstacle
+    /// closer than the protective separation distance
+    pub ssm_limited_s: f64,
+    pub ssm_violations: u64,
 }
 
 /// One wave recognised in a run.
@@ -183,8 +188,15 @@ impl Accounting {
         self.open = still;
     }
 
-    pub(crate) fn summary(&self, _sim: &Simulator, counters: &ControlCounters) -> CellSummary {
+    pub(crate) fn summary(
+        &self,
+        _sim: &Simulator,
+        counters: &ControlCounters,
+        ssm: phri_control::resolve::SsmCounters,
+    ) -> CellSummary {
         let mut s = self.s.clone();
+        s.ssm_limited_s = ssm.limited_periods as f64 * self.dt_s;
+        s.ssm_violations = ssm.violation_periods;
         s.waypoints = counters.waypoints_reached;
         s.detections = counters.detections;
         for c in &s.contacts {
