@@ -407,14 +407,12 @@ impl Avoidance {
         Ok(())
     }
 
-    /// Eq. 20 for one body control point (after [`Avoidance::begin`]);
-    /// returns its risk `f`.
-    pub fn add_point<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
-        &mut self,
+    /// A control point's Jacobian: at least 3 rows (the first three
+    /// linear), `n` columns.
+    fn check_point_jacobian<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        n: usize,
         jacobian: &Matrix<f64, R, C, S>,
-        v_call: Vector3<f64>,
-    ) -> Result<f64, SnsError> {
-        let n = self.n();
+    ) -> Result<(), SnsError> {
         if jacobian.nrows() < 3 {
             return Err(SnsError::TooFewRows {
                 what: "control point jacobian",
@@ -423,6 +421,18 @@ impl Avoidance {
             });
         }
         check_len("control point jacobian columns", n, jacobian.ncols())?;
+        Ok(())
+    }
+
+    /// Eq. 20 for one body control point (after [`Avoidance::begin`]);
+    /// returns its risk `f`.
+    pub fn add_point<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        &mut self,
+        jacobian: &Matrix<f64, R, C, S>,
+        v_call: Vector3<f64>,
+    ) -> Result<f64, SnsError> {
+        let n = self.n();
+        Self::check_point_jacobian(n, jacobian)?;
         let f = shape_bounds_for_point(
             jacobian,
             v_call,
@@ -454,14 +464,7 @@ impl Avoidance {
         allowed: f64,
     ) -> Result<f64, SnsError> {
         let n = self.n();
-        if jacobian.nrows() < 3 {
-            return Err(SnsError::TooFewRows {
-                what: "control point jacobian",
-                min: 3,
-                got: jacobian.nrows(),
-            });
-        }
-        check_len("control point jacobian columns", n, jacobian.ncols())?;
+        Self::check_point_jacobian(n, jacobian)?;
         let mut reach = 0.0;
         for k in 0..n {
             let along =
