@@ -249,7 +249,6 @@ fn worker_result(cfg: &Config, w: u32, capture_ns: u64, t_s: f64) -> RepulsionRe
             min_distance: 0.8,
             position: [0.5, 0.0, 0.4],
             obstacle: [1.3, 0.0, 0.4],
-            ..PointRepulsion::default()
         };
     }
     r
