@@ -3,8 +3,11 @@
 //! know what its predecessor was doing, so it judges what it sees. While a
 //! tracked hand is at the robot it holds in a protective stop; it lets the
 //! arm recover and resume its task only once every hand has stayed away for
-//! a while. Without a fresh skeleton it has judged nothing yet (and stays in
-//! `sync`), or it keeps holding a hand it has seen near.
+//! a while, also when none was ever seen near (one skeleton in which the
+//! tracker lost the person, or the hand hidden by the arm it touches, is no
+//! proof that the hand is gone). Without a fresh skeleton it has judged
+//! nothing yet (and stays in `sync`), or it keeps holding a hand it has seen
+//! near.
 
 /// The judgement of one period.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -50,14 +53,16 @@ impl RestartHold {
     /// surface gap between a tracked hand and the robot \[m\] (∞: nobody's
     /// hand tracked), `None` without a fresh skeleton.
     pub fn step(&mut self, t: f64, gap: Option<f64>) -> Hold {
+        // still judging, or holding a hand seen near
+        let waiting = match self.near {
+            true => Hold::HandNear,
+            false => Hold::Judging,
+        };
         let Some(gap) = gap else {
-            // unseen: nothing judged yet, or a hand seen near may still be there
+            // unseen: nothing judged yet, or a hand seen near may still be
+            // there; either way the time away starts again
             self.clear_since = None;
-            return match (self.judged, self.near) {
-                (false, _) => Hold::Judging,
-                (true, true) => Hold::HandNear,
-                (true, false) => Hold::Clear,
-            };
+            return waiting;
         };
         self.judged = true;
         if gap <= self.clear_m {
@@ -65,13 +70,10 @@ impl RestartHold {
             self.clear_since = None;
             return Hold::HandNear;
         }
-        if !self.near {
-            return Hold::Clear;
-        }
         let since = *self.clear_since.get_or_insert(t);
         match t - since >= self.clear_s {
             true => Hold::Clear,
-            false => Hold::HandNear,
+            false => waiting,
         }
     }
 }
@@ -81,13 +83,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn no_hand_near_at_the_first_sight_releases_at_once() {
+    fn no_hand_near_releases_once_every_hand_stayed_away() {
         let mut h = RestartHold::new(0.1, 0.25);
         assert_eq!(h.step(0.0, None), Hold::Judging);
         assert_eq!(h.step(0.1, None), Hold::Judging);
-        assert_eq!(h.step(0.2, Some(f64::INFINITY)), Hold::Clear);
+        // nobody tracked in one skeleton: no proof yet, still judging
+        assert_eq!(h.step(0.2, Some(f64::INFINITY)), Hold::Judging);
+        assert_eq!(h.step(0.3, Some(f64::INFINITY)), Hold::Judging);
+        assert_eq!(h.step(0.45, Some(f64::INFINITY)), Hold::Clear);
+        // a hand far away at first sight, for release_s
         let mut h = RestartHold::new(0.1, 0.25);
-        assert_eq!(h.step(0.0, Some(0.3)), Hold::Clear);
+        assert_eq!(h.step(0.0, Some(0.3)), Hold::Judging);
+        // a skeleton missing restarts the time away
+        assert_eq!(h.step(0.2, None), Hold::Judging);
+        assert_eq!(h.step(0.3, Some(0.3)), Hold::Judging);
+        assert_eq!(h.step(0.55, Some(0.3)), Hold::Clear);
+        // the tracker lost the person in the first skeleton, then the hand
+        // at the robot shows: held, as it always was
+        let mut h = RestartHold::new(0.1, 0.25);
+        assert_eq!(h.step(0.0, Some(f64::INFINITY)), Hold::Judging);
+        assert_eq!(h.step(0.03, Some(0.02)), Hold::HandNear);
+        assert_eq!(h.step(0.4, Some(0.02)), Hold::HandNear);
     }
 
     #[test]
