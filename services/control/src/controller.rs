@@ -72,13 +72,6 @@ pub struct ControlCounters {
     pub avoidance_errors: u64,
 }
 
-impl Controller {
-    /// What speed and separation monitoring did so far.
-    pub fn ssm_counters(&self) -> crate::resolve::SsmCounters {
-        self.resolver.ssm_counters()
-    }
-}
-
 /// The torque-loop controller. `step` is pure and allocation-free.
 pub struct Controller {
     model: Model,
@@ -566,10 +559,7 @@ impl Controller {
             self.mode,
             ControlMode::Task | ControlMode::Slow | ControlMode::Recover
         )
-        .then(|| {
-            let age = self.safety.perception_age_ns as f64 * 1e-9;
-            (age + self.params.period_s, self.t)
-        });
+        .then(|| self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s);
         let faults: Faults = if with_perception {
             self.resolver
                 .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh, ssm)
@@ -670,6 +660,11 @@ impl Controller {
 
     pub fn counters(&self) -> &ControlCounters {
         &self.counters
+    }
+
+    /// What speed and separation monitoring did so far.
+    pub fn ssm_counters(&self) -> crate::resolve::SsmCounters {
+        self.resolver.ssm_counters()
     }
 
     /// Model calls refused since the start (each with its fail-safe).

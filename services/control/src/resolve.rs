@@ -36,8 +36,6 @@ pub struct SsmCounters {
     /// (faster than 1 cm/s) with its clearance below the protective
     /// separation distance
     pub violation_periods: u64,
-    /// robot time of the last such period \[s\] (NaN: none)
-    pub last_violation_s: f64,
 }
 
 /// Failures met while resolving, counted (each leaves the fail-safe it always had).
@@ -90,10 +88,7 @@ impl Resolver {
             behind_before: Vec::new(),
             task_scale: 1.0,
             ssm: None,
-            ssm_counters: SsmCounters {
-                last_violation_s: f64::NAN,
-                ..SsmCounters::default()
-            },
+            ssm_counters: SsmCounters::default(),
         }
     }
 
@@ -193,8 +188,8 @@ impl Resolver {
     /// them and the joint-limit bounds. Moves `q_ref`, writes `qd_ref`.
     /// `perception`: fresh results (`None`: stale, no repulsion); `posture`:
     /// the body task's lowest level (empty: none). `ssm`: speed and
-    /// separation monitoring applies this period, with the results `t_r`
-    /// \[s\] old (capture → this command), at robot time `now_s` \[s\].
+    /// separation monitoring applies this period, with the results this
+    /// old \[s\] (`T_r`: capture → this command).
     #[allow(clippy::too_many_arguments)]
     pub fn avoid(
         &mut self,
@@ -206,7 +201,7 @@ impl Resolver {
         cfg: &ControlConfig,
         posture: &[f64],
         perception: Option<PerceptionView<'_>>,
-        ssm: Option<(f64, f64)>,
+        ssm: Option<f64>,
     ) -> Faults {
         let mut faults = Faults::default();
         let ee = self.clik.frame();
@@ -273,45 +268,27 @@ impl Resolver {
                 }
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
-                if let Some((m, (t_r, now_s))) = monitor.filter(|_| p.active != 0) {
+                if let Some((m, t_r)) = monitor.filter(|_| p.active != 0) {
                     let allowed = m.allowed_speed(k, p.min_distance, t_r);
-                    let away = Vector3::from(p.position) - Vector3::from(p.obstacle);
-                    let away = match away.norm() > 1e-9 && away.iter().all(|x| x.is_finite()) {
-                        true => away.normalize(),
-                        // touching (or no direction): away from the repulsion's side
-                        false => Vector3::from(p.v_call)
-                            .try_normalize(1e-12)
-                            .unwrap_or_default(),
-                    };
+                    let away = away_from_obstacle(p);
                     if allowed < SSM_UNBOUNDED_M_S && away != Vector3::zeros() {
-                        let jac = if k == 0 {
-                            Ok(&self.jac_ee)
-                        } else {
-                            phri_model::point_jacobian(
+                        let jac = match k {
+                            0 => Ok(&self.jac_ee),
+                            _ => phri_model::point_jacobian(
                                 model,
                                 data,
                                 frame,
                                 &xyz,
                                 &mut self.jac_point,
                             )
-                            .map(|_| &self.jac_point)
+                            .map(|_| &self.jac_point),
                         };
                         match jac {
                             Ok(j) => {
                                 // the point's speed toward its obstacle at last period's reference
-                                let mut v_r = 0.0;
-                                for (col, qd) in reference.qd_ref.iter().enumerate() {
-                                    let along = away.x * j[(0, col)]
-                                        + away.y * j[(1, col)]
-                                        + away.z * j[(2, col)];
-                                    v_r -= along * qd;
-                                }
-                                if v_r > SSM_MOVING_M_S
-                                    && p.min_distance < m.separation(k, p.min_distance, v_r, t_r)
-                                {
-                                    ssm_violated = true;
-                                    self.ssm_counters.last_violation_s = now_s;
-                                }
+                                let v_r = -along(j, &away, &reference.qd_ref);
+                                ssm_violated |= v_r > SSM_MOVING_M_S
+                                    && p.min_distance < m.separation(k, p.min_distance, v_r, t_r);
                                 match self.avoidance.limit_approach(j, &away, allowed) {
                                     Ok(f) => ssm_limited |= f > 0.0,
                                     Err(_) => faults.avoidance += 1,
@@ -473,6 +450,28 @@ const BEHIND_HYSTERESIS_M: f64 = 0.03;
 /// centre as the controller sees it \[m\] is the hand itself or its mask's
 /// edge (the hand's radius 4.5 cm, depth's error of the centre 3-5 cm).
 pub(crate) const AT_THE_HAND_M: f64 = 0.10;
+
+/// Unit vector from `p`'s closest obstacle point to the control point (base
+/// frame); touching (no direction between them), away along its repulsion;
+/// 0 when neither gives one.
+fn away_from_obstacle(p: &phri_ipc::PointRepulsion) -> Vector3<f64> {
+    let away = Vector3::from(p.position) - Vector3::from(p.obstacle);
+    match away.norm() > 1e-9 && away.iter().all(|x| x.is_finite()) {
+        true => away.normalize(),
+        false => Vector3::from(p.v_call)
+            .try_normalize(1e-12)
+            .unwrap_or_default(),
+    }
+}
+
+/// The speed \[m/s\] along unit `u` of the point whose Jacobian is `jac`
+/// (its first three rows linear), at joint velocities `qd` \[rad/s\].
+fn along(jac: &Matrix6xX<f64>, u: &Vector3<f64>, qd: &[f64]) -> f64 {
+    qd.iter()
+        .enumerate()
+        .map(|(col, v)| (u.x * jac[(0, col)] + u.y * jac[(1, col)] + u.z * jac[(2, col)]) * v)
+        .sum()
+}
 
 /// The obstacle of `p` is the collaborative hand `h` itself ([`AT_THE_HAND_M`]).
 fn at_the_hand(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
