@@ -439,6 +439,25 @@ fn coexistence_avoids_the_person_without_deadline_misses() {
 }
 
 #[test]
+fn a_person_walking_in_finds_the_arm_stopped_and_the_report_says_so() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // ISO/TS 15066 speed and separation monitoring: the person walks at
+    // 1.6 m/s from 2 s and stands 7 cm in front of P2 from 3.45 s
+    let r = Cell::start("walkin", "walk-in", Some(8.0), &["ssm.enabled=true"]).finish();
+    assert_untouched(&r);
+    let iso = &r["iso_ts_15066"];
+    assert_eq!(iso["ssm_enabled"], true, "{iso}");
+    // the monitor bounded the arm while the person came and stood there ...
+    assert!(iso["ssm_limited_s"].as_f64().unwrap() > 1.0, "{iso}");
+    // ... and never let it move on toward the person inside S_p
+    assert_eq!(iso["ssm_violations"], 0, "{iso}");
+    assert_eq!(iso["ssm_violation_times_s"].as_array().unwrap().len(), 0);
+    assert_eq!(r["protective_stops"], 0);
+    let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
+    assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
+}
+
+#[test]
 fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start(

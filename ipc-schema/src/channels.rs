@@ -52,6 +52,8 @@ pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::WO
 /// [`CollabState`] from the controller, 1 kHz.
 pub const COLLAB_STATE: Channel<CollabState> =
     Channel::new("collab/state", Qos::ONE_PUBLISHER, false);
+/// [`SsmStatus`] from the controller, 1 kHz: speed and separation monitoring.
+pub const CONTROL_SSM: Channel<SsmStatus> = Channel::new("control/ssm", Qos::ONE_PUBLISHER, false);
 /// [`AudioChunk`]s from the microphone (a capture driver, a recording, or
 /// the simulated cell's scripted speech), 50 Hz, deeply queued: the
 /// recogniser loses no audio while it decodes. Wakes: new chunk.
@@ -220,6 +222,7 @@ pub const ALL: &[&str] = &[
     VOICE_UTTERANCE.name,
     INPUT_AUDIT.name,
     ROBOT_BOX.name,
+    CONTROL_SSM.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -265,6 +268,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(VOICE_UTTERANCE);
     v.message(INPUT_AUDIT);
     v.message(ROBOT_BOX);
+    v.message(CONTROL_SSM);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

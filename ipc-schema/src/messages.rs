@@ -844,6 +844,51 @@ pub struct CollabState {
 
 impl Zeroed for CollabState {}
 
+/// Speed and separation monitoring (ISO/TS 15066 clause 5.5.4) from the
+/// controller, one per command: what the monitor did this period and in
+/// total since the controller started (a restarted controller counts anew).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::SsmStatus")]
+pub struct SsmStatus {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// measurement time of the state answered [ns, robot clock]
+    pub state_stamp_ns: u64,
+    /// 1: configured (`[ssm] enabled`)
+    #[serde(with = "crate::json::flag")]
+    pub enabled: u32,
+    /// 1: monitoring this period (configured, outside the collaboration, perception fresh)
+    #[serde(with = "crate::json::flag")]
+    pub monitoring: u32,
+    /// 1: it bounded some control point's approach this period
+    #[serde(with = "crate::json::flag")]
+    pub limiting: u32,
+    /// 1: a violation this period: a control point had been moving toward its
+    /// obstacle inside the protective separation distance for longer than
+    /// the stop time T_s
+    #[serde(with = "crate::json::flag")]
+    pub violating: u32,
+    /// periods it bounded some approach
+    pub limited_periods: u64,
+    /// periods of violation
+    pub violation_periods: u64,
+    /// violations: runs of such periods
+    pub violations: u64,
+    /// the smallest clearance less the protective separation distance over the control points [m] (null: none monitored)
+    #[serde(with = "crate::json::distance")]
+    pub min_margin_m: f64,
+    /// the largest person's speed toward a control point used [m/s]
+    #[serde(with = "crate::json::finite")]
+    pub human_speed_m_s: f64,
+    /// T_r: the age of the perception acted on [s] (null: not monitoring)
+    #[serde(with = "crate::json::finite")]
+    pub reaction_s: f64,
+}
+
+impl Zeroed for SsmStatus {}
+
 /// `impl Message`: the publish time (and stream) of a message type, and the
 /// arrays cut to a count in its JSON view (`counted: [dof => q, tau; n => xs]`;
 /// the fields must exist: checked at compile time).
@@ -900,5 +945,6 @@ message!(HandObservation, published: |m| Some(m.published_ns));
 message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => pcm]);
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
+message!(SsmStatus, published: |m| Some(m.stamp_ns));
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
 message!(BoxStatus, published: |m| Some(m.stamp_ns), counted: [dof => tau_j, tau_ext_hat]);

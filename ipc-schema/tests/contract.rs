@@ -35,4 +35,5 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<CollabState>("phri::CollabState", 240);
     check::<AudioChunk>("phri::AudioChunk", 672);
     check::<Utterance>("phri::Utterance", 128);
+    check::<SsmStatus>("phri::SsmStatus", 88);
 }

@@ -41,9 +41,57 @@ pub struct Judged {
     pub over_limit: usize,
     /// the smallest margin of any contact \[N\] (null: no contact)
     pub min_margin_n: Option<f64>,
+    /// speed and separation monitoring was configured
+    pub ssm_enabled: bool,
+    /// the time it bounded the robot's speed \[s\]
+    pub ssm_limited_s: f64,
+    /// violations: runs of periods in which a control point had been moving
+    /// toward the person inside the protective separation distance for
+    /// longer than the robot's stopping time
+    pub ssm_violations: u64,
+    /// when each began \[s\] (the first [`MAX_VIOLATION_TIMES`])
+    pub ssm_violation_times_s: Vec<f64>,
+    /// the controller's counts last seen (limited periods, violations)
+    #[serde(skip)]
+    ssm_seen: (u64, u64),
 }
 
+/// Violations whose times a report lists at most.
+pub const MAX_VIOLATION_TIMES: usize = 100;
+
 impl Judged {
+    /// The controller's monitor at `t_s` \[s\]: configured or not, and its
+    /// counts since it started (`limited_periods` of `period_s` \[s\] each,
+    /// `violations`). Counts below the last seen are a restarted
+    /// controller's, counted anew.
+    pub fn ssm_counts(
+        &mut self,
+        enabled: bool,
+        limited_periods: u64,
+        violations: u64,
+        t_s: f64,
+        period_s: f64,
+    ) {
+        self.ssm_enabled |= enabled;
+        let (limited_before, violations_before) = match self.ssm_seen {
+            (l, v) if limited_periods >= l && violations >= v => (l, v),
+            _ => (0, 0),
+        };
+        self.ssm_limited_s += (limited_periods - limited_before) as f64 * period_s;
+        for _ in violations_before..violations {
+            self.ssm_violation(t_s);
+        }
+        self.ssm_seen = (limited_periods, violations);
+    }
+
+    /// A violation of the protective separation distance began at `t_s` \[s\].
+    pub fn ssm_violation(&mut self, t_s: f64) {
+        self.ssm_violations += 1;
+        if self.ssm_violation_times_s.len() < MAX_VIOLATION_TIMES {
+            self.ssm_violation_times_s.push(t_s);
+        }
+    }
+
     /// Add a contact of the simulator's truth: `part` touched `link` from
     /// `t_start_s` to `t_end_s` \[s\], peaking at `peak_force_n` \[N\].
     pub fn truth(
@@ -107,5 +155,34 @@ mod tests {
             (j.contacts[3].region, j.contacts[3].within_limit),
             ("unknown", false)
         );
+    }
+
+    #[test]
+    fn violations_are_counted_and_only_the_first_timed() {
+        let mut j = Judged::default();
+        for k in 0..MAX_VIOLATION_TIMES + 5 {
+            j.ssm_violation(k as f64);
+        }
+        assert_eq!(j.ssm_violations, MAX_VIOLATION_TIMES as u64 + 5);
+        assert_eq!(j.ssm_violation_times_s.len(), MAX_VIOLATION_TIMES);
+        assert_eq!(j.ssm_violation_times_s[3], 3.0);
+    }
+
+    #[test]
+    fn a_restarted_controllers_counts_add_to_its_predecessors() {
+        let mut j = Judged::default();
+        j.ssm_counts(true, 10, 0, 1.0, 0.001);
+        j.ssm_counts(true, 30, 1, 2.0, 0.001);
+        // restarted: counting from 0 again
+        j.ssm_counts(true, 5, 0, 3.0, 0.001);
+        j.ssm_counts(true, 5, 2, 4.0, 0.001);
+        assert!(
+            (j.ssm_limited_s - 0.035).abs() < 1e-12,
+            "{}",
+            j.ssm_limited_s
+        );
+        assert_eq!(j.ssm_violations, 3);
+        assert_eq!(j.ssm_violation_times_s, [2.0, 4.0, 4.0]);
+        assert!(j.ssm_enabled);
     }
 }

@@ -17,7 +17,7 @@ pub mod pfl;
 pub mod region;
 pub mod ssm;
 
-pub use contact::{Judged, JudgedContact};
+pub use contact::{Judged, JudgedContact, MAX_VIOLATION_TIMES};
 pub use pfl::{
     judge, reduced_mass, transient_contact_speed, ContactKind, Judgement, TRANSIENT_MAX_S,
 };

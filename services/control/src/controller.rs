@@ -274,6 +274,8 @@ impl Controller {
             let fresh = input.perception.filter(|_| safety.perception_fresh);
             self.resolve(&c, dt, input.perception.is_some(), fresh);
             self.track(q, qd, dt, &c);
+        } else {
+            self.resolver.skip_ssm_period();
         }
 
         // 5. the torque law: τ = M a + C q̇ + g [− r for the reflex, eq. 9]
@@ -665,6 +667,16 @@ impl Controller {
     /// What speed and separation monitoring did so far.
     pub fn ssm_counters(&self) -> crate::resolve::SsmCounters {
         self.resolver.ssm_counters()
+    }
+
+    /// What speed and separation monitoring saw in the last step.
+    pub fn ssm_period(&self) -> crate::resolve::SsmPeriod {
+        self.resolver.ssm_period()
+    }
+
+    /// Speed and separation monitoring is configured (`[ssm] enabled`).
+    pub fn ssm_enabled(&self) -> bool {
+        self.resolver.ssm_enabled()
     }
 
     /// Model calls refused since the start (each with its fail-safe).

@@ -1,5 +1,6 @@
 //! `phri-control`: answers every `robot/state` with a `robot/command` (the only
-//! publisher that channel accepts), a `control/status` and a `collab/state`;
+//! publisher that channel accepts), a `control/status`, a `collab/state` and a
+//! `control/ssm`;
 //! reads the collaboration's `hri/request`, `perception/skeleton` and
 //! `perception/hand` besides; with several cameras, every camera's
 //! `perception/C/repulsion`, `perception/C/skeleton` (merged) and
@@ -10,12 +11,12 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_control::{
-    write_collab_state, write_messages, CollabInput, ControlInput, Controller, InputGate,
-    RepulsionInputs, Stamps,
+    write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, Controller,
+    InputGate, RepulsionInputs, Stamps,
 };
 use phri_ipc::{
-    CollabState, ControlStatus, HriRequest, Queue, TorqueCommand, Zeroed, COLLAB_STATE,
-    CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, ROBOT_COMMAND, ROBOT_STATE,
+    CollabState, ControlStatus, HriRequest, Queue, SsmStatus, TorqueCommand, Zeroed, COLLAB_STATE,
+    CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, ROBOT_COMMAND, ROBOT_STATE,
 };
 
 /// Requests handled per period at most (more wait for the next one).
@@ -84,6 +85,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         .map(|c| c.hand.latest_reader(&node))
         .collect::<Result<Vec<_>, _>>()?;
     let collab_pub = COLLAB_STATE.publisher(&node)?;
+    let ssm_pub = CONTROL_SSM.publisher(&node)?;
     // only the services the supervisor started for a channel, and no stamp
     // from the future or past its bound (counted on audit/inputs)
     let gate = InputGate::new(ctx.watch_inputs(), &cfg.control, &cfg.repulsion);
@@ -95,6 +97,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
 
     let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
     let mut collab_state = CollabState::zeroed();
+    let mut ssm_status = SsmStatus::zeroed();
     let mut pending = [HriRequest::zeroed(); MAX_REQUESTS];
     let mut seq = 0u64;
     while !ctx.shutdown.requested() {
@@ -179,6 +182,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         status_pub.publish(&status)?;
         write_collab_state(&controller, &state, seq, now_ns(), &mut collab_state);
         collab_pub.publish(&collab_state)?;
+        write_ssm_status(&controller, &state, seq, now_ns(), &mut ssm_status);
+        ssm_pub.publish(&ssm_status)?;
     }
     Ok(())
 }

@@ -1,8 +1,8 @@
 //! The one conversion from a step's result to the cell's messages:
-//! `robot/command`, `control/status` and `collab/state`, for `main.rs` and
-//! the lock-step cell.
+//! `robot/command`, `control/status`, `collab/state` and `control/ssm`, for
+//! `main.rs` and the lock-step cell.
 
-use phri_ipc::{CollabState, ControlStatus, JointState, TorqueCommand, Zeroed};
+use phri_ipc::{CollabState, ControlStatus, JointState, SsmStatus, TorqueCommand, Zeroed};
 
 use crate::controller::Controller;
 
@@ -115,4 +115,33 @@ pub fn write_collab_state(
             f.observable = e.observable[i] as u32;
         }
     }
+}
+
+/// Fill `control/ssm` for the period that answered `state` (`seq` numbers
+/// it, `stamp_ns` [ns, CLOCK_MONOTONIC] is its publish time). Every field is
+/// written.
+pub fn write_ssm_status(
+    ctl: &Controller,
+    state: &JointState,
+    seq: u64,
+    stamp_ns: u64,
+    out: &mut SsmStatus,
+) {
+    let p = ctl.ssm_period();
+    let c = ctl.ssm_counters();
+    *out = SsmStatus {
+        seq,
+        stamp_ns,
+        state_stamp_ns: state.stamp_ns,
+        enabled: u32::from(ctl.ssm_enabled()),
+        monitoring: u32::from(p.reaction_s.is_finite()),
+        limiting: u32::from(p.limiting),
+        violating: u32::from(p.violating),
+        limited_periods: c.limited_periods,
+        violation_periods: c.violation_periods,
+        violations: c.violations,
+        min_margin_m: p.min_margin_m,
+        human_speed_m_s: p.human_speed_m_s,
+        reaction_s: p.reaction_s,
+    };
 }

@@ -32,10 +32,47 @@ const SSM_MOVING_M_S: f64 = 0.01;
 pub struct SsmCounters {
     /// periods in which it bounded some control point's approach
     pub limited_periods: u64,
-    /// periods in which some control point moved toward its obstacle
-    /// (faster than 1 cm/s) with its clearance below the protective
-    /// separation distance
+    /// periods in which some control point had been moving toward its
+    /// obstacle (faster than 1 cm/s) with its clearance below the
+    /// protective separation distance for longer than the stop takes (T_s:
+    /// the standard's S_p grants the stop that time)
     pub violation_periods: u64,
+    /// violations: runs of such periods
+    pub violations: u64,
+}
+
+/// What speed and separation monitoring saw in the last period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SsmPeriod {
+    /// it bounded some control point's approach
+    pub limiting: bool,
+    /// a violation (see [`SsmCounters::violation_periods`])
+    pub violating: bool,
+    /// some control point approached its obstacle inside the protective
+    /// separation distance of a standing robot: the reference dropped to
+    /// the bounded solution at once (a stop of the approach), not at the
+    /// reference's slew limit
+    pub stopping: bool,
+    /// the smallest clearance less the protective separation distance
+    /// over the control points [m] (+∞: none monitored)
+    pub min_margin_m: f64,
+    /// the largest person's speed toward a control point used [m/s]
+    pub human_speed_m_s: f64,
+    /// T_r: the age of the perception acted on [s] (NaN: not monitoring)
+    pub reaction_s: f64,
+}
+
+impl Default for SsmPeriod {
+    fn default() -> SsmPeriod {
+        SsmPeriod {
+            limiting: false,
+            violating: false,
+            stopping: false,
+            min_margin_m: f64::INFINITY,
+            human_speed_m_s: 0.0,
+            reaction_s: f64::NAN,
+        }
+    }
 }
 
 /// Failures met while resolving, counted (each leaves the fail-safe it always had).
@@ -67,6 +104,9 @@ pub struct Resolver {
     /// speed and separation monitoring (`None`: `[ssm] enabled = false`)
     ssm: Option<SsmMonitor>,
     ssm_counters: SsmCounters,
+    ssm_period: SsmPeriod,
+    /// the last period monitored was a violation (a new one counts once)
+    ssm_was_violating: bool,
 }
 
 impl Resolver {
@@ -89,6 +129,8 @@ impl Resolver {
             task_scale: 1.0,
             ssm: None,
             ssm_counters: SsmCounters::default(),
+            ssm_period: SsmPeriod::default(),
+            ssm_was_violating: false,
         }
     }
 
@@ -128,6 +170,23 @@ impl Resolver {
     /// What speed and separation monitoring did so far.
     pub fn ssm_counters(&self) -> SsmCounters {
         self.ssm_counters
+    }
+
+    /// What speed and separation monitoring saw in the last period.
+    pub fn ssm_period(&self) -> SsmPeriod {
+        self.ssm_period
+    }
+
+    /// A period without the avoidance stage (a joint-space behaviour): the
+    /// monitor saw nothing.
+    pub fn skip_ssm_period(&mut self) {
+        self.ssm_period = SsmPeriod::default();
+        self.ssm_was_violating = false;
+    }
+
+    /// Speed and separation monitoring is configured.
+    pub fn ssm_enabled(&self) -> bool {
+        self.ssm.is_some()
     }
 
     /// Position of the end effector at `q` \[m\], base frame.
@@ -236,12 +295,17 @@ impl Resolver {
         } else {
             1.0
         };
-        let (mut ssm_limited, mut ssm_violated) = (false, false);
+        let was_violating = self.ssm_was_violating;
+        self.ssm_period = SsmPeriod {
+            reaction_s: ssm.filter(|_| self.ssm.is_some()).unwrap_or(f64::NAN),
+            ..SsmPeriod::default()
+        };
+        let period = &mut self.ssm_period;
         if let Some(v) = perception {
             if let Some(m) = self.ssm.as_mut() {
                 m.observe(&v);
             }
-            let monitor = self.ssm.as_ref().zip(ssm);
+            let mut monitor = self.ssm.as_mut().zip(ssm);
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
                 let was_behind = self.behind_before.get(k).copied().unwrap_or(false);
@@ -268,8 +332,14 @@ impl Resolver {
                 }
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
-                if let Some((m, t_r)) = monitor.filter(|_| p.active != 0) {
+                if let Some((m, _)) = monitor.as_mut().filter(|_| p.active == 0) {
+                    m.approaching_inside(k, false, dt);
+                }
+                if let Some((m, t_r)) = monitor.as_mut().filter(|_| p.active != 0) {
+                    let t_r = *t_r;
                     let allowed = m.allowed_speed(k, p.min_distance, t_r);
+                    period.human_speed_m_s =
+                        period.human_speed_m_s.max(m.human_speed(k, p.min_distance));
                     let away = away_from_obstacle(p);
                     if allowed < SSM_UNBOUNDED_M_S && away != Vector3::zeros() {
                         let jac = match k {
@@ -287,15 +357,24 @@ impl Resolver {
                             Ok(j) => {
                                 // the point's speed toward its obstacle at last period's reference
                                 let v_r = -along(j, &away, &reference.qd_ref);
-                                ssm_violated |= v_r > SSM_MOVING_M_S
-                                    && p.min_distance < m.separation(k, p.min_distance, v_r, t_r);
+                                let margin =
+                                    p.min_distance - m.separation(k, p.min_distance, v_r, t_r);
+                                period.min_margin_m = period.min_margin_m.min(margin);
+                                // approaching inside S_p for longer than
+                                // the stop takes (S_p grants it T_s)
+                                let moving = v_r > SSM_MOVING_M_S;
+                                let inside = m.approaching_inside(k, moving && margin < 0.0, dt);
+                                period.violating |= inside > m.config().stop_time_s;
+                                period.stopping |= moving && allowed <= 0.0;
                                 match self.avoidance.limit_approach(j, &away, allowed) {
-                                    Ok(f) => ssm_limited |= f > 0.0,
+                                    Ok(f) => period.limiting |= f > 0.0,
                                     Err(_) => faults.avoidance += 1,
                                 }
                             }
                             Err(_) => faults.model += 1,
                         }
+                    } else {
+                        m.approaching_inside(k, false, dt);
                     }
                 }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
@@ -317,8 +396,11 @@ impl Resolver {
                 }
             }
         }
-        self.ssm_counters.limited_periods += u64::from(ssm_limited);
-        self.ssm_counters.violation_periods += u64::from(ssm_violated);
+        let period = self.ssm_period;
+        self.ssm_counters.limited_periods += u64::from(period.limiting);
+        self.ssm_counters.violation_periods += u64::from(period.violating);
+        self.ssm_counters.violations += u64::from(period.violating && !was_violating);
+        self.ssm_was_violating = period.violating;
         // position feedback: toward the end effector's obstacle capped below
         // the repulsion's V_max; the task's elsewhere faster (to rejoin its
         // path), the collaboration's at the cautious cap everywhere (it
@@ -341,8 +423,13 @@ impl Resolver {
         );
         let xdot_task = c.xd_d + fb;
         // slew-limited towards the SNS solution (which stays within the bounds
-        // it was computed for; the limit only delays reaching it)
-        let dv = cfg.reference_accel_limit * dt;
+        // it was computed for; the limit only delays reaching it), except
+        // when the separation monitor stops an approach: then at once, as
+        // the protective stop holds (no feed-forward of the step)
+        let dv = match self.ssm_period.stopping {
+            true => f64::INFINITY,
+            false => cfg.reference_accel_limit * dt,
+        };
         match self
             .avoidance
             .solve(&self.jac_ee, &xdot_task, &v_ee, c.speed_scale)
@@ -351,6 +438,9 @@ impl Resolver {
                 self.task_scale = out.scale;
                 for (r, &target) in reference.qd_ref.iter_mut().zip(out.qd) {
                     *r += (target - *r).clamp(-dv, dv);
+                }
+                if self.ssm_period.stopping {
+                    reference.qd_ref_prev.copy_from_slice(&reference.qd_ref);
                 }
             }
             Err(_) => {

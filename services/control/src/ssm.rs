@@ -41,6 +41,9 @@ pub struct SsmMonitor {
     last: Vec<Option<Sample>>,
     /// per control point, the person's measured speed toward it [m/s]
     v_h: Vec<f64>,
+    /// per control point, how long it has been approaching its obstacle
+    /// inside the protective separation distance [s]
+    inside_s: Vec<f64>,
     /// capture time of the last frame observed [ns]
     frame_ns: u64,
 }
@@ -52,6 +55,7 @@ impl SsmMonitor {
             cfg: cfg.clone(),
             last: vec![None; points],
             v_h: vec![0.0; points],
+            inside_s: vec![0.0; points],
             frame_ns: 0,
         }
     }
@@ -117,6 +121,20 @@ impl SsmMonitor {
                 position,
             });
         }
+    }
+
+    /// Point `k` is (`inside`) or is not approaching its obstacle inside
+    /// its protective separation distance for another `dt` \[s\]: for how
+    /// long it has been \[s\].
+    pub fn approaching_inside(&mut self, k: usize, inside: bool, dt: f64) -> f64 {
+        let Some(b) = self.inside_s.get_mut(k) else {
+            return 0.0;
+        };
+        *b = match inside {
+            true => *b + dt,
+            false => 0.0,
+        };
+        *b
     }
 
     /// The person's speed toward point `k` at clearance `d` \[m\] \[m/s\].
@@ -219,6 +237,12 @@ mod tests {
         pts[0] = point(0.30, 0.52);
         m.observe(&view(&pts, 1100));
         assert!((m.human_speed(0, 0.30) - 1.5).abs() < 1e-9);
+        // approaching inside S_p: timed while it lasts, from 0 again after
+        assert_eq!(m.approaching_inside(0, true, 0.001), 0.001);
+        assert!((m.approaching_inside(0, true, 0.001) - 0.002).abs() < 1e-12);
+        assert_eq!(m.approaching_inside(0, false, 0.001), 0.0);
+        assert_eq!(m.approaching_inside(0, true, 0.001), 0.001);
+        assert_eq!(m.approaching_inside(7, true, 0.001), 0.0, "no such point");
         // ISO 13855's speed instead: 2.0 m/s within 0.5 m
         let iso = SsmMonitor::new(&cfg(HumanSpeed::Iso13855), 1);
         assert_eq!(iso.human_speed(0, 0.3), 2.0);

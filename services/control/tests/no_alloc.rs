@@ -9,8 +9,8 @@ use std::collections::BTreeSet;
 use nalgebra::Vector3;
 use phri_config::{Config, PerJoint, ResidualConfig};
 use phri_control::{
-    write_collab_state, write_messages, CollabInput, ControlInput, ControlMode, Controller,
-    Reaction, RepulsionInputs, ResidualView, Stamps,
+    write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, ControlMode,
+    Controller, Reaction, RepulsionInputs, ResidualView, Stamps,
 };
 use phri_estimation::ResidualObserver;
 use phri_ipc::{
@@ -88,6 +88,7 @@ fn the_control_period_allocates_nothing_in_any_mode() {
         // from 8.5 s a person holds the right hand out 0.25 m in front of the
         // end effector and asks, every 100 ms until accepted, to collaborate
         let mut collab = CollabState::zeroed();
+        let mut ssm = phri_ipc::SsmStatus::zeroed();
         let mut request = HriRequest::zeroed();
         request.source = RequestSource::Cli as u32;
         request.kind = RequestKind::Follow as u32;
@@ -196,6 +197,7 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             };
             write_messages(&ctl, &state, k, stamps, &mut cmd, &mut status);
             write_collab_state(&ctl, &state, k, stamp + 1, &mut collab);
+            write_ssm_status(&ctl, &state, k, stamp + 1, &mut ssm);
             step_allocs += allocations() - before;
 
             tau.copy_from_slice(&cmd.tau[..7]);

@@ -24,8 +24,8 @@ use std::time::{Duration, Instant};
 
 use phri_ipc::{
     node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
-    COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND, ROBOT_STATS, SIM_CONTACTS,
-    SIM_TRUTH, SUPERVISOR_HEALTH,
+    COLLAB_STATE, CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND, ROBOT_STATS,
+    SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
@@ -126,6 +126,7 @@ struct Ports {
     filtered: Vec<FrameSubscriber>,
     repulsion: Vec<Subscriber<phri_ipc::RepulsionResult>>,
     collab: Subscriber<phri_ipc::CollabState>,
+    ssm: Subscriber<phri_ipc::SsmStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
     utterances: Subscriber<phri_ipc::Utterance>,
     audio: Subscriber<phri_ipc::AudioChunk>,
@@ -156,6 +157,7 @@ impl Ports {
                 .map(|c| c.repulsion.subscriber(node, Queue::Drain))
                 .collect::<Result<_, _>>()?,
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
+            ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
             audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
@@ -742,6 +744,7 @@ fn body() -> Result<(), SupervisorError> {
             }
             collab_eval.on_state(m);
         })?;
+        ports.ssm.drain(|m| eval.on_ssm(m))?;
         let mut resume = false;
         ports.requests.drain(|m| {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
@@ -1091,6 +1094,7 @@ fn body() -> Result<(), SupervisorError> {
     // drain what arrived in the last period before stopping anything
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     let _ = ports.collab.drain(|m| collab_eval.on_state(m));
+    let _ = ports.ssm.drain(|m| eval.on_ssm(m));
     let _ = ports.requests.drain(|m| collab_eval.on_request(m));
     let _ = ports.utterances.drain(|m| collab_eval.on_utterance(m));
     let _ = ports.truth.drain(|m| {

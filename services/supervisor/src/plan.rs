@@ -135,6 +135,7 @@ impl Plan {
                 perception,
             ))
             .with_robot_service(&self.robot_report().kind)
+            .with_period(self.loaded.config.sim.dt_s)
     }
 
     /// Every service's binary is an executable file in `bin_dir`.

@@ -421,6 +421,10 @@ pub struct Evaluator {
     stop_causes: BTreeMap<String, u64>,
     /// real-time scheduling as the services got it
     realtime: RealtimeReport,
+    /// speed and separation monitoring as `control/ssm` told it (contacts are added at the end)
+    ssm: phri_iso15066::Judged,
+    /// the control period [s]
+    period_s: f64,
 }
 
 /// `n` and `what`, in the plural unless `n` is 1.
@@ -493,7 +497,29 @@ impl Evaluator {
                 permitted: true,
                 ..Default::default()
             },
+            ssm: phri_iso15066::Judged::default(),
+            period_s: 0.001,
         }
+    }
+
+    /// The control period [s] (1 ms unless told).
+    pub fn with_period(mut self, period_s: f64) -> Evaluator {
+        if period_s > 0.0 && period_s.is_finite() {
+            self.period_s = period_s;
+        }
+        self
+    }
+
+    /// A `control/ssm` message: speed and separation monitoring's counts.
+    pub fn on_ssm(&mut self, m: &phri_ipc::SsmStatus) {
+        let t = self.t(m.stamp_ns);
+        self.ssm.ssm_counts(
+            m.enabled != 0,
+            m.limited_periods,
+            m.violations,
+            t,
+            self.period_s,
+        );
     }
 
     /// Tell protective stops apart by cause with these bounds.
@@ -1113,7 +1139,7 @@ impl Evaluator {
         events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
         let missed = s.1 + b.1;
         let (degraded, summary) = self.verdict(missed, &services);
-        let mut iso_ts_15066 = phri_iso15066::Judged::default();
+        let mut iso_ts_15066 = self.ssm.clone();
         for c in &contacts {
             let span = (c.t_start_s, c.t_end_s);
             iso_ts_15066.truth(span, &c.link, &c.part, c.peak_force_n, c.intended);
@@ -1516,6 +1542,36 @@ mod tests {
         e.on_contact_event(&event(5, 2000, 2000, ContactPhase::Begin, 20.0));
         e.on_contact_event(&event(1, 2500, 2500, ContactPhase::Begin, 20.0));
         assert_eq!(e.events_lost, 4, "the first stream began at 5");
+    }
+
+    #[test]
+    fn the_separation_monitors_counts_reach_the_iso_section_with_their_times() {
+        let mut e = eval().with_period(0.002);
+        let ssm = |t_ms: u64, limited: u64, violations: u64| phri_ipc::SsmStatus {
+            stamp_ns: t_ms * 1_000_000,
+            enabled: 1,
+            limited_periods: limited,
+            violations,
+            ..phri_ipc::SsmStatus::zeroed()
+        };
+        e.on_ssm(&ssm(1000, 0, 0));
+        e.on_ssm(&ssm(1500, 250, 0));
+        e.on_ssm(&ssm(2500, 500, 1));
+        // a restarted controller counts from 0
+        e.on_ssm(&ssm(3000, 100, 0));
+        e.on_ssm(&ssm(4000, 100, 1));
+        let r = e.report(5_000_000_000, "walk-in", BTreeMap::new());
+        let iso = &r.iso_ts_15066;
+        assert!(iso.ssm_enabled);
+        assert!(
+            (iso.ssm_limited_s - 1.2).abs() < 1e-9,
+            "{}",
+            iso.ssm_limited_s
+        );
+        assert_eq!(iso.ssm_violations, 2);
+        assert_eq!(iso.ssm_violation_times_s, [2.5, 4.0]);
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["iso_ts_15066"]["ssm_violations"], 2);
     }
 
     #[test]

@@ -305,6 +305,11 @@ impl Cell {
             self.control()?;
         }
         self.summary.mode(self.controller.mode(), self.t_ns);
+        self.summary.ssm(
+            self.controller.ssm_enabled(),
+            self.controller.ssm_counters(),
+            self.t_ns,
+        );
         self.summary.account(
             &self.sim,
             self.controller.mode(),
@@ -496,10 +501,6 @@ impl Cell {
 
     /// The run so far.
     pub fn summary(&self) -> CellSummary {
-        self.summary.summary(
-            &self.sim,
-            self.controller.counters(),
-            self.controller.ssm_counters(),
-        )
+        self.summary.summary(&self.sim, self.controller.counters())
     }
 }

@@ -50,8 +50,7 @@ pub struct CellSummary {
     /// as the multi-process report's section
     pub iso_ts_15066: phri_iso15066::Judged,
     /// speed and separation monitoring: time it bounded some control
-    /// point's approach \[s\], and periods a point moved toward its obstacle
-    /// closer than the protective separation distance
+    /// point's approach \[s\], and violations (`iso_ts_15066`'s, repeated)
     pub ssm_limited_s: f64,
     pub ssm_violations: u64,
 }
@@ -100,6 +99,15 @@ impl Accounting {
             open: Vec::new(),
             collision: false,
         }
+    }
+
+    /// The controller's speed and separation monitoring after a period
+    /// ending at `t_ns` \[ns\].
+    pub(crate) fn ssm(&mut self, enabled: bool, c: phri_control::resolve::SsmCounters, t_ns: u64) {
+        let t = t_ns as f64 * 1e-9;
+        self.s
+            .iso_ts_15066
+            .ssm_counts(enabled, c.limited_periods, c.violations, t, self.dt_s);
     }
 
     pub(crate) fn frame(&mut self) {
@@ -188,15 +196,10 @@ impl Accounting {
         self.open = still;
     }
 
-    pub(crate) fn summary(
-        &self,
-        _sim: &Simulator,
-        counters: &ControlCounters,
-        ssm: phri_control::resolve::SsmCounters,
-    ) -> CellSummary {
+    pub(crate) fn summary(&self, _sim: &Simulator, counters: &ControlCounters) -> CellSummary {
         let mut s = self.s.clone();
-        s.ssm_limited_s = ssm.limited_periods as f64 * self.dt_s;
-        s.ssm_violations = ssm.violation_periods;
+        s.ssm_limited_s = s.iso_ts_15066.ssm_limited_s;
+        s.ssm_violations = s.iso_ts_15066.ssm_violations;
         s.waypoints = counters.waypoints_reached;
         s.detections = counters.detections;
         for c in &s.contacts {

@@ -42,12 +42,20 @@ fn a_person_walking_in_finds_the_arm_stopped() {
         for offset in [-1.0, 0.0, 1.0] {
             let (speed, s) = walk_in(robot, offset, true);
             eprintln!(
-                "{robot} {offset}: the end effector at {speed:.3} m/s when the person arrived; closest {:.3} m, monitor limiting {:.1} s, {} violation periods",
+                "{robot} {offset}: the end effector at {speed:.3} m/s when the person arrived; closest {:.3} m, monitor limiting {:.1} s, {} violations",
                 s.min_distance_m, s.ssm_limited_s, s.ssm_violations
             );
             assert!(speed < 0.01, "{robot} {offset}: {speed:.3} m/s");
             assert!(s.contacts.is_empty(), "{robot} {offset}: {:?}", s.contacts);
             assert!(s.ssm_limited_s > 0.0);
+            // never moving on toward the person inside S_p past the stop time
+            let iso = &s.iso_ts_15066;
+            assert!(iso.ssm_enabled);
+            assert_eq!(
+                iso.ssm_violations, 0,
+                "{robot} {offset}: at {:?} s",
+                iso.ssm_violation_times_s
+            );
         }
         // not vacuous: without the monitor the arm works on as the person arrives
         let (speed, _) = walk_in(robot, 0.0, false);
