@@ -19,7 +19,8 @@ pub mod ssm;
 
 pub use contact::{Judged, JudgedContact, MAX_VIOLATION_TIMES};
 pub use pfl::{
-    judge, reduced_mass, transient_contact_speed, ContactKind, Judgement, TRANSIENT_MAX_S,
+    judge, reduced_mass, robot_effective_mass, transient_contact_speed, transient_speed_limit,
+    ContactKind, Judgement, TRANSIENT_MAX_S,
 };
 pub use region::BodyRegion;
 pub use ssm::{human_speed, protective_separation_distance, SsmTerms};

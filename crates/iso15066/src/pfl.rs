@@ -27,6 +27,29 @@ pub fn transient_contact_speed(force: f64, k: f64, mu: f64) -> f64 {
     }
 }
 
+/// The robot's effective mass \[kg\] as Annex A's eq. A.5 gives it: half
+/// the mass of its moving parts `moving_kg` plus its effective payload
+/// `payload_kg` (the tool and what it carries).
+pub fn robot_effective_mass(moving_kg: f64, payload_kg: f64) -> f64 {
+    moving_kg / 2.0 + payload_kg
+}
+
+/// The largest relative speed \[m/s\] at which the robot, of effective mass
+/// `m_r` \[kg\], may meet `region` so that a transient contact stays within
+/// the region's transient limit (Annex A: `v = F_T / √(μ k)`); 0 for a
+/// region where no transient contact is allowed (skull, face) and where the
+/// standard gives no spring or mass.
+pub fn transient_speed_limit(region: BodyRegion, m_r: f64) -> f64 {
+    match (
+        region.transient_n(),
+        region.spring_n_per_m(),
+        region.mass_kg(),
+    ) {
+        (Some(f), Some(k), Some(m_h)) => transient_contact_speed(f, k, reduced_mass(m_h, m_r)),
+        _ => 0.0,
+    }
+}
+
 /// Transient or quasi-static, by the contact's duration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ContactKind {
@@ -100,6 +123,21 @@ mod tests {
         assert!((v - 0.161_658).abs() < 1e-5, "{v}");
         assert_eq!(transient_contact_speed(100.0, 75_000.0, 0.0), 0.0);
         assert_eq!(transient_contact_speed(100.0, 75_000.0, f64::NAN), 0.0);
+    }
+
+    #[test]
+    fn the_speed_limit_toward_a_hand_worked_by_hand() {
+        // eq. A.5: an arm whose moving parts weigh 15 kg, 1 kg of tool: 8.5 kg
+        let m_r = robot_effective_mass(15.0, 1.0);
+        assert_eq!(m_r, 8.5);
+        // hand: μ = 0.6·8.5/9.1 = 0.56044 kg, √(μ·75 000) = 205.02 N s/m,
+        // v = 280 / 205.02 = 1.3657 m/s
+        let v = transient_speed_limit(BodyRegion::HandAndFingers, m_r);
+        assert!((v - 1.3657).abs() < 1e-3, "{v}");
+        // a heavier robot meets the hand slower
+        assert!(transient_speed_limit(BodyRegion::HandAndFingers, 50.0) < v);
+        // the face: no transient contact at all
+        assert_eq!(transient_speed_limit(BodyRegion::Face, m_r), 0.0);
     }
 
     #[test]

@@ -752,6 +752,12 @@ impl Model {
         })
     }
 
+    /// The mass of the moving parts [kg]: every body a joint moves (what is
+    /// rigidly attached to the root is not).
+    pub fn moving_mass(&self) -> f64 {
+        self.joints.iter().map(|j| j.mass).sum()
+    }
+
     /// Number of actuated joints (= configuration and velocity dimension;
     /// mimic joints have none of their own, as in Pinocchio).
     #[inline]

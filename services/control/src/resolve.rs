@@ -396,6 +396,19 @@ impl Resolver {
                 }
             }
         }
+        // power and force limiting: the end effector meets the
+        // collaborative hand no faster than Annex A's transient speed
+        if let Some(h) = c.collab_hand.filter(|_| c.collab_speed_limit.is_finite()) {
+            let away = (x - h).try_normalize(1e-9).unwrap_or_default();
+            if away != Vector3::zeros()
+                && self
+                    .avoidance
+                    .limit_approach(&self.jac_ee, &away, c.collab_speed_limit)
+                    .is_err()
+            {
+                faults.avoidance += 1;
+            }
+        }
         let period = self.ssm_period;
         self.ssm_counters.limited_periods += u64::from(period.limiting);
         self.ssm_counters.violation_periods += u64::from(period.violating);
@@ -593,6 +606,73 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The LWR-IV at a bent pose: the end effector's speed toward a hand
+    /// 0.4 m ahead of it along +y under a collaboration's reference that
+    /// wants 2 m/s toward it, after 0.3 s, bounded by `limit` [m/s].
+    fn approach_toward_a_hand(limit: f64) -> f64 {
+        let model = Model::from_urdf_file(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../deploy/robots/kuka_lwr4.urdf"
+        ))
+        .unwrap();
+        let cfg = phri_config::Config::defaults().control;
+        let ee = model.frame_id("lwr_link_7").unwrap();
+        let mut r = Resolver::new(&model, ee, &cfg);
+        let mut data = Data::new(&model);
+        let mut reference = JointReference::new(7);
+        reference
+            .q_ref
+            .copy_from_slice(&[0.0, 0.6, 0.0, -1.4, 0.0, 0.8, 0.0]);
+        phri_model::forward_kinematics(&model, &mut data, &reference.q_ref).unwrap();
+        let x0 = phri_model::frame_placement(&model, &data, ee).p;
+        let toward = Vector3::new(0.0, 1.0, 0.0);
+        let hand = x0 + toward * 0.4;
+        let mut approach = 0.0;
+        for _ in 0..300 {
+            phri_model::forward_kinematics(&model, &mut data, &reference.q_ref).unwrap();
+            let x = phri_model::frame_placement(&model, &data, ee).p;
+            let c = CartesianRef {
+                x_d: x + toward * 0.05,
+                xd_d: toward * 2.0,
+                speed_scale: 1.0,
+                path_time: None,
+                collab_hand: Some(hand),
+                collab_touching: false,
+                collab_point: 0,
+                collab_speed_limit: limit,
+            };
+            let view = PerceptionView {
+                capture_ns: 1,
+                points: &[],
+            };
+            let f = r.avoid(
+                &model,
+                &mut data,
+                &mut reference,
+                &c,
+                0.001,
+                &cfg,
+                &[],
+                Some(view),
+                None,
+            );
+            assert_eq!(f, Faults::default());
+            let mut jac = Data::jacobian_buffer(&model);
+            phri_model::point_jacobian(&model, &mut data, ee, &Vector3::zeros(), &mut jac).unwrap();
+            approach = along(&jac, &toward, &reference.qd_ref);
+        }
+        approach
+    }
+
+    #[test]
+    fn the_end_effector_meets_the_collaborative_hand_no_faster_than_annex_a_allows() {
+        let free = approach_toward_a_hand(f64::INFINITY);
+        let bounded = approach_toward_a_hand(0.3);
+        // not vacuous: unbounded, the reference carries it in faster
+        assert!(free > 0.5, "{free}");
+        assert!(bounded <= 0.3 + 1e-6 && bounded > 0.2, "{bounded}");
+    }
 
     fn caps(clearance: f64, approach_gain: f64) -> FeedbackCaps {
         FeedbackCaps {

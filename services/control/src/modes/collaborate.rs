@@ -116,6 +116,10 @@ pub struct Answered {
 /// The collaboration layer's state.
 pub struct Collaboration {
     cfg: CollaborationConfig,
+    /// the end effector's speed toward the collaborative hand at most
+    /// [m/s]: Annex A's transient-contact speed of the hand against the
+    /// robot's effective mass (eq. A.5: half its moving mass)
+    hand_speed_limit: f64,
     machine: CollabMachine,
     forces: ForceEstimator,
     contact: ContactPoint,
@@ -226,7 +230,12 @@ impl Collaboration {
         for (t, v) in collision_threshold.iter_mut().zip(&thresholds) {
             *t = *v;
         }
+        let m_r = phri_iso15066::robot_effective_mass(model.moving_mass(), 0.0);
         Ok(Collaboration {
+            hand_speed_limit: phri_iso15066::transient_speed_limit(
+                phri_iso15066::BodyRegion::HandAndFingers,
+                m_r,
+            ),
             machine: CollabMachine::new(c),
             forces: ForceEstimator::new(model.clone(), FORCE_DAMPING),
             contact: ContactPoint {
@@ -958,7 +967,10 @@ impl Collaboration {
                         let speed =
                             c.contact_speed + (c.approach_speed - c.contact_speed) * near - closing;
                         let speed = match speed >= 0.0 {
-                            true => speed.min(c.approach_speed) * speed_scale.clamp(0.0, 1.0),
+                            true => {
+                                speed.min(c.approach_speed).min(self.hand_speed_limit)
+                                    * speed_scale.clamp(0.0, 1.0)
+                            }
                             false => speed.max(-c.approach_speed.max(closing)),
                         };
                         let delta = target - self.x_d;
@@ -1043,7 +1055,17 @@ impl Collaboration {
                 (true, Some(i)) => i,
                 _ => 0,
             },
+            collab_speed_limit: match self.back_off.is_none() {
+                true => self.hand_speed_limit,
+                false => f64::INFINITY,
+            },
         }
+    }
+
+    /// The end effector's speed toward the collaborative hand at most
+    /// [m/s] (ISO/TS 15066 Annex A).
+    pub fn hand_speed_limit(&self) -> f64 {
+        self.hand_speed_limit
     }
 
     /// The wrist centre \[m\], base frame: the origin of `wrist_link`.

@@ -137,6 +137,10 @@ pub struct CartesianRef {
     /// nearer the wrist (then obstacles behind the hand, seen from the
     /// wrist, do not repel the wrist either)
     pub collab_point: usize,
+    /// collaborating: the end effector's speed toward that hand is bounded
+    /// by this [m/s] (ISO/TS 15066 Annex A's transient-contact speed for
+    /// the hand; ∞: no bound)
+    pub collab_speed_limit: f64,
 }
 
 /// What a behaviour leaves for the rest of the period.

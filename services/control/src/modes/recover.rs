@@ -34,6 +34,7 @@ pub fn step(
             collab_hand: None,
             collab_touching: false,
             collab_point: 0,
+            collab_speed_limit: f64::INFINITY,
         });
     }
     reference.hold(q, qd, gains, accel);

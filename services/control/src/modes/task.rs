@@ -168,6 +168,7 @@ impl TaskState {
             collab_hand: None,
             collab_touching: false,
             collab_point: 0,
+            collab_speed_limit: f64::INFINITY,
         }
     }
 }
