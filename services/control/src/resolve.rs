@@ -659,7 +659,7 @@ mod tests {
             );
             assert_eq!(f, Faults::default());
             let mut jac = Data::jacobian_buffer(&model);
-            phri_model::point_jacobian(&model, &mut data, ee, &Vector3::zeros(), &mut jac).unwrap();
+            phri_model::point_jacobian(&model, &data, ee, &Vector3::zeros(), &mut jac).unwrap();
             approach = along(&jac, &toward, &reference.qd_ref);
         }
         approach
