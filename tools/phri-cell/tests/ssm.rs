@@ -17,13 +17,27 @@ fn at(offset: f64) -> CellOptions {
 /// `walk-in` on `robot` at `offset` with `[ssm] enabled = ssm`: the end
 /// effector's speed when the person arrives [m/s], and the run.
 fn walk_in(robot: &str, offset: f64, ssm: bool) -> (f64, phri_cell::CellSummary) {
+    // the person stops at 3.45 s of their script (1.6 m/s from 2 s)
+    walk_at("walk-in", 3.45, 9.0, robot, offset, ssm)
+}
+
+/// `scenario` (a person who arrives at `arrival` \[s\] of their script)
+/// for `seconds` on `robot` at `offset` with `[ssm] enabled = ssm`: the end
+/// effector's speed when the person arrives [m/s], and the run.
+fn walk_at(
+    scenario: &str,
+    arrival: f64,
+    seconds: f64,
+    robot: &str,
+    offset: f64,
+    ssm: bool,
+) -> (f64, phri_cell::CellSummary) {
     let arm = format!("robot.name=\"{robot}\"");
     let on = format!("ssm.enabled={ssm}");
-    let mut c = common::cell("walk-in", &at(offset), &[arm.as_str(), on.as_str()]);
-    // the person stops at 3.45 s of their script (1.6 m/s from 2 s)
-    let arrival = 3.45 - offset;
+    let mut c = common::cell(scenario, &at(offset), &[arm.as_str(), on.as_str()]);
+    let arrival = arrival - offset;
     let (mut before, mut speed) = (None, f64::NAN);
-    for k in 1..=(9000.0f64).round() as usize {
+    for k in 1..=(seconds * 1000.0).round() as usize {
         c.tick().unwrap();
         let t = k as f64 * 0.001;
         if (t - (arrival - 0.01)).abs() < 5e-4 {
@@ -60,6 +74,28 @@ fn a_person_walking_in_finds_the_arm_stopped() {
         // not vacuous: without the monitor the arm works on as the person arrives
         let (speed, _) = walk_in(robot, 0.0, false);
         assert!(speed > 0.05, "{robot} without the monitor: {speed:.3} m/s");
+    }
+}
+
+#[test]
+fn a_head_at_the_paths_height_is_never_touched() {
+    // deploy/scenarios/head-height.toml: the arm mounted at head height; the
+    // person walks at it from 4 s and stands with the face 12 cm in front of
+    // P2 from 5.55 s. ISO/TS 15066 allows no transient contact of the face
+    for robot in ["lwr4", "fr3"] {
+        for offset in [-1.0, 0.0, 1.0] {
+            let (speed, s) = walk_at("head-height", 5.55, 10.0, robot, offset, true);
+            let iso = &s.iso_ts_15066;
+            eprintln!(
+                "{robot} {offset}: the end effector at {speed:.3} m/s when the head arrived; closest {:.3} m, monitor limiting {:.1} s, {} violations",
+                s.min_distance_m, iso.ssm_limited_s, iso.ssm_violations
+            );
+            assert!(s.contacts.is_empty(), "{robot} {offset}: {:?}", s.contacts);
+            assert!(iso.contacts.is_empty() && iso.over_limit == 0);
+            assert_eq!(iso.ssm_violations, 0, "{robot} {offset}");
+            // not vacuous: the person came near enough for the monitor to bound the arm
+            assert!(iso.ssm_limited_s > 0.0, "{robot} {offset}");
+        }
     }
 }
 
