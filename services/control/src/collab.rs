@@ -98,6 +98,9 @@ pub struct CollabMachine {
     /// \[m\] (depth places a touching hand 0-6 cm off the surface, by the
     /// view): the hand has gone `follow_gap_m` beyond it
     touch_gap: Option<f64>,
+    /// following: the gap seen while the hand last pressed \[m\] (depth's
+    /// error of the hand then, which mostly persists into the follow)
+    follow_touch_gap: Option<f64>,
     /// a `stop` request asked for a protective stop
     stop_requested: bool,
 }
@@ -115,12 +118,20 @@ impl CollabMachine {
             since: 0.0,
             apart_since: None,
             touch_gap: None,
+            follow_touch_gap: None,
             stop_requested: false,
         }
     }
 
     pub fn phase(&self) -> CollabPhase {
         self.phase
+    }
+
+    /// Following: the gap depth gave while the hand last pressed \[m\]
+    /// (`None`: not following, or no force was felt at the touch).
+    pub fn follow_touch_gap(&self) -> Option<f64> {
+        self.follow_touch_gap
+            .filter(|_| self.phase == CollabPhase::Follow)
     }
 
     /// `[collaboration]`.
@@ -171,6 +182,11 @@ impl CollabMachine {
             self.part = CollabPart::None;
             self.person = u32::MAX;
         }
+        self.follow_touch_gap = match phase {
+            CollabPhase::Follow => self.touch_gap.or(self.follow_touch_gap),
+            CollabPhase::Contact => self.follow_touch_gap,
+            _ => None,
+        };
         self.phase = phase;
         self.reason = reason;
         self.since = t;

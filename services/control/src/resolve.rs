@@ -396,19 +396,6 @@ impl Resolver {
                 }
             }
         }
-        // power and force limiting: the end effector meets the
-        // collaborative hand no faster than Annex A's transient speed
-        if let Some(h) = c.collab_hand.filter(|_| c.collab_speed_limit.is_finite()) {
-            let away = (x - h).try_normalize(1e-9).unwrap_or_default();
-            if away != Vector3::zeros()
-                && self
-                    .avoidance
-                    .limit_approach(&self.jac_ee, &away, c.collab_speed_limit)
-                    .is_err()
-            {
-                faults.avoidance += 1;
-            }
-        }
         let period = self.ssm_period;
         self.ssm_counters.limited_periods += u64::from(period.limiting);
         self.ssm_counters.violation_periods += u64::from(period.violating);
@@ -434,7 +421,7 @@ impl Resolver {
                 approach_gain: if task { cfg.approach_gain } else { 0.0 },
             },
         );
-        let xdot_task = c.xd_d + fb;
+        let xdot_task = limit_toward_hand(c, &x, c.xd_d + fb, &v_ee);
         // slew-limited towards the SNS solution (which stays within the bounds
         // it was computed for; the limit only delays reaching it), except
         // when the separation monitor stops an approach: then at once, as
@@ -468,6 +455,31 @@ impl Resolver {
             *q += v * dt;
         }
         faults
+    }
+}
+
+/// Power and force limiting: the end effector's velocity `task + v_ee`
+/// [m/s] (the task's and the repulsion's, eq. 19) toward the collaborative
+/// hand of `c` at most its `collab_speed_limit` (Annex A's transient speed):
+/// the task's part cut along the hand's direction from the end effector at
+/// `x` \[m\]. SNS scales the task, never turns it, so the resolved end
+/// effector approaches no faster.
+fn limit_toward_hand(
+    c: &CartesianRef,
+    x: &Vector3<f64>,
+    task: Vector3<f64>,
+    v_ee: &Vector3<f64>,
+) -> Vector3<f64> {
+    let Some(h) = c.collab_hand.filter(|_| c.collab_speed_limit.is_finite()) else {
+        return task;
+    };
+    let Some(u) = (h - x).try_normalize(1e-9) else {
+        return task;
+    };
+    let toward = (task + v_ee).dot(&u);
+    match toward > c.collab_speed_limit {
+        true => task - u * (toward - c.collab_speed_limit),
+        false => task,
     }
 }
 

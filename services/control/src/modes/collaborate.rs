@@ -925,6 +925,11 @@ impl Collaboration {
         let offset = ee - self.robot_point;
         let mut velocity = Vector3::zeros();
         let phase = self.machine.phase();
+        // following, the gap as far as it exceeds the one seen at the last
+        // press (depth placed the touching hand that far off the surface,
+        // and places it so still): the new touch at about `contact_speed`
+        // instead of 2-3 times it
+        let gap = self.near_gap - self.machine.follow_touch_gap().unwrap_or(0.0).max(0.0);
         if phase == CollabPhase::Contact && self.ref_phase != CollabPhase::Contact {
             // the touch: the approach's lead (up to `MAX_LEAD_M` where the
             // hand stopped the arm) would press on as a spring; the
@@ -952,7 +957,7 @@ impl Collaboration {
                     if to.norm() > 1e-6 {
                         let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
                         let target = h - to.normalize() * reach + offset;
-                        let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
+                        let near = (gap.max(0.0) / c.slow_down_m).min(1.0);
                         // within `slow_down_m`, the hand's own speed toward
                         // the robot point is taken from the robot's, which
                         // backs away from a hand coming faster, so that they
@@ -1034,7 +1039,7 @@ impl Collaboration {
         // the end effector through the body points' repulsion to the touch
         let max_lead = match phase {
             CollabPhase::Follow => {
-                let near = (self.near_gap.max(0.0) / c.slow_down_m).min(1.0);
+                let near = (gap.max(0.0) / c.slow_down_m).min(1.0);
                 MIN_NEAR_LEAD_M + (MAX_LEAD_M - MIN_NEAR_LEAD_M) * near
             }
             _ => MAX_LEAD_M,
