@@ -30,6 +30,7 @@ pub struct JudgedContact {
     /// a touch of the collaboration, not a collision
     pub intended: bool,
     /// where the force comes from: `truth` (the simulator's contact model)
+    /// or `estimate` (F̂, where no simulator gives the truth)
     pub source: &'static str,
 }
 
@@ -96,11 +97,36 @@ impl Judged {
     /// `t_start_s` to `t_end_s` \[s\], peaking at `peak_force_n` \[N\].
     pub fn truth(
         &mut self,
+        span: (f64, f64),
+        link: &str,
+        part: &str,
+        peak_force_n: f64,
+        intended: bool,
+    ) {
+        self.add(span, link, part, peak_force_n, intended, "truth");
+    }
+
+    /// Add a contact known only from the estimated force (F̂ of eqs. 21-22,
+    /// where no simulator gives the truth): as [`Judged::truth`].
+    pub fn estimate(
+        &mut self,
+        span: (f64, f64),
+        link: &str,
+        part: &str,
+        peak_force_n: f64,
+        intended: bool,
+    ) {
+        self.add(span, link, part, peak_force_n, intended, "estimate");
+    }
+
+    fn add(
+        &mut self,
         (t_start_s, t_end_s): (f64, f64),
         link: &str,
         part: &str,
         peak_force_n: f64,
         intended: bool,
+        source: &'static str,
     ) {
         let known = BodyRegion::of_part(part);
         let region = known.unwrap_or(BodyRegion::Face);
@@ -121,7 +147,7 @@ impl Judged {
             margin_n: j.margin_n,
             within_limit: j.within,
             intended,
-            source: "truth",
+            source,
         });
     }
 }
@@ -154,6 +180,13 @@ mod tests {
         assert_eq!(
             (j.contacts[3].region, j.contacts[3].within_limit),
             ("unknown", false)
+        );
+        // an estimated touch of the collaboration, held 2 s at 30 N
+        j.estimate((40.0, 42.0), "lwr_link_7", "hand_right", 30.0, true);
+        let c = &j.contacts[4];
+        assert_eq!(
+            (c.source, c.kind, c.margin_n),
+            ("estimate", "quasi_static", 110.0)
         );
     }
 

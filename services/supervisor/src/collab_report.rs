@@ -161,6 +161,22 @@ pub struct CollabEvaluator {
     touch_last_ns: Option<u64>,
     /// voice requests by seq: (text, score, utterance end → request [ms])
     voice: BTreeMap<u64, (String, f64, f64)>,
+    /// the contact phase's touches as F̂ tells them (the last may be open)
+    estimated: Vec<EstimatedContact>,
+    estimating: Option<EstimatedContact>,
+}
+
+/// A touch of the collaborative hand as the estimated force F̂ tells it:
+/// one run of the contact phase.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EstimatedContact {
+    /// its first and last observable estimate [s]
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    /// the largest ‖F̂‖ [N]
+    pub peak_force_n: f64,
+    /// the collaborative hand (the scripted person's name: `hand_right`)
+    pub part: &'static str,
 }
 
 fn norm(v: &[f64; 3]) -> f64 {
@@ -196,6 +212,8 @@ impl CollabEvaluator {
             touches: 0,
             touch_last_ns: None,
             voice: BTreeMap::new(),
+            estimated: Vec::new(),
+            estimating: None,
         }
     }
 
@@ -268,8 +286,36 @@ impl CollabEvaluator {
             if phase == CollabPhase::Contact && f.observable != 0 {
                 self.estimates.insert(s.state_stamp_ns, f.force);
                 self.match_up(s.state_stamp_ns);
+                let (force, part) = (norm(&f.force), self.part.body_part());
+                match self.estimating.as_mut() {
+                    Some(e) => {
+                        e.t_end_s = t;
+                        e.peak_force_n = e.peak_force_n.max(force);
+                    }
+                    None => {
+                        self.estimating = part.map(|p| EstimatedContact {
+                            t_start_s: t,
+                            t_end_s: t,
+                            peak_force_n: force,
+                            part: p.name(),
+                        })
+                    }
+                }
             }
         }
+        if phase != CollabPhase::Contact {
+            if let Some(e) = self.estimating.take() {
+                if self.estimated.len() < MAX_LISTED {
+                    self.estimated.push(e);
+                }
+            }
+        }
+    }
+
+    /// The collaboration's touches as F̂ tells them, for a run without the
+    /// simulator's truth.
+    pub fn estimated_contacts(&self) -> impl Iterator<Item = &EstimatedContact> {
+        self.estimated.iter().chain(self.estimating.as_ref())
     }
 
     /// A request on `hri/request`: voice requests' words and timing.
@@ -440,6 +486,38 @@ mod tests {
         s.reason = reason as u32;
         s.human_part = CollabPart::RightHand as u32;
         s
+    }
+
+    #[test]
+    fn the_touches_as_the_estimate_tells_them() {
+        let mut e = CollabEvaluator::new(1_000_000_000, vec![], 1_000_000);
+        e.on_state(&state(1000, CollabPhase::Approach, CollabReason::Accepted));
+        let touch = |t_ms: u64, f: f64, observable: u32| {
+            let mut c = state(t_ms, CollabPhase::Contact, CollabReason::ContactMade);
+            c.n_forces = 1;
+            c.forces[0].force = [0.0, f, 0.0];
+            c.forces[0].observable = observable;
+            c
+        };
+        e.on_state(&touch(2000, 10.0, 1));
+        e.on_state(&touch(2500, 35.0, 1));
+        // not observable: not counted
+        e.on_state(&touch(2600, 90.0, 0));
+        e.on_state(&touch(3000, 20.0, 1));
+        e.on_state(&state(
+            3100,
+            CollabPhase::Follow,
+            CollabReason::HandMovedAway,
+        ));
+        // the second touch is still on when the run ends
+        e.on_state(&touch(4000, 15.0, 1));
+        let c: Vec<_> = e.estimated_contacts().cloned().collect();
+        assert_eq!(c.len(), 2, "{c:?}");
+        assert_eq!(
+            (c[0].t_start_s, c[0].t_end_s, c[0].peak_force_n),
+            (2.0, 3.0, 35.0)
+        );
+        assert_eq!((c[1].part, c[1].peak_force_n), ("hand_right", 15.0));
     }
 
     #[test]

@@ -1124,6 +1124,16 @@ fn body() -> Result<(), SupervisorError> {
     ) = eval.max_joint_step();
     report.collaboration =
         collab_eval.report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));
+    if !eval.has_truth() {
+        // a real arm: the collaboration's touches as F̂ tells them
+        let link = &plan.loaded.config.collaboration.robot_link;
+        for c in collab_eval.estimated_contacts() {
+            let span = (c.t_start_s, c.t_end_s);
+            report
+                .iso_ts_15066
+                .estimate(span, link, c.part, c.peak_force_n, true);
+        }
+    }
     close_ipc(node, Some(ports), &prefix);
     cell.remove_state();
     if let Some(file) = report_file.as_mut() {

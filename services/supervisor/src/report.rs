@@ -510,6 +510,11 @@ impl Evaluator {
         self
     }
 
+    /// The simulator's truth reached this run (contact episodes or samples).
+    pub fn has_truth(&self) -> bool {
+        self.events_seen || self.truth_seq > 0
+    }
+
     /// A `control/ssm` message: speed and separation monitoring's counts.
     pub fn on_ssm(&mut self, m: &phri_ipc::SsmStatus) {
         let t = self.t(m.stamp_ns);
