@@ -57,6 +57,29 @@ pub struct Judged {
     ssm_seen: (u64, u64),
 }
 
+/// Where a contact's force comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ForceSource {
+    /// the simulator's contact model
+    Truth,
+    /// the estimated force F̂ (eqs. 21-22), where no simulator gives the truth
+    Estimate,
+}
+
+impl ForceSource {
+    /// `"truth"` or `"estimate"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ForceSource::Truth => "truth",
+            ForceSource::Estimate => "estimate",
+        }
+    }
+}
+
+/// Who touched when: ((start, end) \[s\], the robot's link, the person's
+/// body part).
+pub type Touching<'a> = ((f64, f64), &'a str, &'a str);
+
 /// Violations whose times a report lists at most.
 pub const MAX_VIOLATION_TIMES: usize = 100;
 
@@ -93,40 +116,14 @@ impl Judged {
         }
     }
 
-    /// Add a contact of the simulator's truth: `part` touched `link` from
-    /// `t_start_s` to `t_end_s` \[s\], peaking at `peak_force_n` \[N\].
-    pub fn truth(
+    /// Add a contact: `part` touched `link` from `t_start_s` to `t_end_s`
+    /// \[s\], peaking at `peak_force_n` \[N\] as `source` tells it.
+    pub fn contact(
         &mut self,
-        span: (f64, f64),
-        link: &str,
-        part: &str,
+        ((t_start_s, t_end_s), link, part): Touching<'_>,
         peak_force_n: f64,
         intended: bool,
-    ) {
-        self.add(span, link, part, peak_force_n, intended, "truth");
-    }
-
-    /// Add a contact known only from the estimated force (F̂ of eqs. 21-22,
-    /// where no simulator gives the truth): as [`Judged::truth`].
-    pub fn estimate(
-        &mut self,
-        span: (f64, f64),
-        link: &str,
-        part: &str,
-        peak_force_n: f64,
-        intended: bool,
-    ) {
-        self.add(span, link, part, peak_force_n, intended, "estimate");
-    }
-
-    fn add(
-        &mut self,
-        (t_start_s, t_end_s): (f64, f64),
-        link: &str,
-        part: &str,
-        peak_force_n: f64,
-        intended: bool,
-        source: &'static str,
+        source: ForceSource,
     ) {
         let known = BodyRegion::of_part(part);
         let region = known.unwrap_or(BodyRegion::Face);
@@ -147,7 +144,7 @@ impl Judged {
             margin_n: j.margin_n,
             within_limit: j.within,
             intended,
-            source,
+            source: source.name(),
         });
     }
 }
@@ -161,11 +158,26 @@ mod tests {
         let mut j = Judged::default();
         assert_eq!(j.min_margin_n, None);
         // a thrown hand's impact, 0.05 s, 180 N: within the hand's 280 N
-        j.truth((10.0, 10.05), "lwr_link_6", "hand_right", 180.0, false);
+        j.contact(
+            ((10.0, 10.05), "lwr_link_6", "hand_right"),
+            180.0,
+            false,
+            ForceSource::Truth,
+        );
         // a collaboration's touch held 1.5 s at 40 N: within 140 N
-        j.truth((12.0, 13.5), "lwr_link_7", "hand_left", 40.0, true);
+        j.contact(
+            ((12.0, 13.5), "lwr_link_7", "hand_left"),
+            40.0,
+            true,
+            ForceSource::Truth,
+        );
         // a forearm clamped 2 s at 170 N: over the lower arm's 160 N
-        j.truth((20.0, 22.0), "lwr_link_4", "forearm_left", 170.0, false);
+        j.contact(
+            ((20.0, 22.0), "lwr_link_4", "forearm_left"),
+            170.0,
+            false,
+            ForceSource::Truth,
+        );
         assert_eq!(j.contacts.len(), 3);
         assert_eq!(j.over_limit, 1);
         assert_eq!(j.min_margin_n, Some(-10.0));
@@ -176,13 +188,23 @@ mod tests {
         );
         assert_eq!(j.contacts[2].region, "lower_arm_and_wrist");
         // an unknown part is judged as the face, the strictest
-        j.truth((30.0, 30.01), "lwr_link_7", "#42", 1.0, false);
+        j.contact(
+            ((30.0, 30.01), "lwr_link_7", "#42"),
+            1.0,
+            false,
+            ForceSource::Truth,
+        );
         assert_eq!(
             (j.contacts[3].region, j.contacts[3].within_limit),
             ("unknown", false)
         );
         // an estimated touch of the collaboration, held 2 s at 30 N
-        j.estimate((40.0, 42.0), "lwr_link_7", "hand_right", 30.0, true);
+        j.contact(
+            ((40.0, 42.0), "lwr_link_7", "hand_right"),
+            30.0,
+            true,
+            ForceSource::Estimate,
+        );
         let c = &j.contacts[4];
         assert_eq!(
             (c.source, c.kind, c.margin_n),

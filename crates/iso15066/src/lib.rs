@@ -17,7 +17,7 @@ pub mod pfl;
 pub mod region;
 pub mod ssm;
 
-pub use contact::{Judged, JudgedContact, MAX_VIOLATION_TIMES};
+pub use contact::{ForceSource, Judged, JudgedContact, Touching, MAX_VIOLATION_TIMES};
 pub use pfl::{
     judge, reduced_mass, robot_effective_mass, transient_contact_speed, transient_speed_limit,
     ContactKind, Judgement, TRANSIENT_MAX_S,

@@ -1128,10 +1128,11 @@ fn body() -> Result<(), SupervisorError> {
         // a real arm: the collaboration's touches as F̂ tells them
         let link = &plan.loaded.config.collaboration.robot_link;
         for c in collab_eval.estimated_contacts() {
-            let span = (c.t_start_s, c.t_end_s);
+            let touching = ((c.t_start_s, c.t_end_s), link.as_str(), c.part);
+            let estimate = phri_iso15066::ForceSource::Estimate;
             report
                 .iso_ts_15066
-                .estimate(span, link, c.part, c.peak_force_n, true);
+                .contact(touching, c.peak_force_n, true, estimate);
         }
     }
     close_ipc(node, Some(ports), &prefix);

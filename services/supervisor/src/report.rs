@@ -1146,8 +1146,9 @@ impl Evaluator {
         let (degraded, summary) = self.verdict(missed, &services);
         let mut iso_ts_15066 = self.ssm.clone();
         for c in &contacts {
-            let span = (c.t_start_s, c.t_end_s);
-            iso_ts_15066.truth(span, &c.link, &c.part, c.peak_force_n, c.intended);
+            let touching = ((c.t_start_s, c.t_end_s), c.link.as_str(), c.part.as_str());
+            let truth = phri_iso15066::ForceSource::Truth;
+            iso_ts_15066.contact(touching, c.peak_force_n, c.intended, truth);
         }
         Report {
             clean: degraded.is_empty(),

@@ -203,9 +203,10 @@ impl Accounting {
         s.waypoints = counters.waypoints_reached;
         s.detections = counters.detections;
         for c in &s.contacts {
-            let span = (c.t_start_s, c.t_end_s);
+            let touching = ((c.t_start_s, c.t_end_s), c.link.as_str(), c.part.as_str());
+            let truth = phri_iso15066::ForceSource::Truth;
             s.iso_ts_15066
-                .truth(span, &c.link, &c.part, c.peak_force_n, c.intended);
+                .contact(touching, c.peak_force_n, c.intended, truth);
         }
         s
     }
