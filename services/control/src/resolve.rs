@@ -332,9 +332,8 @@ impl Resolver {
                 }
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
-                if let Some((m, _)) = monitor.as_mut().filter(|_| p.active == 0) {
-                    m.approaching_inside(k, false, dt);
-                }
+                // approaching its obstacle inside S_p this period
+                let mut inside = false;
                 if let Some((m, t_r)) = monitor.as_mut().filter(|_| p.active != 0) {
                     let t_r = *t_r;
                     let allowed = m.allowed_speed(k, p.min_distance, t_r);
@@ -360,11 +359,8 @@ impl Resolver {
                                 let margin =
                                     p.min_distance - m.separation(k, p.min_distance, v_r, t_r);
                                 period.min_margin_m = period.min_margin_m.min(margin);
-                                // approaching inside S_p for longer than
-                                // the stop takes (S_p grants it T_s)
                                 let moving = v_r > SSM_MOVING_M_S;
-                                let inside = m.approaching_inside(k, moving && margin < 0.0, dt);
-                                period.violating |= inside > m.config().stop_time_s;
+                                inside = moving && margin < 0.0;
                                 period.stopping |= moving && allowed <= 0.0;
                                 match self.avoidance.limit_approach(j, &away, allowed) {
                                     Ok(f) => period.limiting |= f > 0.0,
@@ -373,9 +369,13 @@ impl Resolver {
                             }
                             Err(_) => faults.model += 1,
                         }
-                    } else {
-                        m.approaching_inside(k, false, dt);
                     }
+                }
+                // a violation: approaching inside S_p for longer than the
+                // stop takes (S_p grants it T_s)
+                if let Some((m, _)) = monitor.as_mut() {
+                    let for_s = m.approaching_inside(k, inside, dt);
+                    period.violating |= for_s > m.config().stop_time_s;
                 }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
                     break;
@@ -641,6 +641,7 @@ mod tests {
         let toward = Vector3::new(0.0, 1.0, 0.0);
         let hand = x0 + toward * 0.4;
         let mut approach = 0.0;
+        let mut jac = Data::jacobian_buffer(&model);
         for _ in 0..300 {
             phri_model::forward_kinematics(&model, &mut data, &reference.q_ref).unwrap();
             let x = phri_model::frame_placement(&model, &data, ee).p;
@@ -670,7 +671,6 @@ mod tests {
                 None,
             );
             assert_eq!(f, Faults::default());
-            let mut jac = Data::jacobian_buffer(&model);
             phri_model::point_jacobian(&model, &data, ee, &Vector3::zeros(), &mut jac).unwrap();
             approach = along(&jac, &toward, &reference.qd_ref);
         }

@@ -1067,12 +1067,6 @@ impl Collaboration {
         }
     }
 
-    /// The end effector's speed toward the collaborative hand at most
-    /// [m/s] (ISO/TS 15066 Annex A).
-    pub fn hand_speed_limit(&self) -> f64 {
-        self.hand_speed_limit
-    }
-
     /// The wrist centre \[m\], base frame: the origin of `wrist_link`.
     pub fn wrist_centre(&self) -> Vector3<f64> {
         self.forces.frame_origin(self.wrist_frame)
