@@ -318,6 +318,17 @@ impl CollabEvaluator {
         self.estimated.iter().chain(self.estimating.as_ref())
     }
 
+    /// A run without the simulator's truth (a real arm): judge the
+    /// collaboration's touches as F̂ tells them, on the collaborative robot
+    /// part's `link`, into `iso`.
+    pub fn judge_estimated(&self, iso: &mut phri_iso15066::Judged, link: &str) {
+        for c in self.estimated_contacts() {
+            let touching = ((c.t_start_s, c.t_end_s), link, c.part);
+            let estimate = phri_iso15066::ForceSource::Estimate;
+            iso.contact(touching, c.peak_force_n, true, estimate);
+        }
+    }
+
     /// A request on `hri/request`: voice requests' words and timing.
     pub fn on_request(&mut self, r: &HriRequest) {
         if r.source == RequestSource::Voice as u32 {
@@ -518,6 +529,15 @@ mod tests {
             (2.0, 3.0, 35.0)
         );
         assert_eq!((c[1].part, c[1].peak_force_n), ("hand_right", 15.0));
+        // judged as the hand's: 1 s at 35 N quasi-static, 105 N to spare
+        let mut iso = phri_iso15066::Judged::default();
+        e.judge_estimated(&mut iso, "lwr_link_7");
+        let j = &iso.contacts[0];
+        assert_eq!(iso.contacts.len(), 2);
+        assert_eq!(
+            (j.source, j.region, j.kind, j.margin_n, j.intended),
+            ("estimate", "hand_and_fingers", "quasi_static", 105.0, true)
+        );
     }
 
     #[test]

@@ -1127,13 +1127,7 @@ fn body() -> Result<(), SupervisorError> {
     if !eval.has_truth() {
         // a real arm: the collaboration's touches as F̂ tells them
         let link = &plan.loaded.config.collaboration.robot_link;
-        for c in collab_eval.estimated_contacts() {
-            let touching = ((c.t_start_s, c.t_end_s), link.as_str(), c.part);
-            let estimate = phri_iso15066::ForceSource::Estimate;
-            report
-                .iso_ts_15066
-                .contact(touching, c.peak_force_n, true, estimate);
-        }
+        collab_eval.judge_estimated(&mut report.iso_ts_15066, link);
     }
     close_ipc(node, Some(ports), &prefix);
     cell.remove_state();
