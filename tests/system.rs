@@ -355,11 +355,15 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
 #[test]
 fn killing_the_controller_brakes_then_resumes_without_a_jump() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // one controller ([control] standby = false): today's brake and resume
     let cell = Cell::start(
         "kctl",
         "free-motion",
         Some(12.0),
-        &["supervisor.restart_backoff_min_ms=300"],
+        &[
+            "supervisor.restart_backoff_min_ms=300",
+            "control.standby=false",
+        ],
     );
     wait(5.0);
     cell.kill("control", libc::SIGKILL);
@@ -383,6 +387,172 @@ fn killing_the_controller_brakes_then_resumes_without_a_jump() {
     assert!(events(&r, "sync", "control")
         .iter()
         .any(|e| e["t_s"].as_f64().unwrap() >= t_restart - 0.01));
+    assert_eq!(r["false_detections"], 0);
+}
+
+/// The controller in charge now, as the robot's newest state says
+/// (`control` or `control_standby`).
+fn in_charge(cell: &Cell) -> &'static str {
+    let node = phri_ipc::node("test-in-charge", &cell.prefix).unwrap();
+    let states = phri_ipc::ROBOT_STATE
+        .subscriber(&node, phri_ipc::Queue::Latest)
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(2);
+    loop {
+        if let Some(s) = states.latest().unwrap() {
+            return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
+                0 => "control",
+                _ => "control_standby",
+            };
+        }
+        assert!(Instant::now() < deadline, "no robot/state");
+        wait(0.01);
+    }
+}
+
+/// The report's takeovers (`control.takeovers`).
+fn takeovers(r: &Value) -> &Vec<Value> {
+    r["control"]["takeovers"].as_array().unwrap()
+}
+
+/// The restart of `service` (its first), the report's time \[s\].
+fn restarted_at(r: &Value, service: &str) -> f64 {
+    let e = events(r, "restart", service);
+    assert!(!e.is_empty(), "{service} not restarted: {}", r["events"]);
+    e[0]["t_s"].as_f64().unwrap()
+}
+
+/// The robot missed no deadline and kept its brakes off from `from_s` on
+/// for `span_s` \[s\] (the report's missed deadlines come at 10 Hz).
+fn nothing_missed(r: &Value, from_s: f64, span_s: f64) {
+    let within = |e: &&Value| {
+        let t = e["t_s"].as_f64().unwrap();
+        t >= from_s - 0.1 && t <= from_s + span_s
+    };
+    for kind in ["missed_deadlines", "brake"] {
+        let hits: Vec<&Value> = events(r, kind, "sim").into_iter().filter(within).collect();
+        assert!(hits.is_empty(), "{kind} at {from_s:.2} s: {hits:?}");
+    }
+}
+
+#[test]
+fn killing_either_controller_costs_the_torque_loop_nothing() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("kstandby", "free-motion", Some(14.0), &[]);
+    // the controller in charge dies, twice: the other answers the same period
+    wait(4.0);
+    let first = in_charge(&cell);
+    cell.kill(first, libc::SIGKILL);
+    wait(4.0);
+    let second = in_charge(&cell);
+    cell.kill(second, libc::SIGKILL);
+    let r = cell.finish();
+    eprintln!("killed {first}, then {second}; control: {}", r["control"]);
+    assert_eq!(r["control"]["standby"], true);
+    // a kill is noticed by the supervisor after its back-off (50 ms) at most
+    let t = takeovers(&r);
+    for killed in [first, second] {
+        let to = match killed {
+            "control" => "robot/command/standby",
+            _ => "robot/command",
+        };
+        let back = restarted_at(&r, killed);
+        let took = t.iter().find(|k| {
+            let at = k["t_s"].as_f64().unwrap();
+            k["to"] == to && at > back - 0.3 && at <= back
+        });
+        let took = took.unwrap_or_else(|| panic!("no takeover for {killed}: {}", r["control"]));
+        // one period's change of a computed torque, not a jump
+        assert!(took["command_diff_nm"].as_f64().unwrap() < 2.0, "{took}");
+        nothing_missed(&r, back - 0.3, 1.3);
+    }
+    assert!(r["control"]["max_takeover_diff_nm"].as_f64().unwrap() < 2.0);
+    let restarts = |s: &str| r["services"][s]["restarts"].as_u64().unwrap();
+    assert_eq!(restarts("control") + restarts("control_standby"), 2);
+    for s in ["control", "control_standby"] {
+        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
+    }
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+    assert_eq!(r["protective_stops"], 0);
+    assert_eq!(r["false_detections"], 0);
+}
+
+#[test]
+fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_standby() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("stopctl", "free-motion", Some(12.0), &[]);
+    wait(4.0);
+    // the controller in charge stops (SIGSTOP) for 0.5 s, then the one in
+    // charge 3 s later for 0.3 s: the other commands meanwhile; the first
+    // woke as the standby, and commands again only once re-synced
+    let mut stopped = Vec::new();
+    for (hold, rest) in [(0.5, 3.0), (0.3, 1.0)] {
+        let who = in_charge(&cell);
+        let pid = cell.kill(who, libc::SIGSTOP);
+        wait(0.2);
+        let meanwhile = in_charge(&cell);
+        wait(hold - 0.2);
+        // SAFETY: kill(2) on the controller stopped above.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+        assert_ne!(meanwhile, who, "the other controller took over");
+        stopped.push(who);
+        wait(rest);
+    }
+    let r = cell.finish();
+    eprintln!("stopped {stopped:?}; control: {}", r["control"]);
+    assert!(takeovers(&r).len() >= 2, "{}", r["control"]);
+    for k in takeovers(&r) {
+        assert!(k["command_diff_nm"].as_f64().unwrap() < 2.0, "{k}");
+        nothing_missed(&r, k["t_s"].as_f64().unwrap() - 0.1, 0.8);
+    }
+    for s in ["control", "control_standby"] {
+        assert_eq!(r["services"][s]["restarts"], 0, "{s}: not judged frozen");
+    }
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+    assert_eq!(r["protective_stops"], 0);
+}
+
+#[test]
+fn both_controllers_killed_at_once_brake_and_resume_as_one_did_alone() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start(
+        "kboth",
+        "free-motion",
+        Some(12.0),
+        &["supervisor.restart_backoff_min_ms=300"],
+    );
+    wait(5.0);
+    cell.kill("control", libc::SIGKILL);
+    cell.kill("control_standby", libc::SIGKILL);
+    let r = cell.finish();
+    eprintln!("control: {}", r["control"]);
+    assert!(
+        !events(&r, "brake", "sim").is_empty(),
+        "no brake: {}",
+        r["events"]
+    );
+    for s in ["control", "control_standby"] {
+        assert_eq!(r["services"][s]["restarts"], 1, "{s}");
+    }
+    let resync = &r["resyncs"][0];
+    assert!(
+        resync["max_joint_speed_rad_s"].as_f64().unwrap() < 0.3,
+        "{resync}"
+    );
+    assert!(
+        resync["max_joint_travel_rad"].as_f64().unwrap() < 0.05,
+        "{resync}"
+    );
+    let t_restart = resync["t_s"].as_f64().unwrap();
+    assert!(events(&r, "sync", "control")
+        .iter()
+        .any(|e| e["t_s"].as_f64().unwrap() >= t_restart - 0.01));
+    // nobody took over while both were dead: a start from the brakes is none
+    let dead = takeovers(&r).iter().any(|k| {
+        let at = k["t_s"].as_f64().unwrap();
+        at > t_restart - 0.6 && at < t_restart + 0.2
+    });
+    assert!(!dead, "{}", r["control"]);
     assert_eq!(r["false_detections"], 0);
 }
 
@@ -882,7 +1052,13 @@ fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_han
     // at the robot (within 5 cm) until it is lowered at 15-15.5 s. The
     // controller is stopped in contact until the supervisor finds it frozen
     // (heartbeat timeout 200 ms), kills and restarts it
-    let cell = Cell::start("ctlcontact", "collaboration", Some(20.0), &[]);
+    // one controller: the standby would go on with the collaboration
+    let cell = Cell::start(
+        "ctlcontact",
+        "collaboration",
+        Some(20.0),
+        &["control.standby=false"],
+    );
     cell.pid_of("control");
     let deadline = Instant::now() + Duration::from_secs(14);
     while collab_phase(&cell).as_deref() != Some("contact") {

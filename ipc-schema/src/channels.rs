@@ -12,6 +12,15 @@ pub const ROBOT_STATE: Channel<JointState> = Channel::new("robot/state", Qos::ON
 /// [`TorqueCommand`] to the robot, one publisher only (the controller). Wakes: new command.
 pub const ROBOT_COMMAND: Channel<TorqueCommand> =
     Channel::new("robot/command", Qos::ONE_PUBLISHER, true);
+/// [`TorqueCommand`] to the robot from the hot standby controller, one
+/// publisher only: applied when the controller in charge misses a period
+/// (then the standby is in charge). Wakes: new command.
+pub const ROBOT_COMMAND_STANDBY: Channel<TorqueCommand> =
+    Channel::new("robot/command/standby", Qos::ONE_PUBLISHER, true);
+/// [`CommanderStats`] from the robot adapter: which controller commanded,
+/// takeovers, 10 Hz and at every takeover.
+pub const ROBOT_COMMANDERS: Channel<CommanderStats> =
+    Channel::new("robot/commanders", Qos::SLOW, false);
 /// [`RobotStats`] from the robot adapter: loop timing and latency histogram, 10 Hz.
 pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SLOW, false);
 /// [`BoxStatus`] from a real robot's adapter: its control box's own figures
@@ -22,9 +31,23 @@ pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISH
 /// [`Residual`] from the dynamics service, 1 kHz. Wakes: new residual.
 pub const DYNAMICS_RESIDUAL: Channel<Residual> =
     Channel::new("dynamics/residual", Qos::ONE_PUBLISHER, true);
-/// [`ControlStatus`] from the controller, 1 kHz.
+/// [`Residual`] from the hot standby's dynamics service (the same observer
+/// over the same states), 1 kHz: the controller takes the fresher of the
+/// two. Wakes: new residual.
+pub const DYNAMICS_RESIDUAL_STANDBY: Channel<Residual> =
+    Channel::new("dynamics/residual/standby", Qos::ONE_PUBLISHER, true);
+/// [`ControlStatus`] from the controller in charge, 1 kHz (the standby's
+/// publisher waits: two publishers at most).
 pub const CONTROL_STATUS: Channel<ControlStatus> =
-    Channel::new("control/status", Qos::ONE_PUBLISHER, false);
+    Channel::new("control/status", Qos::CONTROLLERS, false);
+/// [`ControlBehaviour`] of the controller on `robot/command`, every period
+/// while it is in charge: the standby adopts it.
+pub const CONTROL_BEHAVIOUR: Channel<ControlBehaviour> =
+    Channel::new("control/behaviour", Qos::BEHAVIOUR, false);
+/// [`ControlBehaviour`] of the controller on `robot/command/standby`, every
+/// period while it is in charge.
+pub const CONTROL_STANDBY_BEHAVIOUR: Channel<ControlBehaviour> =
+    Channel::new("control/standby/behaviour", Qos::BEHAVIOUR, false);
 /// [`Health`] from the supervisor, 10 Hz.
 pub const SUPERVISOR_HEALTH: Channel<Health> = Channel::new("supervisor/health", Qos::SLOW, false);
 /// [`WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
@@ -49,11 +72,11 @@ pub const PERCEPTION_HAND: Channel<HandObservation> =
     Channel::new("perception/hand", Qos::ONE_PUBLISHER, false);
 /// [`HriRequest`]s from people (gesture, voice, command line): several publishers.
 pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::WORKERS, false);
-/// [`CollabState`] from the controller, 1 kHz.
+/// [`CollabState`] from the controller in charge, 1 kHz.
 pub const COLLAB_STATE: Channel<CollabState> =
-    Channel::new("collab/state", Qos::ONE_PUBLISHER, false);
-/// [`SsmStatus`] from the controller, 1 kHz: speed and separation monitoring.
-pub const CONTROL_SSM: Channel<SsmStatus> = Channel::new("control/ssm", Qos::ONE_PUBLISHER, false);
+    Channel::new("collab/state", Qos::CONTROLLERS, false);
+/// [`SsmStatus`] from the controller in charge, 1 kHz: speed and separation monitoring.
+pub const CONTROL_SSM: Channel<SsmStatus> = Channel::new("control/ssm", Qos::CONTROLLERS, false);
 /// [`AudioChunk`]s from the microphone (a capture driver, a recording, or
 /// the simulated cell's scripted speech), 50 Hz, deeply queued: the
 /// recogniser loses no audio while it decodes. Wakes: new chunk.
@@ -223,6 +246,11 @@ pub const ALL: &[&str] = &[
     INPUT_AUDIT.name,
     ROBOT_BOX.name,
     CONTROL_SSM.name,
+    ROBOT_COMMAND_STANDBY.name,
+    ROBOT_COMMANDERS.name,
+    CONTROL_BEHAVIOUR.name,
+    CONTROL_STANDBY_BEHAVIOUR.name,
+    DYNAMICS_RESIDUAL_STANDBY.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -236,6 +264,10 @@ pub const ON_DEMAND: &[&str] = &[
     PERCEPTION_HAND.name,
     VOICE_UTTERANCE.name,
     ROBOT_BOX.name,
+    ROBOT_COMMAND_STANDBY.name,
+    CONTROL_BEHAVIOUR.name,
+    CONTROL_STANDBY_BEHAVIOUR.name,
+    DYNAMICS_RESIDUAL_STANDBY.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -269,6 +301,11 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(INPUT_AUDIT);
     v.message(ROBOT_BOX);
     v.message(CONTROL_SSM);
+    v.message(ROBOT_COMMAND_STANDBY);
+    v.message(ROBOT_COMMANDERS);
+    v.message(CONTROL_BEHAVIOUR);
+    v.message(CONTROL_STANDBY_BEHAVIOUR);
+    v.message(DYNAMICS_RESIDUAL_STANDBY);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

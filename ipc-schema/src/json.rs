@@ -327,6 +327,11 @@ pub mod latency_hist {
     }
 }
 
+/// An array of zero bytes (the default of a byte blob left out of JSON).
+pub fn zero_bytes<const N: usize>() -> [u8; N] {
+    [0; N]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

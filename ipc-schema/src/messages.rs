@@ -40,6 +40,9 @@ pub mod robot_status {
     /// (a real robot's adapter under the protocol's brakes), so `tau` is not
     /// what acted and a momentum residual over this state means nothing
     pub const TORQUE_UNKNOWN: u32 = 8;
+    /// the controller on `robot/command/standby` is in charge (its fresh
+    /// command is applied first); clear: the one on `robot/command`
+    pub const STANDBY_IN_CHARGE: u32 = 16;
 }
 
 /// Measured joint state, published by the robot every control period.
@@ -889,6 +892,78 @@ pub struct SsmStatus {
 
 impl Zeroed for SsmStatus {}
 
+/// Bytes of a controller's behaviour state in [`ControlBehaviour`].
+pub const BEHAVIOUR_BYTES: usize = 8192;
+
+/// A controller's behaviour state after its step (mode, path time, the
+/// collaboration's phase, reaction and integrator states): published by
+/// the controller in charge every period, adopted by the other one (the
+/// hot standby) before its next step. The bytes are the controller's own
+/// layout (`phri_control::snapshot`): only a controller of the same
+/// configuration reads them.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::ControlBehaviour")]
+pub struct ControlBehaviour {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// the state whose step left this behaviour
+    pub state_seq: u64,
+    pub state_stamp_ns: u64,
+    /// bytes used in `bytes`
+    pub len: u32,
+    #[serde(skip)]
+    pub _pad: u32,
+    #[serde(skip, default = "crate::json::zero_bytes")]
+    pub bytes: [u8; BEHAVIOUR_BYTES],
+}
+
+impl Zeroed for ControlBehaviour {}
+
+/// Which controller commanded the robot, from the robot adapter (the
+/// simulator or a real arm's): 10 Hz and at every takeover, cumulative
+/// since the adapter started. Slot 0 is the controller on `robot/command`,
+/// slot 1 the one on `robot/command/standby`.
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::CommanderStats")]
+pub struct CommanderStats {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// the slot in charge now (0 or 1)
+    pub in_charge: u32,
+    #[serde(skip)]
+    pub _pad: u32,
+    /// periods whose applied command was each slot's fresh answer
+    pub periods: [u64; 2],
+    /// periods both slots answered the same state
+    pub both_answered: u64,
+    /// takeovers: the slot not in charge answered for the one in charge
+    pub takeovers: u64,
+    /// the last takeover: the state answered [ns, robot clock] and its number (0: none yet)
+    pub last_takeover_state_stamp_ns: u64,
+    pub last_takeover_state_seq: u64,
+    /// the slot that took over
+    pub last_takeover_to: u32,
+    #[serde(skip)]
+    pub _pad2: u32,
+    /// largest joint difference between the command taking over and the
+    /// last command applied before [Nm]
+    #[serde(with = "crate::json::finite")]
+    pub last_takeover_diff_nm: f64,
+    /// the largest such difference so far [Nm]
+    #[serde(with = "crate::json::finite")]
+    pub max_takeover_diff_nm: f64,
+    /// the largest joint difference between the two slots' answers to the
+    /// same state, while both answered [Nm]
+    #[serde(with = "crate::json::finite")]
+    pub max_answer_diff_nm: f64,
+}
+
+impl Zeroed for CommanderStats {}
+
 /// `impl Message`: the publish time (and stream) of a message type, and the
 /// arrays cut to a count in its JSON view (`counted: [dof => q, tau; n => xs]`;
 /// the fields must exist: checked at compile time).
@@ -946,5 +1021,7 @@ message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => p
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
 message!(SsmStatus, published: |m| Some(m.stamp_ns));
+message!(ControlBehaviour, published: |m| Some(m.stamp_ns));
+message!(CommanderStats, published: |m| Some(m.stamp_ns));
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
 message!(BoxStatus, published: |m| Some(m.stamp_ns), counted: [dof => tau_j, tau_ext_hat]);

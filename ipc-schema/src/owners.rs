@@ -26,6 +26,9 @@ pub const PUBLISHERS: &[(&str, &[&str])] = &[
     ("perception/hand", &["phri-perception"]),
     ("hri/request", &["phri-gesture", "phri-voice"]),
     ("audio/mic", &["phri-mic"]),
+    // the controller in charge's behaviour, adopted by the standby (the
+    // standby's own, `control/standby/behaviour`, is owned as this one)
+    ("control/behaviour", &["phri-control"]),
 ];
 
 /// An owned channel by its index in [`PUBLISHERS`].
@@ -40,12 +43,22 @@ impl Owned {
     pub const PERCEPTION_HAND: Owned = Owned(4);
     pub const HRI_REQUEST: Owned = Owned(5);
     pub const AUDIO_MIC: Owned = Owned(6);
+    pub const CONTROL_BEHAVIOUR: Owned = Owned(7);
 
     /// The owned channel named `name`, if it is one. A further camera's
     /// channel (`perception/1/repulsion`) is owned as the first camera's
     /// (its publishers are the same binaries; its refusals count there).
     pub fn of(name: &str) -> Option<Owned> {
         let name = crate::channels::camera_of_channel(name).map_or(name, |(_, first)| first);
+        let name = match name {
+            n if n == crate::channels::CONTROL_STANDBY_BEHAVIOUR.name => {
+                crate::channels::CONTROL_BEHAVIOUR.name
+            }
+            n if n == crate::channels::DYNAMICS_RESIDUAL_STANDBY.name => {
+                crate::channels::DYNAMICS_RESIDUAL.name
+            }
+            n => n,
+        };
         PUBLISHERS.iter().position(|(c, _)| *c == name).map(Owned)
     }
 
@@ -326,11 +339,16 @@ mod tests {
             (Owned::PERCEPTION_HAND, PERCEPTION_HAND.name),
             (Owned::HRI_REQUEST, HRI_REQUEST.name),
             (Owned::AUDIO_MIC, AUDIO_MIC.name),
+            (Owned::CONTROL_BEHAVIOUR, CONTROL_BEHAVIOUR.name),
         ] {
             assert_eq!(o.name(), c);
             assert_eq!(Owned::of(c), Some(o));
         }
-        assert_eq!(PUBLISHERS.len(), 7);
+        let standby = Owned::of(CONTROL_STANDBY_BEHAVIOUR.name);
+        assert_eq!(standby, Some(Owned::CONTROL_BEHAVIOUR));
+        let residual = Owned::of(DYNAMICS_RESIDUAL_STANDBY.name);
+        assert_eq!(residual, Some(Owned::DYNAMICS_RESIDUAL));
+        assert_eq!(PUBLISHERS.len(), 8);
     }
 
     #[test]

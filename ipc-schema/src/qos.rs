@@ -25,6 +25,21 @@ impl Qos {
         subscriber_max_buffer: 256,
         history: 1,
     };
+    /// What the controller in charge publishes: the hot standby holds the
+    /// second publisher, idle until it takes over.
+    pub const CONTROLLERS: Qos = Qos {
+        max_publishers: 2,
+        ..Qos::ONE_PUBLISHER
+    };
+    /// A controller's behaviour state for its standby: one publisher, one
+    /// reader that wants the newest only, no history (a restarted standby
+    /// waits for the next period's).
+    pub const BEHAVIOUR: Qos = Qos {
+        max_subscribers: 8,
+        subscriber_max_buffer: 2,
+        history: 0,
+        ..Qos::ONE_PUBLISHER
+    };
     /// One publisher at 10 Hz.
     pub const SLOW: Qos = Qos {
         subscriber_max_buffer: 8,

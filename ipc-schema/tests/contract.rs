@@ -36,4 +36,6 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<AudioChunk>("phri::AudioChunk", 672);
     check::<Utterance>("phri::Utterance", 128);
     check::<SsmStatus>("phri::SsmStatus", 88);
+    check::<ControlBehaviour>("phri::ControlBehaviour", 8232);
+    check::<CommanderStats>("phri::CommanderStats", 104);
 }

@@ -54,6 +54,10 @@ pub struct ControlConfig {
     pub retreat_ramp_s: f64,
     /// least time spent reacting before recovering [s]
     pub reaction_min_s: f64,
+    /// a hot standby controller (`[services.control_standby]`) answers every
+    /// state too, adopting the behaviour of the one in charge, and takes
+    /// over in the same period when that one misses; false: one controller
+    pub standby: bool,
     /// resume the task once the residual stayed below the contact level for `resume_quiet_s`
     pub resume: bool,
     pub resume_quiet_s: f64,

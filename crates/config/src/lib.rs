@@ -257,6 +257,38 @@ fn camera_from_value(value: &Value, i: usize, origin: &str) -> Result<CameraConf
     toml::from_str(&text).map_err(|e: toml::de::Error| key_err(e.message().trim_end().to_string()))
 }
 
+/// `[control] standby = false` drops the hot standby's services (its
+/// controller and its residual); with them, the first controller is judged
+/// frozen after the standby's silence too (`heartbeat_timeout_ms`, unless
+/// its own is given).
+fn standby(table: &mut Table) {
+    let on = table
+        .get("control")
+        .and_then(|c| c.get("standby"))
+        .and_then(|v| v.as_bool())
+        != Some(false);
+    let Some(Value::Table(services)) = table.get_mut("services") else {
+        return;
+    };
+    if !on {
+        for name in ["control_standby", "dynamics_standby"] {
+            if let Some(Value::Table(s)) = services.get_mut(name) {
+                s.insert("enabled".into(), Value::Boolean(false));
+            }
+        }
+        return;
+    }
+    let Some(Value::Table(standby)) = services.get_mut("control_standby") else {
+        return;
+    };
+    let Some(timeout) = standby.get("heartbeat_timeout_ms").cloned() else {
+        return;
+    };
+    if let Some(Value::Table(control)) = services.get_mut("control") {
+        control.entry("heartbeat_timeout_ms").or_insert(timeout);
+    }
+}
+
 fn hybrid(table: &mut Table) -> Result<(), Invalid> {
     let outside = table
         .get("robot")
@@ -720,6 +752,7 @@ impl Loaded {
                 }
             })
         };
+        standby(&mut table);
         hybrid(&mut table).map_err(|invalid| ConfigError::Invalid {
             origin: blame("robot.ip"),
             invalid,

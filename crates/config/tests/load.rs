@@ -457,14 +457,26 @@ fn each_further_camera_gets_its_own_camera_and_ingestion_services() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("at most 4"), "{e}");
-    // three fit the roster of 16 services; a fourth needs two disabled
+    // two fit the roster of 16 services with the hot standby's two; a third
+    // needs the standby off, a fourth two more disabled
+    let two = "[[camera]]\n".repeat(2);
+    assert!(Loaded::load_text(&two, &deploy(), None, &[]).is_ok());
     let three = "[[camera]]\n".repeat(3);
-    assert!(Loaded::load_text(&three, &deploy(), None, &[]).is_ok());
-    let four = "[[camera]]\n".repeat(4);
-    let e = Loaded::load_text(&four, &deploy(), None, &[])
+    let e = Loaded::load_text(&three, &deploy(), None, &[])
         .unwrap_err()
         .to_string();
     assert!(e.contains("services") && e.contains("got 18"), "{e}");
-    let quiet = ["services.voice.enabled=false", "services.mic.enabled=false"];
+    let alone = ["control.standby=false"];
+    assert!(Loaded::load_text(&three, &deploy(), None, &alone).is_ok());
+    let four = "[[camera]]\n".repeat(4);
+    let e = Loaded::load_text(&four, &deploy(), None, &alone)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("services") && e.contains("got 18"), "{e}");
+    let quiet = [
+        "control.standby=false",
+        "services.voice.enabled=false",
+        "services.mic.enabled=false",
+    ];
     assert!(Loaded::load_text(&four, &deploy(), None, &quiet).is_ok());
 }

@@ -20,6 +20,24 @@ impl VelocityEstimator {
         }
     }
 
+    /// The filter's state: the last positions \[rad\], the estimate
+    /// \[rad/s\], and whether it has seen positions yet.
+    pub fn state(&self) -> (&[f64], &[f64], bool) {
+        (&self.last_q, &self.qd, self.primed)
+    }
+
+    /// Take over another estimator's state ([`VelocityEstimator::state`]) of
+    /// the same joints: `false` (nothing changed) for another length.
+    pub fn set_state(&mut self, last_q: &[f64], qd: &[f64], primed: bool) -> bool {
+        if last_q.len() != self.last_q.len() || qd.len() != self.qd.len() {
+            return false;
+        }
+        self.last_q.copy_from_slice(last_q);
+        self.qd.copy_from_slice(qd);
+        self.primed = primed;
+        true
+    }
+
     /// Forget the history (next update starts from rest).
     pub fn reset(&mut self) {
         self.primed = false;

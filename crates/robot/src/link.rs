@@ -24,10 +24,21 @@
 //! when; the waiting is the caller's. Missed deadlines are reported as runs
 //! ([`MissRun`]), one per run of consecutive misses, when it ends.
 //!
+//! With a hot standby ([`RobotLink::cycle_slots`]) two controllers answer
+//! every state, each on a command channel of its own (slot 0
+//! `robot/command`, slot 1 `robot/command/standby`). The slot in charge
+//! commands while it answers in time; when its fresh answer is missing and
+//! the other slot's is there, the other slot's is applied in the same period
+//! and that slot is in charge from then on (a **takeover**, counted with the
+//! torque step it made in [`CommanderStats`]). The state's
+//! `STANDBY_IN_CHARGE` bit tells both controllers which one is in charge.
+//!
 //! [`RobotLink::cycle`] is pure and allocates nothing: every time it needs
 //! enters as a number ([`CycleTiming`], nanoseconds on one clock).
 
-use phri_ipc::{robot_status, RobotStats, TorqueCommand, Zeroed, LATENCY_BINS, MAX_DOF};
+use phri_ipc::{
+    robot_status, CommanderStats, RobotStats, TorqueCommand, Zeroed, LATENCY_BINS, MAX_DOF,
+};
 
 /// Consecutive missing commands the robot tolerates before braking (as Franka's FCI).
 pub const MAX_MISSED: u32 = 20;
@@ -74,7 +85,20 @@ impl Wake {
     /// deciding: only in a late cycle whose `newest` command does not answer
     /// it yet (`None`: decide now).
     pub fn grace_until(&self, newest: Option<&TorqueCommand>, state_seq: u64) -> Option<u64> {
-        let answered = newest.is_some_and(|c| RobotLink::answers(c, state_seq));
+        self.grace_until_any(&[newest], state_seq)
+    }
+
+    /// [`Wake::grace_until`] for several command slots: no grace once any
+    /// slot's newest command answers state `state_seq`.
+    pub fn grace_until_any(
+        &self,
+        newest: &[Option<&TorqueCommand>],
+        state_seq: u64,
+    ) -> Option<u64> {
+        let answered = newest
+            .iter()
+            .flatten()
+            .any(|c| RobotLink::answers(c, state_seq));
         (self.late && !answered).then_some(self.woke_ns + LATE_CYCLE_GRACE_NS)
     }
 }
@@ -146,8 +170,15 @@ pub struct LinkOutput {
     pub brake_engaged: bool,
     /// a run of missed deadlines ended this period (and is to be logged)
     pub miss_run: Option<MissRun>,
-    /// time to publish the statistics ([`RobotLink::stats_message`])
+    /// time to publish the statistics ([`RobotLink::stats_message`],
+    /// [`RobotLink::commanders_message`])
     pub publish_stats: bool,
+    /// the command slot in charge after this period (0: `robot/command`,
+    /// 1: `robot/command/standby`)
+    pub in_charge: usize,
+    /// the slot not in charge answered for the one in charge this period
+    /// (publish [`RobotLink::commanders_message`] now)
+    pub takeover: bool,
 }
 
 impl LinkOutput {
@@ -204,7 +235,18 @@ pub struct RobotLink {
     loop_established: bool,
     misses: MissLog,
     stats: RobotStats,
+    commanders: CommanderStats,
     last: LinkOutput,
+}
+
+/// Number of command slots ([`RobotLink::cycle_slots`]).
+pub const SLOTS: usize = 2;
+
+/// The largest joint difference between two torques \[Nm\].
+fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
 impl RobotLink {
@@ -225,6 +267,7 @@ impl RobotLink {
             loop_established: false,
             misses: MissLog::default(),
             stats: RobotStats::zeroed(),
+            commanders: CommanderStats::zeroed(),
             last: LinkOutput {
                 tau: [0.0; MAX_DOF],
                 dof,
@@ -236,6 +279,8 @@ impl RobotLink {
                 brake_engaged: false,
                 miss_run: None,
                 publish_stats: false,
+                in_charge: 0,
+                takeover: false,
             },
         })
     }
@@ -285,9 +330,38 @@ impl RobotLink {
         state_seq: u64,
         timing: &CycleTiming,
     ) -> LinkOutput {
+        self.cycle_slots([newest, None], state_seq, timing)
+    }
+
+    /// Decide this period with a hot standby: `newest[s]` is slot `s`'s newest
+    /// command. The slot in charge's fresh command is applied; without it the
+    /// other slot's fresh one, which then takes charge. Allocates nothing.
+    pub fn cycle_slots(
+        &mut self,
+        newest: [Option<&TorqueCommand>; SLOTS],
+        state_seq: u64,
+        timing: &CycleTiming,
+    ) -> LinkOutput {
         let n = self.dof;
+        let valid = newest.map(|c| c.filter(|c| self.valid(c)));
+        let answer = valid.map(|c| c.filter(|c| Self::answers(c, state_seq)));
+        let primary = self.last.in_charge;
+        if let [Some(a), Some(b)] = answer {
+            let c = &mut self.commanders;
+            c.both_answered += 1;
+            c.max_answer_diff_nm = c
+                .max_answer_diff_nm
+                .max(largest_difference(&a.tau[..n], &b.tau[..n]));
+        }
+        let applied = match (answer[primary], answer[1 - primary]) {
+            (Some(cmd), _) => Some((primary, cmd)),
+            (None, Some(cmd)) => Some((1 - primary, cmd)),
+            // a late answer to an older state is still the newest torque: reuse it
+            (None, None) => valid[primary].map(|c| (primary, c)),
+        };
         let mut fresh = false;
-        if let Some(cmd) = newest.filter(|c| self.valid(c)) {
+        let mut takeover = false;
+        if let Some((slot, cmd)) = applied {
             if Self::answers(cmd, state_seq) {
                 fresh = true;
                 let received = timing.command_event_ns.max(cmd.stamp_ns);
@@ -295,8 +369,24 @@ impl RobotLink {
                 let bin = ((latency / 1000) as usize).min(LATENCY_BINS - 1);
                 self.stats.latency_hist[bin] = self.stats.latency_hist[bin].saturating_add(1);
                 self.stats.latency_max_ns = self.stats.latency_max_ns.max(latency);
+                let c = &mut self.commanders;
+                c.periods[slot] += 1;
+                if slot != primary {
+                    self.last.in_charge = slot;
+                    c.in_charge = slot as u32;
+                    // from a running loop: a takeover (from the brakes: a start)
+                    if !self.last.brake {
+                        takeover = true;
+                        let diff = largest_difference(&cmd.tau[..n], &self.last.tau[..n]);
+                        c.takeovers += 1;
+                        c.last_takeover_state_stamp_ns = cmd.state_stamp_ns;
+                        c.last_takeover_state_seq = state_seq;
+                        c.last_takeover_to = slot as u32;
+                        c.last_takeover_diff_nm = diff;
+                        c.max_takeover_diff_nm = c.max_takeover_diff_nm.max(diff);
+                    }
+                }
             }
-            // a late answer to an older state is still the newest torque: reuse it
             self.last.tau[..n].copy_from_slice(&cmd.tau[..n]);
             self.last.command_seq = cmd.seq;
         }
@@ -334,7 +424,13 @@ impl RobotLink {
                 robot_status::COMMAND_FRESH
             } else {
                 0
+            }
+            | if out.in_charge == 1 {
+                robot_status::STANDBY_IN_CHARGE
+            } else {
+                0
             };
+        out.takeover = takeover;
         out.missed = self.consecutive_missed;
         out.brake_engaged = brake_engaged;
         out.miss_run = miss_run;
@@ -357,6 +453,19 @@ impl RobotLink {
         self.stats.seq += 1;
         self.stats.stamp_ns = stamp_ns;
         &self.stats
+    }
+
+    /// Which controller commanded, as the next `robot/commanders` message,
+    /// stamped `stamp_ns`.
+    pub fn commanders_message(&mut self, stamp_ns: u64) -> &CommanderStats {
+        self.commanders.seq += 1;
+        self.commanders.stamp_ns = stamp_ns;
+        &self.commanders
+    }
+
+    /// The command slots' figures so far.
+    pub fn commanders(&self) -> &CommanderStats {
+        &self.commanders
     }
 
     /// End the run of missed deadlines in progress, if any (at shutdown):

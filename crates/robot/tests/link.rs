@@ -315,3 +315,90 @@ fn a_link_needs_joints_and_a_period() {
     assert!(RobotLink::new(13, PERIOD_NS).is_err());
     assert_eq!(RobotLink::new(7, 0).unwrap_err(), LinkError::Period);
 }
+
+/// One cycle for state `seq` with each slot's newest command.
+fn cycle2(
+    link: &mut RobotLink,
+    primary: Option<&TorqueCommand>,
+    standby: Option<&TorqueCommand>,
+    seq: u64,
+) -> LinkOutput {
+    link.cycle_slots([primary, standby], seq, &timing(seq))
+}
+
+#[test]
+fn the_standby_answers_in_the_same_period_the_primary_misses_and_takes_charge() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    // both answer: the primary's torque is applied, the standby's is compared
+    for seq in 1..=10 {
+        let a = command(seq, seq, 0, 1.0);
+        let b = command(seq + 1000, seq, 0, 1.25);
+        let out = cycle2(&mut link, Some(&a), Some(&b), seq);
+        assert!(out.fresh && out.in_charge == 0 && !out.takeover);
+        assert_eq!(out.torque(), &[1.0; DOF]);
+        assert_eq!(out.status & robot_status::STANDBY_IN_CHARGE, 0);
+    }
+    assert_eq!(link.commanders().both_answered, 10);
+    assert_eq!(link.commanders().max_answer_diff_nm, 0.25);
+    // the primary dies: its last command answers state 10 only
+    let dead = command(10, 10, 0, 1.0);
+    for seq in 11..=40 {
+        let b = command(seq + 1000, seq, 0, 1.5);
+        let out = cycle2(&mut link, Some(&dead), Some(&b), seq);
+        assert!(out.fresh, "state {seq}: the standby's answer is fresh");
+        assert!(!out.brake && out.missed == 0);
+        assert_eq!(out.torque(), &[1.5; DOF]);
+        assert_eq!(out.in_charge, 1);
+        assert_eq!(out.takeover, seq == 11, "one takeover, at the first miss");
+        assert_ne!(out.status & robot_status::STANDBY_IN_CHARGE, 0);
+    }
+    let c = *link.commanders();
+    assert_eq!(
+        link.stats().missed_deadlines,
+        0,
+        "a takeover misses nothing"
+    );
+    assert_eq!((c.takeovers, c.in_charge, c.last_takeover_to), (1, 1, 1));
+    assert_eq!(c.last_takeover_state_seq, 11);
+    assert_eq!(c.last_takeover_diff_nm, 0.5);
+    assert_eq!(c.periods, [10, 30]);
+    // the old primary comes back (re-synced) as the standby: the new primary
+    // keeps charge while it answers
+    for seq in 41..=50 {
+        let a = command(seq, seq, 0, 1.0);
+        let b = command(seq + 1000, seq, 0, 1.5);
+        let out = cycle2(&mut link, Some(&a), Some(&b), seq);
+        assert_eq!((out.in_charge, out.torque()), (1, &[1.5; DOF][..]));
+    }
+    assert_eq!(link.commanders().takeovers, 1);
+}
+
+#[test]
+fn a_late_primary_is_replaced_and_a_late_standby_changes_nothing() {
+    let mut link = established();
+    // the standby is late (answers an older state): the primary commands
+    let old = command(900, 1, 0, 9.0);
+    let out = cycle2(&mut link, Some(&command(2, 2, 0, 2.0)), Some(&old), 2);
+    assert_eq!((out.in_charge, out.torque()), (0, &[2.0; DOF][..]));
+    assert_eq!(link.commanders().both_answered, 0);
+    // the primary is late too: a missed deadline, the primary's newest reused
+    let out = cycle2(&mut link, Some(&command(2, 2, 0, 2.0)), Some(&old), 3);
+    assert!(!out.fresh && out.in_charge == 0);
+    assert_eq!(link.stats().missed_deadlines, 1);
+}
+
+#[test]
+fn both_controllers_dead_still_brake_and_whichever_answers_first_resumes() {
+    let mut link = established();
+    for seq in 2..=(2 + MAX_MISSED as u64) {
+        let out = cycle2(&mut link, None, None, seq);
+        assert_eq!(out.brake, seq == 2 + MAX_MISSED as u64);
+    }
+    assert_eq!(link.stats().brake_events, 1);
+    // the standby's restarted process answers first: it takes charge from
+    // the brakes, which is a start, not a takeover
+    let seq = 3 + MAX_MISSED as u64;
+    let out = cycle2(&mut link, None, Some(&command(5, seq, 0, 3.0)), seq);
+    assert!(out.fresh && !out.brake && out.in_charge == 1 && !out.takeover);
+    assert_eq!(link.commanders().takeovers, 0);
+}

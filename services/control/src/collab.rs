@@ -22,6 +22,8 @@
 use phri_config::CollaborationConfig;
 use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
 
+use crate::snapshot::snapshot_fields;
+
 /// Least time in contact before the hand counts as moved away \[s\]: a
 /// contact is a touch, not one noisy sample.
 const MIN_CONTACT_S: f64 = 0.3;
@@ -104,6 +106,32 @@ pub struct CollabMachine {
     /// a `stop` request asked for a protective stop
     stop_requested: bool,
 }
+
+snapshot_fields!(Answer { accepted, reason });
+
+impl Default for Answer {
+    fn default() -> Answer {
+        Answer {
+            accepted: false,
+            reason: CollabReason::None,
+        }
+    }
+}
+
+// the configuration is not state
+snapshot_fields!(CollabMachine {
+    phase,
+    reason,
+    part,
+    last_part,
+    person,
+    hand_seen_t,
+    since,
+    apart_since,
+    touch_gap,
+    follow_touch_gap,
+    stop_requested
+});
 
 impl CollabMachine {
     pub fn new(cfg: &CollaborationConfig) -> CollabMachine {

@@ -22,6 +22,7 @@ use crate::modes::{self, protective_stop, recover, sync, Behaviour, CartesianRef
 use crate::reference::{JointReference, TrackingGains};
 use crate::resolve::{Faults, Resolver};
 use crate::safety::{Safety, SafetyMonitor};
+use crate::snapshot::{self, snapshot_fields, Layout, Reader, Snapshot, SnapshotError, Writer};
 use crate::terms::DynamicsTerms;
 
 /// Cut-off of the controller's velocity estimate from positions \[Hz\].
@@ -72,6 +73,15 @@ pub struct ControlCounters {
     pub avoidance_errors: u64,
 }
 
+snapshot_fields!(ControlCounters {
+    waypoints_reached,
+    detections,
+    protective_stops,
+    resumes,
+    model_errors,
+    avoidance_errors
+});
+
 /// The torque-loop controller. `step` is pure and allocation-free.
 pub struct Controller {
     model: Model,
@@ -85,6 +95,9 @@ pub struct Controller {
     /// null-space posture \[rad\] (empty until the first start: the measured one)
     posture: Vec<f64>,
     velocity: VelocityEstimator,
+    /// the joint positions of the last state stepped \[rad\] (the velocity
+    /// estimate's, for [`Controller::save_behaviour`])
+    q_last: Vec<f64>,
     terms: DynamicsTerms,
     safety: SafetyMonitor,
     resolver: Resolver,
@@ -172,6 +185,7 @@ impl Controller {
                 p
             },
             velocity: VelocityEstimator::new(n, VELOCITY_CUTOFF_HZ),
+            q_last: vec![0.0; n],
             terms: DynamicsTerms::new(n),
             safety: SafetyMonitor::default(),
             resolver: Resolver::new(&model, ee_frame, &cfg),
@@ -252,6 +266,7 @@ impl Controller {
             return self.refuse_state();
         }
         let dt = self.advance_clock(input.state_stamp_ns);
+        self.q_last.copy_from_slice(q);
         let mut qd = [0.0; MAX_DOF];
         qd[..n].copy_from_slice(self.velocity.update(q, dt));
         let qd = &qd[..n];
@@ -295,6 +310,168 @@ impl Controller {
             mode: self.mode,
             limits,
         }
+    }
+
+    /// The behaviour state after the last step, written into `buf` (room:
+    /// [`snapshot::BEHAVIOUR_BYTES`] holds the default configurations'):
+    /// the bytes written. Allocates nothing. What it holds and leaves out:
+    /// [`snapshot`].
+    pub fn save_behaviour(&self, buf: &mut [u8]) -> Result<usize, SnapshotError> {
+        let layout = self.behaviour_layout();
+        let have = buf.len();
+        let mut w = Writer::new(buf);
+        snapshot::write_header(&mut w, &layout);
+        self.save_state(&mut w);
+        debug_assert_eq!(w.len(), layout.bytes);
+        match w.overflowed() {
+            true => Err(SnapshotError::BufferTooSmall {
+                need: w.len(),
+                have,
+            }),
+            false => Ok(w.len()),
+        }
+    }
+
+    /// Adopt a peer's behaviour state (saved by a controller of the same
+    /// configuration after its step of the previous state, whether this one
+    /// stepped that state or missed it; bytes after the snapshot's length
+    /// are ignored). A snapshot of
+    /// another robot or configuration, a truncated or malformed one is
+    /// refused, and on any error `self` is left unchanged: the header and
+    /// length are checked, then a dry run reads and validates all of it,
+    /// then it is loaded. Allocates nothing.
+    pub fn adopt_behaviour(&mut self, bytes: &[u8]) -> Result<(), SnapshotError> {
+        let body = snapshot::check_header(bytes, &self.behaviour_layout())?;
+        snapshot::load_checked(self, body, Controller::load_state)
+    }
+
+    /// The snapshot's layout for this configuration: its length (a counting
+    /// pass) and a fingerprint of the sizes the configuration sets.
+    fn behaviour_layout(&self) -> Layout {
+        let mut count = Writer::new(&mut []);
+        let blank = Layout {
+            dof: 0,
+            bytes: 0,
+            fingerprint: 0,
+        };
+        snapshot::write_header(&mut count, &blank);
+        self.save_state(&mut count);
+        let bytes = count.len();
+        let sizes = [
+            self.n as u64,
+            self.resolver.control_points() as u64,
+            u64::from(self.resolver.ssm_enabled()),
+            u64::from(self.collab.is_some()),
+            self.task.waypoints() as u64,
+            self.history.capacity() as u64,
+            bytes as u64,
+        ];
+        Layout {
+            dof: self.n as u32,
+            bytes,
+            fingerprint: snapshot::fingerprint(&sizes),
+        }
+    }
+
+    /// The behaviour state, in the order [`Controller::load_state`] reads it.
+    fn save_state(&self, w: &mut Writer<'_>) {
+        let n = self.n;
+        self.mode.save(w);
+        self.t.save(w);
+        self.last_stamp.save(w);
+        self.quiet_since.save(w);
+        self.collab_from_segment.save(w);
+        self.hold.save(w);
+        // the posture: empty until the first start, then n joints; n slots always
+        w.u64(self.posture.len() as u64);
+        for i in 0..n {
+            w.f64(self.posture.get(i).copied().unwrap_or(0.0));
+        }
+        self.counters.save(w);
+        // the velocity estimate (primed once a state was stepped: `last_stamp`)
+        snapshot::save_slice(w, self.velocity.velocity());
+        snapshot::save_slice(w, &self.q_last);
+        self.task_x_d.save(w);
+        self.safety.save(w);
+        self.resolver.save(w);
+        self.reference.save(w);
+        // the path history: the count of its entries only
+        w.u64(self.history.available() as u64);
+        self.task.save(w);
+        self.reaction.save(w);
+        w.bool(self.collab.is_some());
+        if let Some(c) = &self.collab {
+            c.save(w);
+        }
+        w.bool(self.restart.is_some());
+        match &self.restart {
+            Some(h) => h.save(w),
+            None => RestartHold::new(0.0, 0.0).save(w),
+        }
+    }
+
+    /// Load what [`Controller::save_state`] wrote (nothing stored on a dry run).
+    fn load_state(&mut self, r: &mut Reader<'_>) {
+        let n = self.n;
+        self.mode.load(r);
+        self.t.load(r);
+        self.last_stamp.load(r);
+        self.quiet_since.load(r);
+        self.collab_from_segment.load(r);
+        self.hold.load(r);
+        let posture_len = r.usize();
+        if posture_len != 0 && posture_len != n {
+            r.fail();
+        }
+        let mut posture = [0.0; MAX_DOF];
+        for p in posture[..n].iter_mut() {
+            *p = r.f64();
+        }
+        if r.applying() {
+            // within the capacity reserved at construction: no allocation
+            self.posture.clear();
+            self.posture.extend_from_slice(&posture[..posture_len]);
+        }
+        self.counters.load(r);
+        let qd = snapshot::load_joints(r, n);
+        let q_last = snapshot::load_joints(r, n);
+        if r.applying() {
+            let primed = self.last_stamp.is_some();
+            snapshot::restore_velocity(&mut self.velocity, &qd[..n], &q_last[..n], primed);
+            self.q_last.copy_from_slice(&q_last[..n]);
+        }
+        self.task_x_d.load(r);
+        self.safety.load(r);
+        self.resolver.load(r);
+        self.reference.load(r);
+        let entries = r.usize();
+        if r.applying() {
+            // the peer's newest entries are (of a standby adopting every
+            // period) this one's newest: keep as many as both hold
+            self.history.keep_newest(entries);
+        }
+        self.task.load(r);
+        self.reaction.load(r);
+        if r.bool() != self.collab.is_some() {
+            r.fail();
+        }
+        if let Some(c) = self.collab.as_mut() {
+            c.load(r);
+        }
+        let restarted = r.bool();
+        let mut hold = match (&self.restart, &self.collab) {
+            (Some(h), _) => h.clone(),
+            (None, Some(c)) => {
+                let cfg = c.machine().config();
+                RestartHold::new(cfg.restart_clear_m, cfg.release_s)
+            }
+            (None, None) => RestartHold::new(0.0, 0.0),
+        };
+        hold.load(r);
+        if restarted && self.collab.is_none() {
+            r.fail();
+        }
+        r.store(&mut self.restart, restarted.then_some(hold));
     }
 
     /// A malformed state (wrong length, not finite): never act on it; hold
@@ -653,6 +830,12 @@ impl Controller {
     /// not, and rejoining approaches).
     pub fn task_segments_ended(&self) -> u64 {
         self.task.segments_ended()
+    }
+
+    /// Entries of the retreat's path history held (one per period of the
+    /// task since its last start, at most its room).
+    pub fn path_history_entries(&self) -> usize {
+        self.history.available()
     }
 
     /// The collaboration layer (`None`: disabled).

@@ -8,7 +8,10 @@ pub struct PathHistory {
     n: usize,
     cap: usize,
     data: Vec<f64>,
-    count: usize,
+    /// the slot the next entry goes to
+    head: usize,
+    /// entries held (at most `cap`), the newest in the slot before `head`
+    len: usize,
 }
 
 impl PathHistory {
@@ -19,7 +22,8 @@ impl PathHistory {
             n,
             cap,
             data: vec![0.0; cap * (n + 1)],
-            count: 0,
+            head: 0,
+            len: 0,
         }
     }
 
@@ -30,19 +34,30 @@ impl PathHistory {
 
     /// Add the newest entry: path time `s` \[s\], reference `q` \[rad\].
     pub fn push(&mut self, s: f64, q: &[f64]) {
-        let at = (self.count % self.cap) * (self.n + 1);
+        let at = self.head * (self.n + 1);
         self.data[at] = s;
         self.data[at + 1..at + 1 + self.n].copy_from_slice(q);
-        self.count += 1;
+        self.head = (self.head + 1) % self.cap;
+        self.len = (self.len + 1).min(self.cap);
     }
 
     /// Entries held.
     pub fn available(&self) -> usize {
-        self.count.min(self.cap)
+        self.len
+    }
+
+    /// Room for this many entries.
+    pub fn capacity(&self) -> usize {
+        self.cap
     }
 
     pub fn clear(&mut self) {
-        self.count = 0;
+        self.len = 0;
+    }
+
+    /// Forget all but the newest `count` entries.
+    pub fn keep_newest(&mut self, count: usize) {
+        self.len = self.len.min(count);
     }
 
     /// The entry `back` entries before the newest (0 = newest; fractional:
@@ -50,14 +65,14 @@ impl PathHistory {
     /// `q` \[rad\], returns the path time \[s\]. `None` (and `q` untouched) when
     /// the history is empty.
     pub fn at(&self, back: f64, q: &mut [f64]) -> Option<f64> {
-        if self.count == 0 {
+        if self.len == 0 {
             return None;
         }
-        let max_back = (self.available().max(1) - 1) as f64;
+        let max_back = (self.len - 1) as f64;
         let back = back.clamp(0.0, max_back);
         let (i0, frac) = (back.floor() as usize, back.fract());
         let i1 = (i0 + 1).min(max_back as usize);
-        let slot = |i: usize| ((self.count - 1 - i) % self.cap) * (self.n + 1);
+        let slot = |i: usize| ((self.head + self.cap - 1 - i) % self.cap) * (self.n + 1);
         let (a, b) = (slot(i0), slot(i1));
         for k in 0..self.n {
             q[k] = self.data[a + 1 + k] * (1.0 - frac) + self.data[b + 1 + k] * frac;
@@ -86,6 +101,30 @@ mod tests {
         assert_eq!(q, [35.0]);
         // clamped to the oldest held (2)
         assert_eq!(h.at(10.0, &mut q), Some(2.0));
+    }
+
+    #[test]
+    fn keeping_the_newest_keeps_the_newest() {
+        let mut h = PathHistory::new(1, 4);
+        let mut q = [0.0];
+        for k in 0..6 {
+            h.push(k as f64, &[10.0 * k as f64]);
+        }
+        h.keep_newest(9);
+        assert_eq!(h.available(), 4);
+        h.keep_newest(2);
+        assert_eq!(h.available(), 2);
+        assert_eq!(h.at(0.0, &mut q), Some(5.0));
+        assert_eq!(h.at(5.0, &mut q), Some(4.0), "the older ones are gone");
+        // the ring goes on from there
+        h.push(6.0, &[60.0]);
+        assert_eq!(
+            (h.available(), h.at(0.0, &mut q), q),
+            (3, Some(6.0), [60.0])
+        );
+        assert_eq!(h.at(2.0, &mut q), Some(4.0));
+        h.keep_newest(0);
+        assert_eq!(h.at(0.0, &mut q), None);
     }
 
     #[test]

@@ -442,6 +442,12 @@ impl InputGate {
         self.owners.admit(Owned::ROBOT_STATE, pid).accepted()
     }
 
+    /// The other controller's behaviour state from `pid` (`control/behaviour`
+    /// or `control/standby/behaviour`): a controller the supervisor started.
+    pub fn behaviour(&self, pid: i32) -> bool {
+        self.owners.admit(Owned::CONTROL_BEHAVIOUR, pid).accepted()
+    }
+
     /// Refuse `stamp_ns` on `channel` when from the future or older than
     /// `max_age_ns` against `now_ns` (robot clock), counting it.
     fn timely(

@@ -22,6 +22,8 @@
 //!
 //! [`inputs`] and [`outputs`] are the one conversion between the cell's
 //! messages and the step, for `main.rs` and the lock-step cell.
+//! [`snapshot`] carries the behaviour state from one controller to another
+//! (a hot standby adopting the primary's every period).
 
 pub mod avoidance;
 pub mod body_task;
@@ -38,8 +40,10 @@ pub mod path;
 pub mod reference;
 pub mod resolve;
 pub mod safety;
+pub mod snapshot;
 pub mod sns;
 pub mod ssm;
+pub mod standby;
 pub mod terms;
 
 pub use controller::{ControlCounters, ControlOutput, Controller, ControllerParams};
@@ -50,3 +54,4 @@ pub use inputs::{
 pub use outputs::{write_collab_state, write_messages, write_ssm_status, Stamps};
 pub use phri_config::{AvoidanceParams, ControlConfig};
 pub use phri_ipc::{ControlMode, Reaction};
+pub use snapshot::{SnapshotError, BEHAVIOUR_BYTES};

@@ -10,28 +10,54 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
+use phri_control::standby::{fresher_residual, BehaviourInbox, Duty, Slot, Standby};
 use phri_control::{
     write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, Controller,
     InputGate, RepulsionInputs, Stamps,
 };
 use phri_ipc::{
-    CollabState, ControlStatus, HriRequest, Queue, SsmStatus, TorqueCommand, Zeroed, COLLAB_STATE,
-    CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, ROBOT_COMMAND, ROBOT_STATE,
+    CollabState, ControlBehaviour, ControlStatus, HriRequest, Queue, SsmStatus, TorqueCommand,
+    Zeroed, COLLAB_STATE, CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR,
+    CONTROL_STATUS, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE,
 };
 
 /// Requests handled per period at most (more wait for the next one).
 const MAX_REQUESTS: usize = 8;
 use phri_runtime::{now_ns, ServiceContext};
 
-/// A refused input, for the log: the error and how many so far.
-struct Refused {
-    error: phri_control::InputError,
-    count: u64,
+/// The controller's own flag.
+#[derive(clap::Args, Debug)]
+struct StandbyFlag {
+    /// Run as the hot standby: answer on robot/command/standby, adopting the
+    /// behaviour of the controller in charge every period ([control] standby)
+    #[arg(long)]
+    standby: bool,
 }
 
-impl std::fmt::Display for Refused {
+/// What the 1 kHz loop logs, through a thread at normal priority.
+enum Note {
+    /// a refused input: the error and how many so far
+    Refused {
+        error: phri_control::InputError,
+        count: u64,
+    },
+    /// a peer's behaviour state refused: the error and how many so far
+    Behaviour {
+        error: phri_control::SnapshotError,
+        count: u64,
+    },
+}
+
+impl std::fmt::Display for Note {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} ({} inputs refused)", self.error, self.count)
+        match self {
+            Note::Refused { error, count } => write!(f, "{error} ({count} inputs refused)"),
+            Note::Behaviour { error, count } => write!(
+                f,
+                "the other controller's behaviour state refused: {error} ({count} so far)"
+            ),
+        }
     }
 }
 
@@ -40,7 +66,7 @@ fn main() -> ExitCode {
 }
 
 fn body() -> Result<(), Box<dyn std::error::Error>> {
-    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+    let (ctx, StandbyFlag { standby }) = ServiceContext::from_cli(
         "phri-control",
         "control",
         "The reaction controller: answers every robot/state with the only robot/command (avoidance, detection and reaction, collaboration)",
@@ -49,6 +75,18 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let model = ctx.robot_model()?;
     let n = model.nv();
     let mut controller = Controller::from_config(model, cfg)?;
+    let slot = if standby { Slot::Standby } else { Slot::First };
+    // one controller alone is always in charge
+    let with_standby = cfg.control.standby || standby;
+    let mut role = Standby::new(slot);
+    let (command_channel, own_behaviour, peer_behaviour) = match slot {
+        Slot::First => (ROBOT_COMMAND, CONTROL_BEHAVIOUR, CONTROL_STANDBY_BEHAVIOUR),
+        Slot::Standby => (
+            ROBOT_COMMAND_STANDBY,
+            CONTROL_STANDBY_BEHAVIOUR,
+            CONTROL_BEHAVIOUR,
+        ),
+    };
     // every camera's results, fused point by point (phri_control::inputs)
     let mut repulsion = RepulsionInputs::for_cell(cfg);
     let avoidance = cfg.control.avoidance;
@@ -63,8 +101,17 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let node = ctx.node()?;
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Latest)?;
     let mut residuals = DYNAMICS_RESIDUAL.latest_reader(&node)?;
-    // a second controller fails here: the command channel accepts exactly one publisher
-    let commands = ROBOT_COMMAND.publisher(&node)?;
+    // the hot standby's residual: the fresher of the two is acted on
+    let mut standby_residuals = match with_standby {
+        true => Some(DYNAMICS_RESIDUAL_STANDBY.latest_reader(&node)?),
+        false => None,
+    };
+    // a second controller of this slot fails here: the command channel accepts exactly one publisher
+    let commands = command_channel.publisher(&node)?;
+    let behaviour_pub = own_behaviour.publisher(&node)?;
+    let behaviour_sub = peer_behaviour.subscriber(&node, Queue::Drain)?;
+    let mut inbox = BehaviourInbox::default();
+    let mut behaviour = Box::new(ControlBehaviour::zeroed());
     let status_pub = CONTROL_STATUS.publisher(&node)?;
     let results = phri_ipc::cameras(repulsion.cameras())
         .iter()
@@ -91,8 +138,9 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let gate = InputGate::new(ctx.watch_inputs(), &cfg.control, &cfg.repulsion);
     ctx.start_deadman()?;
     // refused inputs are logged by a thread at normal priority
-    let log = ctx.deferred_log::<Refused>();
+    let log = ctx.deferred_log::<Note>();
     let mut refused = 0u64;
+    let mut behaviour_refused = 0u64;
     ctx.go_realtime();
 
     let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
@@ -116,6 +164,13 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         let now = state.stamp_ns;
         // the newest residual of this robot's dof; an older one stays until then
         residuals.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
+        if let Some(s) = standby_residuals.as_mut() {
+            s.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
+        }
+        let residual = fresher_residual(
+            residuals.get(),
+            standby_residuals.as_ref().and_then(|s| s.get()),
+        );
         // refused results are counted by the accumulator (perception then turns stale)
         for (camera, results) in results.iter().enumerate() {
             results.drain_from(|pid, r| {
@@ -126,12 +181,12 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         }
         repulsion.fuse(now);
         let perception = avoidance.then_some(&repulsion);
-        let mut input = match ControlInput::from_messages(&state, residuals.get(), perception, n) {
+        let mut input = match ControlInput::from_messages(&state, residual, perception, n) {
             Ok(input) => input,
             Err(e) => {
                 refused += 1;
                 if refused.is_power_of_two() {
-                    log.post(Refused {
+                    log.post(Note::Refused {
                         error: e,
                         count: refused,
                     });
@@ -171,19 +226,72 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 hand,
             };
         }
+        // the hot standby: the behaviour the one in charge left after the state before
+        if with_standby {
+            behaviour_sub.drain_from(|pid, b| {
+                if gate.behaviour(pid) {
+                    inbox.push(b);
+                }
+            })?;
+            let before = state.seq.saturating_sub(1);
+            if let Some(b) = inbox
+                .after_state(before)
+                .filter(|_| role.should_adopt(&state, before))
+            {
+                let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
+                match controller.adopt_behaviour(bytes) {
+                    Ok(()) => {
+                        role.adopted(&state);
+                        // one numbering of the messages, whoever is in charge
+                        seq = b.seq;
+                    }
+                    Err(error) => {
+                        behaviour_refused += 1;
+                        if behaviour_refused.is_power_of_two() {
+                            log.post(Note::Behaviour {
+                                error,
+                                count: behaviour_refused,
+                            });
+                        }
+                    }
+                }
+            }
+        }
         controller.step(&input);
         seq += 1;
         let stamps = Stamps {
             woke_ns,
             done_ns: now_ns(),
         };
+        let duty = match with_standby {
+            true => role.duty(&state),
+            false => Duty {
+                in_charge: true,
+                command: true,
+            },
+        };
         write_messages(&controller, &state, seq, stamps, &mut cmd, &mut status);
-        commands.publish(&cmd)?;
+        if duty.command {
+            commands.publish(&cmd)?;
+        }
+        if !duty.in_charge {
+            continue;
+        }
         status_pub.publish(&status)?;
         write_collab_state(&controller, &state, seq, now_ns(), &mut collab_state);
         collab_pub.publish(&collab_state)?;
         write_ssm_status(&controller, &state, seq, now_ns(), &mut ssm_status);
         ssm_pub.publish(&ssm_status)?;
+        if with_standby {
+            if let Ok(len) = controller.save_behaviour(&mut behaviour.bytes) {
+                behaviour.seq = seq;
+                behaviour.stamp_ns = now_ns();
+                behaviour.state_seq = state.seq;
+                behaviour.state_stamp_ns = state.stamp_ns;
+                behaviour.len = len as u32;
+                behaviour_pub.publish(&behaviour)?;
+            }
+        }
     }
     Ok(())
 }

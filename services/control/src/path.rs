@@ -4,6 +4,8 @@
 
 use nalgebra::Vector3;
 
+use crate::snapshot::snapshot_fields;
+
 /// Minimum-jerk blend `p(u) = 10u³ − 15u⁴ + 6u⁵` and its derivative, u ∈ [0, 1].
 #[inline]
 pub fn min_jerk(u: f64) -> (f64, f64) {
@@ -66,13 +68,20 @@ fn unit(v: Vector3<f64>) -> Vector3<f64> {
 }
 
 /// A straight minimum-jerk move of the end effector from `from` to `to`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Approach {
     pub from: Vector3<f64>,
     pub to: Vector3<f64>,
     pub duration: f64,
     pub t: f64,
 }
+
+snapshot_fields!(Approach {
+    from,
+    to,
+    duration,
+    t
+});
 
 impl Approach {
     pub fn new(from: Vector3<f64>, to: Vector3<f64>, speed: f64) -> Approach {

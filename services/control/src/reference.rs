@@ -4,6 +4,8 @@
 
 use nalgebra::Vector3;
 
+use crate::snapshot::snapshot_fields;
+
 /// Gains of the computed-torque tracking (`[control] kp`, `kd`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackingGains {
@@ -27,6 +29,14 @@ pub struct JointReference {
     /// end-effector position held while recovering \[m\], base frame
     pub x_hold: Vector3<f64>,
 }
+
+snapshot_fields!(JointReference {
+    q_ref,
+    qd_ref,
+    qd_ref_prev,
+    q_hold,
+    x_hold
+});
 
 impl JointReference {
     pub fn new(n: usize) -> JointReference {

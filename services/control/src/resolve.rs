@@ -17,6 +17,7 @@ use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
 use crate::reference::JointReference;
+use crate::snapshot::{snapshot_fields, Reader, Snapshot, Writer};
 use crate::ssm::SsmMonitor;
 
 /// A point whose allowed approach is above this needs no bound [m/s] (no
@@ -72,6 +73,55 @@ impl Default for SsmPeriod {
             human_speed_m_s: 0.0,
             reaction_s: f64::NAN,
         }
+    }
+}
+
+snapshot_fields!(SsmCounters {
+    limited_periods,
+    violation_periods,
+    violations
+});
+
+snapshot_fields!(SsmPeriod {
+    limiting,
+    violating,
+    stopping,
+    min_margin_m,
+    human_speed_m_s,
+    reaction_s
+});
+
+/// What the resolver carries from one period to the next: per control
+/// point the filtered repulsion and the behind-the-hand hysteresis, the
+/// task scale, and speed and separation monitoring (the monitor, when
+/// configured, after a byte saying it is). CLIK, SNS, the body task and
+/// the Jacobians keep nothing between periods.
+impl Snapshot for Resolver {
+    fn save(&self, w: &mut Writer<'_>) {
+        self.v_call_filtered.save(w);
+        self.behind_before.save(w);
+        self.task_scale.save(w);
+        w.bool(self.ssm.is_some());
+        if let Some(m) = &self.ssm {
+            m.save(w);
+        }
+        self.ssm_counters.save(w);
+        self.ssm_period.save(w);
+        self.ssm_was_violating.save(w);
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        self.v_call_filtered.load(r);
+        self.behind_before.load(r);
+        self.task_scale.load(r);
+        if r.bool() != self.ssm.is_some() {
+            r.fail();
+        }
+        if let Some(m) = self.ssm.as_mut() {
+            m.load(r);
+        }
+        self.ssm_counters.load(r);
+        self.ssm_period.load(r);
+        self.ssm_was_violating.load(r);
     }
 }
 
@@ -187,6 +237,11 @@ impl Resolver {
     /// Speed and separation monitoring is configured.
     pub fn ssm_enabled(&self) -> bool {
         self.ssm.is_some()
+    }
+
+    /// The number of control points.
+    pub fn control_points(&self) -> usize {
+        self.points.len()
     }
 
     /// Position of the end effector at `q` \[m\], base frame.

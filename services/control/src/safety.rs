@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 use phri_config::ControlConfig;
 
 use crate::inputs::ControlInput;
+use crate::snapshot::snapshot_fields;
 
 /// The safety inputs of one period, judged.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -43,6 +44,13 @@ pub struct SafetyMonitor {
     /// largest risk `‖V_Call‖/V_max` over the control points in the last period
     pub risk: f64,
 }
+
+snapshot_fields!(SafetyMonitor {
+    residual_age_ns,
+    perception_age_ns,
+    last_min_distance,
+    risk
+});
 
 impl Default for SafetyMonitor {
     fn default() -> Self {

@@ -17,6 +17,7 @@ use phri_config::{HumanSpeed, SsmConfig};
 use phri_iso15066::{protective_separation_distance, SsmTerms};
 
 use crate::inputs::PerceptionView;
+use crate::snapshot::snapshot_fields;
 
 /// A measured approach above this is no person's [m/s] (depth's outliers).
 const HUMAN_SPEED_MAX: f64 = 3.0;
@@ -25,7 +26,7 @@ const HUMAN_SPEED_MAX: f64 = 3.0;
 const MAX_FRAME_GAP_S: f64 = 0.2;
 
 /// One control point's last sighting.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Sample {
     capture_ns: u64,
     /// clearance [m]
@@ -47,6 +48,20 @@ pub struct SsmMonitor {
     /// capture time of the last frame observed [ns]
     frame_ns: u64,
 }
+
+snapshot_fields!(Sample {
+    capture_ns,
+    d,
+    position
+});
+
+// per control point (lengths fixed by the configuration), and the last frame
+snapshot_fields!(SsmMonitor {
+    last,
+    v_h,
+    inside_s,
+    frame_ns
+});
 
 impl SsmMonitor {
     /// For `points` control points.

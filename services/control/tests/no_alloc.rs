@@ -1,6 +1,8 @@
 //! The 1 kHz path allocates nothing: `Controller::step` in every mode (with
 //! avoidance and perception), the repulsion accumulator and the message
-//! writer, on an exact-model arm with the residual observer in the loop.
+//! writer, on an exact-model arm with the residual observer in the loop;
+//! and a hot standby's: its step, the primary's `save_behaviour`, its
+//! `adopt_behaviour` (refusals included).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -10,7 +12,7 @@ use nalgebra::Vector3;
 use phri_config::{Config, PerJoint, ResidualConfig};
 use phri_control::{
     write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, ControlMode,
-    Controller, Reaction, RepulsionInputs, ResidualView, Stamps,
+    Controller, Reaction, RepulsionInputs, ResidualView, Stamps, BEHAVIOUR_BYTES,
 };
 use phri_estimation::ResidualObserver;
 use phri_ipc::{
@@ -65,6 +67,11 @@ fn the_control_period_allocates_nothing_in_any_mode() {
         cfg.control.posture.clear(); // taken from the arm at the first start
         let model = cfg_model(&cfg);
         let mut ctl = Controller::from_config(model.clone(), &cfg).unwrap();
+        // a hot standby from 1 s on: it steps the same states and adopts the
+        // primary's behaviour after each step (commanding what it does)
+        let mut standby = Controller::from_config(model.clone(), &cfg).unwrap();
+        let mut snapshot = [0u8; BEHAVIOUR_BYTES];
+        let standby_from = 1000;
         let rcfg = ResidualConfig {
             viscous_friction: PerJoint::All(0.0),
             coulomb_friction: PerJoint::All(0.0),
@@ -191,6 +198,14 @@ fn the_control_period_allocates_nothing_in_any_mode() {
                 };
             }
             let mode = ctl.step(&input).mode;
+            if k >= standby_from {
+                let out = standby.step(&input);
+                let same = out.tau == ctl.tau() && out.mode == mode;
+                assert!(same || k == standby_from, "{reaction}: the standby at {k}");
+                let len = ctl.save_behaviour(&mut snapshot).unwrap();
+                assert!(standby.adopt_behaviour(&snapshot[..len - 1]).is_err());
+                standby.adopt_behaviour(&snapshot[..len]).unwrap();
+            }
             let stamps = Stamps {
                 woke_ns: stamp,
                 done_ns: stamp + 1,
@@ -203,7 +218,10 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             tau.copy_from_slice(&cmd.tau[..7]);
             modes.insert(mode as u32);
         }
-        assert_eq!(step_allocs, 0, "{reaction}: the control period allocated");
+        assert_eq!(
+            step_allocs, 0,
+            "{reaction}: the control period (or the standby's) allocated"
+        );
         let visited: Vec<&str> = modes.iter().map(|m| ControlMode::name_of(*m)).collect();
         for m in [
             "sync",

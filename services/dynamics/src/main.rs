@@ -1,12 +1,14 @@
 //! `phri-dynamics`: wakes on `robot/state`, steps [`DynamicsStep`] over every
-//! queued state and publishes the last residual on `dynamics/residual`.
+//! queued state and publishes the last residual on `dynamics/residual`
+//! (`--standby`: on `dynamics/residual/standby`, the hot standby's; the
+//! controller takes the fresher of the two).
 
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_dynamics::DynamicsStep;
-use phri_ipc::{Queue, DYNAMICS_RESIDUAL, ROBOT_STATE};
+use phri_ipc::{Queue, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, ROBOT_STATE};
 use phri_runtime::{now_ns, ServiceContext};
 
 /// A refused `robot/state` sample, for the log: the error and how many so far.
@@ -25,12 +27,20 @@ impl std::fmt::Display for BadSample {
     }
 }
 
+/// The service's own flag.
+#[derive(clap::Args, Debug)]
+struct StandbyFlag {
+    /// Run as the hot standby: publish on dynamics/residual/standby ([control] standby)
+    #[arg(long)]
+    standby: bool,
+}
+
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-dynamics", body)
 }
 
 fn body() -> Result<(), Box<dyn Error>> {
-    let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
+    let (ctx, StandbyFlag { standby }) = ServiceContext::from_cli(
         "phri-dynamics",
         "dynamics",
         "The momentum residual of robot/state (collision detection, eqs. 4-8) on dynamics/residual",
@@ -41,7 +51,11 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     let node = ctx.node()?;
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
-    let residuals = DYNAMICS_RESIDUAL.publisher(&node)?;
+    let channel = match standby {
+        false => DYNAMICS_RESIDUAL,
+        true => DYNAMICS_RESIDUAL_STANDBY,
+    };
+    let residuals = channel.publisher(&node)?;
     // states only from the robot the supervisor started (counted on audit/inputs)
     let owners = ctx.watch_inputs();
     ctx.start_deadman()?;

@@ -90,6 +90,11 @@ impl FciCycle {
         self.link.stats_message(stamp_ns)
     }
 
+    /// `robot/commanders` now (`stamp_ns` on this machine's clock).
+    pub fn commanders_message(&mut self, stamp_ns: u64) -> &phri_ipc::CommanderStats {
+        self.link.commanders_message(stamp_ns)
+    }
+
     /// Gravity `g(q)` of the model \[Nm\].
     pub fn gravity(&mut self, q: &[f64; JOINTS]) -> Result<[f64; JOINTS], CycleError> {
         let g = phri_model::gravity(&self.model, &mut self.data, q)?;
@@ -128,7 +133,19 @@ impl FciCycle {
         timing: &CycleTiming,
         q: &[f64; JOINTS],
     ) -> Result<(LinkOutput, FciTorque), CycleError> {
-        let out = self.link.cycle(newest, state_seq, timing);
+        self.step_slots([newest, None], state_seq, timing, q)
+    }
+
+    /// [`FciCycle::step`] with a hot standby: `newest[s]` is command slot
+    /// `s`'s newest command (`RobotLink::cycle_slots`).
+    pub fn step_slots(
+        &mut self,
+        newest: [Option<&TorqueCommand>; phri_robot::SLOTS],
+        state_seq: u64,
+        timing: &CycleTiming,
+        q: &[f64; JOINTS],
+    ) -> Result<(LinkOutput, FciTorque), CycleError> {
+        let out = self.link.cycle_slots(newest, state_seq, timing);
         let g = self.gravity(q)?;
         let mut tau = [0.0; JOINTS];
         for k in 0..JOINTS {

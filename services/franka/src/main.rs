@@ -14,7 +14,7 @@ use std::process::ExitCode;
 use phri_franka::{fill_state, first_difference, BoxError, BoxLog, BoxTorques, FciCycle, JOINTS};
 use phri_ipc::{
     BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
-    ROBOT_STATE, ROBOT_STATS,
+    ROBOT_COMMANDERS, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS,
 };
 use phri_robot::{CycleTiming, LinkOutput, RobotLink, GRACE_POLL_NS};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
@@ -176,6 +176,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     let state_pub = ROBOT_STATE.publisher(&node)?;
     let stats_pub = ROBOT_STATS.publisher(&node)?;
     let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
+    // the hot standby's (slot 1): applied when the controller in charge misses
+    let standby = ROBOT_COMMAND_STANDBY.subscriber(&node, Queue::Latest)?;
+    let commanders_pub = ROBOT_COMMANDERS.publisher(&node)?;
     let mut boxed = BoxChannel {
         log: BoxLog::default(),
         publisher: ROBOT_BOX.publisher(&node)?,
@@ -207,13 +210,15 @@ fn body() -> Result<(), Box<dyn Error>> {
             &mut state,
         );
         state_pub.publish(&state)?;
-        let mut newest: Option<TorqueCommand> = commands.latest()?;
-        while !newest.as_ref().is_some_and(|c| RobotLink::answers(c, seq))
+        let mut newest: [Option<TorqueCommand>; 2] = [commands.latest()?, standby.latest()?];
+        while !newest.iter().flatten().any(|c| RobotLink::answers(c, seq))
             && now_ns() < published + ANSWER_BUDGET_NS
         {
             sleep_until_ns(now_ns() + GRACE_POLL_NS);
-            if let Some(c) = commands.latest()? {
-                newest = Some(c);
+            for (slot, sub) in newest.iter_mut().zip([&commands, &standby]) {
+                if let Some(c) = sub.latest()? {
+                    *slot = Some(c);
+                }
             }
         }
         let timing = CycleTiming {
@@ -222,9 +227,12 @@ fn body() -> Result<(), Box<dyn Error>> {
             now_ns: now_ns(),
             behind_schedule_ns: 0,
         };
-        let decided = cycle.step(newest.as_ref(), seq, &timing, q)?;
+        let decided = cycle.step_slots(newest.each_ref().map(Option::as_ref), seq, &timing, q)?;
         if decided.0.publish_stats {
             stats_pub.publish(cycle.stats_message(now_ns()))?;
+        }
+        if decided.0.publish_stats || decided.0.takeover {
+            commanders_pub.publish(cycle.commanders_message(now_ns()))?;
         }
         Ok(decided)
     };
@@ -247,6 +255,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
     }
     let _ = stats_pub.publish(cycle.stats_message(now_ns()));
+    let _ = commanders_pub.publish(cycle.commanders_message(now_ns()));
     let _ = boxed.publisher.publish(boxed.log.message(now_ns()));
     Ok(())
 }

@@ -23,8 +23,8 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use phri_ipc::{
-    IpcError, JointState, Queue, Truth, WorldState, Zeroed, ROBOT_COMMAND, ROBOT_STATE,
-    ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
+    IpcError, JointState, Queue, Truth, WorldState, Zeroed, ROBOT_COMMAND, ROBOT_COMMANDERS,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
 };
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
 use phri_sim::link::GRACE_POLL_NS;
@@ -90,6 +90,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     let contacts_pub = SIM_CONTACTS.publisher(&node)?;
     let mut contact_log = ContactLog::new();
     let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
+    // the hot standby's (slot 1): applied when the controller in charge misses
+    let standby = ROBOT_COMMAND_STANDBY.subscriber(&node, Queue::Latest)?;
+    let commanders_pub = ROBOT_COMMANDERS.publisher(&node)?;
     // the arm's positions for a successor, saved by a thread at normal
     // priority (started before this one turns real-time)
     let shared_arm = Arc::new(SharedArm::new(n));
@@ -137,18 +140,21 @@ fn body() -> Result<(), Box<dyn Error>> {
             sleep_until_ns(tick);
             let wake = link.wake(tick, now_ns());
             tick = wake.deadline_ns;
-            let mut newest = commands.latest()?;
-            if let Some(until) = wake.grace_until(newest.as_ref(), seq) {
+            let mut newest = [commands.latest()?, standby.latest()?];
+            if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
                 // the machine stalled us and maybe the controller too: in
                 // simulated time the cycle is not over yet
                 while now_ns() < until {
                     sleep_until_ns(now_ns() + GRACE_POLL_NS);
-                    if let Some(c) = commands.latest()? {
-                        let answered = RobotLink::answers(&c, seq);
-                        newest = Some(c);
-                        if answered {
-                            break;
+                    let mut answered = false;
+                    for (slot, sub) in newest.iter_mut().zip([&commands, &standby]) {
+                        if let Some(c) = sub.latest()? {
+                            answered |= RobotLink::answers(&c, seq);
+                            *slot = Some(c);
                         }
+                    }
+                    if answered {
+                        break;
                     }
                 }
             }
@@ -158,7 +164,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 now_ns: now_ns(),
                 behind_schedule_ns: wake.behind_schedule_ns(),
             };
-            let out = link.cycle(newest.as_ref(), seq, &timing);
+            let out = link.cycle_slots(newest.each_ref().map(Option::as_ref), seq, &timing);
             if let Some(run) = out.miss_run {
                 log.post(LinkEvent::Missed(run));
             }
@@ -171,6 +177,9 @@ fn body() -> Result<(), Box<dyn Error>> {
             if out.publish_stats {
                 stats_pub.publish(link.stats_message(now_ns()))?;
             }
+            if out.publish_stats || out.takeover {
+                commanders_pub.publish(link.commanders_message(now_ns()))?;
+            }
         }
         Ok(())
     };
@@ -180,6 +189,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     }
     // last word on the statistics
     let _ = stats_pub.publish(link.stats_message(now_ns()));
+    let _ = commanders_pub.publish(link.commanders_message(now_ns()));
     ctx.shutdown.request();
     let _ = listener_thread.join();
     if let Some(t) = saver_thread {

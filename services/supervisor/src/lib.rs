@@ -24,6 +24,7 @@ pub mod restart;
 pub mod roster;
 pub mod shm;
 pub mod spec;
+pub mod standby_report;
 pub mod state;
 pub mod verdict;
 

@@ -24,8 +24,8 @@ use std::time::{Duration, Instant};
 
 use phri_ipc::{
     node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
-    COLLAB_STATE, CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND, ROBOT_STATS,
-    SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
+    COLLAB_STATE, CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
 use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
@@ -132,6 +132,10 @@ struct Ports {
     audio: Subscriber<phri_ipc::AudioChunk>,
     audits: Subscriber<phri_ipc::InputAudit>,
     boxes: Subscriber<phri_ipc::BoxStatus>,
+    /// the controllers' commands (their heartbeats) and the adapter's takeovers
+    commands: [Subscriber<phri_ipc::TorqueCommand>; 2],
+    commanders: Subscriber<phri_ipc::CommanderStats>,
+    standby_residual: Subscriber<phri_ipc::Residual>,
 }
 
 impl Ports {
@@ -163,6 +167,12 @@ impl Ports {
             audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
             audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
             boxes: phri_ipc::ROBOT_BOX.subscriber(node, Queue::Drain)?,
+            commands: [
+                ROBOT_COMMAND.subscriber(node, Queue::Drain)?,
+                ROBOT_COMMAND_STANDBY.subscriber(node, Queue::Drain)?,
+            ],
+            commanders: phri_ipc::ROBOT_COMMANDERS.subscriber(node, Queue::Drain)?,
+            standby_residual: phri_ipc::DYNAMICS_RESIDUAL_STANDBY.subscriber(node, Queue::Drain)?,
         })
     }
 }
@@ -628,6 +638,9 @@ fn body() -> Result<(), SupervisorError> {
     let mut watch_errors = 0u64;
     let deadman_ns = (plan.loaded.config.supervisor.deadman_s * 1e9) as u64;
     let mut collab_eval = plan.collab_evaluator(cell_start_ns);
+    let standby = plan.loaded.config.control.standby;
+    let mut standby_eval = phri_supervisor::standby_report::StandbyEvaluator::new(standby);
+    let mut residual_pair = phri_supervisor::standby_report::ResidualPair::new(standby);
     let reaction = plan.reaction().name();
     let mut cell = Cell {
         roster: Roster::new(plan.loaded.config.supervisor.clone(), plan.services.clone()),
@@ -745,6 +758,21 @@ fn body() -> Result<(), SupervisorError> {
             collab_eval.on_state(m);
         })?;
         ports.ssm.drain(|m| eval.on_ssm(m))?;
+        for (channel, commands) in [ROBOT_COMMAND.name, ROBOT_COMMAND_STANDBY.name]
+            .into_iter()
+            .zip(&ports.commands)
+        {
+            if commands.drain(|_| {})? > 0 {
+                roster.heard(channel, now);
+            }
+        }
+        if ports
+            .commanders
+            .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)))?
+            > 0
+        {
+            roster.heard(phri_ipc::ROBOT_COMMANDERS.name, now);
+        }
         let mut resume = false;
         ports.requests.drain(|m| {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
@@ -769,8 +797,19 @@ fn body() -> Result<(), SupervisorError> {
         {
             roster.heard(SIM_TRUTH.name, now);
         }
-        if ports.residual.drain(|m| eval.on_residual(m))? > 0 {
+        if ports.residual.drain(|m| {
+            eval.on_residual(m);
+            residual_pair.on_residual(0, m);
+        })? > 0
+        {
             roster.heard(DYNAMICS_RESIDUAL.name, now);
+        }
+        if ports
+            .standby_residual
+            .drain(|m| residual_pair.on_residual(1, m))?
+            > 0
+        {
+            roster.heard(phri_ipc::DYNAMICS_RESIDUAL_STANDBY.name, now);
         }
         if ports.status.drain(|m| eval.on_status(m, reaction))? > 0 {
             roster.heard(CONTROL_STATUS.name, now);
@@ -831,21 +870,25 @@ fn body() -> Result<(), SupervisorError> {
             next_watch = now + WATCH_NS;
             // a channel that cannot be read now (being removed as its last
             // user exits) is read again at the next watch
-            let intruder = ROBOT_COMMAND
-                .publisher_pids(&node)
-                .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
-                .unwrap_or_default()
-                .into_iter()
-                .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
-            if let Some(pid) = intruder {
+            let mut intruder = None;
+            for channel in [ROBOT_COMMAND, ROBOT_COMMAND_STANDBY] {
+                let pid = channel
+                    .publisher_pids(&node)
+                    .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
+                    .unwrap_or_default()
+                    .into_iter()
+                    .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
+                if let Some(pid) = pid {
+                    intruder.get_or_insert((pid, channel.name));
+                }
+            }
+            if let Some((pid, channel)) = intruder {
                 let who = cmdline_of(pid);
                 tracing::warn!(
-                    "pid {pid} ({who}) publishes on {}, and is not the controller this supervisor started: stopping the cell (the robot first: it brakes)",
-                    ROBOT_COMMAND.name
+                    "pid {pid} ({who}) publishes on {channel}, and is not a controller this supervisor started: stopping the cell (the robot first: it brakes)"
                 );
                 let reason = format!(
-                    "pid {pid} ({who}) published on {} instead of the supervised controller",
-                    ROBOT_COMMAND.name
+                    "pid {pid} ({who}) published on {channel} instead of the supervised controller"
                 );
                 eval.event(now, "intruder", "supervisor", reason.clone());
                 eval.degrade(reason.clone());
@@ -1105,6 +1148,9 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.status.drain(|m| eval.on_status(m, reaction));
     let _ = ports.stats.drain(|m| eval.on_stats(m));
     cell.stop();
+    let _ = ports
+        .commanders
+        .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)));
     // what the services said last (the simulator's contacts as it braked)
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     eval.set_realtime(rt_watch.report());
@@ -1116,6 +1162,8 @@ fn body() -> Result<(), SupervisorError> {
     }
     let mut report = eval.report(end, plan.scenario_name(), services_report);
     report.inputs = inputs;
+    report.control = standby_eval.report();
+    report.dynamics = residual_pair.report();
     report.robot = plan.robot_report();
     box_eval.fill(&mut report);
     (

@@ -205,6 +205,10 @@ pub struct Report {
     /// what the readers of the owned channels refused (strangers, stamps
     /// from the future or past their bound), per reader and channel
     pub inputs: crate::owned::InputsReport,
+    /// the controllers: the hot standby's takeovers
+    pub control: crate::standby_report::ControlReport,
+    /// the residual services: the hot standby's beside the first
+    pub dynamics: crate::standby_report::DynamicsReport,
 }
 
 /// The controller's perception staleness bound until the configuration's
@@ -613,6 +617,11 @@ impl Evaluator {
         if !self.degraded.contains(&r) {
             self.degraded.push(r);
         }
+    }
+
+    /// Seconds since the cell started at `ns` \[ns, CLOCK_MONOTONIC\].
+    pub fn time_s(&self, ns: u64) -> f64 {
+        self.t(ns)
     }
 
     fn t(&self, ns: u64) -> f64 {
@@ -1157,6 +1166,8 @@ impl Evaluator {
             protective_stop_causes: self.stop_causes.clone(),
             summary,
             inputs: Default::default(),
+            control: Default::default(),
+            dynamics: Default::default(),
             evaluation: Evaluation {
                 truth_samples_lost: self.truth_lost,
                 contact_events_lost: self.events_lost,

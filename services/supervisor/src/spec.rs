@@ -34,6 +34,7 @@ mod tests {
             [
                 "sim",
                 "dynamics",
+                "dynamics_standby",
                 "perception",
                 "gesture",
                 "repulsion0",
@@ -41,6 +42,7 @@ mod tests {
                 "repulsion2",
                 "repulsion3",
                 "control",
+                "control_standby",
                 "mic",
                 "voice"
             ]

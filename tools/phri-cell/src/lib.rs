@@ -38,12 +38,13 @@ use phri_perception::ingest::StateHistory;
 use phri_sim::{fill_state, fill_world, CycleTiming, LinkOutput, RobotLink, Simulator};
 
 mod outage;
+mod standby;
 mod summary;
 pub mod trace;
 pub mod truth;
 
 pub use outage::{Down, Outage, OutageError};
-pub use summary::{CellSummary, ContactEpisode, GestureRequest};
+pub use summary::{CellSummary, ContactEpisode, GestureRequest, StandbySummary};
 
 /// Why a cell could not be built or stepped: the service at fault and what it said.
 #[derive(Debug, thiserror::Error)]
@@ -81,6 +82,9 @@ pub struct CellOptions {
     /// replace every camera's distances by the truth ([`truth::rewrite`]):
     /// what the avoidance does with perception that hides nothing
     pub truth_perception: bool,
+    /// run the hot standby beside the controller ([`standby`];
+    /// `phri-lockstep` follows `[control] standby`)
+    pub standby: bool,
 }
 
 impl Default for CellOptions {
@@ -91,6 +95,7 @@ impl Default for CellOptions {
             perception: true,
             outages: Vec::new(),
             truth_perception: false,
+            standby: false,
         }
     }
 }
@@ -139,6 +144,8 @@ pub struct Cell {
     link: RobotLink,
     dynamics: DynamicsStep,
     pub controller: Controller,
+    /// the hot standby and both controllers' places ([`CellOptions::standby`])
+    pair: Option<Box<standby::Pair>>,
     repulsion: RepulsionInputs,
     avoidance: bool,
     perception: Option<Perception>,
@@ -181,6 +188,13 @@ impl Cell {
         ctl_cfg.control.avoidance = avoidance;
         let controller = Controller::from_config(model.clone(), &ctl_cfg)
             .map_err(|e| step_err("control")(&e))?;
+        let pair = match opts.standby {
+            true => Some(Box::new(standby::Pair::new(
+                Controller::from_config(model.clone(), &ctl_cfg)
+                    .map_err(|e| step_err("control_standby")(&e))?,
+            ))),
+            false => None,
+        };
         let perception = if avoidance {
             if !(opts.perception_latency_ms.is_finite() && opts.perception_latency_ms >= 0.0) {
                 return Err(CellError::Latency(opts.perception_latency_ms));
@@ -242,6 +256,7 @@ impl Cell {
             link,
             dynamics,
             controller,
+            pair,
             repulsion: RepulsionInputs::for_cell(cfg),
             avoidance,
             perception,
@@ -301,23 +316,41 @@ impl Cell {
                 .map_err(|e| step_err("dynamics")(&e))?;
             self.residual = Some(*self.dynamics.seal(self.t_ns, 0));
         }
-        if !self.down(Down::Control) {
-            self.control()?;
-        }
-        self.summary.mode(self.controller.mode(), self.t_ns);
-        self.summary.ssm(
-            self.controller.ssm_enabled(),
-            self.controller.ssm_counters(),
-            self.t_ns,
+        self.control()?;
+        let mode = self.in_charge().mode();
+        self.summary.mode(mode, self.t_ns);
+        let ssm = (
+            self.in_charge().ssm_enabled(),
+            self.in_charge().ssm_counters(),
         );
+        self.summary.ssm(ssm.0, ssm.1, self.t_ns);
         self.summary.account(
             &self.sim,
-            self.controller.mode(),
+            mode,
             &self.link_out,
             self.residual.as_ref(),
             self.t_ns,
         );
-        Ok(self.controller.mode())
+        Ok(mode)
+    }
+
+    /// The controller in charge: the robot's state says which (the first
+    /// without a standby).
+    pub fn in_charge(&self) -> &Controller {
+        match &self.pair {
+            Some(p) if p.in_charge(&self.state) == 1 => &p.standby,
+            _ => &self.controller,
+        }
+    }
+
+    /// The hot standby's controller, if it runs.
+    pub fn standby(&self) -> Option<&Controller> {
+        self.pair.as_ref().map(|p| &p.standby)
+    }
+
+    /// The robot link's figures of the two command slots.
+    pub fn commanders(&self) -> &phri_ipc::CommanderStats {
+        self.link.commanders()
     }
 
     /// The robot link and the arm: one period, then the new state.
@@ -328,7 +361,14 @@ impl Cell {
             now_ns: self.t_ns,
             behind_schedule_ns: 0,
         };
-        self.link_out = self.link.cycle(self.command.as_ref(), self.seq, &timing);
+        self.link_out = match &self.pair {
+            Some(p) => self.link.cycle_slots(
+                [p.slots.commands[0].as_ref(), p.slots.commands[1].as_ref()],
+                self.seq,
+                &timing,
+            ),
+            None => self.link.cycle(self.command.as_ref(), self.seq, &timing),
+        };
         self.sim.step(self.link_out.torque(), self.link_out.brake);
         self.seq += 1;
         self.t_ns += self.link.period_ns();
@@ -367,7 +407,11 @@ impl Cell {
             }
             // ingestion reads the controller's collab/state, as the service does
             let mut collab = CollabState::zeroed();
-            write_collab_state(&self.controller, &self.state, self.seq, now, &mut collab);
+            let controller = match &self.pair {
+                Some(pair) if pair.in_charge(&self.state) == 1 => &pair.standby,
+                _ => &self.controller,
+            };
+            write_collab_state(controller, &self.state, self.seq, now, &mut collab);
             let hand = p
                 .cameras
                 .perceive(&p.history, Some(&collab), ready_ns)
@@ -444,7 +488,9 @@ impl Cell {
         Ok(())
     }
 
-    /// The controller answers the newest state with a command and a status.
+    /// The controllers that are up answer the newest state with a command
+    /// and a status (the one in charge's); with the hot standby, each first
+    /// adopts the behaviour the one in charge left after the state before.
     fn control(&mut self) -> Result<(), CellError> {
         let n = self.sim.model().nv();
         self.repulsion.fuse(self.state.stamp_ns);
@@ -457,22 +503,65 @@ impl Cell {
             skeleton: self.skeleton.as_ref(),
             hand: self.hand.as_ref(),
         };
-        self.controller.step(&input);
-        self.requests.clear();
+        let up = [!self.down(Down::Control), !self.down(Down::Standby)];
         let stamps = Stamps {
             woke_ns: self.t_ns,
             done_ns: self.t_ns,
         };
-        let mut cmd = self.command.unwrap_or_else(TorqueCommand::zeroed);
-        write_messages(
-            &self.controller,
-            &self.state,
-            self.status.seq + 1,
-            stamps,
-            &mut cmd,
-            &mut self.status,
-        );
-        self.command = Some(cmd);
+        let Some(pair) = self.pair.as_mut() else {
+            if up[0] {
+                self.controller.step(&input);
+                let mut cmd = self.command.unwrap_or_else(TorqueCommand::zeroed);
+                let seq = self.status.seq + 1;
+                write_messages(
+                    &self.controller,
+                    &self.state,
+                    seq,
+                    stamps,
+                    &mut cmd,
+                    &mut self.status,
+                );
+                self.command = Some(cmd);
+            }
+            self.requests.clear();
+            return Ok(());
+        };
+        for slot in 0..2 {
+            if up[slot] {
+                let controller = match slot {
+                    0 => &mut self.controller,
+                    _ => &mut pair.standby,
+                };
+                pair.slots.adopt(slot, controller, &self.state);
+            }
+        }
+        let in_charge = pair.in_charge(&self.state);
+        for slot in 0..2 {
+            if !up[slot] {
+                continue;
+            }
+            let controller = match slot {
+                0 => &mut self.controller,
+                _ => &mut pair.standby,
+            };
+            controller.step(&input);
+            let mut cmd = pair.slots.commands[slot].unwrap_or_else(TorqueCommand::zeroed);
+            let mut status = self.status;
+            write_messages(
+                controller,
+                &self.state,
+                self.status.seq + 1,
+                stamps,
+                &mut cmd,
+                &mut status,
+            );
+            pair.slots.answered(slot, controller, &self.state, cmd);
+            if slot == in_charge {
+                self.status = status;
+            }
+        }
+        self.command = pair.slots.commands[in_charge];
+        self.requests.clear();
         Ok(())
     }
 
@@ -485,6 +574,19 @@ impl Cell {
     /// to the measured state as a new process does.
     pub fn restart_controller(&mut self, controller: Controller) {
         self.controller = controller;
+        if let Some(p) = self.pair.as_mut() {
+            p.slots.restarted(0);
+        }
+    }
+
+    /// Replace the hot standby's controller (a restarted process): it
+    /// commands again once it adopted the behaviour of the one in charge.
+    /// Without a standby, nothing happens.
+    pub fn restart_standby(&mut self, controller: Controller) {
+        if let Some(p) = self.pair.as_mut() {
+            p.standby = controller;
+            p.slots.restarted(1);
+        }
     }
 
     /// Replace the residual service by a new one (a restarted process starts
@@ -501,6 +603,18 @@ impl Cell {
 
     /// The run so far.
     pub fn summary(&self) -> CellSummary {
-        self.summary.summary(&self.sim, self.controller.counters())
+        let mut s = self.summary.summary(&self.sim, self.in_charge().counters());
+        if self.pair.is_some() {
+            let c = self.link.commanders();
+            s.standby = Some(summary::StandbySummary {
+                takeovers: c.takeovers,
+                max_takeover_diff_nm: c.max_takeover_diff_nm,
+                max_answer_diff_nm: c.max_answer_diff_nm,
+                periods_commanded: c.periods,
+                both_answered: c.both_answered,
+                missed_deadlines: self.link.stats().missed_deadlines,
+            });
+        }
+        s
     }
 }

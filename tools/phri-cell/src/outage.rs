@@ -8,15 +8,19 @@ pub enum Down {
     Perception,
     /// the residual stops: the controller keeps seeing the last one, ageing
     Dynamics,
-    /// no command: the robot reuses the last one, then brakes
+    /// no command from the first controller (`robot/command`): the robot
+    /// reuses the last one, then brakes, unless the hot standby answers
     Control,
+    /// no command from the hot standby (`robot/command/standby`)
+    Standby,
 }
 
 impl Down {
-    pub const ALL: [(Down, &'static str); 3] = [
+    pub const ALL: [(Down, &'static str); 4] = [
         (Down::Perception, "perception"),
         (Down::Dynamics, "dynamics"),
         (Down::Control, "control"),
+        (Down::Standby, "standby"),
     ];
 }
 
@@ -30,12 +34,14 @@ pub struct Outage {
 
 /// An outage that is not `SERVICE:FROM:TO`.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("outage: expected perception|dynamics|control:FROM:TO (seconds, FROM ≤ TO), got '{0}'")]
+#[error(
+    "outage: expected perception|dynamics|control|standby:FROM:TO (seconds, FROM ≤ TO), got '{0}'"
+)]
 pub struct OutageError(pub String);
 
 impl std::str::FromStr for Outage {
     type Err = OutageError;
-    /// `perception:FROM:TO`, `dynamics:FROM:TO` or `control:FROM:TO` (seconds)
+    /// `perception:FROM:TO`, `dynamics:FROM:TO`, `control:FROM:TO` or `standby:FROM:TO` (seconds)
     fn from_str(s: &str) -> Result<Outage, OutageError> {
         let bad = || OutageError(s.to_string());
         let mut it = s.split(':');

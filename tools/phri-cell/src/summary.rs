@@ -53,6 +53,25 @@ pub struct CellSummary {
     /// point's approach \[s\], and violations (`iso_ts_15066`'s, repeated)
     pub ssm_limited_s: f64,
     pub ssm_violations: u64,
+    /// the hot standby (null without it)
+    pub standby: Option<StandbySummary>,
+}
+
+/// The hot standby's figures in a lock-step run (the robot link's).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct StandbySummary {
+    pub takeovers: u64,
+    /// the largest joint difference between a command taking over and the
+    /// last one applied before \[Nm\]
+    pub max_takeover_diff_nm: f64,
+    /// the largest joint difference between the two controllers' answers
+    /// to the same state \[Nm\]
+    pub max_answer_diff_nm: f64,
+    /// periods each slot's fresh command was applied
+    pub periods_commanded: [u64; 2],
+    /// periods both slots answered the same state
+    pub both_answered: u64,
+    pub missed_deadlines: u64,
 }
 
 /// One wave recognised in a run.

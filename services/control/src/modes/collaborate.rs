@@ -27,7 +27,7 @@ use nalgebra::Vector3;
 use phri_config::{CollaborationConfig, Config, OnRequest};
 use phri_estimation::{ContactPoint, ForceEstimate, ForceEstimator};
 use phri_ipc::{
-    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, SkeletonJoint, MAX_DOF,
+    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, SkeletonJoint, Zeroed, MAX_DOF,
     MAX_PEOPLE,
 };
 use phri_model::{Model, Placement};
@@ -37,6 +37,7 @@ use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
 use crate::resolve::AT_THE_HAND_M;
+use crate::snapshot::{snapshot_fields, Reader, Snapshot, Writer};
 
 /// A skeleton older than this is no sighting of the hand \[s\].
 const MAX_SKELETON_AGE_S: f64 = 0.2;
@@ -111,6 +112,17 @@ pub struct CollabInput<'a> {
 pub struct Answered {
     pub request: HriRequest,
     pub answer: Answer,
+}
+
+snapshot_fields!(Answered { request, answer });
+
+impl Default for Answered {
+    fn default() -> Answered {
+        Answered {
+            request: HriRequest::zeroed(),
+            answer: Answer::default(),
+        }
+    }
 }
 
 /// The collaboration layer's state.
@@ -195,7 +207,7 @@ pub struct Collaboration {
 }
 
 /// Backing off after a force limit: along the force the person applied.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct BackOff {
     /// unit direction \[-\], base frame
     dir: Vector3<f64>,
@@ -203,6 +215,69 @@ struct BackOff {
     from: Vector3<f64>,
     /// the end effector when it began \[m\], base frame (set by the first reference)
     ee: Option<Vector3<f64>>,
+}
+
+snapshot_fields!(BackOff { dir, from, ee });
+
+/// The phase machine and what the layer carries from one period to the
+/// next. Not saved: the configuration and what comes from it, and the force
+/// estimate and the estimator's kinematics, which every period recomputes
+/// (from `q` and `r`) before reading them. The frame of F̂'s contact point
+/// follows from whether it is on the wrist.
+impl Snapshot for Collaboration {
+    fn save(&self, w: &mut Writer<'_>) {
+        self.machine.save(w);
+        self.contact_on_wrist.save(w);
+        self.contact_axis.save(w);
+        self.hand.save(w);
+        self.hand_lp.save(w);
+        self.sighting.save(w);
+        self.hand_velocity.save(w);
+        self.other.save(w);
+        self.other_velocity.save(w);
+        self.other_closing.save(w);
+        self.hand_seen.save(w);
+        self.x_d.save(w);
+        self.robot_point.save(w);
+        self.gap.save(w);
+        self.near_gap.save(w);
+        self.wrist_since.save(w);
+        self.wrist_pattern.save(w);
+        self.collision.save(w);
+        self.rearm.save(w);
+        self.last_answer.save(w);
+        self.back_off.save(w);
+        self.ref_phase.save(w);
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        self.machine.load(r);
+        self.contact_on_wrist.load(r);
+        let frame = match self.contact_on_wrist {
+            true => self.wrist_frame,
+            false => self.contact.frame,
+        };
+        r.store(&mut self.contact_frame, frame);
+        self.contact_axis.load(r);
+        self.hand.load(r);
+        self.hand_lp.load(r);
+        self.sighting.load(r);
+        self.hand_velocity.load(r);
+        self.other.load(r);
+        self.other_velocity.load(r);
+        self.other_closing.load(r);
+        self.hand_seen.load(r);
+        self.x_d.load(r);
+        self.robot_point.load(r);
+        self.gap.load(r);
+        self.near_gap.load(r);
+        self.wrist_since.load(r);
+        self.wrist_pattern.load(r);
+        self.collision.load(r);
+        self.rearm.load(r);
+        self.last_answer.load(r);
+        self.back_off.load(r);
+        self.ref_phase.load(r);
+    }
 }
 
 impl Collaboration {

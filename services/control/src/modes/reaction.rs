@@ -19,6 +19,7 @@ use crate::history::PathHistory;
 use crate::limits::Limits;
 use crate::modes::Behaviour;
 use crate::reference::{JointReference, TrackingGains};
+use crate::snapshot::snapshot_fields;
 use crate::terms::DynamicsTerms;
 
 /// The retreat's walk back through the history. Positions in the history
@@ -38,6 +39,8 @@ pub struct Retreat {
     /// entries to walk back
     total: f64,
 }
+
+snapshot_fields!(Retreat { u, total });
 
 impl Retreat {
     /// A retreat of `path_s` [s of path time] with a time law ramping over
@@ -106,6 +109,8 @@ pub struct ReactionState {
     t0: f64,
     retreat: Retreat,
 }
+
+snapshot_fields!(ReactionState { t0, retreat });
 
 /// What one period of the reaction reads and writes.
 pub struct ReactionIo<'a> {

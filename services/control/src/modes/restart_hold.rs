@@ -9,6 +9,8 @@
 //! nothing yet (and stays in `sync`), or it keeps holding a hand it has seen
 //! near.
 
+use crate::snapshot::{snapshot_fields, Reader, Snapshot, Writer};
+
 /// The judgement of one period.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Hold {
@@ -20,6 +22,29 @@ pub enum Hold {
     /// restarted, a hand at the robot (or one seen there, since unseen or
     /// not yet away for long enough)
     HandNear,
+}
+
+/// As a byte: 0 clear, 1 judging, 2 a hand near.
+impl Snapshot for Hold {
+    fn save(&self, w: &mut Writer<'_>) {
+        w.u8(match self {
+            Hold::Clear => 0,
+            Hold::Judging => 1,
+            Hold::HandNear => 2,
+        });
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        let v = match r.u8() {
+            0 => Hold::Clear,
+            1 => Hold::Judging,
+            2 => Hold::HandNear,
+            _ => {
+                r.fail();
+                Hold::Clear
+            }
+        };
+        r.store(self, v);
+    }
 }
 
 /// The hold of a restarted controller.
@@ -36,6 +61,13 @@ pub struct RestartHold {
     /// every hand away since \[s\]
     clear_since: Option<f64>,
 }
+
+// the distance and time are configuration
+snapshot_fields!(RestartHold {
+    judged,
+    near,
+    clear_since
+});
 
 impl RestartHold {
     /// A hold with `[collaboration] restart_clear_m` and `release_s`.

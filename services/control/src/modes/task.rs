@@ -14,6 +14,7 @@ use phri_config::{ControlConfig, PathPace};
 
 use crate::modes::CartesianRef;
 use crate::path::{Approach, Path};
+use crate::snapshot::{Reader, Snapshot, Writer};
 
 /// Where the task is on its path.
 #[derive(Clone, Debug)]
@@ -59,7 +60,37 @@ pub fn path_slowdown(pace: PathPace, v_call: &Vector3<f64>, dir: &Vector3<f64>, 
     }
 }
 
+/// Where the task is (its path and settings are configuration).
+impl Snapshot for TaskState {
+    fn save(&self, w: &mut Writer<'_>) {
+        self.approach.save(w);
+        self.s.save(w);
+        self.ramp_u.save(w);
+        self.last_target.save(w);
+        self.waypoints_reached.save(w);
+        self.segments_ended.save(w);
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        self.approach.load(r);
+        self.s.load(r);
+        self.ramp_u.load(r);
+        // an index into the waypoints
+        let target = r.usize();
+        if target >= self.path.waypoints.len() {
+            r.fail();
+        }
+        r.store(&mut self.last_target, target);
+        self.waypoints_reached.load(r);
+        self.segments_ended.load(r);
+    }
+}
+
 impl TaskState {
+    /// The number of waypoints (the snapshot's layout check).
+    pub(crate) fn waypoints(&self) -> usize {
+        self.path.waypoints.len()
+    }
+
     /// The path of `[control]` (`waypoints`, `segment_time_s`), at its start.
     pub fn new(cfg: &ControlConfig) -> TaskState {
         TaskState {

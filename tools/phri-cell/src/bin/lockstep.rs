@@ -163,6 +163,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let mut opts = CellOptions {
         perception: !cli.no_perception,
         truth_perception: cli.truth_perception,
+        standby: loaded.config.control.standby,
         ..CellOptions::default()
     };
     opts.outages.extend(cli.outage.iter().copied());

@@ -1,0 +1,247 @@
+//! The hot standby's rule, as a pure function of what a controller sees:
+//! two controllers answer every state, each on a command channel of its own
+//! (slot 0 `robot/command`, slot 1 `robot/command/standby`); the robot
+//! applies the answer of the one in charge, or the other's in the same
+//! period when that one is missing, and says who is in charge in the state
+//! (`robot_status::STANDBY_IN_CHARGE`).
+//!
+//! - The controller in charge publishes its status, collaboration and SSM
+//!   messages and its behaviour state ([`phri_ipc::ControlBehaviour`]) after
+//!   every step.
+//! - The other adopts that behaviour before its next step (the one the
+//!   controller in charge left after the previous state), and answers too.
+//! - A controller not in charge that has not adopted a behaviour of the last
+//!   [`SYNC_STATES`] states (it was stopped, starved, or has just started)
+//!   does not command: it would answer from a past of its own. While the
+//!   robot is braked nobody is in charge, and anyone may answer (a start,
+//!   from the sync mode).
+
+use phri_ipc::{residual_flags, robot_status, ControlBehaviour, JointState, Residual, Zeroed};
+
+/// A behaviour adopted this many states back at most keeps a standby in sync.
+pub const SYNC_STATES: u64 = 2;
+
+/// Which command slot a controller answers on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// `robot/command`: in charge when the robot starts
+    First = 0,
+    /// `robot/command/standby`
+    Standby = 1,
+}
+
+/// What a controller does with one state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Duty {
+    /// in charge: publish status, collaboration, SSM and behaviour
+    pub in_charge: bool,
+    /// publish the command answering this state
+    pub command: bool,
+}
+
+/// One controller's place beside the other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Standby {
+    slot: Slot,
+    /// the state whose behaviour was adopted last (0: none)
+    adopted: u64,
+}
+
+impl Standby {
+    pub fn new(slot: Slot) -> Standby {
+        Standby { slot, adopted: 0 }
+    }
+
+    pub fn slot(&self) -> Slot {
+        self.slot
+    }
+
+    /// Is this controller in charge by `state`?
+    pub fn in_charge(&self, state: &JointState) -> bool {
+        let standby_in_charge = state.status & robot_status::STANDBY_IN_CHARGE != 0;
+        standby_in_charge == (self.slot == Slot::Standby)
+    }
+
+    /// Before the step of `state`: adopt a peer's behaviour left by the step
+    /// of state `behaviour_state_seq`? Only the one of the state before,
+    /// and only when not in charge.
+    pub fn should_adopt(&self, state: &JointState, behaviour_state_seq: u64) -> bool {
+        !self.in_charge(state) && behaviour_state_seq + 1 == state.seq
+    }
+
+    /// The peer's behaviour of the state before `state` was adopted.
+    pub fn adopted(&mut self, state: &JointState) {
+        self.adopted = state.seq;
+    }
+
+    /// What to do with `state` after the step.
+    pub fn duty(&self, state: &JointState) -> Duty {
+        let in_charge = self.in_charge(state);
+        let braked = state.status & robot_status::BRAKING != 0;
+        let in_sync = self.adopted > 0 && state.seq.saturating_sub(self.adopted) < SYNC_STATES;
+        Duty {
+            in_charge,
+            command: in_charge || braked || in_sync,
+        }
+    }
+}
+
+/// The residual to act on of the two dynamics services' newest (the first's
+/// `dynamics/residual`, the standby's `dynamics/residual/standby`): a valid
+/// one before one still warming up, then the one of the newer state, then
+/// the first's. Either may be missing (killed, restarting).
+pub fn fresher_residual<'a>(
+    first: Option<&'a Residual>,
+    standby: Option<&'a Residual>,
+) -> Option<&'a Residual> {
+    let key = |r: &Residual| (r.flags & residual_flags::VALID != 0, r.state_seq);
+    match (first, standby) {
+        (Some(a), Some(b)) if key(b) > key(a) => Some(b),
+        (Some(a), _) => Some(a),
+        (None, b) => b,
+    }
+}
+
+/// The peer's newest behaviour states, kept until the step they precede:
+/// a peer that runs first on the CPU has already published the behaviour
+/// of state k when this controller reads state k, and that one is for the
+/// step of state k + 1. Two messages, allocated once.
+pub struct BehaviourInbox {
+    kept: [Box<ControlBehaviour>; 2],
+}
+
+impl Default for BehaviourInbox {
+    fn default() -> Self {
+        BehaviourInbox {
+            kept: [
+                Box::new(ControlBehaviour::zeroed()),
+                Box::new(ControlBehaviour::zeroed()),
+            ],
+        }
+    }
+}
+
+impl BehaviourInbox {
+    /// Keep `m` in place of the older of the two kept. Allocates nothing.
+    pub fn push(&mut self, m: &ControlBehaviour) {
+        let older = usize::from(self.kept[1].state_seq < self.kept[0].state_seq);
+        *self.kept[older] = *m;
+    }
+
+    /// The behaviour the step of state `seq` left, if kept.
+    pub fn after_state(&self, seq: u64) -> Option<&ControlBehaviour> {
+        self.kept
+            .iter()
+            .map(|b| &**b)
+            .find(|b| b.state_seq == seq && seq > 0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    fn state(seq: u64, status: u32) -> JointState {
+        JointState {
+            seq,
+            status,
+            ..JointState::zeroed()
+        }
+    }
+
+    #[test]
+    fn the_first_slot_is_in_charge_until_the_robot_says_otherwise() {
+        let first = Standby::new(Slot::First);
+        let standby = Standby::new(Slot::Standby);
+        let s = state(5, 0);
+        assert!(first.in_charge(&s) && !standby.in_charge(&s));
+        let s = state(6, robot_status::STANDBY_IN_CHARGE);
+        assert!(!first.in_charge(&s) && standby.in_charge(&s));
+        assert_eq!(
+            standby.duty(&s),
+            Duty {
+                in_charge: true,
+                command: true
+            }
+        );
+    }
+
+    #[test]
+    fn a_standby_commands_only_in_sync_with_the_one_in_charge() {
+        let mut b = Standby::new(Slot::Standby);
+        // just started: not in sync, not commanding
+        assert!(!b.duty(&state(10, 0)).command);
+        // the behaviour of the state before is adopted; any other is not
+        assert!(!b.should_adopt(&state(10, 0), 8));
+        assert!(b.should_adopt(&state(10, 0), 9));
+        b.adopted(&state(10, 0));
+        assert_eq!(
+            b.duty(&state(10, 0)),
+            Duty {
+                in_charge: false,
+                command: true
+            }
+        );
+        // one state without a behaviour (the one in charge late): still in sync
+        assert!(b.duty(&state(11, 0)).command);
+        // two: no longer (a stall, a stop)
+        assert!(!b.duty(&state(12, 0)).command);
+        // in charge it never adopts, and commands
+        let s = state(13, robot_status::STANDBY_IN_CHARGE);
+        assert!(!b.should_adopt(&s, 12));
+        assert!(b.duty(&s).command);
+    }
+
+    #[test]
+    fn the_fresher_valid_residual_is_taken() {
+        let r = |seq, valid: bool| Residual {
+            state_seq: seq,
+            flags: if valid { residual_flags::VALID } else { 0 },
+            ..Residual::zeroed()
+        };
+        let pick = |a: Option<&Residual>, b: Option<&Residual>| {
+            fresher_residual(a, b).map(|x| (x.state_seq, x.flags))
+        };
+        let (a, b) = (r(10, true), r(10, true));
+        assert!(std::ptr::eq(
+            fresher_residual(Some(&a), Some(&b)).unwrap(),
+            &a
+        ));
+        // the first one killed: its last residual ages, the standby's is newer
+        assert_eq!(pick(Some(&r(10, true)), Some(&r(12, true))), Some((12, 8)));
+        // a restarted one warming up is not taken over a valid one
+        assert_eq!(pick(Some(&r(10, true)), Some(&r(12, false))), Some((10, 8)));
+        assert_eq!(pick(None, Some(&r(3, true))), Some((3, 8)));
+        assert_eq!(pick(None, None), None);
+    }
+
+    #[test]
+    fn the_inbox_keeps_the_two_newest_behaviours() {
+        let mut inbox = BehaviourInbox::default();
+        let b = |seq| ControlBehaviour {
+            state_seq: seq,
+            ..ControlBehaviour::zeroed()
+        };
+        assert!(inbox.after_state(0).is_none() && inbox.after_state(1).is_none());
+        inbox.push(&b(9));
+        inbox.push(&b(10));
+        assert_eq!(inbox.after_state(9).map(|m| m.state_seq), Some(9));
+        inbox.push(&b(11));
+        assert!(inbox.after_state(9).is_none());
+        assert!(inbox.after_state(10).is_some() && inbox.after_state(11).is_some());
+    }
+
+    #[test]
+    fn while_the_robot_is_braked_anyone_may_answer() {
+        let b = Standby::new(Slot::Standby);
+        let d = b.duty(&state(3, robot_status::BRAKING));
+        assert_eq!(
+            d,
+            Duty {
+                in_charge: false,
+                command: true
+            }
+        );
+    }
+}

@@ -1,0 +1,118 @@
+//! The hot standby in lock-step: a second controller answers every state
+//! on command slot 1 (`robot/command/standby`), as `phri-control --standby`
+//! does. Each period both adopt the behaviour the controller in charge left
+//! after the state before (the rule of [`phri_control::standby`]), then both
+//! step; the robot link applies the answer of the one in charge, or the
+//! other's in the same period.
+
+use phri_control::standby::{Slot, Standby};
+use phri_control::Controller;
+use phri_ipc::{JointState, TorqueCommand, BEHAVIOUR_BYTES};
+
+/// One controller's behaviour state after a step, as the peer reads it.
+pub(crate) struct Behaviour {
+    /// the state whose step left it (0: none)
+    pub state_seq: u64,
+    pub len: usize,
+    pub bytes: Vec<u8>,
+}
+
+impl Behaviour {
+    fn new() -> Behaviour {
+        Behaviour {
+            state_seq: 0,
+            len: 0,
+            bytes: vec![0; BEHAVIOUR_BYTES],
+        }
+    }
+}
+
+/// The hot standby's controller (slot 1; slot 0 is the cell's `controller`)
+/// and both slots' places.
+pub(crate) struct Pair {
+    pub standby: Controller,
+    pub slots: Slots,
+}
+
+impl Pair {
+    pub fn new(standby: Controller) -> Pair {
+        Pair {
+            standby,
+            slots: Slots::new(),
+        }
+    }
+
+    /// The slot in charge by `state`.
+    pub fn in_charge(&self, state: &JointState) -> usize {
+        usize::from(!self.slots.roles[0].in_charge(state))
+    }
+}
+
+/// Both command slots' places.
+pub(crate) struct Slots {
+    pub roles: [Standby; 2],
+    /// each slot's newest command (kept while it is down)
+    pub commands: [Option<TorqueCommand>; 2],
+    /// each slot's behaviour after its last step in charge
+    pub behaviours: [Behaviour; 2],
+    /// adoptions refused (a layout mismatch): none expected
+    pub refused: u64,
+}
+
+impl Slots {
+    fn new() -> Slots {
+        Slots {
+            roles: [Standby::new(Slot::First), Standby::new(Slot::Standby)],
+            commands: [None, None],
+            behaviours: [Behaviour::new(), Behaviour::new()],
+            refused: 0,
+        }
+    }
+
+    /// Slot `slot`'s controller was replaced by a new one: not in sync, no
+    /// command nor behaviour of its own yet.
+    pub fn restarted(&mut self, slot: usize) {
+        let kind = [Slot::First, Slot::Standby][slot];
+        self.roles[slot] = Standby::new(kind);
+        self.commands[slot] = None;
+        self.behaviours[slot].state_seq = 0;
+    }
+
+    /// Before slot `slot`'s step of `state`: adopt the other slot's behaviour
+    /// of the state before, if it left one and `slot` is not in charge.
+    pub fn adopt(&mut self, slot: usize, controller: &mut Controller, state: &JointState) {
+        let peer = &self.behaviours[1 - slot];
+        if peer.state_seq == 0 || !self.roles[slot].should_adopt(state, peer.state_seq) {
+            return;
+        }
+        match controller.adopt_behaviour(&peer.bytes[..peer.len]) {
+            Ok(()) => self.roles[slot].adopted(state),
+            Err(_) => self.refused += 1,
+        }
+    }
+
+    /// After slot `slot`'s step of `state`, answered by `cmd`: keep the
+    /// command if it is to be sent, the behaviour if in charge.
+    pub fn answered(
+        &mut self,
+        slot: usize,
+        controller: &Controller,
+        state: &JointState,
+        cmd: TorqueCommand,
+    ) {
+        let duty = self.roles[slot].duty(state);
+        if duty.command {
+            self.commands[slot] = Some(cmd);
+        }
+        if duty.in_charge {
+            let b = &mut self.behaviours[slot];
+            match controller.save_behaviour(&mut b.bytes) {
+                Ok(len) => {
+                    b.len = len;
+                    b.state_seq = state.seq;
+                }
+                Err(_) => b.state_seq = 0,
+            }
+        }
+    }
+}
