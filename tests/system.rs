@@ -326,7 +326,13 @@ fn a_stalled_supervisor_loses_no_contact_and_counts_what_it_lost() {
 #[test]
 fn killing_dynamics_means_protective_stop_restart_and_resume() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("kdyn", "free-motion", Some(12.0), &[]);
+    // one residual service ([control] standby = false): today's stop
+    let cell = Cell::start(
+        "kdyn",
+        "free-motion",
+        Some(12.0),
+        &["control.standby=false"],
+    );
     wait(5.0);
     cell.kill("dynamics", libc::SIGKILL);
     let r = cell.finish();
@@ -350,6 +356,32 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
     // (the arm waits braked only at the start, before the controller's first
     // command; a brake engaged later is more than 20 answers missed)
     assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+}
+
+#[test]
+fn killing_either_residual_service_causes_no_protective_stop() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = Cell::start("kdyn2", "free-motion", Some(14.0), &[]);
+    wait(4.0);
+    cell.kill("dynamics", libc::SIGKILL);
+    wait(4.0);
+    cell.kill("dynamics_standby", libc::SIGKILL);
+    let r = cell.finish();
+    eprintln!("dynamics: {}", r["dynamics"]);
+    for s in ["dynamics", "dynamics_standby"] {
+        assert_eq!(r["services"][s]["restarts"], 1, "{s}");
+        assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
+    }
+    // the controller acted on the other residual meanwhile
+    assert_eq!(r["protective_stops"], 0, "{}", r["events"]);
+    assert!(events(&r, "protective_stop", "control").is_empty());
+    assert!(events(&r, "brake", "sim").is_empty(), "{}", r["events"]);
+    assert_eq!(r["false_detections"], 0);
+    // the two observers agree: the same states, the same model
+    let d = &r["dynamics"];
+    assert!(d["residuals_compared"].as_u64().unwrap() > 5000, "{d}");
+    let disagreement = d["max_residual_disagreement_nm"].as_f64().unwrap();
+    assert!(disagreement < 1.0, "{d}");
 }
 
 #[test]
@@ -919,7 +951,13 @@ fn a_supervisor_that_dies_leaves_the_cell_running_and_a_new_one_takes_it_over() 
 #[test]
 fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("frozen", "free-motion", Some(10.0), &[]);
+    // one residual service: its silence is a protective stop
+    let cell = Cell::start(
+        "frozen",
+        "free-motion",
+        Some(10.0),
+        &["control.standby=false"],
+    );
     wait(4.0);
     // SIGSTOP: the process does not exit, it only stops answering
     let pid = cell.kill("dynamics", libc::SIGSTOP);

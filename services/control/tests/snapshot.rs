@@ -15,13 +15,15 @@ use nalgebra::{Matrix6xX, Vector3};
 use phri_config::{Config, Loaded, PerJoint, ResidualConfig, DEFAULT_DEPLOY_DIR};
 use phri_control::snapshot::HEADER_BYTES;
 use phri_control::{
-    CollabInput, ControlConfig, ControlInput, ControlMode, Controller, ControllerParams, Reaction,
-    RepulsionInputs, ResidualView, SnapshotError, BEHAVIOUR_BYTES,
+    write_collab_state, write_messages, write_ssm_status, CollabInput, ControlConfig, ControlInput,
+    ControlMode, Controller, ControllerParams, Reaction, RepulsionInputs, ResidualView,
+    SnapshotError, Stamps, BEHAVIOUR_BYTES,
 };
 use phri_estimation::ResidualObserver;
 use phri_ipc::{
-    CollabPart, CollabPhase, HriRequest, PointRepulsion, RepulsionResult, RequestKind,
-    RequestSource, Skeleton, SkeletonJoint, Zeroed,
+    CollabPart, CollabPhase, CollabState, ControlStatus, HriRequest, JointState, PointRepulsion,
+    RepulsionResult, RequestKind, RequestSource, Skeleton, SkeletonJoint, SsmStatus, TorqueCommand,
+    Zeroed,
 };
 use phri_model::{Data, Model};
 
@@ -258,6 +260,28 @@ struct Period {
     /// the standby's torque and mode (`None`: it did not step); in a period
     /// it adopts in, its own (before adopting)
     b: Option<(Vec<f64>, ControlMode)>,
+    /// what both report (from the period asked for, when the standby stepped)
+    reports: Option<(String, String)>,
+}
+
+/// What a controller reports after its step of state `k` at `q`: its
+/// command and its status, collaboration and speed and separation messages.
+fn report(ctl: &Controller, k: u64, q: &[f64]) -> String {
+    let mut state = JointState::zeroed();
+    state.seq = k;
+    state.stamp_ns = k * MS;
+    state.dof = q.len() as u32;
+    state.q[..q.len()].copy_from_slice(q);
+    let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
+    let (mut collab, mut ssm) = (CollabState::zeroed(), SsmStatus::zeroed());
+    let stamps = Stamps {
+        woke_ns: k * MS,
+        done_ns: k * MS + 1,
+    };
+    write_messages(ctl, &state, k, stamps, &mut cmd, &mut status);
+    write_collab_state(ctl, &state, k, k * MS + 1, &mut collab);
+    write_ssm_status(ctl, &state, k, k * MS + 1, &mut ssm);
+    format!("{cmd:?}\n{status:?}\n{collab:?}\n{ssm:?}")
 }
 
 /// A hot-standby situation: the cell of `loaded` under `script` over
@@ -290,8 +314,8 @@ fn situation(loaded: Loaded, script: Script, b_from: u64, end: u64) -> Situation
 
 impl Situation {
     /// The periods, B adopting A's snapshot after its step of period `k`
-    /// (from `b_from` on) when `adopt(k)`.
-    fn run(&self, adopt: impl Fn(u64) -> bool) -> Vec<Period> {
+    /// (from `b_from` on) when `adopt(k)`; both reports from `report_from` on.
+    fn run(&self, adopt: impl Fn(u64) -> bool, report_from: u64) -> Vec<Period> {
         let mut cell = Cell::new(&self.loaded, self.script);
         let (mut a, mut b) = (controller(&self.loaded), controller(&self.loaded));
         if self.a_restarted {
@@ -318,6 +342,8 @@ impl Situation {
                 let o = b.step(&input);
                 (o.tau.to_vec(), o.mode)
             });
+            let reports = (k >= report_from && b_out.is_some())
+                .then(|| (report(&a, k, &cell.q), report(&b, k, &cell.q)));
             if k >= self.b_from && adopt(k) {
                 let len = a.save_behaviour(&mut buf).unwrap();
                 b.adopt_behaviour(&buf[..len]).unwrap();
@@ -329,19 +355,21 @@ impl Situation {
                 mode_a,
                 segments: a.task_segments_ended(),
                 b: b_out,
+                reports,
             });
         }
         out
     }
 
     /// Adopting in the periods `adopt` says, the standby commands what the
-    /// primary does from period `from` on, in its mode; without adopting it
-    /// would not have. Returns the periods (adopting).
+    /// primary does from period `from` on, in its mode, and reports what it
+    /// does (command, status, collaboration, speed and separation); without
+    /// adopting it would not have. Returns the periods (adopting).
     fn assert_bumpless(&self, adopt: impl Fn(u64) -> bool, from: u64, what: &str) -> Vec<Period> {
-        let alone = self.run(|_| false);
+        let alone = self.run(|_| false, u64::MAX);
         let diff = largest_difference(&alone, from..=self.end);
         assert!(diff > 1e-6, "{what}: as much without adopting: {diff} Nm");
-        let periods = self.run(adopt);
+        let periods = self.run(adopt, from);
         let mut compared = 0;
         for p in periods.iter().filter(|p| p.k >= from) {
             let (tau_b, mode_b) = p.b.as_ref().expect("the standby stepped");
@@ -352,6 +380,10 @@ impl Situation {
                     "{what}: period {}, joint {i}: {x} Nm vs {y} Nm",
                     p.k
                 );
+            }
+            let (ra, rb) = p.reports.as_ref().expect("reported");
+            if let Some((la, lb)) = ra.lines().zip(rb.lines()).find(|(a, b)| a != b) {
+                panic!("{what}: period {}: the reports differ:\n{la}\n{lb}", p.k);
             }
             compared += 1;
         }
@@ -432,7 +464,7 @@ fn a_standby_that_adopts_mid_task_commands_what_the_primary_does() {
 #[test]
 fn a_late_standby_without_adoption_diverges() {
     let s = situation(lwr(Reaction::Reflex), Script::default(), 6901, 7400);
-    let periods = s.run(|_| false);
+    let periods = s.run(|_| false, u64::MAX);
     let diff = largest_difference(&periods, 7001..=7400);
     assert!(
         diff > 1e-2,
