@@ -95,9 +95,6 @@ pub struct Controller {
     /// null-space posture \[rad\] (empty until the first start: the measured one)
     posture: Vec<f64>,
     velocity: VelocityEstimator,
-    /// the joint positions of the last state stepped \[rad\] (the velocity
-    /// estimate's, for [`Controller::save_behaviour`])
-    q_last: Vec<f64>,
     terms: DynamicsTerms,
     safety: SafetyMonitor,
     resolver: Resolver,
@@ -185,7 +182,6 @@ impl Controller {
                 p
             },
             velocity: VelocityEstimator::new(n, VELOCITY_CUTOFF_HZ),
-            q_last: vec![0.0; n],
             terms: DynamicsTerms::new(n),
             safety: SafetyMonitor::default(),
             resolver: Resolver::new(&model, ee_frame, &cfg),
@@ -266,7 +262,6 @@ impl Controller {
             return self.refuse_state();
         }
         let dt = self.advance_clock(input.state_stamp_ns);
-        self.q_last.copy_from_slice(q);
         let mut qd = [0.0; MAX_DOF];
         qd[..n].copy_from_slice(self.velocity.update(q, dt));
         let qd = &qd[..n];
@@ -388,9 +383,11 @@ impl Controller {
             w.f64(self.posture.get(i).copied().unwrap_or(0.0));
         }
         self.counters.save(w);
-        // the velocity estimate (primed once a state was stepped: `last_stamp`)
-        snapshot::save_slice(w, self.velocity.velocity());
-        snapshot::save_slice(w, &self.q_last);
+        // the velocity estimate: the last positions, q̇, whether it saw any
+        let (last_q, qd, primed) = self.velocity.state();
+        snapshot::save_slice(w, last_q);
+        snapshot::save_slice(w, qd);
+        w.bool(primed);
         self.task_x_d.save(w);
         self.safety.save(w);
         self.resolver.save(w);
@@ -433,12 +430,13 @@ impl Controller {
             self.posture.extend_from_slice(&posture[..posture_len]);
         }
         self.counters.load(r);
+        let last_q = snapshot::load_joints(r, n);
         let qd = snapshot::load_joints(r, n);
-        let q_last = snapshot::load_joints(r, n);
+        let primed = r.bool();
         if r.applying() {
-            let primed = self.last_stamp.is_some();
-            snapshot::restore_velocity(&mut self.velocity, &qd[..n], &q_last[..n], primed);
-            self.q_last.copy_from_slice(&q_last[..n]);
+            // the lengths were checked: n joints
+            let taken = self.velocity.set_state(&last_q[..n], &qd[..n], primed);
+            debug_assert!(taken);
         }
         self.task_x_d.load(r);
         self.safety.load(r);

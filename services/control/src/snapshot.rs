@@ -29,7 +29,7 @@
 //! commands (or the controller's reports): the mode, the controller's
 //! time, the last state stamp, the recover timer, the segment a
 //! collaboration waits for, the null-space posture, the counters, the
-//! velocity estimate (its filtered `q̇` and last `q`), the safety monitor,
+//! velocity estimator (its last `q` and filtered `q̇`), the safety monitor,
 //! the resolver (filtered repulsion per control point, the behind-the-hand
 //! hysteresis, the task scale, the speed and separation monitor's
 //! sightings, speeds and timers, its counters), the joint reference, the
@@ -60,30 +60,22 @@
 //!   adoption the standby holds its own last good value.
 //! - The body task's count of rows dropped for lack of room (reported
 //!   nowhere in the controller's messages, shapes no command).
-//! - The velocity estimator's fields are private to `phri-estimation`:
-//!   they travel as the estimate `q̇` ([`VelocityEstimator::velocity`]) and
-//!   the controller's own copy of the last measured `q`, and are put back
-//!   through its public `reset`/`update` exactly (see
-//!   [`restore_velocity`]); accessors `state() -> (&[f64], &[f64], bool)`
-//!   and `set_state(last_q, qd, primed)` would make that direct.
-//!
-//! [`VelocityEstimator::velocity`]: phri_estimation::VelocityEstimator::velocity
 
 use nalgebra::Vector3;
-use phri_estimation::VelocityEstimator;
 use phri_ipc::{CollabPart, CollabPhase, CollabReason, ControlMode, HriRequest, MAX_DOF};
 
-/// Room for a behaviour snapshot in a message \[bytes\]. The default
-/// configurations (collaboration and speed and separation monitoring on)
-/// need 2787 bytes for the LWR-IV (16 control points) and 2459 for the FR3
-/// (12); each control point takes 82, so 7 joints fit about 31 points.
-pub const BEHAVIOUR_BYTES: usize = 4096;
+/// Room for a behaviour snapshot: the bytes of `control/behaviour`
+/// ([`phri_ipc::ControlBehaviour`]). The default configurations
+/// (collaboration and speed and separation monitoring on) need 2788 bytes
+/// for the LWR-IV (16 control points) and 2460 for the FR3 (12); each
+/// control point takes 82 bytes, each joint 56.
+pub const BEHAVIOUR_BYTES: usize = phri_ipc::BEHAVIOUR_BYTES;
 
 /// `"PHRB"` little-endian: a behaviour snapshot.
 const MAGIC: u32 = u32::from_le_bytes(*b"PHRB");
 
 /// The layout's version: changes whenever a field is added, removed or moved.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// The header: magic, version, total length, joints (u32 each), fingerprint (u64) \[bytes\].
 pub const HEADER_BYTES: usize = 24;
@@ -504,31 +496,6 @@ pub(crate) fn load_joints(r: &mut Reader<'_>, n: usize) -> [f64; MAX_DOF] {
     out
 }
 
-/// Put the velocity estimate back to `qd` \[rad/s\] with the last positions
-/// `last_q` \[rad\] (`primed`: it has seen positions), through its public
-/// API and bit-exactly: after `reset` (q̇ = 0), a first update only takes
-/// its positions (0); one of a 1 s step from 0 to `qd` gives
-/// `q̇ = α·0 + (1 − α)·qd = qd` with `α = e^(−2π f_c)` far below the
-/// rounding of `1 − α` (any cut-off above a few Hz); an update with no
-/// time passed (`dt = 0`) takes `last_q` and leaves `q̇`.
-pub(crate) fn restore_velocity(
-    v: &mut VelocityEstimator,
-    qd: &[f64],
-    last_q: &[f64],
-    primed: bool,
-) {
-    const REPLAY_DT_S: f64 = 1.0;
-    debug_assert_eq!(1.0 - v.smoothing(REPLAY_DT_S), 1.0, "cut-off too low");
-    v.reset();
-    if !primed {
-        return;
-    }
-    let zeros = [0.0; MAX_DOF];
-    v.update(&zeros[..qd.len()], 0.0);
-    v.update(qd, REPLAY_DT_S);
-    v.update(last_q, 0.0);
-}
-
 /// What the header of a controller's snapshot says: its joints, its byte
 /// length, and a fingerprint of the configuration's sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -726,31 +693,5 @@ mod tests {
         let mut wr = Writer::new(&mut buf);
         v.save(&mut wr);
         assert!(wr.overflowed() && wr.len() == 32);
-    }
-
-    #[test]
-    fn the_velocity_estimate_is_restored_exactly() {
-        let q = |k: u32| {
-            let t = f64::from(k) * 1e-3;
-            [t.sin(), -0.3 * t, 1e-3 * (7.0 * t).cos()]
-        };
-        let mut a = VelocityEstimator::new(3, 60.0);
-        for k in 0..50 {
-            a.update(&q(k), 1e-3);
-        }
-        let mut b = VelocityEstimator::new(3, 60.0);
-        b.update(&[9.0; 3], 1e-3);
-        restore_velocity(&mut b, a.velocity(), &q(49), true);
-        assert_eq!(b.velocity(), a.velocity());
-        for k in 50..80 {
-            let (va, vb) = (
-                a.update(&q(k), 1e-3).to_vec(),
-                b.update(&q(k), 1e-3).to_vec(),
-            );
-            assert_eq!(va, vb);
-        }
-        // not primed: the next update only takes its positions
-        restore_velocity(&mut b, &[1.0; 3], &[2.0; 3], false);
-        assert_eq!(b.update(&q(0), 1e-3), [0.0; 3]);
     }
 }

@@ -123,7 +123,7 @@ fn malformed_outages_are_refused_with_the_format() {
     ] {
         let e = bad.parse::<Outage>().unwrap_err().to_string();
         assert!(
-            e.contains("perception|dynamics|control:FROM:TO"),
+            e.contains("perception|dynamics|control|standby:FROM:TO"),
             "{bad}: {e}"
         );
     }
