@@ -957,7 +957,7 @@ pub struct CommanderStats {
     #[serde(with = "crate::json::finite")]
     pub max_takeover_diff_nm: f64,
     /// the largest joint difference between the two slots' answers to the
-    /// same state, while both answered [Nm]
+    /// same state, while both answered and the brakes were off [Nm]
     #[serde(with = "crate::json::finite")]
     pub max_answer_diff_nm: f64,
 }

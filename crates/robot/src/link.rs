@@ -346,7 +346,8 @@ impl RobotLink {
         let valid = newest.map(|c| c.filter(|c| self.valid(c)));
         let answer = valid.map(|c| c.filter(|c| Self::answers(c, state_seq)));
         let primary = self.last.in_charge;
-        if let [Some(a), Some(b)] = answer {
+        // compared while the loop runs (from the brakes both start afresh)
+        if let ([Some(a), Some(b)], false) = (answer, self.last.brake) {
             let c = &mut self.commanders;
             c.both_answered += 1;
             c.max_answer_diff_nm = c

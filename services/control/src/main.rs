@@ -10,7 +10,7 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_control::standby::{fresher_residual, BehaviourInbox, Duty, Slot, Standby};
+use phri_control::standby::{fresher_residual, inputs_fresh, BehaviourInbox, Duty, Slot, Standby};
 use phri_control::{
     write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, Controller,
     InputGate, RepulsionInputs, Stamps,
@@ -264,7 +264,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
             done_ns: now_ns(),
         };
         let duty = match with_standby {
-            true => role.duty(&state),
+            true => role.duty(&state, inputs_fresh(&controller, &cfg.control)),
             false => Duty {
                 in_charge: true,
                 command: true,

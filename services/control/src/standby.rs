@@ -16,7 +16,10 @@
 //!   robot is braked nobody is in charge, and anyone may answer (a start,
 //!   from the sync mode).
 
+use phri_config::ControlConfig;
 use phri_ipc::{residual_flags, robot_status, ControlBehaviour, JointState, Residual, Zeroed};
+
+use crate::Controller;
 
 /// A behaviour adopted this many states back at most keeps a standby in sync.
 pub const SYNC_STATES: u64 = 2;
@@ -74,16 +77,32 @@ impl Standby {
         self.adopted = state.seq;
     }
 
-    /// What to do with `state` after the step.
-    pub fn duty(&self, state: &JointState) -> Duty {
+    /// What to do with `state` after the step; `inputs_fresh`: this
+    /// controller's own safety inputs were fresh in it ([`inputs_fresh`]): a
+    /// controller just started, without perception results yet, would
+    /// answer otherwise than the one in charge.
+    pub fn duty(&self, state: &JointState, inputs_fresh: bool) -> Duty {
         let in_charge = self.in_charge(state);
         let braked = state.status & robot_status::BRAKING != 0;
-        let in_sync = self.adopted > 0 && state.seq.saturating_sub(self.adopted) < SYNC_STATES;
+        // (a restarted robot numbers its states from 1 again: a behaviour
+        // adopted before is not of this robot's states)
+        let in_sync =
+            self.adopted > 0 && self.adopted <= state.seq && state.seq - self.adopted < SYNC_STATES;
         Duty {
             in_charge,
-            command: in_charge || braked || in_sync,
+            command: in_charge || braked || (in_sync && inputs_fresh),
         }
     }
+}
+
+/// Were `controller`'s safety inputs fresh in its last step: the residual
+/// within `[control] residual_max_age_ms` and, with avoidance, perception
+/// within `perception_max_age_ms`?
+pub fn inputs_fresh(controller: &Controller, cfg: &ControlConfig) -> bool {
+    let residual = controller.residual_age_ns() as f64 <= cfg.residual_max_age_ms * 1e6;
+    let perception =
+        !cfg.avoidance || controller.perception_age_ns() as f64 <= cfg.perception_max_age_ms * 1e6;
+    residual && perception
 }
 
 /// The residual to act on of the two dynamics services' newest (the first's
@@ -94,7 +113,9 @@ pub fn fresher_residual<'a>(
     first: Option<&'a Residual>,
     standby: Option<&'a Residual>,
 ) -> Option<&'a Residual> {
-    let key = |r: &Residual| (r.flags & residual_flags::VALID != 0, r.state_seq);
+    // the robot's clock, not the state's number: a restarted robot numbers
+    // its states from 1 again, its clock goes on
+    let key = |r: &Residual| (r.flags & residual_flags::VALID != 0, r.state_stamp_ns);
     match (first, standby) {
         (Some(a), Some(b)) if key(b) > key(a) => Some(b),
         (Some(a), _) => Some(a),
@@ -108,6 +129,8 @@ pub fn fresher_residual<'a>(
 /// step of state k + 1. Two messages, allocated once.
 pub struct BehaviourInbox {
     kept: [Box<ControlBehaviour>; 2],
+    /// the slot the next message goes into
+    next: usize,
 }
 
 impl Default for BehaviourInbox {
@@ -117,15 +140,17 @@ impl Default for BehaviourInbox {
                 Box::new(ControlBehaviour::zeroed()),
                 Box::new(ControlBehaviour::zeroed()),
             ],
+            next: 0,
         }
     }
 }
 
 impl BehaviourInbox {
-    /// Keep `m` in place of the older of the two kept. Allocates nothing.
+    /// Keep `m` in place of the one received before the last (by arrival:
+    /// a restarted robot numbers its states from 1 again). Allocates nothing.
     pub fn push(&mut self, m: &ControlBehaviour) {
-        let older = usize::from(self.kept[1].state_seq < self.kept[0].state_seq);
-        *self.kept[older] = *m;
+        *self.kept[self.next] = *m;
+        self.next = 1 - self.next;
     }
 
     /// The behaviour the step of state `seq` left, if kept.
@@ -159,7 +184,7 @@ mod tests {
         let s = state(6, robot_status::STANDBY_IN_CHARGE);
         assert!(!first.in_charge(&s) && standby.in_charge(&s));
         assert_eq!(
-            standby.duty(&s),
+            standby.duty(&s, true),
             Duty {
                 in_charge: true,
                 command: true
@@ -171,32 +196,39 @@ mod tests {
     fn a_standby_commands_only_in_sync_with_the_one_in_charge() {
         let mut b = Standby::new(Slot::Standby);
         // just started: not in sync, not commanding
-        assert!(!b.duty(&state(10, 0)).command);
+        assert!(!b.duty(&state(10, 0), true).command);
         // the behaviour of the state before is adopted; any other is not
         assert!(!b.should_adopt(&state(10, 0), 8));
         assert!(b.should_adopt(&state(10, 0), 9));
         b.adopted(&state(10, 0));
         assert_eq!(
-            b.duty(&state(10, 0)),
+            b.duty(&state(10, 0), true),
             Duty {
                 in_charge: false,
                 command: true
             }
         );
         // one state without a behaviour (the one in charge late): still in sync
-        assert!(b.duty(&state(11, 0)).command);
+        assert!(b.duty(&state(11, 0), true).command);
         // two: no longer (a stall, a stop)
-        assert!(!b.duty(&state(12, 0)).command);
+        assert!(!b.duty(&state(12, 0), true).command);
+        // a restarted robot's states start from 1: not in sync with them
+        assert!(!b.duty(&state(1, 0), true).command);
+        // in sync, but its own inputs stale (just started): no command
+        b.adopted(&state(20, 0));
+        assert!(!b.duty(&state(20, 0), false).command);
+        assert!(b.duty(&state(20, 0), true).command);
         // in charge it never adopts, and commands
         let s = state(13, robot_status::STANDBY_IN_CHARGE);
         assert!(!b.should_adopt(&s, 12));
-        assert!(b.duty(&s).command);
+        assert!(b.duty(&s, true).command);
     }
 
     #[test]
     fn the_fresher_valid_residual_is_taken() {
         let r = |seq, valid: bool| Residual {
             state_seq: seq,
+            state_stamp_ns: seq * 1_000_000,
             flags: if valid { residual_flags::VALID } else { 0 },
             ..Residual::zeroed()
         };
@@ -230,12 +262,18 @@ mod tests {
         inbox.push(&b(11));
         assert!(inbox.after_state(9).is_none());
         assert!(inbox.after_state(10).is_some() && inbox.after_state(11).is_some());
+        // a restarted robot: its states from 1 again
+        inbox.push(&b(1));
+        inbox.push(&b(2));
+        assert!(inbox.after_state(1).is_some() && inbox.after_state(2).is_some());
+        inbox.push(&b(3));
+        assert!(inbox.after_state(2).is_some() && inbox.after_state(1).is_none());
     }
 
     #[test]
     fn while_the_robot_is_braked_anyone_may_answer() {
         let b = Standby::new(Slot::Standby);
-        let d = b.duty(&state(3, robot_status::BRAKING));
+        let d = b.duty(&state(3, robot_status::BRAKING), true);
         assert_eq!(
             d,
             Duty {

@@ -192,6 +192,7 @@ impl Cell {
             true => Some(Box::new(standby::Pair::new(
                 Controller::from_config(model.clone(), &ctl_cfg)
                     .map_err(|e| step_err("control_standby")(&e))?,
+                ctl_cfg.control.clone(),
             ))),
             false => None,
         };

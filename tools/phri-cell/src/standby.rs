@@ -5,7 +5,7 @@
 //! step; the robot link applies the answer of the one in charge, or the
 //! other's in the same period.
 
-use phri_control::standby::{Slot, Standby};
+use phri_control::standby::{inputs_fresh, Slot, Standby};
 use phri_control::Controller;
 use phri_ipc::{JointState, TorqueCommand, BEHAVIOUR_BYTES};
 
@@ -35,10 +35,10 @@ pub(crate) struct Pair {
 }
 
 impl Pair {
-    pub fn new(standby: Controller) -> Pair {
+    pub fn new(standby: Controller, control: phri_config::ControlConfig) -> Pair {
         Pair {
             standby,
-            slots: Slots::new(),
+            slots: Slots::new(control),
         }
     }
 
@@ -57,11 +57,14 @@ pub(crate) struct Slots {
     pub behaviours: [Behaviour; 2],
     /// adoptions refused (a layout mismatch): none expected
     pub refused: u64,
+    /// `[control]` as the controllers run it (their inputs' staleness bounds)
+    pub control: phri_config::ControlConfig,
 }
 
 impl Slots {
-    fn new() -> Slots {
+    fn new(control: phri_config::ControlConfig) -> Slots {
         Slots {
+            control,
             roles: [Standby::new(Slot::First), Standby::new(Slot::Standby)],
             commands: [None, None],
             behaviours: [Behaviour::new(), Behaviour::new()],
@@ -100,7 +103,7 @@ impl Slots {
         state: &JointState,
         cmd: TorqueCommand,
     ) {
-        let duty = self.roles[slot].duty(state);
+        let duty = self.roles[slot].duty(state, inputs_fresh(controller, &self.control));
         if duty.command {
             self.commands[slot] = Some(cmd);
         }
