@@ -242,6 +242,25 @@ pub struct RobotLink {
 /// Number of command slots ([`RobotLink::cycle_slots`]).
 pub const SLOTS: usize = 2;
 
+/// Take each slot's newest command from its channel into `newest` (a slot
+/// without a new one keeps its last); true when some slot's answers state
+/// `state_seq`. What the adapters poll between a state and their decision.
+pub fn poll_slots(
+    channels: [&phri_ipc::Subscriber<TorqueCommand>; SLOTS],
+    newest: &mut [Option<TorqueCommand>; SLOTS],
+    state_seq: u64,
+) -> Result<bool, phri_ipc::IpcError> {
+    for (slot, channel) in newest.iter_mut().zip(channels) {
+        if let Some(c) = channel.latest()? {
+            *slot = Some(c);
+        }
+    }
+    Ok(newest
+        .iter()
+        .flatten()
+        .any(|c| RobotLink::answers(c, state_seq)))
+}
+
 /// The largest joint difference between two torques \[Nm\].
 fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
     a.iter()

@@ -10,7 +10,9 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_control::standby::{fresher_residual, inputs_fresh, BehaviourInbox, Duty, Slot, Standby};
+use phri_control::standby::{
+    fresher_residual, inputs_fresh, save_behaviour, BehaviourInbox, Duty, Slot, Standby,
+};
 use phri_control::{
     write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, Controller,
     InputGate, RepulsionInputs, Stamps,
@@ -233,26 +235,18 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                     inbox.push(b);
                 }
             })?;
-            let before = state.seq.saturating_sub(1);
-            if let Some(b) = inbox
-                .after_state(before)
-                .filter(|_| role.should_adopt(&state, before))
-            {
-                let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
-                match controller.adopt_behaviour(bytes) {
-                    Ok(()) => {
-                        role.adopted(&state);
-                        // one numbering of the messages, whoever is in charge
-                        seq = b.seq;
-                    }
-                    Err(error) => {
-                        behaviour_refused += 1;
-                        if behaviour_refused.is_power_of_two() {
-                            log.post(Note::Behaviour {
-                                error,
-                                count: behaviour_refused,
-                            });
-                        }
+            let before = inbox.after_state(state.seq.saturating_sub(1));
+            match role.adopt(&mut controller, &state, before) {
+                // one numbering of the messages, whoever is in charge
+                Ok(true) => seq = before.map_or(seq, |b| b.seq),
+                Ok(false) => {}
+                Err(error) => {
+                    behaviour_refused += 1;
+                    if behaviour_refused.is_power_of_two() {
+                        log.post(Note::Behaviour {
+                            error,
+                            count: behaviour_refused,
+                        });
                     }
                 }
             }
@@ -282,15 +276,10 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         collab_pub.publish(&collab_state)?;
         write_ssm_status(&controller, &state, seq, now_ns(), &mut ssm_status);
         ssm_pub.publish(&ssm_status)?;
-        if with_standby {
-            if let Ok(len) = controller.save_behaviour(&mut behaviour.bytes) {
-                behaviour.seq = seq;
-                behaviour.stamp_ns = now_ns();
-                behaviour.state_seq = state.seq;
-                behaviour.state_stamp_ns = state.stamp_ns;
-                behaviour.len = len as u32;
-                behaviour_pub.publish(&behaviour)?;
-            }
+        if with_standby
+            && save_behaviour(&controller, &state, seq, now_ns(), &mut behaviour).is_ok()
+        {
+            behaviour_pub.publish(&behaviour)?;
         }
     }
     Ok(())

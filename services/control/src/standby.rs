@@ -19,7 +19,7 @@
 use phri_config::ControlConfig;
 use phri_ipc::{residual_flags, robot_status, ControlBehaviour, JointState, Residual, Zeroed};
 
-use crate::Controller;
+use crate::{Controller, SnapshotError};
 
 /// A behaviour adopted this many states back at most keeps a standby in sync.
 pub const SYNC_STATES: u64 = 2;
@@ -93,6 +93,46 @@ impl Standby {
             command: in_charge || braked || (in_sync && inputs_fresh),
         }
     }
+}
+
+impl Standby {
+    /// Before the step of `state`: adopt `behaviour` (the newest the peer
+    /// left) when it is the one of the state before and this controller is
+    /// not in charge. `Ok(true)`: adopted; a refused one changes nothing.
+    pub fn adopt(
+        &mut self,
+        controller: &mut Controller,
+        state: &JointState,
+        behaviour: Option<&ControlBehaviour>,
+    ) -> Result<bool, SnapshotError> {
+        let Some(b) =
+            behaviour.filter(|b| b.state_seq > 0 && self.should_adopt(state, b.state_seq))
+        else {
+            return Ok(false);
+        };
+        let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
+        controller.adopt_behaviour(bytes)?;
+        self.adopted(state);
+        Ok(true)
+    }
+}
+
+/// `controller`'s behaviour after its step of `state` into `msg`, numbered
+/// `seq` (the controller's message numbering) and stamped `stamp_ns`.
+pub fn save_behaviour(
+    controller: &Controller,
+    state: &JointState,
+    seq: u64,
+    stamp_ns: u64,
+    msg: &mut ControlBehaviour,
+) -> Result<(), SnapshotError> {
+    let len = controller.save_behaviour(&mut msg.bytes)?;
+    msg.seq = seq;
+    msg.stamp_ns = stamp_ns;
+    msg.state_seq = state.seq;
+    msg.state_stamp_ns = state.stamp_ns;
+    msg.len = len as u32;
+    Ok(())
 }
 
 /// Were `controller`'s safety inputs fresh in its last step: the residual

@@ -16,7 +16,7 @@ use phri_ipc::{
     BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
     ROBOT_COMMANDERS, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS,
 };
-use phri_robot::{CycleTiming, LinkOutput, RobotLink, GRACE_POLL_NS};
+use phri_robot::{poll_slots, CycleTiming, LinkOutput, GRACE_POLL_NS};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
 /// The adapter's own flag.
@@ -210,16 +210,11 @@ fn body() -> Result<(), Box<dyn Error>> {
             &mut state,
         );
         state_pub.publish(&state)?;
-        let mut newest: [Option<TorqueCommand>; 2] = [commands.latest()?, standby.latest()?];
-        while !newest.iter().flatten().any(|c| RobotLink::answers(c, seq))
+        let mut newest: [Option<TorqueCommand>; 2] = [None, None];
+        while !poll_slots([&commands, &standby], &mut newest, seq)?
             && now_ns() < published + ANSWER_BUDGET_NS
         {
             sleep_until_ns(now_ns() + GRACE_POLL_NS);
-            for (slot, sub) in newest.iter_mut().zip([&commands, &standby]) {
-                if let Some(c) = sub.latest()? {
-                    *slot = Some(c);
-                }
-            }
         }
         let timing = CycleTiming {
             state_published_ns: published,

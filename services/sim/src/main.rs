@@ -27,7 +27,7 @@ use phri_ipc::{
     ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
 };
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
-use phri_sim::link::GRACE_POLL_NS;
+use phri_sim::link::{poll_slots, GRACE_POLL_NS};
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
     fill_state, fill_truth, fill_world, forces_out::ForcesDatagram, ContactLog, CycleTiming,
@@ -140,20 +140,14 @@ fn body() -> Result<(), Box<dyn Error>> {
             sleep_until_ns(tick);
             let wake = link.wake(tick, now_ns());
             tick = wake.deadline_ns;
-            let mut newest = [commands.latest()?, standby.latest()?];
+            let mut newest = [None, None];
+            poll_slots([&commands, &standby], &mut newest, seq)?;
             if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
                 // the machine stalled us and maybe the controller too: in
                 // simulated time the cycle is not over yet
                 while now_ns() < until {
                     sleep_until_ns(now_ns() + GRACE_POLL_NS);
-                    let mut answered = false;
-                    for (slot, sub) in newest.iter_mut().zip([&commands, &standby]) {
-                        if let Some(c) = sub.latest()? {
-                            answered |= RobotLink::answers(&c, seq);
-                            *slot = Some(c);
-                        }
-                    }
-                    if answered {
+                    if poll_slots([&commands, &standby], &mut newest, seq)? {
                         break;
                     }
                 }

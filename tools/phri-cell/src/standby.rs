@@ -5,27 +5,9 @@
 //! step; the robot link applies the answer of the one in charge, or the
 //! other's in the same period.
 
-use phri_control::standby::{inputs_fresh, Slot, Standby};
+use phri_control::standby::{inputs_fresh, save_behaviour, Slot, Standby};
 use phri_control::Controller;
-use phri_ipc::{JointState, TorqueCommand, BEHAVIOUR_BYTES};
-
-/// One controller's behaviour state after a step, as the peer reads it.
-pub(crate) struct Behaviour {
-    /// the state whose step left it (0: none)
-    pub state_seq: u64,
-    pub len: usize,
-    pub bytes: Vec<u8>,
-}
-
-impl Behaviour {
-    fn new() -> Behaviour {
-        Behaviour {
-            state_seq: 0,
-            len: 0,
-            bytes: vec![0; BEHAVIOUR_BYTES],
-        }
-    }
-}
+use phri_ipc::{ControlBehaviour, JointState, TorqueCommand, Zeroed};
 
 /// The hot standby's controller (slot 1; slot 0 is the cell's `controller`)
 /// and both slots' places.
@@ -53,8 +35,8 @@ pub(crate) struct Slots {
     pub roles: [Standby; 2],
     /// each slot's newest command (kept while it is down)
     pub commands: [Option<TorqueCommand>; 2],
-    /// each slot's behaviour after its last step in charge
-    pub behaviours: [Behaviour; 2],
+    /// each slot's behaviour after its last step in charge (state 0: none)
+    pub behaviours: [Box<ControlBehaviour>; 2],
     /// adoptions refused (a layout mismatch): none expected
     pub refused: u64,
     /// `[control]` as the controllers run it (their inputs' staleness bounds)
@@ -67,7 +49,10 @@ impl Slots {
             control,
             roles: [Standby::new(Slot::First), Standby::new(Slot::Standby)],
             commands: [None, None],
-            behaviours: [Behaviour::new(), Behaviour::new()],
+            behaviours: [
+                Box::new(ControlBehaviour::zeroed()),
+                Box::new(ControlBehaviour::zeroed()),
+            ],
             refused: 0,
         }
     }
@@ -85,12 +70,11 @@ impl Slots {
     /// of the state before, if it left one and `slot` is not in charge.
     pub fn adopt(&mut self, slot: usize, controller: &mut Controller, state: &JointState) {
         let peer = &self.behaviours[1 - slot];
-        if peer.state_seq == 0 || !self.roles[slot].should_adopt(state, peer.state_seq) {
-            return;
-        }
-        match controller.adopt_behaviour(&peer.bytes[..peer.len]) {
-            Ok(()) => self.roles[slot].adopted(state),
-            Err(_) => self.refused += 1,
+        if self.roles[slot]
+            .adopt(controller, state, Some(peer))
+            .is_err()
+        {
+            self.refused += 1;
         }
     }
 
@@ -109,12 +93,8 @@ impl Slots {
         }
         if duty.in_charge {
             let b = &mut self.behaviours[slot];
-            match controller.save_behaviour(&mut b.bytes) {
-                Ok(len) => {
-                    b.len = len;
-                    b.state_seq = state.seq;
-                }
-                Err(_) => b.state_seq = 0,
+            if save_behaviour(controller, state, cmd.seq, state.stamp_ns, b).is_err() {
+                b.state_seq = 0;
             }
         }
     }
