@@ -98,12 +98,13 @@ fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
         );
     }
     // no command lost for long (the server enforces FCI's communication
-    // constraints: the motion would have ended); over its last 100, at most
-    // one late from this test thread, which is not real-time. The cell's
-    // figure, averaged over a run with the real-time adapter, is held to
-    // 0.999 by the hybrid tests
+    // constraints: 20 lost in a row would have ended the motion and failed
+    // `read_once` above); over its last 100, a few late from this test
+    // thread, which is not real-time and shares 2 cores with the MuJoCo
+    // server (CI saw 2). The cell's figure, averaged over a run with the
+    // real-time adapter, is held to 0.999 by the hybrid tests
     assert!(
-        s.control_command_success_rate >= 0.99,
+        s.control_command_success_rate >= 0.95,
         "{}",
         s.control_command_success_rate
     );
