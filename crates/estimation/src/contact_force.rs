@@ -125,6 +125,22 @@ impl ForceEstimator {
         Ok(())
     }
 
+    /// Take the kinematics at joints `q` \[rad\] that `from` holds (a
+    /// workspace of the same model after [`phri_model::all_terms`] or
+    /// [`phri_model::forward_kinematics`] at `q`), so the estimates and
+    /// placements of this period cost no pass of their own. A workspace of
+    /// another size is ignored (returns false): the estimator computes its own.
+    pub fn share_kinematics(&mut self, from: &Data, q: &[f64]) -> bool {
+        if from.body.len() != self.data.body.len() || q.len() != self.kinematics_of.len() {
+            return false;
+        }
+        self.data.body.copy_from_slice(&from.body);
+        self.data.s.copy_from_slice(&from.s);
+        self.kinematics_of.copy_from_slice(q);
+        self.kinematics_valid = true;
+        true
+    }
+
     pub fn model(&self) -> &Model {
         &self.model
     }

@@ -315,6 +315,35 @@ pub fn residual_terms(
     Ok(())
 }
 
+/// Every term the torque law needs at one state, in one pass of the
+/// kinematics, as Pinocchio's `computeAllTerms`: the body placements and
+/// motion subspaces (so [`crate::frame_placement`] and
+/// [`crate::point_jacobian`] may follow without another
+/// [`crate::forward_kinematics`]), `M(q)` into `data.m`, `g(q)` into `data.g`
+/// and the bias `C(q, q̇) q̇ + g(q)` into `data.tau`. Gravity comes from the
+/// subtree masses and first moments the CRBA has summed anyway. Allocates
+/// nothing.
+pub fn all_terms(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+    check_q_qd(model, q, qd)?;
+    fk_pass(model, data, q);
+    inertia_pass(model, data);
+    crba_pass(model, data);
+    // data.composite[i] now holds subtree i's inertia: its m and h are the
+    // subtree mass and first moment gravity needs
+    let a0 = -model.gravity;
+    data.g.fill(0.0);
+    for (i, j) in model.joints.iter().enumerate() {
+        let ci = &data.composite[i];
+        data.g[j.idx_v] += data.s[i].dot(&Force {
+            n: ci.h.cross(&a0),
+            f: a0 * ci.m,
+        });
+    }
+    rnea_pass(model, data, qd, None, base_acceleration(model));
+    project(model, data, |d| &mut d.tau);
+    Ok(())
+}
+
 /// Forward dynamics `q̈ = M⁻¹ (τ − C q̇ − g)` into `data.qdd` (CRBA, RNEA and
 /// an in-place Cholesky solve; nothing allocated).
 pub fn forward_dynamics<'a>(

@@ -45,8 +45,8 @@ mod xml_depth;
 pub use cholesky::{cholesky_factor, cholesky_solve, NotPositiveDefinite};
 pub use data::Data;
 pub use dynamics::{
-    coriolis_matrix, coriolis_times_qd, coriolis_transpose_times_qd, crba, forward_dynamics,
-    gravity, kinetic_energy, momentum, potential_energy, residual_terms, rnea,
+    all_terms, coriolis_matrix, coriolis_times_qd, coriolis_transpose_times_qd, crba,
+    forward_dynamics, gravity, kinetic_energy, momentum, potential_energy, residual_terms, rnea,
 };
 pub use error::{check_len, LengthError, ModelError};
 pub use geometry::{parry_shapes, CollisionObject, Shape};

@@ -120,6 +120,44 @@ fn rnea_equals_m_qdd_plus_c_qd_plus_g_and_forward_dynamics_inverts_it() {
 }
 
 #[test]
+fn all_terms_in_one_pass_equal_each_term_alone() {
+    for (name, model) in models() {
+        let n = model.nv();
+        let (mut one, mut each) = (Data::new(&model), Data::new(&model));
+        let mut r = rng(7);
+        for _ in 0..STATES {
+            let q = random_vec(&mut r, n, 3.0);
+            let qd = random_vec(&mut r, n, 2.0);
+            all_terms(&model, &mut one, &q, &qd).unwrap();
+            let m = crba(&model, &mut each, &q).unwrap().clone();
+            let g = gravity(&model, &mut each, &q).unwrap().clone();
+            let bias = rnea(&model, &mut each, &q, &qd, &vec![0.0; n])
+                .unwrap()
+                .clone();
+            let scale = 1.0 + bias.amax() + m.amax();
+            assert!((&one.m - &m).amax() < 1e-12 * scale, "{name}: M");
+            assert!((&one.g - &g).amax() < 1e-12 * scale, "{name}: g");
+            assert!((&one.tau - &bias).amax() < 1e-12 * scale, "{name}: C q̇ + g");
+            // the placements are those of forward kinematics at q
+            forward_kinematics(&model, &mut each, &q).unwrap();
+            for f in 0..model.frames.len() {
+                let (a, b) = (
+                    frame_placement(&model, &one, f),
+                    frame_placement(&model, &each, f),
+                );
+                assert!(
+                    (a.p - b.p).norm() < 1e-14 && (a.r - b.r).amax() < 1e-14,
+                    "{name}: frame {f}"
+                );
+            }
+        }
+        // a state of the wrong length is refused, naming it
+        assert!(all_terms(&model, &mut one, &vec![0.0; n + 1], &vec![0.0; n]).is_err());
+        assert!(all_terms(&model, &mut one, &vec![0.0; n], &vec![0.0; n + 1]).is_err());
+    }
+}
+
+#[test]
 fn jacobians_match_finite_differences_of_forward_kinematics() {
     for (name, model) in models() {
         let n = model.nv();

@@ -500,19 +500,17 @@ impl Controller {
         dt
     }
 
-    /// The model terms and the end effector at the measured state.
+    /// The model terms and the end effector at the measured state, from one
+    /// pass of the kinematics shared by both. A state the model refuses
+    /// keeps the last terms and end effector (counted).
     fn measure(&mut self, q: &[f64], qd: &[f64]) {
-        self.counters.model_errors += self.terms.update(&self.model, &mut self.data, q, qd);
-        self.ee = self.ee_at(q);
-    }
-
-    /// The end effector at `q` \[m\]; the origin (counted) if the model refuses `q`.
-    fn ee_at(&mut self, q: &[f64]) -> Vector3<f64> {
-        match self.resolver.ee_position(&self.model, &mut self.data, q) {
-            Ok(x) => x,
-            Err(_) => {
-                self.counters.model_errors += 1;
-                Vector3::zeros()
+        let errors = self.terms.update(&self.model, &mut self.data, q, qd);
+        self.counters.model_errors += errors;
+        if errors == 0 {
+            let frame = self.resolver.ee_frame();
+            self.ee = phri_model::frame_placement(&self.model, &self.data, frame).p;
+            if let Some(c) = self.collab.as_mut() {
+                c.share_kinematics(&self.data, q);
             }
         }
     }
@@ -635,8 +633,7 @@ impl Controller {
                 protective_stop::enter(&mut self.reference, q);
             }
             (_, Recover) => {
-                let ee = self.ee_at(q);
-                recover::enter(&mut self.reference, q, ee);
+                recover::enter(&mut self.reference, q, self.ee);
                 self.quiet_since = None;
             }
             (_, Sync) => self.reference.hold_here(q),
@@ -650,8 +647,7 @@ impl Controller {
         if self.posture.is_empty() {
             self.posture.extend_from_slice(q);
         }
-        let from = self.ee_at(q);
-        self.task.start(from);
+        self.task.start(self.ee);
         self.history.clear();
     }
 

@@ -9,7 +9,7 @@
 
 use nalgebra::{Matrix6xX, Vector3};
 use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
-use phri_model::{Data, Model, ModelError};
+use phri_model::{Data, Model};
 
 use crate::avoidance::Avoidance;
 use crate::clik::{Clik, ClikGains};
@@ -244,14 +244,9 @@ impl Resolver {
         self.points.len()
     }
 
-    /// Position of the end effector at `q` \[m\], base frame.
-    pub fn ee_position(
-        &self,
-        model: &Model,
-        data: &mut Data,
-        q: &[f64],
-    ) -> Result<Vector3<f64>, ModelError> {
-        self.clik.position(model, data, q)
+    /// The end effector's frame (its origin is the task point).
+    pub fn ee_frame(&self) -> usize {
+        self.clik.frame()
     }
 
     /// Task scale of the last SNS solution (1 without perception).

@@ -13,7 +13,6 @@ pub struct DynamicsTerms {
     pub gravity: Vec<f64>,
     /// bias torque `C(q, q̇) q̇ + g(q)` \[Nm\]
     pub bias: Vec<f64>,
-    zeros: Vec<f64>,
 }
 
 impl DynamicsTerms {
@@ -22,30 +21,25 @@ impl DynamicsTerms {
             m_diag: vec![0.0; n],
             gravity: vec![0.0; n],
             bias: vec![0.0; n],
-            zeros: vec![0.0; n],
         }
     }
 
-    /// The terms at (`q` \[rad\], `q̇` [rad/s]); `M` lands in `data.m`. Returns
-    /// how many model calls failed: a failed call leaves its term as it was
-    /// in the previous period (fail-safe: the last good value).
+    /// The terms at (`q` \[rad\], `q̇` [rad/s]), in one pass of the
+    /// kinematics ([`phri_model::all_terms`]): `M` lands in `data.m`, and
+    /// `data` holds the body placements at `q` for whoever reads them next.
+    /// Returns how many model calls failed (0 or 1): a refused state leaves
+    /// every term and `data` as they were in the previous period
+    /// (fail-safe: the last good values).
     pub fn update(&mut self, model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> u64 {
-        let mut errors = 0;
-        if phri_model::crba(model, data, q).is_err() {
-            errors += 1;
+        if phri_model::all_terms(model, data, q, qd).is_err() {
+            return 1;
         }
         for i in 0..self.m_diag.len() {
             self.m_diag[i] = data.m[(i, i)];
         }
-        match phri_model::gravity(model, data, q) {
-            Ok(g) => self.gravity.copy_from_slice(g.as_slice()),
-            Err(_) => errors += 1,
-        }
-        match phri_model::rnea(model, data, q, qd, &self.zeros) {
-            Ok(b) => self.bias.copy_from_slice(b.as_slice()),
-            Err(_) => errors += 1,
-        }
-        errors
+        self.gravity.copy_from_slice(data.g.as_slice());
+        self.bias.copy_from_slice(data.tau.as_slice());
+        0
     }
 }
 
@@ -76,8 +70,8 @@ mod tests {
             );
         }
         assert!(terms.m_diag.iter().all(|m| *m > 0.0));
-        // a state the model refuses: three calls fail, the terms stay
-        assert_eq!(terms.update(&model, &mut data, &q[..3], &[0.0; 3]), 3);
+        // a state the model refuses: the call fails, the terms stay
+        assert_eq!(terms.update(&model, &mut data, &q[..3], &[0.0; 3]), 1);
         assert_eq!(terms.gravity, g);
     }
 }

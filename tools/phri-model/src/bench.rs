@@ -129,6 +129,19 @@ pub(crate) fn run(args: &BenchArgs) -> Result<String, String> {
     let fd = median_ns(samples, &model, &mut data, 8, |m, d, q, qd| {
         black_box(phri_model::forward_dynamics(m, d, q, qd, &zero).is_ok());
     });
+    // what the controller computed per period before the one pass: CRBA,
+    // gravity, RNEA and the end effector's kinematics, each from scratch
+    let separate = median_ns(samples, &model, &mut data, 9, |m, d, q, qd| {
+        black_box(phri_model::crba(m, d, q).is_ok());
+        black_box(phri_model::gravity(m, d, q).is_ok());
+        black_box(phri_model::rnea(m, d, q, qd, &zero).is_ok());
+        black_box(phri_model::forward_kinematics(m, d, q).is_ok());
+        black_box(phri_model::frame_placement(m, d, last));
+    });
+    let all = median_ns(samples, &model, &mut data, 9, |m, d, q, qd| {
+        black_box(phri_model::all_terms(m, d, q, qd).is_ok());
+        black_box(phri_model::frame_placement(m, d, last));
+    });
     let out = json!({
         "robot": model.name,
         "dof": n,
@@ -142,6 +155,8 @@ pub(crate) fn run(args: &BenchArgs) -> Result<String, String> {
         "coriolis_ns": coriolis,
         "residual_terms_ns": residual,
         "forward_dynamics_ns": fd,
+        "terms_separately_ns": separate,
+        "all_terms_ns": all,
     });
     Ok(out.to_string())
 }

@@ -382,6 +382,12 @@ impl Collaboration {
         self.cfg.on_request == OnRequest::Complete
     }
 
+    /// Hand the force estimator the kinematics at `q` the controller
+    /// computed this period (its workspace of the same model).
+    pub fn share_kinematics(&mut self, data: &phri_model::Data, q: &[f64]) {
+        self.forces.share_kinematics(data, q);
+    }
+
     pub fn machine(&self) -> &CollabMachine {
         &self.machine
     }
