@@ -69,6 +69,17 @@ impl Clik {
         self.frame
     }
 
+    /// Position of the point at `q` \[m\], base frame.
+    pub fn position(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+    ) -> Result<Vector3<f64>, ModelError> {
+        phri_model::forward_kinematics(model, data, q)?;
+        Ok(phri_model::frame_placement(model, data, self.frame).p)
+    }
+
     /// One step: move `q_ref` so the point follows (`x_d` \[m\], `xd_d` [m/s],
     /// base frame), the redundancy pulling towards `posture`; velocities
     /// scaled uniformly into `vmax`. Returns the reference velocity [rad/s].
