@@ -30,6 +30,7 @@ pub mod body_task;
 pub mod clik;
 pub mod collab;
 pub mod controller;
+pub mod cut;
 pub mod error;
 pub mod history;
 pub mod inputs;

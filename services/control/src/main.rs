@@ -10,6 +10,7 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
+use phri_control::cut::{CutLatest, HeldBack};
 use phri_control::standby::{
     fresher_residual, inputs_fresh, save_behaviour, BehaviourInbox, Duty, Slot, Standby,
 };
@@ -127,6 +128,11 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         .map(|c| c.skeleton.latest_reader(&node))
         .collect::<Result<Vec<_>, _>>()?;
     let mut skeleton = phri_ipc::Skeleton::zeroed();
+    // with a standby, the perception as of each state's publication (phri_control::cut)
+    let mut held_results =
+        HeldBack::with_capacity(4 * cfg.repulsion.workers.max(1) as usize * results.len());
+    let mut cut_skeletons = [CutLatest::default(); phri_ipc::MAX_CAMERAS];
+    let mut cut_hands = [CutLatest::default(); phri_ipc::MAX_CAMERAS];
     let skeleton_spread_ns = (cfg.control.perception_max_age_ms * 1e6) as u64;
     // every camera's refined hand; the first camera's that observes it counts (phri_ipc::best_hand)
     let mut hands = phri_ipc::cameras(repulsion.cameras())
@@ -164,6 +170,11 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         };
         let woke_ns = now_ns();
         let now = state.stamp_ns;
+        // two controllers answering this state act on what was published before it
+        let cut = match with_standby {
+            true => state.published_ns,
+            false => u64::MAX,
+        };
         // the newest residual of this robot's dof; an older one stays until then
         residuals.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
         if let Some(s) = standby_residuals.as_mut() {
@@ -174,10 +185,15 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
             standby_residuals.as_ref().and_then(|s| s.get()),
         );
         // refused results are counted by the accumulator (perception then turns stale)
+        held_results.release(cut, |camera, r| {
+            let _ = repulsion.push_camera(camera, r);
+        });
         for (camera, results) in results.iter().enumerate() {
             results.drain_from(|pid, r| {
                 if gate.repulsion(pid, r, now) {
-                    let _ = repulsion.push_camera(camera, r);
+                    held_results.offer(camera, r, cut, |camera, r| {
+                        let _ = repulsion.push_camera(camera, r);
+                    });
                 }
             })?;
         }
@@ -211,15 +227,31 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             let mut views = [None; phri_ipc::MAX_CAMERAS];
-            for (v, r) in views.iter_mut().zip(skeletons.iter_mut()) {
+            for ((v, r), c) in views
+                .iter_mut()
+                .zip(skeletons.iter_mut())
+                .zip(&mut cut_skeletons)
+            {
                 r.update_from(|pid, s| gate.skeleton(pid, s, now))?;
-                *v = r.get();
+                c.release(cut);
+                if let Some(s) = r.get() {
+                    c.offer(s, cut);
+                }
+                *v = c.get();
             }
             let seen = phri_ipc::merge_newest(&views, skeleton_spread_ns, &mut skeleton);
             let mut seen_hands = [None; phri_ipc::MAX_CAMERAS];
-            for (v, r) in seen_hands.iter_mut().zip(hands.iter_mut()) {
+            for ((v, r), c) in seen_hands
+                .iter_mut()
+                .zip(hands.iter_mut())
+                .zip(&mut cut_hands)
+            {
                 r.update_from(|pid, h| gate.hand(pid, h, now))?;
-                *v = r.get();
+                c.release(cut);
+                if let Some(h) = r.get() {
+                    c.offer(h, cut);
+                }
+                *v = c.get();
             }
             let hand = phri_ipc::best_hand(&seen_hands, skeleton_spread_ns);
             input.collab = CollabInput {
