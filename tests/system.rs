@@ -422,23 +422,40 @@ fn killing_the_controller_brakes_then_resumes_without_a_jump() {
     assert_eq!(r["false_detections"], 0);
 }
 
-/// The controller in charge now, as the robot's newest state says
-/// (`control` or `control_standby`).
-fn in_charge(cell: &Cell) -> &'static str {
-    let node = phri_ipc::node("test-in-charge", &cell.prefix).unwrap();
-    let states = phri_ipc::ROBOT_STATE
-        .subscriber(&node, phri_ipc::Queue::Latest)
-        .unwrap();
-    let deadline = Instant::now() + Duration::from_secs(2);
-    loop {
-        if let Some(s) = states.latest().unwrap() {
-            return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
-                0 => "control",
-                _ => "control_standby",
-            };
+/// Who commands the robot, read from its newest state through one node and
+/// subscriber opened before the faults: a node and subscriber created
+/// mid-run make the robot's publisher connect them in its 1 kHz loop, and
+/// the test should not be what costs a deadline.
+struct Charge {
+    _node: phri_ipc::IpcNode,
+    states: phri_ipc::Subscriber<phri_ipc::JointState>,
+}
+
+impl Charge {
+    fn watch(cell: &Cell) -> Charge {
+        let node = phri_ipc::node("test-in-charge", &cell.prefix).unwrap();
+        let states = phri_ipc::ROBOT_STATE
+            .subscriber(&node, phri_ipc::Queue::Latest)
+            .unwrap();
+        Charge {
+            _node: node,
+            states,
         }
-        assert!(Instant::now() < deadline, "no robot/state");
-        wait(0.01);
+    }
+
+    /// The controller in charge now (`control` or `control_standby`).
+    fn now(&self) -> &'static str {
+        let deadline = Instant::now() + Duration::from_secs(2);
+        loop {
+            if let Some(s) = self.states.latest().unwrap() {
+                return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
+                    0 => "control",
+                    _ => "control_standby",
+                };
+            }
+            assert!(Instant::now() < deadline, "no robot/state");
+            wait(0.01);
+        }
     }
 }
 
@@ -471,12 +488,14 @@ fn nothing_missed(r: &Value, from_s: f64, span_s: f64) {
 fn killing_either_controller_costs_the_torque_loop_nothing() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("kstandby", "free-motion", Some(14.0), &[]);
+    wait(1.0);
+    let charge = Charge::watch(&cell);
     // the controller in charge dies, twice: the other answers the same period
-    wait(4.0);
-    let first = in_charge(&cell);
+    wait(3.0);
+    let first = charge.now();
     cell.kill(first, libc::SIGKILL);
     wait(4.0);
-    let second = in_charge(&cell);
+    let second = charge.now();
     cell.kill(second, libc::SIGKILL);
     let r = cell.finish();
     eprintln!("killed {first}, then {second}; control: {}", r["control"]);
@@ -513,16 +532,18 @@ fn killing_either_controller_costs_the_torque_loop_nothing() {
 fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_standby() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("stopctl", "free-motion", Some(12.0), &[]);
-    wait(4.0);
+    wait(1.0);
+    let charge = Charge::watch(&cell);
+    wait(3.0);
     // the controller in charge stops (SIGSTOP) for 0.5 s, then the one in
     // charge 3 s later for 0.3 s: the other commands meanwhile; the first
     // woke as the standby, and commands again only once re-synced
     let mut stopped = Vec::new();
     for (hold, rest) in [(0.5, 3.0), (0.3, 1.0)] {
-        let who = in_charge(&cell);
+        let who = charge.now();
         let pid = cell.kill(who, libc::SIGSTOP);
         wait(0.2);
-        let meanwhile = in_charge(&cell);
+        let meanwhile = charge.now();
         wait(hold - 0.2);
         // SAFETY: kill(2) on the controller stopped above.
         assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
@@ -580,16 +601,23 @@ fn both_controllers_killed_at_once_brake_and_resume_as_one_did_alone() {
         .iter()
         .any(|e| e["t_s"].as_f64().unwrap() >= t_restart - 0.01));
     // nobody took over while both were dead: a start from the brakes is none
-    let dead = takeovers(&r).iter().any(|k| {
+    let braked = events(&r, "brake", "sim")[0]["t_s"].as_f64().unwrap();
+    for k in takeovers(&r) {
         let at = k["t_s"].as_f64().unwrap();
-        at > t_restart - 0.6 && at < t_restart + 0.2
-    });
-    // the two kills are two syscalls: the standby may answer a period or
-    // two between them (a takeover), never longer
-    let standby_periods = r["control"]["periods_commanded"]["robot/command/standby"]
-        .as_u64()
-        .unwrap();
-    assert!(!dead || standby_periods < 50, "{}", r["control"]);
+        assert!(
+            !(braked..t_restart + 0.2).contains(&at),
+            "a takeover while braked: {}",
+            r["control"]
+        );
+        // the two kills are two syscalls: the standby may answer a period
+        // or two between them (a takeover just before the brake: 20 missing
+        // commands, the event reported at 10 Hz), never longer
+        assert!(
+            at < braked - 0.5 || braked - at < 0.25,
+            "the standby commanded between the kills: {}",
+            r["control"]
+        );
+    }
     assert_eq!(r["false_detections"], 0);
 }
 
