@@ -947,8 +947,11 @@ pub struct CommanderStats {
     pub last_takeover_state_seq: u64,
     /// the slot that took over
     pub last_takeover_to: u32,
-    #[serde(skip)]
-    pub _pad2: u32,
+    /// the yardstick of a takeover's difference: the largest joint change
+    /// of the applied command from one period to the next without a
+    /// takeover, both periods fresh and the brakes off [Nm]. Was padding:
+    /// the layout and size are unchanged.
+    pub max_step_nm: f32,
     /// largest joint difference between the command taking over and the
     /// last command applied before [Nm]
     #[serde(with = "crate::json::finite")]

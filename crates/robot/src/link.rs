@@ -391,6 +391,11 @@ impl RobotLink {
                 self.stats.latency_max_ns = self.stats.latency_max_ns.max(latency);
                 let c = &mut self.commanders;
                 c.periods[slot] += 1;
+                // what one period changes, where no takeover is involved
+                if slot == primary && self.last.fresh && !self.last.brake {
+                    let step = largest_difference(&cmd.tau[..n], &self.last.tau[..n]);
+                    c.max_step_nm = c.max_step_nm.max(step as f32);
+                }
                 if slot != primary {
                     self.last.in_charge = slot;
                     c.in_charge = slot as u32;

@@ -403,3 +403,28 @@ fn both_controllers_dead_still_brake_and_whichever_answers_first_resumes() {
     assert!(out.fresh && !out.brake && out.in_charge == 1 && !out.takeover);
     assert_eq!(link.commanders().takeovers, 0);
 }
+
+/// The yardstick of a takeover: the largest change of the applied command
+/// from one fresh period to the next, takeovers and missed periods left out.
+#[test]
+fn the_step_of_one_period_is_measured_apart_from_takeovers() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    // a ramp of 0.25 Nm a period from the primary
+    for seq in 1..=10 {
+        let a = command(seq, seq, 0, 0.25 * seq as f64);
+        cycle2(&mut link, Some(&a), None, seq);
+    }
+    assert_eq!(link.commanders().max_step_nm, 0.25);
+    // the standby takes over with a 3 Nm jump: a takeover, not a step
+    let b = command(1011, 11, 0, 5.5);
+    assert!(cycle2(&mut link, None, Some(&b), 11).takeover);
+    assert_eq!(link.commanders().last_takeover_diff_nm, 3.0);
+    // a missed period, then a fresh answer 2 Nm away: no period's step either
+    cycle2(&mut link, None, None, 12);
+    let b = command(1013, 13, 0, 7.5);
+    assert!(cycle2(&mut link, None, Some(&b), 13).fresh);
+    // the next period's 0.5 Nm is one
+    let b = command(1014, 14, 0, 8.0);
+    cycle2(&mut link, None, Some(&b), 14);
+    assert_eq!(link.commanders().max_step_nm, 0.5);
+}

@@ -50,6 +50,10 @@ pub struct ControlReport {
     /// the largest joint difference between the two controllers' answers to
     /// the same state \[Nm\] (null: never both)
     pub max_answer_diff_nm: Option<f64>,
+    /// the yardstick of `max_takeover_diff_nm`: the largest joint change of
+    /// the applied command from one period to the next without a takeover
+    /// \[Nm\] (null: no two fresh periods)
+    pub max_period_step_nm: Option<f64>,
 }
 
 /// Reads `robot/commanders` into a [`ControlReport`].
@@ -61,6 +65,7 @@ pub struct StandbyEvaluator {
     last: Option<CommanderStats>,
     max_answer: f64,
     max_takeover: f64,
+    max_step: f64,
 }
 
 impl StandbyEvaluator {
@@ -104,6 +109,9 @@ impl StandbyEvaluator {
         if m.both_answered > 0 {
             self.max_answer = self.max_answer.max(m.max_answer_diff_nm);
         }
+        if m.max_step_nm.is_finite() {
+            self.max_step = self.max_step.max(f64::from(m.max_step_nm));
+        }
         self.last = Some(*m);
     }
 
@@ -119,6 +127,7 @@ impl StandbyEvaluator {
         r.takeover_count = self.base.2 + l.takeovers;
         r.max_takeover_diff_nm = (r.takeover_count > 0).then_some(self.max_takeover);
         r.max_answer_diff_nm = (r.both_answered > 0).then_some(self.max_answer);
+        r.max_period_step_nm = (self.max_step > 0.0).then_some(self.max_step);
         r
     }
 }
@@ -206,6 +215,7 @@ mod tests {
             last_takeover_diff_nm: diff,
             max_takeover_diff_nm: diff,
             max_answer_diff_nm: 0.01,
+            max_step_nm: 0.5 * seq as f32,
             ..CommanderStats::zeroed()
         }
     }
@@ -230,6 +240,8 @@ mod tests {
         assert_eq!(r.periods_commanded["robot/command/standby"], 160);
         assert_eq!(r.max_takeover_diff_nm, Some(0.4));
         assert_eq!(r.max_answer_diff_nm, Some(0.01));
+        // the largest step over both adapters' runs
+        assert_eq!(r.max_period_step_nm, Some(1.5));
     }
 
     #[test]
