@@ -3,7 +3,7 @@
 //! ground-truth contact whose joint torque is `Jᵀ F`). Geometry and physics,
 //! measured on the capsules and the simulator's truth.
 
-mod common;
+use crate::common;
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use phri_config::{Scenario, SimConfig};

@@ -4,7 +4,7 @@
 //! controller and a restarted residual, with the real robot link between
 //! controller and arm.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use phri_cell::{Cell, CellOptions, Down, Outage};

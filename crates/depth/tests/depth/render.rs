@@ -1,8 +1,8 @@
 //! The z-buffer renderer against analytic ray intersections.
 
-mod common;
+use crate::common;
 
-use common::{front_camera, pixel_ray, sphere_trace};
+use crate::common::{front_camera, pixel_ray, sphere_trace};
 use nalgebra::{Point3, Vector3};
 use phri_depth::{
     sigma_z, Aabb, CameraPose, Capsule, DepthError, Intrinsics, RenderOptions, Renderer, LABEL_NONE,

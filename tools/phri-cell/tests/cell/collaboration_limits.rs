@@ -4,7 +4,7 @@
 //! off along the force by `back_off_m`, and the task resumes; no collision
 //! reaction, nothing unintended.
 
-mod common;
+use crate::common;
 
 use phri_cell::CellOptions;
 use phri_ipc::{CollabPhase, CollabReason};

@@ -6,7 +6,7 @@
 //! at the end effector and leaving (`collaboration`), and with the left hand
 //! resting on the wrist for the rest of the run (`voice-collaboration`).
 
-mod common;
+use crate::common;
 
 use phri_cell::{Cell, CellOptions};
 use phri_config::{Keyframe, Loaded};

@@ -5,7 +5,7 @@
 //! wrist by the other hand still ends it (within 0.5 s as scripted, the
 //! collaborative hand lowered; within 1 s while it rests on the wrist).
 
-mod common;
+use crate::common;
 
 use phri_cell::CellOptions;
 use phri_config::{Hand, Keyframe, Loaded, Push};

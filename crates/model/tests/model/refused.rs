@@ -1,6 +1,6 @@
 //! Every malformed or unsupported input is refused with a typed error naming the culprit.
 
-mod common;
+use crate::common;
 
 use phri_model::*;
 

@@ -1,7 +1,7 @@
 //! Physics of the simulated arm: energy, gravity, friction, brakes, end
 //! stops, encoders, contact forces and the dynamic identity they satisfy.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! Rotor inertia (armature): every algorithm sees the same `M + diag(a)`.
 
-mod common;
+use crate::common;
 
 use phri_model::{crba, forward_dynamics, momentum, rnea, Data};
 

@@ -10,9 +10,7 @@
 //!     deploy/robots/panda/panda.urdf@20
 //! ```
 
-mod common;
-
-use common::repo_path;
+use crate::common::repo_path;
 use nalgebra::Vector3;
 use phri_model::*;
 

@@ -8,7 +8,7 @@
 //! is `(J_cᵀ)^# r` at the true contact points with the residual computed
 //! from joint positions only.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use phri_cell::CellOptions;

@@ -5,9 +5,7 @@
 //! each against the configuration it replaced, so that the tests fail if
 //! the new behaviour stops doing its work.
 
-mod common;
-
-use common::run;
+use crate::common::run;
 use phri_cell::CellOptions;
 
 fn at(offset: f64) -> CellOptions {

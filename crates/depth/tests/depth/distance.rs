@@ -1,9 +1,9 @@
 //! Depth-space distances (paper eqs. 15-18) against Cartesian geometry, the
 //! occlusion rule and a brute-force scan of the whole image.
 
-mod common;
+use crate::common;
 
-use common::front_camera;
+use crate::common::front_camera;
 use nalgebra::{Point3, Vector3};
 use phri_depth::{
     Aabb, CameraPose, Capsule, DepthError, DepthSpaceDistance, Intrinsics, PointOfInterest,

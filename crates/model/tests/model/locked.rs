@@ -3,9 +3,7 @@
 //! arm: the same M block, the same gravity, the same RNEA torques at zero
 //! finger motion.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use phri_model::*;
 
 fn locked_panda(locked: &[&str]) -> Result<Model, ModelError> {

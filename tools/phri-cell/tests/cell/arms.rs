@@ -6,7 +6,7 @@
 //! Panda's hand still meets the person once in `coexistence`, at 10.9 s:
 //! an open shortcoming, in BENCHMARKS.md, not asserted here.)
 
-mod common;
+use crate::common;
 
 use phri_cell::CellOptions;
 use phri_ipc::CollabPhase;

@@ -1,6 +1,6 @@
 //! Removing the robot's own pixels from rendered robot + human frames.
 
-mod common;
+use crate::common;
 
 use nalgebra::Point3;
 use phri_depth::{

@@ -4,9 +4,7 @@
 //! This holds where Pinocchio cannot compare (a leader below its mimic,
 //! continuous joints), and on the Panda.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{DMatrix, DVector, Vector3};
 use phri_model::*;
 

@@ -3,7 +3,7 @@
 //! then the brakes hold the arm; a controller that comes back releases them
 //! and re-syncs.
 
-mod common;
+use crate::common;
 
 use phri_cell::{CellOptions, Down, Outage};
 use phri_ipc::{robot_status, ControlMode};

@@ -2,7 +2,7 @@
 //! the newest state's positions, its velocity their difference over the
 //! robot's clock, and a state it cannot use leaves it where it was.
 
-mod common;
+use crate::common;
 
 use phri_ipc::{JointState, Zeroed};
 use phri_sim::{Simulator, WorldFollower};

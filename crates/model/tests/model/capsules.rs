@@ -1,7 +1,7 @@
 //! Capsules added to a link (a robot file's, for a URDF with mesh
 //! collisions only): the segment rides on the link wherever the joints put it.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use phri_model::{forward_kinematics, frame_placement, Data, Shape};

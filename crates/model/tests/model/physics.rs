@@ -1,9 +1,7 @@
 //! Physical identities every dynamics term must satisfy, on the default robot,
 //! a generated tree with prismatic joints and random trees.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{DMatrix, DVector, Vector3};
 use phri_model::*;
 

@@ -2,7 +2,7 @@
 //! and the person's motion. (Parsing and its errors are tested with the
 //! parser, in `crates/config/tests/scenario.rs`.)
 
-mod common;
+use crate::common;
 
 use phri_config::Scenario;
 use phri_ipc::BodyPart;

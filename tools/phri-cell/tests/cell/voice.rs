@@ -4,7 +4,7 @@
 //! skeleton), into the controller. Deterministic: the same verdicts and
 //! phases on every run.
 
-mod common;
+use crate::common;
 
 use phri_cell::CellOptions;
 

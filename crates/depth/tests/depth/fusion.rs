@@ -2,9 +2,7 @@
 //! only one camera sees is still bounded from below, because what the other
 //! camera does not watch counts as occupied for it.
 
-mod common;
-
-use common::{human_capsules, lwr_points_of_interest, Q_REACH};
+use crate::common::{human_capsules, lwr_points_of_interest, Q_REACH};
 use nalgebra::Vector3;
 use phri_depth::{
     fuse, CameraPose, CameraView, Capsule, DepthSpaceDistance, Intrinsics, PointOfInterest,
