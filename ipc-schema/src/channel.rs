@@ -375,6 +375,16 @@ impl<T: Message> Publisher<T> {
     pub fn channel(&self) -> &'static str {
         self.channel
     }
+
+    /// Connect the readers that appeared since the last send, without
+    /// sending: a publisher that sends only now and then (a hot standby's,
+    /// until it takes charge) keeps its connections made, so its first
+    /// sends cost a real-time loop no more than the others. A failed
+    /// connection is retried at the next send.
+    pub fn update_connections(&self) {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        let _ = self.port.update_connections();
+    }
 }
 
 /// Subscriber of one channel.

@@ -50,6 +50,31 @@ pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     Ok(())
 }
 
+/// Move the calling thread, already under SCHED_FIFO, to `priority`
+/// (1-99): one syscall, nothing allocated, for a loop whose role changes
+/// its rank (a hot standby taking charge). A thread under the normal
+/// scheduler is left there (the machine refused SCHED_FIFO before).
+pub fn set_fifo_priority(priority: i32) -> Result<(), RtError> {
+    if priority <= 0 {
+        return Err(RtError::NoPriority);
+    }
+    // SAFETY: plain syscall on the calling thread.
+    if unsafe { libc::sched_getscheduler(0) } != libc::SCHED_FIFO {
+        return Ok(());
+    }
+    let param = libc::sched_param {
+        sched_priority: priority.min(99),
+    };
+    // SAFETY: plain syscall with valid arguments.
+    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
+        return Err(RtError::Scheduler {
+            priority,
+            source: std::io::Error::last_os_error(),
+        });
+    }
+    Ok(())
+}
+
 /// Return the calling thread to the normal scheduler (SCHED_OTHER), e.g.
 /// once its real-time loop has ended: waiting at real-time priority for a
 /// normal thread on the same CPU (the log writer's flush at exit) would

@@ -12,7 +12,8 @@ use std::time::Duration;
 
 use phri_control::cut::{CutLatest, HeldBack};
 use phri_control::standby::{
-    fresher_residual, inputs_fresh, save_behaviour, BehaviourInbox, Duty, Slot, Standby,
+    fresher_residual, inputs_fresh, save_behaviour, BehaviourInbox, Duty, RolePriority, Slot,
+    Standby,
 };
 use phri_control::{
     write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, Controller,
@@ -150,6 +151,11 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let mut refused = 0u64;
     let mut behaviour_refused = 0u64;
     ctx.go_realtime();
+    // with the standby, the loop's priority follows the role (the lower until in charge)
+    let mut rank = RolePriority::for_cell(cfg).filter(|_| with_standby && ctx.rt_priority > 0);
+    if let Some(p) = rank.as_mut().and_then(|r| r.change(false)) {
+        let _ = phri_runtime::rt::set_fifo_priority(p);
+    }
 
     let (mut cmd, mut status) = (TorqueCommand::zeroed(), ControlStatus::zeroed());
     let mut collab_state = CollabState::zeroed();
@@ -300,7 +306,16 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         if duty.command {
             commands.publish(&cmd)?;
         }
+        if let Some(p) = rank.as_mut().and_then(|r| r.change(duty.in_charge)) {
+            // refused: the priority stays (the supervisor's watch reports it)
+            let _ = phri_runtime::rt::set_fifo_priority(p);
+        }
         if !duty.in_charge {
+            // ready to take charge: the publishers of the one in charge connected
+            status_pub.update_connections();
+            collab_pub.update_connections();
+            ssm_pub.update_connections();
+            behaviour_pub.update_connections();
             continue;
         }
         status_pub.publish(&status)?;

@@ -135,6 +135,52 @@ pub fn save_behaviour(
     Ok(())
 }
 
+/// The torque loop's priority follows the role: the controller in charge
+/// runs at the higher of the two controllers' `rt_priority`, the other at
+/// the lower, so the answer the robot applies never waits for the other's
+/// (a restarted controller, faulting in its first periods, runs below the
+/// one in charge), and a standby that took charge keeps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RolePriority {
+    /// SCHED_FIFO priority in charge
+    pub in_charge: i32,
+    /// SCHED_FIFO priority while not in charge (and before the first state)
+    pub standby: i32,
+    /// the role of the priority set last (`None`: none set yet)
+    role: Option<bool>,
+}
+
+impl RolePriority {
+    /// From the two controllers' `[services.*] rt_priority`: `None` unless
+    /// both run real-time.
+    pub fn new(first: i32, standby: i32) -> Option<RolePriority> {
+        (first > 0 && standby > 0).then(|| RolePriority {
+            in_charge: first.max(standby),
+            standby: first.min(standby),
+            role: None,
+        })
+    }
+
+    /// From `config`'s `control` and `control_standby` services.
+    pub fn for_cell(config: &phri_config::Config) -> Option<RolePriority> {
+        let prio = |s: &str| config.services.get(s).map_or(0, |s| s.rt_priority);
+        RolePriority::new(prio("control"), prio("control_standby"))
+    }
+
+    /// The priority to move to when the role is now `in_charge` (`None`:
+    /// unchanged since the last one set).
+    pub fn change(&mut self, in_charge: bool) -> Option<i32> {
+        if self.role == Some(in_charge) {
+            return None;
+        }
+        self.role = Some(in_charge);
+        Some(match in_charge {
+            true => self.in_charge,
+            false => self.standby,
+        })
+    }
+}
+
 /// Were `controller`'s safety inputs fresh in its last step: the residual
 /// within `[control] residual_max_age_ms` and, with avoidance, perception
 /// within `perception_max_age_ms`?
@@ -205,6 +251,24 @@ impl BehaviourInbox {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_priority_follows_the_role_with_one_syscall_per_change() {
+        let mut p = RolePriority::new(79, 77).unwrap();
+        assert_eq!((p.in_charge, p.standby), (79, 77));
+        // before the first state: the lower
+        assert_eq!(p.change(false), Some(77));
+        assert_eq!(p.change(false), None);
+        assert_eq!(p.change(true), Some(79));
+        assert_eq!(p.change(true), None);
+        assert_eq!(p.change(false), Some(77));
+        // either order in the configuration; without real time, nothing
+        assert_eq!(
+            RolePriority::new(70, 75).map(|p| (p.in_charge, p.standby)),
+            Some((75, 70))
+        );
+        assert_eq!(RolePriority::new(0, 77), None);
+    }
     use phri_ipc::Zeroed;
 
     fn state(seq: u64, status: u32) -> JointState {

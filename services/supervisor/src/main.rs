@@ -530,11 +530,12 @@ fn body() -> Result<(), SupervisorError> {
     // real-time scheduling: permitted here, or the run is degraded (or refused)
     let require_rt = args.require_rt || plan.loaded.config.supervisor.require_rt;
     let online = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let wanted: Vec<(String, realtime::Wanted)> = plan
+    let mut wanted: Vec<(String, realtime::Wanted)> = plan
         .services
         .iter()
         .map(|(name, spec)| (name.clone(), wanted_of(spec)))
         .collect();
+    realtime::role_ranked(&mut wanted);
     let rt_refusal =
         realtime::probe_services(wanted.iter().map(|(n, w)| (n.as_str(), w)), online).err();
     if let Some(why) = &rt_refusal {

@@ -266,6 +266,26 @@ impl RealtimeWatch {
     }
 }
 
+/// The two controllers of a hot standby swap priorities with their role
+/// (the one in charge runs at the higher of their `rt_priority`, the
+/// other at the lower: `phri_control::standby::RolePriority`): each is
+/// judged against the lower.
+pub fn role_ranked(wanted: &mut [(String, Wanted)]) {
+    let prio = |w: &[(String, Wanted)], n: &str| {
+        w.iter()
+            .find(|(name, _)| name == n)
+            .map(|(_, w)| w.priority)
+    };
+    let (Some(a), Some(b)) = (prio(wanted, "control"), prio(wanted, "control_standby")) else {
+        return;
+    };
+    for (name, w) in wanted.iter_mut() {
+        if name == "control" || name == "control_standby" {
+            w.priority = a.min(b);
+        }
+    }
+}
+
 /// Try SCHED_FIFO at `priority` on a scratch thread (then back to the
 /// normal scheduler): would a service be granted it? `Err` says why not.
 pub fn probe(priority: i32) -> Result<(), String> {
@@ -395,6 +415,22 @@ pub fn probe_services<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_two_controllers_are_judged_against_the_lower_priority() {
+        let mut w = vec![
+            ("sim".to_string(), want(80, &[1])),
+            ("control".to_string(), want(79, &[1])),
+            ("control_standby".to_string(), want(77, &[1])),
+        ];
+        role_ranked(&mut w);
+        let p: Vec<i32> = w.iter().map(|(_, w)| w.priority).collect();
+        assert_eq!(p, [80, 77, 77]);
+        // one controller alone keeps its own
+        let mut one = vec![("control".to_string(), want(79, &[1]))];
+        role_ranked(&mut one);
+        assert_eq!(one[0].1.priority, 79);
+    }
 
     fn want(p: i32, cpus: &[usize]) -> Wanted {
         Wanted {
