@@ -1143,7 +1143,13 @@ fn a_run_without_real_time_scheduling_is_a_degraded_run() {
         .iter()
         .filter_map(Value::as_str)
         .collect();
-    for (service, priority) in [("sim", 78), ("dynamics", 80), ("control", 79)] {
+    // the two controllers swap priorities with their role: both judged against the lower
+    for (service, priority) in [
+        ("sim", 78),
+        ("dynamics", 80),
+        ("control", 77),
+        ("control_standby", 77),
+    ] {
         let want = format!("real-time: {service} SCHED_OTHER instead of SCHED_FIFO {priority}");
         assert!(
             degraded.iter().any(|l| l.starts_with(&want)),
@@ -1232,7 +1238,13 @@ fn a_run_with_real_time_scheduling_reports_what_each_service_got() {
     let r = report(&report_path);
     assert_eq!(r["realtime"]["permitted"], true);
     let online = std::thread::available_parallelism().map_or(1, |n| n.get());
-    for (service, priority) in [("sim", 78), ("dynamics", 80), ("control", 79)] {
+    // the two controllers swap priorities with their role: both judged against the lower
+    for (service, priority) in [
+        ("sim", 78),
+        ("dynamics", 80),
+        ("control", 77),
+        ("control_standby", 77),
+    ] {
         let s = &r["realtime"]["services"][service];
         assert_eq!(s["priority"], priority, "{service}: {s}");
         assert_eq!(s["memory_locked"], true, "{service}: {s}");
