@@ -33,17 +33,7 @@ pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     // SAFETY: plain syscall with a valid flag.
     let locked = unsafe { libc::mlockall(libc::MCL_CURRENT) };
     let lock_error = std::io::Error::last_os_error();
-    let param = libc::sched_param {
-        sched_priority: priority.min(99),
-    };
-    // SAFETY: plain syscall with valid arguments.
-    let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
-    if rc != 0 {
-        return Err(RtError::Scheduler {
-            priority,
-            source: std::io::Error::last_os_error(),
-        });
-    }
+    fifo(priority)?;
     if locked != 0 {
         return Err(RtError::Lock(lock_error));
     }
@@ -62,6 +52,11 @@ pub fn set_fifo_priority(priority: i32) -> Result<(), RtError> {
     if unsafe { libc::sched_getscheduler(0) } != libc::SCHED_FIFO {
         return Ok(());
     }
+    fifo(priority)
+}
+
+/// SCHED_FIFO at `priority` (capped at 99) for the calling thread.
+fn fifo(priority: i32) -> Result<(), RtError> {
     let param = libc::sched_param {
         sched_priority: priority.min(99),
     };

@@ -146,6 +146,16 @@ impl<T: Published> CutLatest<T> {
     pub fn get(&self) -> Option<&T> {
         self.current.as_ref()
     }
+
+    /// One state's step: the state published at `cut_ns`, the channel's
+    /// newest message `newest` (if any); the newest published by the cut.
+    pub fn take(&mut self, newest: Option<&T>, cut_ns: u64) -> Option<&T> {
+        self.release(cut_ns);
+        if let Some(m) = newest {
+            self.offer(m, cut_ns);
+        }
+        self.get()
+    }
 }
 
 #[cfg(test)]
@@ -223,8 +233,8 @@ mod tests {
         assert_eq!(l.get(), Some(&M(1100, 2)));
         // a controller that first sees 1100 at state 2000 agrees
         let mut m = CutLatest::default();
-        m.offer(&M(900, 1), 1000);
-        m.offer(&M(1100, 2), 2000);
-        assert_eq!(m.get(), l.get());
+        assert_eq!(m.take(Some(&M(900, 1)), 1000), Some(&M(900, 1)));
+        assert_eq!(m.take(Some(&M(1100, 2)), 2000), l.get());
+        assert_eq!(m.take(None, 3000), Some(&M(1100, 2)));
     }
 }

@@ -239,11 +239,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 .zip(&mut cut_skeletons)
             {
                 r.update_from(|pid, s| gate.skeleton(pid, s, now))?;
-                c.release(cut);
-                if let Some(s) = r.get() {
-                    c.offer(s, cut);
-                }
-                *v = c.get();
+                *v = c.take(r.get(), cut);
             }
             let seen = phri_ipc::merge_newest(&views, skeleton_spread_ns, &mut skeleton);
             let mut seen_hands = [None; phri_ipc::MAX_CAMERAS];
@@ -253,11 +249,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 .zip(&mut cut_hands)
             {
                 r.update_from(|pid, h| gate.hand(pid, h, now))?;
-                c.release(cut);
-                if let Some(h) = r.get() {
-                    c.offer(h, cut);
-                }
-                *v = c.get();
+                *v = c.take(r.get(), cut);
             }
             let hand = phri_ipc::best_hand(&seen_hands, skeleton_spread_ns);
             input.collab = CollabInput {
