@@ -984,6 +984,122 @@ fn a_supervisor_that_dies_leaves_the_cell_running_and_a_new_one_takes_it_over() 
     assert_nothing_left(&cell.prefix);
 }
 
+/// CLOCK_MONOTONIC [ns], the cell's clock.
+fn mono_ns() -> u64 {
+    phri_runtime::now_ns()
+}
+
+/// The cell's start [ns, CLOCK_MONOTONIC], as the supervisor gave it to
+/// `pid` (the report's times count from it).
+fn cell_start_of(pid: i32) -> u64 {
+    let env = std::fs::read(format!("/proc/{pid}/environ")).unwrap();
+    env.split(|&b| b == 0)
+        .filter_map(|kv| std::str::from_utf8(kv).ok())
+        .find_map(|kv| kv.strip_prefix(&format!("{}=", phri_runtime::service::CELL_START_ENV)))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no cell start in the environment of {pid}"))
+}
+
+/// Liveness by iceoryx2's deadlines: each watched service beats on
+/// `liveness/<name>` (every quarter of its deadline), the supervisor waits
+/// on all of them in one WaitSet. Stopped (SIGSTOP: silent, not dead), a
+/// service is noticed once its deadline has passed and within one beat of
+/// it; killed (SIGKILL), before that (its parent reaps it). Each is then
+/// restarted.
+#[test]
+fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // the watched services of deploy/phri.toml and their deadlines
+    // (heartbeat_timeout_ms, else the supervisor's)
+    let loaded =
+        phri_config::Loaded::load(&repo().join("deploy/phri.toml"), Some("free-motion"), &[])
+            .unwrap();
+    let c = &loaded.config;
+    let watched: Vec<(&str, u64)> = [
+        "sim",
+        "dynamics",
+        "dynamics_standby",
+        "camera",
+        "perception",
+        "control",
+        "control_standby",
+        "mic",
+    ]
+    .into_iter()
+    .map(|name| {
+        let spec = &c.services[name];
+        assert!(spec.heartbeat.is_some(), "{name} is not watched");
+        let ms = spec
+            .heartbeat_timeout_ms
+            .unwrap_or(c.supervisor.heartbeat_timeout_ms);
+        (name, ms)
+    })
+    .collect();
+    let cell = Cell::start("liveness", "free-motion", Some(28.0), &[]);
+    wait(3.0); // past the start-up grace (2 s)
+    let t0 = cell_start_of(cell.pid_of("sim"));
+    let restarted = |service: &str, old: i32| {
+        let until = Instant::now() + Duration::from_secs(5);
+        while cell.pid_of(service) == old {
+            assert!(Instant::now() < until, "{service} not restarted");
+            wait(0.02);
+        }
+        // its dependants judge it afresh once it is heard again
+        wait(0.8);
+    };
+    let mut faults = Vec::new();
+    for (service, deadline_ms) in watched {
+        let signal = |sig: i32| {
+            let pid = cell.pid_of(service);
+            let at = mono_ns();
+            // SAFETY: kill(2) on a pid the supervisor reported as its child
+            assert_eq!(unsafe { libc::kill(pid, sig) }, 0, "kill {service} ({pid})");
+            (pid, at)
+        };
+        let (pid, stopped_ns) = signal(libc::SIGSTOP);
+        restarted(service, pid);
+        let (pid, killed_ns) = signal(libc::SIGKILL);
+        restarted(service, pid);
+        faults.push((service, deadline_ms, stopped_ns, killed_ns));
+    }
+    let r = cell.finish();
+    let at_ns = |e: &Value| t0 + (e["t_s"].as_f64().unwrap() * 1e9) as u64;
+    for (service, deadline_ms, stopped_ns, killed_ns) in faults {
+        let (deadline, beat) = (deadline_ms * 1_000_000, deadline_ms * 1_000_000 / 4);
+        let frozen = events(&r, "frozen", service);
+        let noticed = frozen
+            .iter()
+            .map(|e| at_ns(e))
+            .find(|&t| t > stopped_ns && t < killed_ns)
+            .unwrap_or_else(|| panic!("{service}: stop not noticed: {}", r["events"]));
+        let silent = noticed - stopped_ns;
+        eprintln!(
+            "{service}: stopped, noticed after {:.1} ms (deadline {deadline_ms} ms)",
+            silent as f64 * 1e-6
+        );
+        assert!(
+            silent + beat >= deadline && silent <= deadline + beat,
+            "{service}: noticed {silent} ns after it stopped, deadline {deadline} ns"
+        );
+        let exit = events(&r, "exit", service)
+            .into_iter()
+            .map(at_ns)
+            .find(|&t| t > killed_ns)
+            .unwrap_or_else(|| panic!("{service}: kill not noticed: {}", r["events"]));
+        eprintln!(
+            "{service}: killed, noticed after {:.1} ms",
+            (exit - killed_ns) as f64 * 1e-6
+        );
+        // reaped by its parent at the next round, well before its deadline
+        assert!(
+            exit - killed_ns <= deadline + beat,
+            "{service}: death noticed {} ns late",
+            exit - killed_ns
+        );
+    }
+    assert_no_unintended_contact(&r);
+}
+
 #[test]
 fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());

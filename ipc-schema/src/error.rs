@@ -41,6 +41,9 @@ pub enum IpcError {
         channel: &'static str,
         detail: String,
     },
+    /// a liveness service (`liveness/<service>`), its port or its WaitSet failed
+    #[error("liveness of '{service}': {detail}")]
+    Liveness { service: String, detail: String },
     /// an event port was asked of a channel that does not wake its readers
     #[error("channel '{channel}' does not wake its readers (no event service)")]
     NoEvent { channel: &'static str },
@@ -106,7 +109,7 @@ impl IpcError {
             | IpcError::Receive { channel, .. }
             | IpcError::NoEvent { channel } => Some(channel),
             IpcError::Unknown(c) => Some(c),
-            IpcError::Node { .. } | IpcError::Prefix { .. } => None,
+            IpcError::Node { .. } | IpcError::Prefix { .. } | IpcError::Liveness { .. } => None,
         }
     }
 }

@@ -13,6 +13,7 @@ pub mod cleanup;
 pub mod enums;
 pub mod error;
 pub mod json;
+pub mod liveness;
 pub mod messages;
 pub mod owners;
 pub mod qos;

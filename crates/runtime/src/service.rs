@@ -270,8 +270,45 @@ impl ServiceContext {
                 };
                 Ok((node, sub, audits))
             });
-            let (_node, health, audits) = match opened {
+            let (node, health, audits) = match opened {
                 Ok(x) => x,
+                Err(e) => {
+                    let _ = ready.send(Err(e));
+                    return;
+                }
+            };
+            // the supervisor beats on its liveness service with each health:
+            // this thread sleeps until then, the dead-man's deadline or the
+            // audit's tick (without one, it reads health every few ms)
+            let watched: Vec<phri_ipc::liveness::Watched> = match phri_ipc::liveness::Watched::open(
+                &node,
+                phri_ipc::liveness::SUPERVISOR,
+                std::time::Duration::from_nanos(limit_ns.max(1)),
+            ) {
+                Ok(w) => w.into_iter().collect(),
+                Err(e) => {
+                    let _ = ready.send(Err(e));
+                    return;
+                }
+            };
+            let tick_ms = if watched.is_empty() {
+                SUPERVISION_POLL_MS
+            } else {
+                AUDIT_PERIOD_MS
+            };
+            let waitset = match phri_ipc::liveness::waitset() {
+                Ok(ws) => ws,
+                Err(e) => {
+                    let _ = ready.send(Err(e));
+                    return;
+                }
+            };
+            let vigil = match phri_ipc::liveness::Vigil::new(
+                &waitset,
+                &watched,
+                std::time::Duration::from_millis(tick_ms),
+            ) {
+                Ok(v) => v,
                 Err(e) => {
                     let _ = ready.send(Err(e));
                     return;
@@ -284,12 +321,31 @@ impl ServiceContext {
             let first_by = last + FIRST_HEALTH_MS * 1_000_000;
             let mut first = true;
             let mut refused_pid = 0;
+            let mut told_dead = false;
             let mut report = phri_ipc::InputAudit::zeroed();
             report.service = phri_ipc::json::to_c_str(&service);
             let mut next_audit = last;
             while !shutdown.requested() {
-                let pause = if first { 1 } else { SUPERVISION_POLL_MS };
-                std::thread::sleep(std::time::Duration::from_millis(pause));
+                if first && watched.is_empty() {
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                } else {
+                    let timeout = if first { 1 } else { tick_ms };
+                    let mut dead = false;
+                    let _ = vigil.wait(std::time::Duration::from_millis(timeout), |w| {
+                        if let phri_ipc::liveness::Wake::Pulse(0) = w {
+                            let _ = watched[0].take(|p| {
+                                dead |= p != phri_ipc::liveness::Pulse::Beat;
+                            });
+                        }
+                    });
+                    if dead && !told_dead {
+                        told_dead = true;
+                        tracing::warn!(
+                            "the supervisor's node is gone (iceoryx2): the dead-man stops this service in {:.1} s unless another supervisor takes the cell over",
+                            limit_ns as f64 * 1e-9
+                        );
+                    }
+                }
                 let now = crate::now_ns();
                 let mut newest: Option<phri_ipc::Health> = None;
                 let _ = health.drain_from(|pid, h| {
@@ -305,6 +361,7 @@ impl ServiceContext {
                 });
                 if let Some(h) = newest {
                     last = now;
+                    told_dead = false;
                     for s in h
                         .services
                         .iter()
@@ -388,6 +445,24 @@ impl ServiceContext {
             crate::log::warn,
         );
         mailbox
+    }
+
+    /// This service's liveness beats (`liveness/<name>`, which the
+    /// supervisor watches with the service's deadline, its
+    /// `heartbeat_timeout_ms`): its loop calls
+    /// [`phri_ipc::liveness::Beat::beat`] every iteration. Unsupervised, or
+    /// not watched (no `heartbeat`), the beats do nothing.
+    pub fn beat(&self, node: &IpcNode) -> Result<phri_ipc::liveness::Beat, IpcError> {
+        if std::env::var_os(SUPERVISED_ENV).is_none() {
+            return Ok(phri_ipc::liveness::Beat::none());
+        }
+        let config = self.config();
+        let ms = config
+            .services
+            .get(&self.name)
+            .and_then(|s| s.heartbeat_timeout_ms)
+            .unwrap_or(config.supervisor.heartbeat_timeout_ms);
+        phri_ipc::liveness::Beat::open(node, &self.name, std::time::Duration::from_millis(ms))
     }
 
     /// Switch to SCHED_FIFO if configured and permitted; say what happened

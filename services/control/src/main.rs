@@ -146,6 +146,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     // from the future or past its bound (counted on audit/inputs)
     let gate = InputGate::new(ctx.watch_inputs(), &cfg.control, &cfg.repulsion);
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     // refused inputs are logged by a thread at normal priority
     let log = ctx.deferred_log::<Note>();
     let mut refused = 0u64;
@@ -165,6 +166,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
         let _ = states.wait(Duration::from_millis(50));
+        beat.beat(now_ns());
         let mut latest = None;
         states.drain_from(|pid, s| {
             if gate.state(pid) {

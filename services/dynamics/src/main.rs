@@ -59,6 +59,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     // states only from the robot the supervisor started (counted on audit/inputs)
     let owners = ctx.watch_inputs();
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     // bad samples are logged by a thread at normal priority
     let log = ctx.deferred_log::<BadSample>();
     ctx.go_realtime();
@@ -67,6 +68,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     while !ctx.shutdown.requested() {
         // a wake-up without a sample (timeout, signal) just loops
         let _ = states.wait(Duration::from_millis(50));
+        beat.beat(now_ns());
         let mut fresh = None;
         states.drain_from(|pid, s| {
             if !owners.admit(phri_ipc::Owned::ROBOT_STATE, pid).accepted() {

@@ -184,6 +184,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         publisher: ROBOT_BOX.publisher(&node)?,
     };
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
 
     let mut state = JointState::zeroed();
@@ -195,6 +196,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                       cycle: &mut FciCycle|
      -> Result<(LinkOutput, phri_franka::FciTorque), Box<dyn Error>> {
         seq += 1;
+        beat.beat(now_ns());
         // the robot's clock, on this machine's: the box's milliseconds from the first state
         let (epoch, ms0) = *clock.get_or_insert((now_ns(), box_ms));
         let stamp = epoch + box_ms.saturating_sub(ms0) * 1_000_000;

@@ -36,6 +36,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         .map(|c| c.skeleton.waking_subscriber(&node, Queue::Drain))
         .collect::<Result<Vec<_>, _>>()?;
     let requests = HRI_REQUEST.publisher(&node)?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     let max_age_ns = (cfg.max_age_ms * 1e6) as u64;
     // numbers that grow across restarts (readers tell requests apart by
@@ -48,6 +49,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         // the first camera wakes us; without it, every frame period or so
         // a wait ended early (a signal, a failed wake-up) is one more poll
         let _ = skeletons[0].wait(Duration::from_millis(40));
+        beat.beat(now_ns());
         let mut waves = Vec::new();
         let mut one = |sk: &Skeleton, detector: &mut WaveDetector| {
             // an old skeleton (a stalled tracker, a replay) is not a gesture now

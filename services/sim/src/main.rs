@@ -99,6 +99,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let saver_thread =
         snapshot_path.map(|path| spawn_saver(path, Arc::clone(&shared_arm), ctx.shutdown.clone()));
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     // the 1 kHz loop's events are logged by a thread at normal priority
     let log = ctx.deferred_log::<LinkEvent>();
     ctx.go_realtime();
@@ -138,6 +139,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         while !ctx.shutdown.requested() {
             tick += period_ns;
             sleep_until_ns(tick);
+            beat.beat(now_ns());
             let wake = link.wake(tick, now_ns());
             tick = wake.deadline_ns;
             let mut newest = [None, None];
@@ -227,6 +229,7 @@ fn serve_world(
     let mut datagram = ForcesDatagram::default();
     let mut forces_unsent = 0u64;
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     tracing::info!(
         "following the arm on robot/state (robot.ip set): simulating the person and the world only"
@@ -237,6 +240,7 @@ fn serve_world(
         while !ctx.shutdown.requested() {
             tick += period_ns;
             sleep_until_ns(tick);
+            beat.beat(now_ns());
             if let Some(s) = states.latest()? {
                 newest = Some(s);
             }

@@ -22,13 +22,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use phri_ipc::liveness::{self, Beat, Pulse, Wake, Watched};
 use phri_ipc::{
     node, FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed,
     COLLAB_STATE, CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_COMMAND,
     ROBOT_COMMAND_STANDBY, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 use phri_runtime::rundir::{create_private_dir, default_run_dir, write_private};
-use phri_runtime::{now_ns, sleep_until_ns, Shutdown};
+use phri_runtime::{now_ns, Shutdown};
 use phri_supervisor::cpu::{self, CpuUse};
 use phri_supervisor::owned::{self, AuditLog};
 use phri_supervisor::process::{cpu_time_ns, process_matches, Launch, Proc};
@@ -129,12 +130,13 @@ struct Ports {
     ssm: Subscriber<phri_ipc::SsmStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
     utterances: Subscriber<phri_ipc::Utterance>,
-    audio: Subscriber<phri_ipc::AudioChunk>,
     audits: Subscriber<phri_ipc::InputAudit>,
     boxes: Subscriber<phri_ipc::BoxStatus>,
-    /// the controllers' commands (their heartbeats) and the adapter's takeovers
-    commands: [Subscriber<phri_ipc::TorqueCommand>; 2],
+    /// the adapter's takeovers
     commanders: Subscriber<phri_ipc::CommanderStats>,
+    /// the supervisor's beats (`liveness/supervisor`), one with each health:
+    /// what the services' dead-man watches
+    beat: Beat,
     standby_residual: Subscriber<phri_ipc::Residual>,
 }
 
@@ -164,16 +166,38 @@ impl Ports {
             ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
-            audio: phri_ipc::AUDIO_MIC.subscriber(node, Queue::Drain)?,
             audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
             boxes: phri_ipc::ROBOT_BOX.subscriber(node, Queue::Drain)?,
-            commands: [
-                ROBOT_COMMAND.subscriber(node, Queue::Drain)?,
-                ROBOT_COMMAND_STANDBY.subscriber(node, Queue::Drain)?,
-            ],
             commanders: phri_ipc::ROBOT_COMMANDERS.subscriber(node, Queue::Drain)?,
             standby_residual: phri_ipc::DYNAMICS_RESIDUAL_STANDBY.subscriber(node, Queue::Drain)?,
+            beat: Beat::create(node, liveness::SUPERVISOR)?,
         })
+    }
+
+    /// Publish `health` and beat with it (the services wake for it).
+    fn publish_health(&mut self, health: &Health, now_ns: u64) {
+        let _ = self.health.publish(health);
+        self.beat.now(now_ns);
+    }
+}
+
+/// The watched services' liveness (`liveness/<service>`, each created with
+/// its deadline before the service starts): the supervisor hears of beats,
+/// deaths and missed deadlines through one WaitSet ([`liveness::Vigil`]).
+struct Watch {
+    watched: Vec<Watched>,
+    /// roster index of each watched service
+    index: Vec<usize>,
+}
+
+impl Watch {
+    fn open(node: &IpcNode, roster: &Roster) -> Result<Watch, IpcError> {
+        let (mut watched, mut index) = (Vec::new(), Vec::new());
+        for (i, deadline) in roster.deadlines() {
+            watched.push(Watched::create(node, &roster.get(i).name, deadline)?);
+            index.push(i);
+        }
+        Ok(Watch { watched, index })
     }
 }
 
@@ -610,7 +634,7 @@ fn body() -> Result<(), SupervisorError> {
         close_ipc(node, None, &prefix);
         return Err(e.into());
     }
-    let ports = match Ports::open(&node, plan.loaded.config.cameras.len()) {
+    let mut ports = match Ports::open(&node, plan.loaded.config.cameras.len()) {
         Ok(p) => p,
         Err(e) => {
             close_ipc(node, None, &prefix);
@@ -649,6 +673,14 @@ fn body() -> Result<(), SupervisorError> {
         launch,
     };
     let mut health = Health::zeroed();
+    // every watched service's liveness exists before it starts
+    let watch = match Watch::open(&node, &cell.roster) {
+        Ok(w) => w,
+        Err(e) => {
+            close_ipc(node, Some(ports), &prefix);
+            return Err(e.into());
+        }
+    };
 
     // start (or adopt) every service in order; a start that fails stops what it started
     let mut adopted_any = false;
@@ -687,8 +719,9 @@ fn body() -> Result<(), SupervisorError> {
         }
         cell.write_state();
         // the services' dead-man hears a supervisor from their start
-        cell.roster.fill_health(&mut health, now_ns());
-        let _ = ports.health.publish(&health);
+        let now = now_ns();
+        cell.roster.fill_health(&mut health, now);
+        ports.publish_health(&health, now);
         let delay = cell.roster.get(i).spec.start_delay_ms;
         if delay > 0 {
             std::thread::sleep(Duration::from_millis(delay));
@@ -731,25 +764,48 @@ fn body() -> Result<(), SupervisorError> {
     let mut fast_health_until = now_ns() + FAST_HEALTH_NS;
     let mut next_watch = now_ns();
     let mut next_cpu_sample = now_ns();
-    let mut tick = now_ns();
+    // one WaitSet: the tick, and each watched service's liveness with its
+    // deadline; it sleeps until one of them wakes it
+    let waitset = liveness::waitset()?;
+    let vigil = liveness::Vigil::new(&waitset, &watch.watched, Duration::from_nanos(TICK_NS))?;
+    let mut woke: Vec<Wake> = Vec::with_capacity(watch.watched.len() + 1);
+    let mut last_round = now_ns();
     while start_error.is_none()
         && stop_reason.is_none()
         && !shutdown.requested()
         && end_ns.is_none_or(|e| now_ns() < e)
     {
-        tick += TICK_NS;
-        sleep_until_ns(tick);
+        woke.clear();
+        vigil.wait(Duration::from_nanos(TICK_NS), |w| woke.push(w))?;
         let now = now_ns();
-        let stalled_ns = now.saturating_sub(tick);
-        if stalled_ns > TICK_NS {
-            // fell behind: no burst of ticks to catch up
-            tick = now;
+        // beats, deaths and missed deadlines; a round of the duties below
+        // at each tick, and at once when a service died or fell silent
+        let mut round = false;
+        for &w in &woke {
+            match w {
+                Wake::Tick => round = true,
+                Wake::Missed(k) => {
+                    cell.roster.deadline_missed(watch.index[k]);
+                    round = true;
+                }
+                Wake::Pulse(k) => watch.watched[k].take(|p| match p {
+                    Pulse::Beat => cell.roster.heard(watch.index[k], now),
+                    // reaped below (a child) or found gone (adopted)
+                    Pulse::Ended | Pulse::Dead => round = true,
+                })?,
+            }
         }
+        if !round && now.saturating_sub(last_round) < TICK_NS {
+            continue;
+        }
+        // this process did not run for longer than a tick (a stopped
+        // supervisor, a starved CPU): the services' silence meanwhile is
+        // not theirs to answer for
+        let stalled_ns = now.saturating_sub(last_round).saturating_sub(TICK_NS);
+        last_round = now;
         let roster = &mut cell.roster;
-        // evaluation streams, and heartbeats per channel
-        if ports.stats.drain(|m| eval.on_stats(m))? > 0 {
-            roster.heard(ROBOT_STATS.name, now);
-        }
+        // evaluation streams
+        ports.stats.drain(|m| eval.on_stats(m))?;
         ports.contacts.drain(|m| eval.on_contact_event(m))?;
         ports.collab.drain(|m| {
             if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
@@ -759,21 +815,9 @@ fn body() -> Result<(), SupervisorError> {
             collab_eval.on_state(m);
         })?;
         ports.ssm.drain(|m| eval.on_ssm(m))?;
-        for (channel, commands) in [ROBOT_COMMAND.name, ROBOT_COMMAND_STANDBY.name]
-            .into_iter()
-            .zip(&ports.commands)
-        {
-            if commands.drain(|_| {})? > 0 {
-                roster.heard(channel, now);
-            }
-        }
-        if ports
+        ports
             .commanders
-            .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)))?
-            > 0
-        {
-            roster.heard(phri_ipc::ROBOT_COMMANDERS.name, now);
-        }
+            .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)))?;
         let mut resume = false;
         ports.requests.drain(|m| {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
@@ -791,31 +835,19 @@ fn body() -> Result<(), SupervisorError> {
             );
         }
         ports.utterances.drain(|m| collab_eval.on_utterance(m))?;
-        if ports.truth.drain(|m| {
+        ports.truth.drain(|m| {
             eval.on_truth(m);
             collab_eval.on_truth(m);
-        })? > 0
-        {
-            roster.heard(SIM_TRUTH.name, now);
-        }
-        if ports.residual.drain(|m| {
+        })?;
+        ports.residual.drain(|m| {
             eval.on_residual(m);
             residual_pair.on_residual(0, m);
-        })? > 0
-        {
-            roster.heard(DYNAMICS_RESIDUAL.name, now);
-        }
-        if ports
+        })?;
+        ports
             .standby_residual
-            .drain(|m| residual_pair.on_residual(1, m))?
-            > 0
-        {
-            roster.heard(phri_ipc::DYNAMICS_RESIDUAL_STANDBY.name, now);
-        }
-        if ports.status.drain(|m| eval.on_status(m, reaction))? > 0 {
-            roster.heard(CONTROL_STATUS.name, now);
-        }
-        for (camera, channels) in phri_ipc::CAMERAS.iter().enumerate() {
+            .drain(|m| residual_pair.on_residual(1, m))?;
+        ports.status.drain(|m| eval.on_status(m, reaction))?;
+        for camera in 0..ports.frames.len() {
             let (Some(frames), Some(filtered), Some(results)) = (
                 ports.frames.get(camera),
                 ports.filtered.get(camera),
@@ -823,32 +855,15 @@ fn body() -> Result<(), SupervisorError> {
             ) else {
                 break;
             };
-            let mut n = 0;
             while let Some(f) = frames.receive()? {
                 eval.on_frame(camera, f.user_header());
-                n += 1;
             }
-            if n > 0 {
-                roster.heard(channels.depth.name, now);
-            }
-            n = 0;
             while let Some(f) = filtered.receive()? {
                 eval.on_filtered(camera, f.user_header());
-                n += 1;
             }
-            if n > 0 {
-                roster.heard(channels.perception.name, now);
-            }
-            if results.drain(|m| eval.on_repulsion(camera, m))? > 0 {
-                roster.heard(channels.repulsion.name, now);
-            }
-        }
-        if ports.audio.drain(|_| {})? > 0 {
-            roster.heard(phri_ipc::AUDIO_MIC.name, now);
+            results.drain(|m| eval.on_repulsion(camera, m))?;
         }
         if stalled_ns > STALL_NS {
-            // this process did not run (a stopped supervisor, a starved CPU):
-            // the services' silence meanwhile is not theirs to answer for
             tracing::warn!(
                 "stalled for {} ms: heartbeats judged afresh",
                 stalled_ns / 1_000_000
@@ -963,6 +978,8 @@ fn body() -> Result<(), SupervisorError> {
             };
             cell.procs[i] = None;
             changed = true;
+            // noticed now (this round began before the reaping)
+            let now = now_ns();
             let _ = node.try_cleanup_dead_nodes();
             let name = cell.roster.get(i).name.clone();
             eval.event(now, "exit", &name, detail.clone());
@@ -1012,7 +1029,7 @@ fn body() -> Result<(), SupervisorError> {
             // the later half of the silence: the starvation had surely begun
             let window = (f.silent_ns / 2).clamp(cpu::WINDOW_NS / 10, cpu::WINDOW_NS);
             let sv = cell.roster.get(f.index);
-            let heartbeat = sv.spec.heartbeat.as_deref().unwrap_or("?");
+            let heartbeat = liveness::liveness_name(&sv.name);
             let victim = match cpu::culprit(&cell.roster, &cpu_use, f.index, window) {
                 Some((c, share)) => {
                     let culprit = &cell.roster.get(c).name;
@@ -1026,7 +1043,10 @@ fn body() -> Result<(), SupervisorError> {
                         now,
                         "frozen",
                         &sv.name,
-                        format!("no heartbeat; starved by {culprit}"),
+                        format!(
+                            "no beat on {heartbeat} for {} ms; starved by {culprit}",
+                            f.silent_ns / 1_000_000
+                        ),
                     );
                     eval.event(
                         now,
@@ -1059,7 +1079,12 @@ fn body() -> Result<(), SupervisorError> {
                             cell.roster.get(b).name,
                             share.min(1.0) * 100.0
                         );
-                        eval.event(now, "frozen", &sv.name, "no heartbeat");
+                        eval.event(
+                            now,
+                            "frozen",
+                            &sv.name,
+                            format!("no beat on {heartbeat} for {} ms", f.silent_ns / 1_000_000),
+                        );
                         f.index
                     }
                 },
@@ -1110,7 +1135,7 @@ fn body() -> Result<(), SupervisorError> {
             cell.write_state();
             // the services learn the new pids (the owners of their inputs) at once
             cell.roster.fill_health(&mut health, now);
-            let _ = ports.health.publish(&health);
+            ports.publish_health(&health, now);
             // a restart opened a node: the node counter must still be ours alone
             if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &prefix) {
                 let reason = e.to_string();
@@ -1122,10 +1147,14 @@ fn body() -> Result<(), SupervisorError> {
         if now >= next_health || now < fast_health_until {
             next_health = now + health_period;
             cell.roster.fill_health(&mut health, now);
-            let _ = ports.health.publish(&health);
+            ports.publish_health(&health, now);
         }
     }
 
+    // the liveness services go with the cell's other ports
+    drop(vigil);
+    drop(waitset);
+    drop(watch);
     if let Some(reason) = start_error {
         tracing::warn!("{reason}: stopping everything started");
         cell.stop();

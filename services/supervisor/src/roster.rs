@@ -1,7 +1,7 @@
 //! The supervised services' bookkeeping, as plain data and decisions: which
 //! runs (by pid), when to restart what died (exponential back-off), which
-//! service is frozen (silent on its heartbeat channel while what it depends
-//! on is not), and the views of it all: the health message, the state files,
+//! service is frozen (silent on its liveness service beyond its deadline
+//! while what it depends on is not), and the views of it all: the health message, the state files,
 //! the report's `services`. Pure: the clock comes in as `now_ns`
 //! (CLOCK_MONOTONIC), processes are started, signalled and reaped by the
 //! caller, which tells the roster what happened.
@@ -26,9 +26,13 @@ pub struct Supervised {
     pub policy: RestartPolicy,
     /// when to start it again [ns], while a restart is pending
     pub restart_at: Option<u64>,
-    /// last message on its heartbeat channel, or since when its silence is
-    /// judged afresh ((re)start, a dependency silent, killed frozen) [ns]
+    /// last beat on its liveness service (`liveness/<name>`), or since
+    /// when its silence is judged afresh ((re)start, a dependency silent,
+    /// killed frozen) [ns]
     pub last_heartbeat_ns: u64,
+    /// its liveness deadline passed without a beat (iceoryx2's WaitSet
+    /// said so); cleared by a beat or a fresh judgement
+    pub missed: bool,
     /// last (re)start [ns]
     pub started_ns: u64,
     /// its heartbeat was heard since its last (re)start
@@ -88,6 +92,7 @@ impl Roster {
                 policy: RestartPolicy::default(),
                 restart_at: None,
                 last_heartbeat_ns: 0,
+                missed: false,
                 started_ns: 0,
                 heard_since_start: false,
                 exits_ns: Vec::new(),
@@ -167,6 +172,7 @@ impl Roster {
         s.policy.started(now_ns);
         s.started_ns = now_ns;
         s.last_heartbeat_ns = now_ns;
+        s.missed = false;
         s.heard_since_start = false;
     }
 
@@ -256,15 +262,30 @@ impl Roster {
         at
     }
 
-    /// Something arrived on `channel` (its name) since the last call: every
-    /// service with that heartbeat is alive at `now_ns`.
-    pub fn heard(&mut self, channel: &str, now_ns: u64) {
-        for s in &mut self.services {
-            if s.spec.heartbeat.as_deref() == Some(channel) {
-                s.last_heartbeat_ns = now_ns;
-                s.heard_since_start = s.pid.is_some();
-            }
-        }
+    /// Service `index` beat on its liveness service: alive at `now_ns`.
+    pub fn heard(&mut self, index: usize, now_ns: u64) {
+        let s = &mut self.services[index];
+        s.last_heartbeat_ns = now_ns;
+        s.missed = false;
+        s.heard_since_start = s.pid.is_some();
+    }
+
+    /// Service `index` was silent for its whole liveness deadline (the
+    /// WaitSet woke the supervisor for it): silent now, whatever the clocks
+    /// say to the microsecond.
+    pub fn deadline_missed(&mut self, index: usize) {
+        self.services[index].missed = true;
+    }
+
+    /// The liveness deadline of each watched service (those with a
+    /// `heartbeat`), by index: its `heartbeat_timeout_ms`, else the supervisor's.
+    pub fn deadlines(&self) -> Vec<(usize, std::time::Duration)> {
+        self.services
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.spec.heartbeat.is_some())
+            .map(|(i, s)| (i, std::time::Duration::from_nanos(self.timeout_ns(s))))
+            .collect()
     }
 
     /// The supervisor itself was stalled until `now_ns` (it could not hear
@@ -273,6 +294,7 @@ impl Roster {
     pub fn judge_afresh(&mut self, now_ns: u64) {
         for s in &mut self.services {
             s.last_heartbeat_ns = s.last_heartbeat_ns.max(now_ns);
+            s.missed = false;
         }
     }
 
@@ -317,7 +339,7 @@ impl Roster {
         for i in 0..self.services.len() {
             let s = &self.services[i];
             self.silent[i] = s.spec.heartbeat.is_some()
-                && now_ns.saturating_sub(s.last_heartbeat_ns) > self.timeout_ns(s);
+                && (s.missed || now_ns.saturating_sub(s.last_heartbeat_ns) > self.timeout_ns(s));
         }
         let grace = self.grace_ns();
         let mut frozen = Vec::new();
@@ -336,6 +358,7 @@ impl Roster {
             let s = &mut self.services[i];
             if !deps_ok {
                 s.last_heartbeat_ns = now_ns;
+                s.missed = false;
                 continue;
             }
             let past_grace = now_ns.saturating_sub(s.started_ns) > grace;
@@ -345,6 +368,7 @@ impl Roster {
                     silent_ns: now_ns.saturating_sub(s.last_heartbeat_ns),
                 });
                 s.last_heartbeat_ns = now_ns;
+                s.missed = false;
             }
         }
         frozen
@@ -459,13 +483,22 @@ mod tests {
         r
     }
 
+    /// Every service with heartbeat `channel` beat at `t_ns`.
+    fn hear(r: &mut Roster, channel: &str, t_ns: u64) {
+        for i in 0..r.len() {
+            if r.get(i).spec.heartbeat.as_deref() == Some(channel) {
+                r.heard(i, t_ns);
+            }
+        }
+    }
+
     /// Both heartbeats heard every 10 ms until `until_ms`, except `mute`'s.
     fn run(r: &mut Roster, from_ms: u64, until_ms: u64, mute: &[&str]) -> Vec<(u64, usize)> {
         let mut frozen = Vec::new();
         for t in (from_ms..until_ms).step_by(10) {
             for ch in ["sim/truth", "dynamics/residual", "control/status"] {
                 if !mute.contains(&ch) {
-                    r.heard(ch, t * MS);
+                    hear(r, ch, t * MS);
                 }
             }
             frozen.extend(r.frozen(t * MS).into_iter().map(|f| (t, f.index)));
@@ -482,6 +515,36 @@ mod tests {
         assert_eq!(f, [(2300, 1)]);
         // counted afresh after the verdict (it is being killed)
         assert!(run(&mut r, 2400, 2490, &["dynamics/residual"]).is_empty());
+    }
+
+    /// The WaitSet's word that a deadline passed is the verdict: frozen at
+    /// once, even a microsecond short of the timeout by this clock; a beat
+    /// before the judgement clears it, and so does the start-up grace.
+    #[test]
+    fn a_missed_deadline_is_silence_until_a_beat() {
+        let mut r = roster();
+        run(&mut r, 0, 2100, &[]);
+        let t = 2090 * MS + 200 * MS - 1_000; // 1 µs before the 200 ms timeout
+        r.deadline_missed(1);
+        assert_eq!(
+            r.frozen(t),
+            [Frozen {
+                index: 1,
+                silent_ns: 200 * MS - 1_000
+            }]
+        );
+        assert!(r.frozen(t + MS).is_empty(), "judged once");
+        r.deadline_missed(1);
+        r.heard(1, t + 2 * MS);
+        assert!(r.frozen(t + 3 * MS).is_empty(), "a beat clears it");
+        r.started(1, t + 4 * MS, 9);
+        r.deadline_missed(1);
+        assert!(r.frozen(t + 5 * MS).is_empty(), "in its grace");
+        let w = r.deadlines();
+        assert_eq!(w.iter().map(|(i, _)| *i).collect::<Vec<_>>(), [0, 1, 3]);
+        assert!(w
+            .iter()
+            .all(|(_, d)| *d == std::time::Duration::from_millis(200)));
     }
 
     #[test]
@@ -609,9 +672,9 @@ mod tests {
         let mut r = roster();
         assert!(!r.whole());
         assert_eq!(r.unheard(), ["sim", "dynamics", "orphan"]);
-        r.heard("sim/truth", 10 * MS);
-        r.heard("dynamics/residual", 10 * MS);
-        r.heard("control/status", 10 * MS);
+        hear(&mut r, "sim/truth", 10 * MS);
+        hear(&mut r, "dynamics/residual", 10 * MS);
+        hear(&mut r, "control/status", 10 * MS);
         assert!(r.whole(), "{:?}", r.unheard());
         // a restart must be heard again; a dead service is not whole
         r.started(1, 20 * MS, 300);

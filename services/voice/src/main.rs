@@ -166,6 +166,7 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
     let mut skeletons = PERCEPTION_SKELETON.latest_reader(&node)?;
     let requests = HRI_REQUEST.publisher(&node)?;
     let utterances = VOICE_UTTERANCE.publisher(&node)?;
+    let mut beat = ctx.beat(&node)?;
     let max_age_ns = (cfg.skeleton_max_age_ms * 1e6) as u64;
     let mut last_seq = 0u64;
     let mut lost = 0u64;
@@ -174,6 +175,7 @@ fn body(flags: phri_runtime::cli::ServiceFlags) -> Result<(), Box<dyn Error>> {
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
         let _ = audio.wait(Duration::from_millis(100));
+        beat.beat(now_ns());
         let mut heard = Vec::new();
         let mut failure = None;
         skeletons.update()?;

@@ -50,6 +50,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let mut skeleton = Skeleton::zeroed();
     let mut faults = FaultState::default();
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     let period = (1e9 / cfg.rate_hz) as u64;
     let latency = (cfg.latency_ms * 1e6) as u64;
@@ -57,6 +58,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     while !ctx.shutdown.requested() {
         tick += period;
         sleep_until_ns(tick);
+        beat.beat(now_ns());
         if now_ns() > tick + period {
             tick = now_ns(); // fell behind: skip frames rather than burst
         }

@@ -189,6 +189,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
     };
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     while !ctx.shutdown.requested() {
         // wait for the next frame (a wake-up without one just loops)
@@ -198,6 +199,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             }
             Source::Png { ticks, .. } => sleep_until_ns(ticks.deadline_ns()),
         }
+        beat.beat(now_ns());
         let woke_ns = now_ns();
         states.drain(|s| {
             out.history.push_state(s);

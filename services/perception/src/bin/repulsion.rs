@@ -69,12 +69,14 @@ fn body() -> Result<(), Box<dyn Error>> {
         });
     }
     ctx.start_deadman()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     while !ctx.shutdown.requested() {
         {
             let subs: Vec<&FrameSubscriber> = served.iter().map(|s| &s.frames).collect();
             let _ = wait_any(&subs, Duration::from_millis(50));
         }
+        beat.beat(now_ns());
         for (camera, s) in served.iter_mut().enumerate() {
             // the newest frame only: an old one is worth nothing to avoidance
             let Some(frame) = s.frames.latest()? else {

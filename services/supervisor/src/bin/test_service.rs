@@ -50,6 +50,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         return Ok(());
     }
     ctx.start_deadman()?;
+    let node = ctx.node()?;
+    let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     let started = now_ns();
     let cell_start = phri_runtime::service::cell_start_ns().unwrap_or(started);
@@ -66,6 +68,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
             }
         } else {
             std::thread::sleep(Duration::from_millis(10));
+            beat.beat(now_ns());
         }
     }
     Ok(())

@@ -64,6 +64,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     ctx.start_deadman()?;
     let node = ctx.node()?;
     let publisher = AUDIO_MIC.publisher(&node)?;
+    let mut beat = ctx.beat(&node)?;
     let mut chunk = AudioChunk::zeroed();
     chunk.rate_hz = AUDIO_RATE_HZ;
     chunk.samples = AUDIO_CHUNK_SAMPLES as u32;
@@ -81,6 +82,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             let mut next: Option<u64> = None;
             while !ctx.shutdown.requested() {
                 std::thread::sleep(Duration::from_millis(5));
+                beat.beat(now_ns());
                 worlds.update()?;
                 let Some(w) = worlds.get() else { continue };
                 // scenario time: the simulator steps once per period from its epoch
@@ -101,6 +103,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             while !ctx.shutdown.requested() {
                 let due_ns = start + (k + 1) * CHUNK_NS;
                 sleep_until_ns(due_ns);
+                beat.beat(now_ns());
                 if now_ns() > due_ns + MAX_BURST * CHUNK_NS {
                     k = (now_ns() - start) / CHUNK_NS; // fell far behind: skip
                     continue;
