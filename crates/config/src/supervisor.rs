@@ -21,7 +21,8 @@ pub struct SupervisorConfig {
     pub shutdown_grace_ms: u64,
     /// health publication rate [Hz]
     pub health_hz: f64,
-    /// a service silent on its output channel this long is reported frozen [ms]
+    /// a watched service that does not beat on its liveness service for
+    /// this long is frozen (its deadline unless it sets its own) [ms]
     pub heartbeat_timeout_ms: u64,
     /// services of a cell whose supervisor has published nothing for this
     /// long stop safely (the robot braked) [s]; long enough for a new
@@ -103,12 +104,14 @@ pub struct ServiceSpec {
     /// disabled services are not started
     #[serde(default = "yes")]
     pub enabled: bool,
-    /// channel the service publishes on continuously; silence there while it
-    /// runs means it is frozen (it is then killed and restarted)
+    /// channel the service publishes on continuously; set, the service is
+    /// watched: its loop beats on `liveness/<name>`, and silence there past
+    /// its deadline while it runs means it is frozen (it is then killed and
+    /// restarted)
     #[serde(default)]
     pub heartbeat: Option<String>,
-    /// silence on `heartbeat` longer than this is frozen [ms] (default: the
-    /// supervisor's `heartbeat_timeout_ms`)
+    /// its liveness deadline: no beat for longer than this is frozen [ms]
+    /// (default: the supervisor's `heartbeat_timeout_ms`)
     #[serde(default)]
     pub heartbeat_timeout_ms: Option<u64>,
     /// services whose silence explains this one's (it is not judged while they are silent)

@@ -525,6 +525,9 @@ mod tests {
         let mut r = roster();
         run(&mut r, 0, 2100, &[]);
         let t = 2090 * MS + 200 * MS - 1_000; // 1 µs before the 200 ms timeout
+        // the others beat on; dynamics (1) does not
+        hear(&mut r, "sim/truth", t);
+        hear(&mut r, "control/status", t);
         r.deadline_missed(1);
         assert_eq!(
             r.frozen(t),
