@@ -1238,15 +1238,18 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
 #[test]
 fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_hand_is_there() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    // the robot touches the held-out right hand from ~8 s; the hand stays
-    // at the robot (within 5 cm) until it is lowered at 15-15.5 s. The
-    // controller is stopped in contact until the supervisor finds it frozen
-    // (heartbeat timeout 200 ms), kills and restarts it
-    // one controller: the standby would go on with the collaboration
+    // the robot touches the held-out right hand from ~8-11 s; a hand stays
+    // at the robot (within 5 cm) until the right one is lowered at
+    // 15-15.5 s and the left one has pushed the wrist (15.5-16.5 s); the
+    // person steps back from 18 s. The controller is stopped in contact
+    // until the supervisor finds it frozen (liveness deadline 200 ms),
+    // kills and restarts it. The run lasts until the hold is surely
+    // released (the hands away for release_s after 18 s), also on a loaded
+    // machine. One controller: the standby would go on with the collaboration
     let cell = Cell::start(
         "ctlcontact",
         "collaboration",
-        Some(20.0),
+        Some(24.0),
         &["control.standby=false"],
     );
     cell.pid_of("control");

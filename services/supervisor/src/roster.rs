@@ -524,8 +524,8 @@ mod tests {
     fn a_missed_deadline_is_silence_until_a_beat() {
         let mut r = roster();
         run(&mut r, 0, 2100, &[]);
-        let t = 2090 * MS + 200 * MS - 1_000; // 1 µs before the 200 ms timeout
-        // the others beat on; dynamics (1) does not
+        // 1 µs before the 200 ms timeout; the others beat on, dynamics (1) does not
+        let t = 2090 * MS + 200 * MS - 1_000;
         hear(&mut r, "sim/truth", t);
         hear(&mut r, "control/status", t);
         r.deadline_missed(1);
