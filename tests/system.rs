@@ -1464,7 +1464,9 @@ fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
     // with the words, the score and the latency
     let follow = find("follow", "left_hand");
     let end = find("end", "none");
-    assert_eq!(follow["accepted"], true, "{c}");
+    // the events too: a refusal as not tracked after a stale perception
+    // (a protective stop) is not the same as a hand the camera lost
+    assert_eq!(follow["accepted"], true, "{c} events: {}", r["events"]);
     assert_ended_by_the_request_or_the_force_limit(c, end);
     for q in [follow, end] {
         assert!(q["score"].as_f64().is_some(), "{q}");
