@@ -261,6 +261,10 @@ impl ServiceContext {
         let (ready, started) = std::sync::mpsc::channel::<Result<(), IpcError>>();
         std::thread::spawn(move || {
             // the node and its port live on this thread (iceoryx2 ports are not Send)
+            // the supervisor beats on its liveness service with each health:
+            // this thread sleeps until then, the dead-man's deadline or the
+            // audit's tick (without one, it reads health every few ms)
+            let deadline = std::time::Duration::from_nanos(limit_ns.max(1));
             let opened = phri_ipc::node(&node_name, &prefix).and_then(|node| {
                 let sub = phri_ipc::SUPERVISOR_HEALTH.subscriber(&node, phri_ipc::Queue::Drain)?;
                 let audits = if audit {
@@ -268,24 +272,18 @@ impl ServiceContext {
                 } else {
                     None
                 };
-                Ok((node, sub, audits))
+                let watched: Vec<phri_ipc::liveness::Watched> = phri_ipc::liveness::Watched::open(
+                    &node,
+                    phri_ipc::liveness::SUPERVISOR,
+                    deadline,
+                )?
+                .into_iter()
+                .collect();
+                let waitset = phri_ipc::liveness::waitset()?;
+                Ok((node, sub, audits, watched, waitset))
             });
-            let (node, health, audits) = match opened {
+            let (_node, health, audits, watched, waitset) = match opened {
                 Ok(x) => x,
-                Err(e) => {
-                    let _ = ready.send(Err(e));
-                    return;
-                }
-            };
-            // the supervisor beats on its liveness service with each health:
-            // this thread sleeps until then, the dead-man's deadline or the
-            // audit's tick (without one, it reads health every few ms)
-            let watched: Vec<phri_ipc::liveness::Watched> = match phri_ipc::liveness::Watched::open(
-                &node,
-                phri_ipc::liveness::SUPERVISOR,
-                std::time::Duration::from_nanos(limit_ns.max(1)),
-            ) {
-                Ok(w) => w.into_iter().collect(),
                 Err(e) => {
                     let _ = ready.send(Err(e));
                     return;
@@ -295,13 +293,6 @@ impl ServiceContext {
                 SUPERVISION_POLL_MS
             } else {
                 AUDIT_PERIOD_MS
-            };
-            let waitset = match phri_ipc::liveness::waitset() {
-                Ok(ws) => ws,
-                Err(e) => {
-                    let _ = ready.send(Err(e));
-                    return;
-                }
             };
             let vigil = match phri_ipc::liveness::Vigil::new(
                 &waitset,
