@@ -422,43 +422,6 @@ fn killing_the_controller_brakes_then_resumes_without_a_jump() {
     assert_eq!(r["false_detections"], 0);
 }
 
-/// Who commands the robot, read from its newest state through one node and
-/// subscriber opened before the faults: a node and subscriber created
-/// mid-run make the robot's publisher connect them in its 1 kHz loop, and
-/// the test should not be what costs a deadline.
-struct Charge {
-    _node: phri_ipc::IpcNode,
-    states: phri_ipc::Subscriber<phri_ipc::JointState>,
-}
-
-impl Charge {
-    fn watch(cell: &Cell) -> Charge {
-        let node = phri_ipc::node("test-in-charge", &cell.prefix).unwrap();
-        let states = phri_ipc::ROBOT_STATE
-            .subscriber(&node, phri_ipc::Queue::Latest)
-            .unwrap();
-        Charge {
-            _node: node,
-            states,
-        }
-    }
-
-    /// The controller in charge now (`control` or `control_standby`).
-    fn now(&self) -> &'static str {
-        let deadline = Instant::now() + Duration::from_secs(2);
-        loop {
-            if let Some(s) = self.states.latest().unwrap() {
-                return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
-                    0 => "control",
-                    _ => "control_standby",
-                };
-            }
-            assert!(Instant::now() < deadline, "no robot/state");
-            wait(0.01);
-        }
-    }
-}
-
 /// The report's takeovers (`control.takeovers`).
 fn takeovers(r: &Value) -> &Vec<Value> {
     r["control"]["takeovers"].as_array().unwrap()
@@ -489,7 +452,7 @@ fn killing_either_controller_costs_the_torque_loop_nothing() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("kstandby", "free-motion", Some(14.0), &[]);
     wait(1.0);
-    let charge = Charge::watch(&cell);
+    let charge = support::Charge::watch(&cell.prefix);
     // the controller in charge dies, twice: the other answers the same period
     wait(3.0);
     let first = charge.now();
@@ -535,7 +498,7 @@ fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_sta
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("stopctl", "free-motion", Some(12.0), &[]);
     wait(1.0);
-    let charge = Charge::watch(&cell);
+    let charge = support::Charge::watch(&cell.prefix);
     wait(3.0);
     // the controller in charge stops (SIGSTOP) for 0.5 s, then the one in
     // charge 3 s later for 0.3 s: the other commands meanwhile; the first
