@@ -224,7 +224,11 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     drop(charge);
     let r = run.finish();
     assert_eq!(r["services"]["franka"]["restarts"], 1, "{}", r["services"]);
-    assert_eq!(r["services"][controller]["restarts"], 1, "{}", r["services"]);
+    assert_eq!(
+        r["services"][controller]["restarts"], 1,
+        "{}",
+        r["services"]
+    );
     // the box stopped the arm when its commands stopped (the one error the
     // kill causes), the adapter recovered, the controller took over again
     let errors = r["robot"]["box_errors"].as_array().unwrap();

@@ -161,6 +161,8 @@ wire_enum! {
         Voice = 2 => "voice",
         /// a command line or script (`phri-hri`)
         Cli = 3 => "cli",
+        /// a ROS 2 node, on `/phri/request` (`phri-ros2`)
+        Ros2 = 4 => "ros2",
     }
 }
 

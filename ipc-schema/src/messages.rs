@@ -295,6 +295,8 @@ impl ServiceHealth {
 pub struct Health {
     pub seq: u64,
     pub stamp_ns: u64,
+    /// services supervised; `services` lists the first [`MAX_SERVICES`] of
+    /// them in start order (read `count.min(MAX_SERVICES)` entries)
     pub count: u32,
     #[serde(skip)]
     pub _pad: u32,

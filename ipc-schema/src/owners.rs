@@ -24,7 +24,7 @@ pub const PUBLISHERS: &[(&str, &[&str])] = &[
     // the simulated camera's body tracker (a real tracker's driver alike)
     ("perception/skeleton", &["phri-camera"]),
     ("perception/hand", &["phri-perception"]),
-    ("hri/request", &["phri-gesture", "phri-voice"]),
+    ("hri/request", &["phri-gesture", "phri-voice", "phri-ros2"]),
     ("audio/mic", &["phri-mic"]),
     // the controller in charge's behaviour, adopted by the standby (the
     // standby's own, `control/standby/behaviour`, is owned as this one)

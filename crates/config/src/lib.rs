@@ -21,6 +21,7 @@ pub mod per_joint;
 pub mod perception;
 pub mod record;
 pub mod robot;
+pub mod ros2;
 pub mod scenario;
 pub mod sim;
 pub mod ssm;
@@ -45,6 +46,7 @@ pub use perception::{
 };
 pub use record::{Compression, RecordConfig};
 pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
+pub use ros2::Ros2Config;
 pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
@@ -58,6 +60,12 @@ pub const DEFAULTS: &str = include_str!("../../../deploy/phri.toml");
 /// Where the defaults' relative paths (`[robot] urdf`) resolve when a
 /// configuration file does not say otherwise.
 pub const DEFAULT_DEPLOY_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../deploy");
+
+/// The most services one supervisor runs. `supervisor/health` lists the
+/// first [`phri_ipc::MAX_SERVICES`] of them in start order (its size is a
+/// contract with outside readers); `state.json`, the report and the
+/// supervisor's own watch cover every one.
+pub const MAX_ROSTER: usize = 2 * phri_ipc::MAX_SERVICES;
 
 /// `[scenario]`: which scenario the cell runs (set by the supervisor in the
 /// merged file it hands to the services).
@@ -94,6 +102,7 @@ pub struct Config {
     pub collaboration: CollaborationConfig,
     pub voice: VoiceConfig,
     pub audio: AudioConfig,
+    pub ros2: Ros2Config,
     #[serde(default)]
     pub scenario: ScenarioSection,
 }
@@ -419,6 +428,7 @@ impl Config {
             "collaboration",
             "voice",
             "audio",
+            "ros2",
             "scenario",
         ];
         if let Some(k) = table.keys().find(|k| !KNOWN.contains(&k.as_str())) {
@@ -498,13 +508,12 @@ impl Config {
             s.validate(name)?;
         }
         let enabled = self.services.values().filter(|s| s.enabled).count();
-        if enabled > phri_ipc::MAX_SERVICES {
+        if enabled > MAX_ROSTER {
             return Err(Invalid::new(
                 "services",
                 format!(
-                    "at most {} enabled services, got {enabled} (each further camera adds two; \
-                     disable some, e.g. services.voice.enabled = false)",
-                    phri_ipc::MAX_SERVICES
+                    "at most {MAX_ROSTER} enabled services, got {enabled} (each further camera adds two; \
+                     disable some, e.g. services.voice.enabled = false)"
                 ),
             ));
         }
@@ -529,6 +538,7 @@ impl Config {
         self.collaboration.validate()?;
         self.voice.validate()?;
         self.audio.validate()?;
+        self.ros2.validate()?;
         Ok(())
     }
 

@@ -537,6 +537,7 @@ impl InputGate {
                 r.source = match self.owners.binary(slot) {
                     "phri-gesture" => RequestSource::Gesture as u32,
                     "phri-voice" => RequestSource::Voice as u32,
+                    "phri-ros2" => RequestSource::Ros2 as u32,
                     _ => RequestSource::Cli as u32,
                 }
             }

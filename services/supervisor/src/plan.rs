@@ -301,7 +301,7 @@ mod tests {
         // the second camera's ingestion starts after its camera
         let at = |n: &str| names.iter().position(|x| *x == n).unwrap();
         assert!(at("camera-1") < at("perception-1"));
-        assert!(p.services.len() <= phri_ipc::MAX_SERVICES);
+        assert!(p.services.len() <= phri_config::MAX_ROSTER);
     }
 
     #[test]

@@ -77,6 +77,34 @@ pub fn normal_scheduler() -> std::io::Result<()> {
     Ok(())
 }
 
+/// Keep off the torque loop's CPUs, under the normal scheduler; before any
+/// thread starts, so that the server's threads inherit it.
+pub fn keep_off_the_loop(config: &phri_config::Config) {
+    if let Err(e) = normal_scheduler() {
+        tracing::warn!("cannot switch to the normal scheduler: {e}");
+    }
+    let avoid = torque_loop_cpus(config);
+    let usable = match usable_cpus() {
+        Ok(c) => c,
+        Err(e) => {
+            tracing::warn!("cannot read this process's CPUs: {e}; not pinned");
+            return;
+        }
+    };
+    match allowed(&usable, &avoid) {
+        Some(cpus) if cpus.len() < usable.len() => match pin(&cpus) {
+            Ok(()) => tracing::info!("on CPUs {cpus:?}, off the torque loop's {avoid:?}"),
+            Err(e) => tracing::warn!("cannot pin to CPUs {cpus:?}: {e}"),
+        },
+        Some(cpus) => {
+            tracing::info!("on CPUs {cpus:?} (the torque loop is pinned to none of them)")
+        }
+        None => tracing::warn!(
+            "only the torque loop's CPUs {avoid:?} are usable: not pinned (normal scheduler)"
+        ),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -201,34 +201,6 @@ fn sources() -> Vec<Box<dyn Source>> {
     ]
 }
 
-/// Keep off the torque loop's CPUs, under the normal scheduler; before any
-/// thread starts, so that the server's threads inherit it.
-fn keep_off_the_loop(config: &phri_config::Config) {
-    if let Err(e) = cpu::normal_scheduler() {
-        tracing::warn!("cannot switch to the normal scheduler: {e}");
-    }
-    let avoid = cpu::torque_loop_cpus(config);
-    let usable = match cpu::usable_cpus() {
-        Ok(c) => c,
-        Err(e) => {
-            tracing::warn!("cannot read this process's CPUs: {e}; not pinned");
-            return;
-        }
-    };
-    match cpu::allowed(&usable, &avoid) {
-        Some(cpus) if cpus.len() < usable.len() => match cpu::pin(&cpus) {
-            Ok(()) => tracing::info!("on CPUs {cpus:?}, off the torque loop's {avoid:?}"),
-            Err(e) => tracing::warn!("cannot pin to CPUs {cpus:?}: {e}"),
-        },
-        Some(cpus) => {
-            tracing::info!("on CPUs {cpus:?} (the torque loop is pinned to none of them)")
-        }
-        None => tracing::warn!(
-            "only the torque loop's CPUs {avoid:?} are usable: not pinned (normal scheduler)"
-        ),
-    }
-}
-
 fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let rates = Rates {
         scene_hz: rate("--rate", cli.rate)?,
@@ -242,7 +214,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let mut pipeline = Pipeline::from_config(&loaded, rates)
         .map_err(|e| format!("--config {}: {e}", cli.config.display()))?
         .with_stale_after(Some(Duration::from_millis(u64::from(cli.stale_after))));
-    keep_off_the_loop(&loaded.config);
+    cpu::keep_off_the_loop(&loaded.config);
 
     let shutdown = Shutdown::install()?;
     let limits = Limits {

@@ -1,0 +1,61 @@
+//! `[ros2]`: phri-ros2, the bridge that publishes the cell's channels as
+//! ROS 2 topics over DDS and takes requests from ROS 2.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::Invalid;
+
+const S: &str = "ros2";
+
+/// `[ros2]` (defaults and their reasons: `deploy/phri.toml`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ros2Config {
+    /// `/joint_states`: every N-th robot state (1: every state, 1 kHz)
+    pub joint_states_every: u32,
+    /// `/tf`: every N-th robot state
+    pub tf_every: u32,
+    /// `/phri/status` [Hz]
+    pub status_hz: f64,
+    /// `/phri/contact_force` [Hz]
+    pub contact_force_hz: f64,
+    /// `/phri/repulsion` [Hz]
+    pub repulsion_hz: f64,
+    /// `/phri/depth`: every N-th filtered depth frame
+    pub depth_every: u32,
+    /// `/phri/points`: every N-th filtered depth frame
+    pub points_every: u32,
+    /// `/phri/points`: one pixel in N per axis
+    pub points_stride: u32,
+    /// take `/phri/request` into `hri/request`; false: refused (and counted)
+    pub accept_requests: bool,
+}
+
+impl Ros2Config {
+    pub fn validate(&self) -> Result<(), Invalid> {
+        for (name, v) in [
+            ("joint_states_every", self.joint_states_every),
+            ("tf_every", self.tf_every),
+            ("depth_every", self.depth_every),
+            ("points_every", self.points_every),
+            ("points_stride", self.points_stride),
+        ] {
+            if v == 0 {
+                return Err(Invalid::new(format!("{S}.{name}"), "must be at least 1"));
+            }
+        }
+        for (name, v) in [
+            ("status_hz", self.status_hz),
+            ("contact_force_hz", self.contact_force_hz),
+            ("repulsion_hz", self.repulsion_hz),
+        ] {
+            if !(v > 0.0 && v <= 1000.0) {
+                return Err(Invalid::new(
+                    format!("{S}.{name}"),
+                    format!("{v} is not in (0, 1000] Hz"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

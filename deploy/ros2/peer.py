@@ -1,0 +1,275 @@
+#!/usr/bin/env python3
+"""An independent ROS 2 peer of phri-ros2, on Eclipse Cyclone DDS (not ROS,
+not RustDDS): subscribes to the bridge's DDS topics with ROS 2's type names
+and QoS, optionally publishes /phri/request texts at given times, and prints
+one JSON object of what it received: per topic the count, the rate over the
+span it received them, the latency from the message's header stamp to its
+arrival (both ROS time, this host's clock), and samples of the content.
+
+  peer.py --duration S [--request T:TEXT ...] [--positions FILE] [--domain D]
+
+--positions writes every /joint_states' positions, one line each (Python's
+repr of each float: the exact double), for comparison with robot/state.
+"""
+import argparse
+import json
+import sys
+import time
+from dataclasses import dataclass
+
+from cyclonedds.core import Policy, Qos
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.idl import IdlStruct
+from cyclonedds.idl.types import float32, float64, int32, sequence, uint8, uint32
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+
+@dataclass
+class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+    sec: int32
+    nanosec: uint32
+
+
+@dataclass
+class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time
+    frame_id: str
+
+
+@dataclass
+class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
+    data: str
+
+
+@dataclass
+class JointState(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
+    header: Header
+    name: sequence[str]
+    position: sequence[float64]
+    velocity: sequence[float64]
+    effort: sequence[float64]
+
+
+@dataclass
+class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x: float64
+    y: float64
+    z: float64
+
+
+@dataclass
+class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    x: float64
+    y: float64
+    z: float64
+    w: float64
+
+
+@dataclass
+class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
+    force: Vector3
+    torque: Vector3
+
+
+@dataclass
+class WrenchStamped(IdlStruct, typename="geometry_msgs::msg::dds_::WrenchStamped_"):
+    header: Header
+    wrench: Wrench
+
+
+@dataclass
+class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
+    translation: Vector3
+    rotation: Quaternion
+
+
+@dataclass
+class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
+    header: Header
+    child_frame_id: str
+    transform: Transform
+
+
+@dataclass
+class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
+    transforms: sequence[TransformStamped]
+
+
+@dataclass
+class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
+    header: Header
+    height: uint32
+    width: uint32
+    encoding: str
+    is_bigendian: uint8
+    step: uint32
+    data: sequence[uint8]
+
+
+@dataclass
+class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
+    key: str
+    value: str
+
+
+@dataclass
+class DiagnosticStatus(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
+    level: uint8
+    name: str
+    message: str
+    hardware_id: str
+    values: sequence[KeyValue]
+
+
+@dataclass
+class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
+    header: Header
+    status: sequence[DiagnosticStatus]
+
+
+BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(4000))
+RELIABLE = Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)), Policy.History.KeepLast(100))
+
+
+def stamp_ns(h):
+    return h.stamp.sec * 1_000_000_000 + h.stamp.nanosec
+
+
+def percentile(xs, p):
+    if not xs:
+        return None
+    xs = sorted(xs)
+    return xs[min(len(xs) - 1, int(p / 100.0 * len(xs)))]
+
+
+class Seen:
+    """What arrived on one topic: arrival times [ns] and latencies [µs]."""
+
+    def __init__(self):
+        self.arrivals = []
+        self.latency_us = []
+        self.stamps = []
+
+    def add(self, header):
+        now = time.time_ns()
+        self.arrivals.append(now)
+        self.stamps.append(stamp_ns(header))
+        self.latency_us.append((now - stamp_ns(header)) / 1000.0)
+
+    def summary(self):
+        n = len(self.arrivals)
+        span = (self.arrivals[-1] - self.arrivals[0]) / 1e9 if n > 1 else 0.0
+        stamps = sorted(self.stamps)
+        stamped = (stamps[-1] - stamps[0]) / 1e9 if n > 1 else 0.0
+        return {
+            "count": n,
+            "rate_hz": (n - 1) / span if span > 0 else None,
+            # the rate the messages were published at, from their stamps
+            "stamped_rate_hz": (n - 1) / stamped if stamped > 0 else None,
+            "latency_us": {
+                "p50": percentile(self.latency_us, 50),
+                "p99": percentile(self.latency_us, 99),
+                "max": max(self.latency_us) if self.latency_us else None,
+            },
+        }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, required=True, help="seconds to listen")
+    ap.add_argument("--request", action="append", default=[], metavar="T:TEXT",
+                    help="publish TEXT on /phri/request T s after the start")
+    ap.add_argument("--positions", help="write every /joint_states' positions here")
+    ap.add_argument("--domain", type=int, default=0)
+    ap.add_argument("--topics", default="joint_states,tf,status,contact_force,depth",
+                    help="comma-separated topics to read (default: all of them)")
+    a = ap.parse_args()
+    requests = []
+    for r in a.request:
+        t, _, text = r.partition(":")
+        try:
+            requests.append((float(t), text))
+        except ValueError:
+            sys.exit(f"peer.py: --request {r!r}: not T:TEXT")
+    requests.sort()
+
+    dp = DomainParticipant(a.domain)
+    readers = {
+        "joint_states": DataReader(dp, Topic(dp, "rt/joint_states", JointState), qos=BEST_EFFORT),
+        "tf": DataReader(dp, Topic(dp, "rt/tf", TFMessage), qos=BEST_EFFORT),
+        "status": DataReader(dp, Topic(dp, "rt/phri/status", DiagnosticArray), qos=RELIABLE),
+        "contact_force": DataReader(dp, Topic(dp, "rt/phri/contact_force", WrenchStamped), qos=BEST_EFFORT),
+        "depth": DataReader(dp, Topic(dp, "rt/phri/depth", Image), qos=Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(2))),
+    }
+    wanted = set(a.topics.split(","))
+    unknown = wanted - set(readers)
+    if unknown:
+        sys.exit(f"peer.py: --topics: unknown {sorted(unknown)} (known: {sorted(readers)})")
+    readers = {k: r for k, r in readers.items() if k in wanted}
+    writer = DataWriter(dp, Topic(dp, "rt/phri/request", String), qos=RELIABLE)
+    seen = {k: Seen() for k in readers}
+    names, frames, status_last, depth_shape = None, set(), None, None
+    max_force, phases = 0.0, []
+    positions = open(a.positions, "w") if a.positions else None
+    sent = []
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < a.duration:
+        t = time.monotonic() - t0
+        while requests and requests[0][0] <= t:
+            _, text = requests.pop(0)
+            writer.write(String(data=text))
+            sent.append({"t_s": round(t, 3), "text": text})
+        got = 0
+        for m in readers["joint_states"].take(N=4000) if "joint_states" in readers else []:
+            got += 1
+            seen["joint_states"].add(m.header)
+            names = list(m.name)
+            if positions:
+                positions.write(" ".join(repr(x) for x in m.position) + "\n")
+        for m in readers["tf"].take(N=1000) if "tf" in readers else []:
+            got += 1
+            for tr in m.transforms:
+                frames.add((tr.header.frame_id, tr.child_frame_id))
+            if m.transforms:
+                seen["tf"].add(m.transforms[0].header)
+        for m in readers["status"].take(N=100) if "status" in readers else []:
+            got += 1
+            seen["status"].add(m.header)
+            if m.status:
+                status_last = {kv.key: kv.value for kv in m.status[0].values}
+                status_last["level"] = m.status[0].level
+                p = status_last.get("phase")
+                if p and (not phases or phases[-1] != p):
+                    phases.append(p)
+        for m in readers["contact_force"].take(N=1000) if "contact_force" in readers else []:
+            got += 1
+            seen["contact_force"].add(m.header)
+            f = m.wrench.force
+            max_force = max(max_force, (f.x * f.x + f.y * f.y + f.z * f.z) ** 0.5)
+        for m in readers["depth"].take(N=10) if "depth" in readers else []:
+            got += 1
+            seen["depth"].add(m.header)
+            depth_shape = [m.width, m.height, m.encoding, len(m.data)]
+        if not got:
+            time.sleep(0.0005)
+    if positions:
+        positions.close()
+    out = {k: s.summary() for k, s in seen.items()}
+    extra = {
+        "joint_states": {"names": names},
+        "tf": {"frames": sorted(f"{p}>{c}" for p, c in frames)},
+        "status": {"last": status_last, "phases": phases},
+        "contact_force": {"max_force_n": max_force},
+        "depth": {"last": depth_shape},
+    }
+    for k in out:
+        out[k].update(extra[k])
+    out["requests_sent"] = sent
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,124 @@
+//! `/phri/request` (`std_msgs/String`) into an [`HriRequest`]: the words of
+//! `phri-hri request`, `KIND [PART]`: `begin` (or `start`), `follow PART`,
+//! `end`, `stop`; PART `right_hand` or `left_hand`. `resume` is refused:
+//! resuming a cell its dead-man stopped is for the operator at the cell.
+
+use phri_ipc::{CollabPart, HriRequest, RequestKind, RequestSource, Zeroed, REQUEST_TEXT};
+
+/// Why a request text was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RequestError {
+    #[error("empty request")]
+    Empty,
+    #[error("'{0}' is not a request (begin, start, follow PART, end, stop)")]
+    Kind(String),
+    #[error("'{0}' is not a part (right_hand, left_hand)")]
+    Part(String),
+    #[error("follow needs a part (right_hand, left_hand)")]
+    PartMissing,
+    #[error("{0} names no part")]
+    PartNotTaken(&'static str),
+    #[error("resume is the operator's, at the cell (phri-hri resume)")]
+    Resume,
+    #[error("'{0}' after the request")]
+    Trailing(String),
+}
+
+/// The request `text` asks, numbered `seq` and stamped `stamp_ns`
+/// [CLOCK_MONOTONIC]; from whoever shows the part.
+pub fn parse(text: &str, seq: u64, stamp_ns: u64) -> Result<HriRequest, RequestError> {
+    let mut words = text.split_whitespace();
+    let first = words
+        .next()
+        .ok_or(RequestError::Empty)?
+        .to_ascii_lowercase();
+    let kind = match first.as_str() {
+        "start" => RequestKind::Begin,
+        w => RequestKind::from_name(w).map_err(|_| RequestError::Kind(w.to_string()))?,
+    };
+    if kind == RequestKind::Resume {
+        return Err(RequestError::Resume);
+    }
+    let part = match words.next() {
+        Some(p) => {
+            let p = p.to_ascii_lowercase();
+            CollabPart::from_name(&p).map_err(|_| RequestError::Part(p.clone()))?
+        }
+        None => CollabPart::None,
+    };
+    if let Some(rest) = words.next() {
+        return Err(RequestError::Trailing(rest.to_string()));
+    }
+    match kind {
+        RequestKind::Follow if part == CollabPart::None => return Err(RequestError::PartMissing),
+        RequestKind::End | RequestKind::Stop if part != CollabPart::None => {
+            return Err(RequestError::PartNotTaken(kind.name()))
+        }
+        _ => {}
+    }
+    let mut r = HriRequest::zeroed();
+    r.seq = seq;
+    r.stamp_ns = stamp_ns;
+    r.source = RequestSource::Ros2 as u32;
+    r.kind = kind as u32;
+    r.part = part as u32;
+    r.person = u32::MAX;
+    r.confidence = 1.0;
+    let t = text.trim().as_bytes();
+    let n = t.len().min(REQUEST_TEXT - 1);
+    r.text[..n].copy_from_slice(&t[..n]);
+    Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_operators_words_are_requests() {
+        let r = parse("follow left_hand", 7, 99).unwrap();
+        assert_eq!(r.kind, RequestKind::Follow as u32);
+        assert_eq!(r.part, CollabPart::LeftHand as u32);
+        assert_eq!(
+            (r.seq, r.stamp_ns, r.source),
+            (7, 99, RequestSource::Ros2 as u32)
+        );
+        assert_eq!(&r.text[..16], b"follow left_hand");
+        assert_eq!(
+            parse(" Start ", 1, 1).unwrap().kind,
+            RequestKind::Begin as u32
+        );
+        assert_eq!(parse("stop", 1, 1).unwrap().kind, RequestKind::Stop as u32);
+        assert_eq!(
+            parse("begin right_hand", 1, 1).unwrap().part,
+            CollabPart::RightHand as u32
+        );
+    }
+
+    #[test]
+    fn anything_else_is_refused_with_its_reason() {
+        assert_eq!(parse("  ", 1, 1).err(), Some(RequestError::Empty));
+        assert_eq!(
+            parse("dance", 1, 1).err(),
+            Some(RequestError::Kind("dance".into()))
+        );
+        assert_eq!(parse("follow", 1, 1).err(), Some(RequestError::PartMissing));
+        assert_eq!(
+            parse("follow foot", 1, 1).err(),
+            Some(RequestError::Part("foot".into()))
+        );
+        assert_eq!(
+            parse("stop left_hand", 1, 1).err(),
+            Some(RequestError::PartNotTaken("stop"))
+        );
+        assert_eq!(parse("resume", 1, 1).err(), Some(RequestError::Resume));
+        assert_eq!(
+            parse("end now please", 1, 1).err(),
+            Some(RequestError::Part("now".into()))
+        );
+        assert_eq!(
+            parse("follow left_hand now", 1, 1).err(),
+            Some(RequestError::Trailing("now".into()))
+        );
+    }
+}

@@ -1,0 +1,239 @@
+//! phri-ros2 against a DDS implementation nobody here wrote: Eclipse Cyclone
+//! DDS's Python binding (`deploy/ros2/install`, `deploy/ros2/peer.py`),
+//! subscribing with ROS 2's topic and type names and QoS and publishing a
+//! request. The real cell (the supervisor and every service, phri-ros2
+//! among them) runs in a network namespace of its own, made by the test
+//! (`unshare --net`, as root), with only its loopback, multicast on; the
+//! peer joins that namespace (`nsenter`): DDS's discovery and data never
+//! leave the machine. iceoryx2's shared memory is not a network: the test
+//! reads `robot/state` beside them.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+/// A binary of the workspace, beside this package's own.
+fn bin(name: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_BIN_EXE_phri-ros2")).with_file_name(name);
+    assert!(
+        p.is_file(),
+        "{} not built: run `cargo build --release --bins` (cargo test --workspace builds it)",
+        p.display()
+    );
+    p
+}
+
+/// The peer's Python (Cyclone DDS installed by the project's script).
+fn peer_python() -> PathBuf {
+    let out = Command::new(repo().join("deploy/ros2/install"))
+        .stderr(Stdio::inherit())
+        .output()
+        .expect("deploy/ros2/install runs");
+    assert!(out.status.success(), "deploy/ros2/install failed");
+    let dir = String::from_utf8(out.stdout).unwrap();
+    PathBuf::from(dir.trim()).join("venv/bin/python")
+}
+
+/// The loopback of a new network namespace, multicast on, then the command.
+const NETNS_SETUP: &str = "ip link set lo up && ip link set lo multicast on \
+    && ip route add 224.0.0.0/4 dev lo && exec \"$0\" \"$@\"";
+
+#[test]
+fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration() {
+    let python = peer_python();
+    let prefix = format!("ros2w{}_", std::process::id());
+    let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
+    let _ = std::fs::remove_dir_all(&run_dir);
+    std::fs::create_dir_all(&run_dir).unwrap();
+    let report = run_dir.join("report.json");
+    let positions = run_dir.join("positions.txt");
+    // the voice scenario without the voice: the person raises the left hand
+    // (6.5 s) and holds it out (9.5-17 s) where the voice asks to follow it;
+    // here the ROS 2 peer asks, and ends it
+    let duration_s = 22.0;
+    let mut supervisor = Command::new("unshare")
+        .current_dir(repo())
+        .args(["--net", "--", "sh", "-c", NETNS_SETUP])
+        .arg(bin("phri-supervisor"))
+        .arg("--config")
+        .arg(repo().join("deploy/phri.toml"))
+        .args(["--scenario", "voice-collaboration", "--prefix", &prefix])
+        .arg("--run-dir")
+        .arg(&run_dir)
+        .arg("--report")
+        .arg(&report)
+        .args(["--duration", &duration_s.to_string()])
+        .args(["--set", "ros2.accept_requests=true"])
+        .args(["--set", "services.mic.enabled=false"])
+        .args(["--set", "services.voice.enabled=false"])
+        .spawn()
+        .expect("unshare starts");
+    let netns = format!("--net=/proc/{}/ns/net", supervisor.id());
+    // the namespace exists once unshare has exec'd sh: wait for the supervisor's run directory
+    let t0 = Instant::now();
+    while !run_dir.join("state.json").exists() {
+        if let Some(s) = supervisor.try_wait().unwrap() {
+            panic!(
+                "the cell did not start in a network namespace of its own ({s}): \
+                 this test needs root (unshare --net)"
+            );
+        }
+        assert!(t0.elapsed() < Duration::from_secs(20), "no state.json");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let peer = Command::new("nsenter")
+        .arg(&netns)
+        .arg(&python)
+        .arg(repo().join("deploy/ros2/peer.py"))
+        .args(["--duration", "19"])
+        .args(["--request", "7.5:follow left_hand", "--request", "14.5:end"])
+        .arg("--positions")
+        .arg(&positions)
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("the peer starts");
+
+    // robot/state, beside the bridge: every state's positions, bit for bit
+    let node = phri_ipc::node("test-ros2-wire", &prefix).unwrap();
+    let states = phri_ipc::ROBOT_STATE
+        .subscriber(&node, phri_ipc::Queue::Drain)
+        .unwrap();
+    let mut seen: HashSet<Vec<u64>> = HashSet::new();
+    let mut published: Vec<u64> = Vec::new();
+    let mut dof = 0;
+    let until = Instant::now() + Duration::from_secs_f64(duration_s);
+    while Instant::now() < until {
+        states
+            .drain(|s| {
+                dof = s.dof as usize;
+                seen.insert(s.q[..dof].iter().map(|x| x.to_bits()).collect());
+                published.push(s.published_ns);
+            })
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    drop(states);
+    drop(node);
+
+    let out = peer.wait_with_output().unwrap();
+    assert!(out.status.success(), "peer.py failed");
+    let p: Value = serde_json::from_slice(&out.stdout).expect("peer.py prints JSON");
+    eprintln!("peer {p}");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let status = loop {
+        if let Some(s) = supervisor.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the supervisor did not stop");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert!(status.success(), "the supervisor failed: {status}");
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+
+    // /joint_states: every state the robot published (at 1 kHz of its
+    // clock, which a loaded machine's wall clock may see a little slower),
+    // the model's names, positions equal to robot/state's
+    let js = &p["joint_states"];
+    let rate = js["rate_hz"].as_f64().unwrap_or(0.0);
+    published.sort_unstable();
+    let robot_hz = (published.len() - 1) as f64
+        / ((published[published.len() - 1] - published[0]) as f64 * 1e-9);
+    eprintln!("robot/state at {robot_hz:.1} Hz; /joint_states received at {rate:.1} Hz");
+    assert!(
+        rate >= 990.0 || rate >= 0.99 * robot_hz,
+        "/joint_states at {rate} Hz, robot/state at {robot_hz} Hz: {js}"
+    );
+    let model = phri_config::Loaded::load(&repo().join("deploy/phri.toml"), None, &[])
+        .unwrap()
+        .model()
+        .unwrap();
+    let names: Vec<String> = model.joint_names().iter().map(|s| s.to_string()).collect();
+    assert_eq!(js["names"], serde_json::json!(names));
+    let text = std::fs::read_to_string(&positions).unwrap();
+    let (mut lines, mut equal) = (0, 0);
+    for line in text.lines() {
+        let q: Vec<u64> = line
+            .split_whitespace()
+            .map(|x| x.parse::<f64>().unwrap().to_bits())
+            .collect();
+        assert_eq!(q.len(), dof, "{line}");
+        lines += 1;
+        equal += usize::from(seen.contains(&q));
+    }
+    assert!(lines > 10_000, "{lines} joint states");
+    // the test's subscriber starts a moment after the bridge's
+    assert!(
+        equal as f64 >= 0.99 * lines as f64,
+        "{equal} of {lines} positions equal to a robot/state's"
+    );
+
+    // /tf: every moving link under base_link
+    let frames = p["tf"]["frames"].as_array().unwrap();
+    assert!(
+        frames
+            .iter()
+            .filter(|f| f.as_str().unwrap().starts_with("base_link>"))
+            .count()
+            >= dof,
+        "{frames:?}"
+    );
+    // /phri/depth: full-resolution 16UC1 frames at the camera's rate
+    let depth = &p["depth"];
+    assert_eq!(
+        depth["last"],
+        serde_json::json!([640, 480, "16UC1", 640 * 480 * 2])
+    );
+    assert!(depth["rate_hz"].as_f64().unwrap_or(0.0) > 15.0, "{depth}");
+
+    // the request from ROS 2 started the collaboration, and the contact force came
+    let requests = r["collaboration"]["requests"].as_array().unwrap();
+    let from_ros = |kind: &str| {
+        requests
+            .iter()
+            .find(|q| q["source"] == "ros2" && q["kind"] == kind)
+            .unwrap_or_else(|| panic!("no {kind} from ros2: {requests:?}"))
+    };
+    assert_eq!(from_ros("follow")["accepted"], true, "{requests:?}");
+    assert!(
+        r["collaboration"]["contacts_intended"]
+            .as_u64()
+            .unwrap_or(0)
+            >= 1,
+        "{}",
+        r["collaboration"]
+    );
+    let force = &p["contact_force"];
+    assert!(force["max_force_n"].as_f64().unwrap() > 5.0, "{force}");
+    assert!(
+        p["status"]["phases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|x| x == "contact"),
+        "{}",
+        p["status"]
+    );
+    let unintended: Vec<&Value> = r["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["intended"] == false)
+        .collect();
+    assert!(unintended.is_empty(), "unintended contacts: {unintended:?}");
+    assert_eq!(
+        r["torque_loop"]["missed_deadlines"], 0,
+        "{}",
+        r["torque_loop"]
+    );
+    let _ = std::fs::remove_dir_all(&run_dir);
+}
