@@ -162,11 +162,23 @@ class Seen:
     def summary(self):
         n = len(self.arrivals)
         span = (self.arrivals[-1] - self.arrivals[0]) / 1e9 if n > 1 else 0.0
+        # the longest stretch without a silence over 0.2 s (a restart of
+        # the bridge, rediscovery): its rate
+        best, start = (0, 0), 0
+        for i in range(1, n + 1):
+            if i == n or self.arrivals[i] - self.arrivals[i - 1] > 200_000_000:
+                if i - start > best[1] - best[0]:
+                    best = (start, i)
+                start = i
+        a, b = best
+        steady = (self.arrivals[b - 1] - self.arrivals[a]) / 1e9 if b - a > 1 else 0.0
         stamps = sorted(self.stamps)
         stamped = (stamps[-1] - stamps[0]) / 1e9 if n > 1 else 0.0
         return {
             "count": n,
             "rate_hz": (n - 1) / span if span > 0 else None,
+            "steady_rate_hz": (b - a - 1) / steady if steady > 0 else None,
+            "silences": sum(1 for i in range(1, n) if self.arrivals[i] - self.arrivals[i - 1] > 200_000_000),
             # the rate the messages were published at, from their stamps
             "stamped_rate_hz": (n - 1) / stamped if stamped > 0 else None,
             "latency_us": {

@@ -42,6 +42,9 @@ impl Qos {
     };
     /// One publisher at 10 Hz.
     pub const SLOW: Qos = Qos {
+        // every service reads supervisor/health (up to the supervisor's
+        // roster of 32, `phri_config::MAX_ROSTER`), and the tools beside them
+        max_subscribers: 48,
         subscriber_max_buffer: 8,
         ..Qos::ONE_PUBLISHER
     };
@@ -55,7 +58,9 @@ impl Qos {
     /// segment small (readers map it when a worker (re)starts).
     pub const WORKERS: Qos = Qos {
         max_publishers: 16,
-        max_subscribers: 8,
+        // both controllers, the supervisor, the ROS 2 bridge, the recorder,
+        // the viewer, the monitor and spares
+        max_subscribers: 16,
         subscriber_max_buffer: 32,
         history: 0,
     };

@@ -457,26 +457,22 @@ fn each_further_camera_gets_its_own_camera_and_ingestion_services() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("at most 4"), "{e}");
-    // two fit the roster of 16 services with the hot standby's two; a third
-    // needs the standby off, a fourth two more disabled
-    let two = "[[camera]]\n".repeat(2);
-    assert!(Loaded::load_text(&two, &deploy(), None, &[]).is_ok());
-    let three = "[[camera]]\n".repeat(3);
-    let e = Loaded::load_text(&three, &deploy(), None, &[])
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("services") && e.contains("got 18"), "{e}");
-    let alone = ["control.standby=false"];
-    assert!(Loaded::load_text(&three, &deploy(), None, &alone).is_ok());
+    // four cameras fit the roster (at most MAX_ROSTER services; the
+    // supervisor's health lists the first 16); past it, refused by count
     let four = "[[camera]]\n".repeat(4);
-    let e = Loaded::load_text(&four, &deploy(), None, &alone)
+    let l = Loaded::load_text(&four, &deploy(), None, &[]).unwrap();
+    let enabled = l.config.services.values().filter(|s| s.enabled).count();
+    assert!(
+        enabled > 16 && enabled <= phri_config::MAX_ROSTER,
+        "{enabled}"
+    );
+    let extra: Vec<String> = (0..=phri_config::MAX_ROSTER - enabled)
+        .flat_map(|i| [format!("services.extra{i}.binary=\"phri-gesture\"")])
+        .collect();
+    let extra: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
+    let e = Loaded::load_text(&four, &deploy(), None, &extra)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("services") && e.contains("got 18"), "{e}");
-    let quiet = [
-        "control.standby=false",
-        "services.voice.enabled=false",
-        "services.mic.enabled=false",
-    ];
-    assert!(Loaded::load_text(&four, &deploy(), None, &quiet).is_ok());
+    let got = format!("got {}", phri_config::MAX_ROSTER + 1);
+    assert!(e.contains("services") && e.contains(&got), "{e}");
 }

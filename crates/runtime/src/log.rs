@@ -20,8 +20,10 @@ use tracing_subscriber::fmt::FmtContext;
 use tracing_subscriber::registry::LookupSpan;
 use tracing_subscriber::EnvFilter;
 
-/// Filter when `RUST_LOG` is unset or empty: everything at `info` and above.
-pub const DEFAULT_FILTER: &str = "info";
+/// Filter when `RUST_LOG` is unset or empty: everything at `info` and
+/// above, but DDS's own chatter (RustDDS, ros2-client: sockets, locators)
+/// from `warn` up.
+pub const DEFAULT_FILTER: &str = "info,rustdds=warn,ros2_client=warn";
 
 /// Keeps the log writer alive: dropping it flushes the lines still queued.
 /// Hold it in `main` (or the service body) until the process ends.

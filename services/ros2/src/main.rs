@@ -3,7 +3,8 @@
 //! `perception/repulsion` and `perception/depth` and publishes them as ROS
 //! 2 topics over DDS ([`phri_ros2`]'s table); takes `/phri/request` into
 //! `hri/request` when `[ros2] accept_requests` is set. ROS 2's domain:
-//! `ROS_DOMAIN_ID` (default 0). Off the torque loop's CPUs, under the
+//! `ROS_DOMAIN_ID` (default 0); this host only with
+//! `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` or `ROS_LOCALHOST_ONLY=1`. Off the torque loop's CPUs, under the
 //! normal scheduler: DDS's threads never compete with the 1 kHz loop, and a
 //! slow or absent ROS 2 subscriber never slows a phri service (best-effort
 //! writers never wait; reliable ones give up at once when full).
@@ -19,10 +20,10 @@ use phri_ipc::{
 use phri_ros2::msgs::{self, RosType};
 use phri_ros2::{Bridge, Clock};
 use phri_runtime::{now_ns, ServiceContext};
+use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{
     qos::{History, WhenFull},
-    Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher,
-    QosProfile,
+    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile,
 };
 use serde::Serialize;
 
@@ -87,6 +88,22 @@ fn send<M: Serialize>(p: &Publisher<M>, m: M, failed: &mut u64) {
     }
 }
 
+/// How far DDS looks for peers, as ROS 2 says it: `ROS_AUTOMATIC_DISCOVERY_RANGE`
+/// (`LOCALHOST`, `SUBNET`, the default, or `OFF`; Iron and later) or, before
+/// it, `ROS_LOCALHOST_ONLY=1`. `true`: this host's loopback only.
+fn localhost_only() -> Result<bool, String> {
+    if let Ok(r) = std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE") {
+        return match r.trim().to_ascii_uppercase().as_str() {
+            "" | "SUBNET" | "SYSTEM_DEFAULT" => Ok(false),
+            "LOCALHOST" | "OFF" => Ok(true),
+            _ => Err(format!(
+                "ROS_AUTOMATIC_DISCOVERY_RANGE: '{r}' is not LOCALHOST, SUBNET or OFF"
+            )),
+        };
+    }
+    Ok(std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v.trim() == "1"))
+}
+
 /// CLOCK_REALTIME [ns].
 fn realtime_ns() -> u64 {
     std::time::SystemTime::now()
@@ -103,13 +120,22 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     let mut bridge = Bridge::new(ctx.config(), ctx.robot_model()?)?;
     let domain = domain_id()?;
+    let local = localhost_only()?;
     if ctx.checking() {
         return Ok(());
     }
     phri_viz::cpu::keep_off_the_loop(ctx.config());
     // DDS's own threads start here, under the normal scheduler, off the loop's CPUs
-    let dds = Context::with_options(ContextOptions::new().domain_id(domain))
-        .map_err(|e| format!("DDS domain {domain}: {e:?}"))?;
+    let mut participant = DomainParticipantBuilder::new(domain);
+    if local {
+        participant = participant.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
+    }
+    let dds = participant
+        .build()
+        .map_err(|e| format!("DDS domain {domain}: {e:?}"))
+        .and_then(|p| {
+            Context::from_domain_participant(p).map_err(|e| format!("DDS domain {domain}: {e:?}"))
+        })?;
     let mut ros = dds
         .new_node(
             NodeName::new("/", "phri").map_err(|e| format!("ROS 2 node name: {e}"))?,
@@ -145,7 +171,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let requests_out = HRI_REQUEST.publisher(&node)?;
     let mut beat = ctx.beat(&node)?;
     tracing::info!(
-        "on ROS 2 domain {domain}: /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
+        "on ROS 2 domain {domain}{}: /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
+        if local { " (this host only)" } else { "" },
         bridge.joint_names().len(),
         if ctx.config().ros2.accept_requests { "taken into hri/request" } else { "refused (ros2.accept_requests = false)" }
     );

@@ -6,7 +6,9 @@
 //! (`unshare --net`, as root), with only its loopback, multicast on; the
 //! peer joins that namespace (`nsenter`): DDS's discovery and data never
 //! leave the machine. iceoryx2's shared memory is not a network: the test
-//! reads `robot/state` beside them.
+//! reads `robot/state` beside them. The bridge is killed (-9) at 4 s: the
+//! supervisor restarts it, the peer finds it again, and the cell misses
+//! nothing.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -108,6 +110,9 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     let states = phri_ipc::ROBOT_STATE
         .subscriber(&node, phri_ipc::Queue::Drain)
         .unwrap();
+    // kill -9 of the bridge at 4 s: restarted, the cell loses nothing
+    let kill_at = Instant::now() + Duration::from_secs(4);
+    let mut killed = false;
     let mut seen: HashSet<Vec<u64>> = HashSet::new();
     let mut published: Vec<u64> = Vec::new();
     let mut dof = 0;
@@ -120,6 +125,15 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
                 published.push(s.published_ns);
             })
             .unwrap();
+        if !killed && Instant::now() >= kill_at {
+            let text = std::fs::read_to_string(run_dir.join("state.json")).unwrap();
+            let pid = serde_json::from_str::<Value>(&text).unwrap()["services"]["ros2"]["pid"]
+                .as_i64()
+                .expect("phri-ros2 runs");
+            // SAFETY: kill(2) on a pid the supervisor reported as its child.
+            assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGKILL) }, 0);
+            killed = true;
+        }
         std::thread::sleep(Duration::from_millis(2));
     }
     drop(states);
@@ -144,7 +158,10 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     // clock, which a loaded machine's wall clock may see a little slower),
     // the model's names, positions equal to robot/state's
     let js = &p["joint_states"];
-    let rate = js["rate_hz"].as_f64().unwrap_or(0.0);
+    // the rate between the bridge's restart and the end (the one silence)
+    let rate = js["steady_rate_hz"].as_f64().unwrap_or(0.0);
+    assert_eq!(js["silences"], 1, "{js}");
+    assert_eq!(r["services"]["ros2"]["restarts"], 1, "{}", r["services"]);
     published.sort_unstable();
     let robot_hz = (published.len() - 1) as f64
         / ((published[published.len() - 1] - published[0]) as f64 * 1e-9);
