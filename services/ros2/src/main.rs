@@ -43,7 +43,16 @@ const RELIABLE: QosProfile = QosProfile::publisher_default()
     .reliability_reliable(WhenFull::Fail)
     .history(History::KeepLast { depth: 10 });
 
+/// The log filter when `RUST_LOG` is unset: the services' own, with
+/// RustDDS from `error` up (restricted to the loopback, it warns at every
+/// send that its own builtin readers have no other locators).
+const LOG_FILTER: &str = "info,rustdds=error,ros2_client=warn";
+
 fn main() -> ExitCode {
+    if std::env::var("RUST_LOG").map_or(true, |f| f.trim().is_empty()) {
+        // before any thread starts (edition 2021: safe to call here)
+        std::env::set_var("RUST_LOG", LOG_FILTER);
+    }
     phri_runtime::service::run("phri-ros2", body)
 }
 

@@ -75,6 +75,7 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .arg("--report")
         .arg(&report)
         .args(["--duration", &duration_s.to_string()])
+        .args(["--set", "services.ros2.enabled=true"])
         .args(["--set", "ros2.accept_requests=true"])
         .args(["--set", "services.mic.enabled=false"])
         .args(["--set", "services.voice.enabled=false"])

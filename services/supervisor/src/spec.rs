@@ -44,8 +44,7 @@ mod tests {
                 "control",
                 "control_standby",
                 "mic",
-                "voice",
-                "ros2"
+                "voice"
             ]
         );
     }
