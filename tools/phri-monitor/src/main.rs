@@ -371,6 +371,9 @@ fn list(node: &IpcNode, nodes: Vec<NodeInfo>, o: &Opts, sd: &Shutdown) -> Result
         std::thread::sleep(POLL);
         poll_all(&mut probes)?;
     }
+    for p in probes.iter_mut() {
+        p.stats_mut().close();
+    }
     if o.json {
         let channels = channels_json(node, &probes)?;
         let nodes: Vec<Value> = nodes

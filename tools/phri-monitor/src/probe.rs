@@ -37,6 +37,8 @@ pub struct Stats {
     /// when the newest sample was received [ns, CLOCK_MONOTONIC]
     newest_recv_ns: Option<u64>,
     window_start_ns: u64,
+    /// where the window ended, once observation stopped [ns, CLOCK_MONOTONIC]
+    window_end_ns: Option<u64>,
     pub total_samples: u64,
     pub total_drops: u64,
 }
@@ -83,6 +85,14 @@ impl Stats {
     pub fn reset(&mut self) {
         self.events.clear();
         self.window_start_ns = now_ns();
+        self.window_end_ns = None;
+    }
+
+    /// End the window now: figures computed later (after the channels'
+    /// publisher and subscriber counts, which take time on a busy host)
+    /// still cover only the observed span.
+    pub fn close(&mut self) {
+        self.window_end_ns = Some(now_ns());
     }
 
     /// Keep only the last `window_ns` (rolling window).
@@ -93,6 +103,7 @@ impl Stats {
             self.events.pop_front();
         }
         self.window_start_ns = self.window_start_ns.max(cut);
+        self.window_end_ns = None;
     }
 
     /// Time since the newest sample was received [ms] (streams whose
@@ -104,7 +115,7 @@ impl Stats {
 
     /// The window's figures as JSON (`null` where unknown).
     pub fn summary(&self) -> Value {
-        let now = now_ns();
+        let now = self.window_end_ns.unwrap_or_else(now_ns);
         let span_s = (now.saturating_sub(self.window_start_ns) as f64 * 1e-9).max(1e-9);
         let n = self.events.len();
         let (mut sum, mut max, mut k) = (0u64, 0u64, 0u64);
@@ -380,4 +391,27 @@ pub fn last<T: Message>(p: &dyn Probe) -> Option<T> {
     p.as_any()
         .downcast_ref::<MsgProbe<T>>()
         .and_then(|m| m.last)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_closed_window_keeps_its_span() {
+        let mut s = Stats::new();
+        for seq in 0..10 {
+            s.record(0, seq, None, 8);
+        }
+        s.close();
+        let before = s.summary();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let after = s.summary();
+        assert_eq!(before["rate_hz"], after["rate_hz"]);
+        assert_eq!(before["bandwidth_bps"], after["bandwidth_bps"]);
+        assert_eq!(after["samples"], 10);
+        // a new window runs on the clock again
+        s.reset();
+        assert!(s.window_end_ns.is_none());
+    }
 }
