@@ -6,29 +6,14 @@
 //! 2 of 2 runs. Two runs, one after the other, each with its own iceoryx2
 //! prefix and run directory.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
-
-/// A binary of the workspace, beside this package's own.
-fn bin(name: &str) -> PathBuf {
-    let p = Path::new(env!("CARGO_BIN_EXE_phri-perception")).with_file_name(name);
-    assert!(
-        p.is_file(),
-        "{} not built: run `cargo build --release --bins` (cargo test --workspace builds it)",
-        p.display()
-    );
-    p
-}
+#[path = "../../../tests/support/workspace.rs"]
+mod workspace;
+use workspace::{bin, repo};
 
 /// One run of `scenario` for `duration_s`, with noise injected every
 /// `every_s` from `first_s` on; the report.

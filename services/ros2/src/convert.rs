@@ -18,7 +18,7 @@ pub const BASE_FRAME: &str = "base_link";
 /// The first depth camera's optical frame.
 pub const CAMERA_FRAME: &str = "camera_depth_optical_frame";
 /// Bytes per point of `/phri/points`: x, y, z as little-endian f32 [m].
-pub const POINT_STEP: usize = 12;
+pub const POINT_STEP: usize = phri_viz::depth::POINT_STRIDE;
 
 /// phri's clock (CLOCK_MONOTONIC) to ROS time (the system clock): the
 /// offset between the two, read when the bridge samples them.
@@ -129,17 +129,11 @@ pub fn contact_wrench(c: &CollabState, stamp: Time) -> WrenchStamped {
     }
 }
 
-/// Whether the payload holds the `width × height` depths the header announces.
-fn complete(h: &FrameHeader, depth: &[u16]) -> bool {
-    let n = (h.width as usize).checked_mul(h.height as usize);
-    n.is_some_and(|n| n > 0 && depth.len() >= n)
-}
-
 /// A depth frame as `sensor_msgs/Image`, `16UC1` (millimetres, little
 /// endian, 0: no reading) in [`CAMERA_FRAME`], at full resolution, into
 /// `out` (its buffer reused). `false` when the payload is short.
 pub fn depth_image(h: &FrameHeader, depth: &[u16], stamp: Time, out: &mut Image) -> bool {
-    if !complete(h, depth) {
+    if !phri_viz::depth::complete(h, depth) {
         return false;
     }
     let (w, ht) = (h.width as usize, h.height as usize);
@@ -176,24 +170,9 @@ pub fn points(
     stamp: Time,
     out: &mut PointCloud2,
 ) -> bool {
-    if k == 0 || !complete(h, depth) || !(h.fx > 0.0 && h.fy > 0.0 && h.depth_scale > 0.0) {
-        return false;
-    }
-    let (w, ht) = (h.width as usize, h.height as usize);
     out.data.clear();
-    for v in (0..ht).step_by(k) {
-        for u in (0..w).step_by(k) {
-            let d = depth[v * w + u];
-            if d == 0 {
-                continue;
-            }
-            let z = f64::from(d) * h.depth_scale;
-            let x = (u as f64 - h.cx) * z / h.fx;
-            let y = (v as f64 - h.cy) * z / h.fy;
-            for c in [x, y, z] {
-                out.data.extend_from_slice(&(c as f32).to_le_bytes());
-            }
-        }
+    if !phri_viz::depth::optical_points(h, depth, k, &mut out.data) {
+        return false;
     }
     let n = out.data.len() / POINT_STEP;
     let field = |name: &str, offset: u32| PointField {

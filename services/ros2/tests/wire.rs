@@ -11,29 +11,15 @@
 //! nothing.
 
 use std::collections::HashSet;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
-
-/// A binary of the workspace, beside this package's own.
-fn bin(name: &str) -> PathBuf {
-    let p = Path::new(env!("CARGO_BIN_EXE_phri-ros2")).with_file_name(name);
-    assert!(
-        p.is_file(),
-        "{} not built: run `cargo build --release --bins` (cargo test --workspace builds it)",
-        p.display()
-    );
-    p
-}
+#[path = "../../../tests/support/workspace.rs"]
+mod workspace;
+use workspace::{bin, repo};
 
 /// The peer's Python (Cyclone DDS installed by the project's script).
 fn peer_python() -> PathBuf {

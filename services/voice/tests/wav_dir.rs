@@ -3,18 +3,14 @@
 //! `follow` on the (absent) skeleton and publishes `stop` on `hri/request`
 //! with the utterance's end; every utterance is a `voice/utterance`.
 
-use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use phri_ipc::{Queue, RequestKind, VoiceIntent, VoiceVerdict, HRI_REQUEST, VOICE_UTTERANCE};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
+#[path = "../../../tests/support/workspace.rs"]
+mod workspace;
+use workspace::repo;
 
 fn start(bin: &str, prefix: &str, sets: &[String]) -> Child {
     let mut cmd = Command::new(bin);

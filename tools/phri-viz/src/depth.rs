@@ -17,9 +17,36 @@ use crate::{BASE_FRAME, CAMERA_FRAME};
 pub const POINT_STRIDE: usize = 12;
 
 /// Whether the payload holds the `width × height` depths the header announces.
-fn complete(h: &FrameHeader, depth: &[u16]) -> bool {
+pub fn complete(h: &FrameHeader, depth: &[u16]) -> bool {
     let n = (h.width as usize).checked_mul(h.height as usize);
     n.is_some_and(|n| n > 0 && depth.len() >= n)
+}
+
+/// The frame's valid depths (non-zero), every `k`-th pixel per axis,
+/// back-projected through the header's intrinsics and appended to `out` as
+/// packed points ([`POINT_STRIDE`] bytes: x, y, z little-endian f32 [m],
+/// the camera's optical frame). `false` (nothing appended) when the payload
+/// is short, `k` is 0 or the intrinsics are unusable.
+pub fn optical_points(h: &FrameHeader, depth: &[u16], k: usize, out: &mut Vec<u8>) -> bool {
+    if k == 0 || !complete(h, depth) || !(h.fx > 0.0 && h.fy > 0.0 && h.depth_scale > 0.0) {
+        return false;
+    }
+    let (w, ht) = (h.width as usize, h.height as usize);
+    for v in (0..ht).step_by(k) {
+        for u in (0..w).step_by(k) {
+            let d = depth[v * w + u];
+            if d == 0 {
+                continue;
+            }
+            let z = f64::from(d) * h.depth_scale;
+            let x = (u as f64 - h.cx) * z / h.fx;
+            let y = (v as f64 - h.cy) * z / h.fy;
+            for c in [x, y, z] {
+                out.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+    }
+    true
 }
 
 /// The camera's pose in the base frame from a frame header: rotation (row-major) and translation [m].
@@ -35,24 +62,10 @@ pub fn camera_pose(h: &FrameHeader) -> (Matrix3<f64>, Vector3<f64>) {
 /// frame and the cloud sits in [`BASE_FRAME`]. `None` when the payload is
 /// short, `k` is 0 or the intrinsics are unusable.
 pub fn point_cloud(h: &FrameHeader, depth: &[u16], k: usize) -> Option<PointCloud> {
-    if k == 0 || !complete(h, depth) || !(h.fx > 0.0 && h.fy > 0.0 && h.depth_scale > 0.0) {
-        return None;
-    }
     let (w, ht) = (h.width as usize, h.height as usize);
-    let mut data = Vec::with_capacity((w / k + 1) * (ht / k + 1) * POINT_STRIDE);
-    for v in (0..ht).step_by(k) {
-        for u in (0..w).step_by(k) {
-            let d = depth[v * w + u];
-            if d == 0 {
-                continue;
-            }
-            let z = f64::from(d) * h.depth_scale;
-            let x = (u as f64 - h.cx) * z / h.fx;
-            let y = (v as f64 - h.cy) * z / h.fy;
-            for c in [x, y, z] {
-                data.extend_from_slice(&(c as f32).to_le_bytes());
-            }
-        }
+    let mut data = Vec::with_capacity((w / k.max(1) + 1) * (ht / k.max(1) + 1) * POINT_STRIDE);
+    if !optical_points(h, depth, k, &mut data) {
+        return None;
     }
     let (r, t) = camera_pose(h);
     let field = |name: &str, offset: u32| PackedElementField {

@@ -5,25 +5,9 @@
 //! abort (100 000 nested elements) or run without a torque clamp (effort 0)
 //! or with a singular mass matrix (a joint that moves no mass).
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
-
-fn bin(name: &str) -> PathBuf {
-    let p = Path::new(env!("CARGO_BIN_EXE_phri-perception")).with_file_name(name);
-    assert!(
-        p.is_file(),
-        "{} not built: run `cargo build --release --bins` (cargo test --workspace builds it)",
-        p.display()
-    );
-    p
-}
+use crate::workspace::{bin, repo};
 
 #[test]
 fn a_prefix_too_long_for_iceoryx2_is_one_line_and_exit_2() {

@@ -7,3 +7,5 @@ mod flying;
 mod pipeline;
 mod png_process;
 mod source;
+#[path = "../../../../tests/support/workspace.rs"]
+mod workspace;

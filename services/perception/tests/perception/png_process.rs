@@ -9,12 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
+use crate::workspace::repo;
 
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("phri-pngproc-{}-{name}", std::process::id()));
