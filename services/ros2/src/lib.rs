@@ -16,20 +16,25 @@
 //! | `/phri/depth` | `sensor_msgs/Image` (16UC1) | best effort, keep last 1 |
 //! | `/phri/points` | `sensor_msgs/PointCloud2` | best effort, keep last 1 |
 //! | `/phri/request` (taken) | `std_msgs/String` | reliable, keep last 10 |
+//!
+//! A topic nobody subscribes to costs nothing: the binary tells the bridge
+//! which topics DDS has matched readers for ([`Subscribed`]), and the bridge
+//! converts only those (ROS 2's "lazy publisher"; the cell's CPU is not
+//! spent on images nobody looks at).
 
 pub mod convert;
 pub mod msgs;
 pub mod request;
 
 use phri_config::{Config, Ros2Config};
-use phri_ipc::{CollabState, ControlStatus, FrameHeader, HriRequest, Residual};
+use phri_ipc::{CollabState, ControlStatus, FrameHeader, HriRequest, RepulsionResult, Residual};
 use phri_viz::status::{Status, Thresholds};
 use phri_viz::RobotView;
 
 pub use convert::{Clock, BASE_FRAME, CAMERA_FRAME};
 use msgs::{
-    DiagnosticArray, DiagnosticStatus, Header, Image, JointState, KeyValue, PointCloud2, TfMessage,
-    WrenchStamped,
+    DiagnosticArray, DiagnosticStatus, Header, Image, JointState, KeyValue, MarkerArray,
+    PointCloud2, TfMessage, WrenchStamped,
 };
 pub use request::RequestError;
 
@@ -64,6 +69,38 @@ pub struct Counts {
     pub requests_refused: u64,
 }
 
+/// Which published topics have at least one matched subscriber (DDS
+/// discovery). The bridge converts and publishes only these.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Subscribed {
+    pub joint_states: bool,
+    pub tf: bool,
+    pub status: bool,
+    pub contact_force: bool,
+    pub repulsion: bool,
+    pub depth: bool,
+    pub points: bool,
+}
+
+impl Subscribed {
+    /// Every topic.
+    pub const ALL: Subscribed = Subscribed {
+        joint_states: true,
+        tf: true,
+        status: true,
+        contact_force: true,
+        repulsion: true,
+        depth: true,
+        points: true,
+    };
+
+    /// Does any subscriber need every robot state (1 kHz wake-ups)?
+    /// Otherwise the binary reads `robot/state` in batches.
+    pub fn every_state(&self) -> bool {
+        self.joint_states
+    }
+}
+
 /// What one robot state gives.
 pub struct StateOut<'a> {
     pub joint_state: Option<&'a JointState>,
@@ -74,6 +111,8 @@ pub struct StateOut<'a> {
 pub struct FrameOut<'a> {
     pub image: Option<&'a Image>,
     pub points: Option<&'a PointCloud2>,
+    /// the camera's optical frame in [`BASE_FRAME`] at the frame's time
+    pub camera_tf: Option<TfMessage>,
 }
 
 /// A rate limit on phri's clock: due at most once per period.
@@ -121,8 +160,12 @@ pub struct Bridge {
     force_every: Every,
     repulsion_every: Every,
     request_seq: u64,
+    /// the newest repulsion result of each worker
+    results: Vec<RepulsionResult>,
     /// the arm's name (`[robot] name`)
     robot: String,
+    /// the topics with subscribers (the binary keeps it current)
+    pub subscribed: Subscribed,
     pub counts: Counts,
 }
 
@@ -165,7 +208,9 @@ impl Bridge {
             image: Image::default(),
             cloud: PointCloud2::default(),
             request_seq: 0,
+            results: Vec::new(),
             robot: config.robot.name.clone(),
+            subscribed: Subscribed::default(),
             counts: Counts::default(),
         })
     }
@@ -176,12 +221,13 @@ impl Bridge {
     }
 
     /// A robot state: `/joint_states` every `joint_states_every`-th, `/tf`
-    /// (each moving link in [`BASE_FRAME`]) every `tf_every`-th.
+    /// (each moving link in [`BASE_FRAME`]) every `tf_every`-th; each only
+    /// when subscribed.
     pub fn state(&mut self, s: &phri_ipc::JointState, clock: &Clock) -> StateOut<'_> {
         self.states += 1;
         let stamp = clock.ros(s.published_ns);
         let mut tf = None;
-        if self.states.is_multiple_of(u64::from(self.cfg.tf_every)) {
+        if self.subscribed.tf && self.states.is_multiple_of(u64::from(self.cfg.tf_every)) {
             let n = (s.dof as usize).min(s.q.len());
             if n == self.view.joint_names().len() && self.view.pose(&s.q[..n]).is_ok() {
                 let transforms = self
@@ -195,9 +241,10 @@ impl Bridge {
             }
         }
         let mut joint_state = None;
-        if self
-            .states
-            .is_multiple_of(u64::from(self.cfg.joint_states_every))
+        if self.subscribed.joint_states
+            && self
+                .states
+                .is_multiple_of(u64::from(self.cfg.joint_states_every))
         {
             convert::joint_state(s, stamp, &mut self.joint_state);
             self.counts.joint_states += 1;
@@ -218,7 +265,7 @@ impl Bridge {
         collab: Option<&CollabState>,
         residual: Option<&Residual>,
     ) -> Option<DiagnosticArray> {
-        if !self.status_every.due(now_ns) {
+        if !self.subscribed.status || !self.status_every.due(now_ns) {
             return None;
         }
         let s = Status::from_latest(control, collab, residual, &self.thresholds);
@@ -270,34 +317,45 @@ impl Bridge {
         collab: Option<&CollabState>,
     ) -> Option<WrenchStamped> {
         let c = collab?;
-        if !self.force_every.due(now_ns) {
+        if !self.subscribed.contact_force || !self.force_every.due(now_ns) {
             return None;
         }
         self.counts.contact_force += 1;
         Some(convert::contact_wrench(c, clock.ros(c.stamp_ns)))
     }
 
-    /// `/phri/repulsion` due at phri's clock `now_ns`?
-    pub fn repulsion_due(&mut self, now_ns: u64) -> bool {
-        let due = self.repulsion_every.due(now_ns);
-        if due {
-            self.counts.repulsion += 1;
+    /// A repulsion worker's result: the newest of each worker is kept.
+    pub fn result(&mut self, r: &RepulsionResult) {
+        match self.results.iter_mut().find(|x| x.worker == r.worker) {
+            Some(x) => *x = *r,
+            None => self.results.push(*r),
         }
-        due
+    }
+
+    /// `/phri/repulsion` at `repulsion_hz` (phri's clock `now_ns`): each
+    /// worker's newest result as arrows.
+    pub fn repulsion(&mut self, now_ns: u64, clock: &Clock) -> Option<MarkerArray> {
+        if !self.subscribed.repulsion
+            || self.results.is_empty()
+            || !self.repulsion_every.due(now_ns)
+        {
+            return None;
+        }
+        self.counts.repulsion += 1;
+        Some(convert::repulsion_markers(&self.results, clock.ros(now_ns)))
     }
 
     /// A new filtered depth frame: `/phri/depth` every `depth_every`-th,
-    /// `/phri/points` every `points_every`-th.
+    /// `/phri/points` every `points_every`-th, the camera's frame on `/tf`
+    /// with each; each only when subscribed.
     pub fn frame(&mut self, h: &FrameHeader, depth: &[u16], clock: &Clock) -> FrameOut<'_> {
         self.frames += 1;
-        let stamp = clock.ros(if h.capture_wall_ns > 0 {
-            h.capture_wall_ns
-        } else {
-            h.published_ns
-        });
-        let image = self.frames.is_multiple_of(u64::from(self.cfg.depth_every))
+        let stamp = clock.ros(phri_viz::depth::stamp(h));
+        let image = self.subscribed.depth
+            && self.frames.is_multiple_of(u64::from(self.cfg.depth_every))
             && convert::depth_image(h, depth, stamp, &mut self.image);
-        let points = self.frames.is_multiple_of(u64::from(self.cfg.points_every))
+        let points = self.subscribed.points
+            && self.frames.is_multiple_of(u64::from(self.cfg.points_every))
             && convert::points(
                 h,
                 depth,
@@ -307,9 +365,13 @@ impl Bridge {
             );
         self.counts.depth += u64::from(image);
         self.counts.points += u64::from(points);
+        let camera_tf = self.subscribed.tf.then(|| TfMessage {
+            transforms: vec![convert::camera_transform(clock.ros(h.published_ns), h)],
+        });
         FrameOut {
             image: image.then_some(&self.image),
             points: points.then_some(&self.cloud),
+            camera_tf,
         }
     }
 
@@ -332,5 +394,100 @@ impl Bridge {
                 Err(e.into())
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    fn bridge() -> Bridge {
+        let model = phri_model::Model::from_urdf_file(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../deploy/robots/kuka_lwr4.urdf"
+        ))
+        .unwrap();
+        Bridge::new(&Config::defaults(), model).unwrap()
+    }
+
+    fn state(k: u64) -> phri_ipc::JointState {
+        let mut s = phri_ipc::JointState::zeroed();
+        s.dof = 7;
+        s.q[3] = 1.0 + k as f64 * 1e-3;
+        s.published_ns = 1_000_000_000 + k * 1_000_000;
+        s
+    }
+
+    fn frame(seq: u64) -> FrameHeader {
+        let mut f = FrameHeader::zeroed();
+        (f.width, f.height, f.seq) = (4, 2, seq);
+        (f.fx, f.fy, f.cx, f.cy, f.depth_scale) = (500.0, 500.0, 2.0, 1.0, 0.001);
+        f.pose_r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        f.published_ns = 1_000_000_000 + seq * 33_000_000;
+        f
+    }
+
+    /// Everything the bridge would publish over 30 robot states, 6 depth
+    /// frames and 1 s of status, force and repulsion.
+    fn run(b: &mut Bridge) -> (u64, u64, u64, u64, u64, u64, u64) {
+        let clock = Clock::new(0, 1_764_000_000_000_000_000);
+        let (mut js, mut tf, mut img, mut pc, mut cam) = (0, 0, 0, 0, 0);
+        for k in 0..30 {
+            let out = b.state(&state(k), &clock);
+            js += u64::from(out.joint_state.is_some());
+            tf += u64::from(out.tf.is_some());
+        }
+        let depth = [1000u16; 8];
+        for seq in 1..=6 {
+            let out = b.frame(&frame(seq), &depth, &clock);
+            img += u64::from(out.image.is_some());
+            pc += u64::from(out.points.is_some());
+            cam += u64::from(out.camera_tf.is_some());
+        }
+        let collab = CollabState::zeroed();
+        let mut r = RepulsionResult::zeroed();
+        r.worker = 2;
+        b.result(&r);
+        let (mut st, mut f, mut rep) = (0, 0, 0);
+        for ms in 0..1000u64 {
+            let now = 2_000_000_000 + ms * 1_000_000;
+            st += u64::from(b.status(now, &clock, None, Some(&collab), None).is_some());
+            f += u64::from(b.contact_force(now, &clock, Some(&collab)).is_some());
+            rep += u64::from(b.repulsion(now, &clock).is_some());
+        }
+        (js, tf, img, pc, cam, st, f + 1000 * rep)
+    }
+
+    #[test]
+    fn nothing_is_converted_for_a_topic_nobody_subscribes_to() {
+        let mut b = bridge();
+        assert_eq!(b.subscribed, Subscribed::default());
+        assert_eq!(run(&mut b), (0, 0, 0, 0, 0, 0, 0));
+        assert_eq!(b.counts, Counts::default());
+    }
+
+    #[test]
+    fn every_subscribed_topic_comes_at_its_configured_rate() {
+        let mut b = bridge();
+        b.subscribed = Subscribed::ALL;
+        // 30 states: /joint_states each, /tf every 10th; 6 frames: an image
+        // each, points every 3rd, the camera's frame each; status 10 Hz,
+        // force 100 Hz, repulsion 10 Hz
+        assert_eq!(run(&mut b), (30, 3, 6, 2, 6, 10, 100 + 1000 * 10));
+        assert_eq!(b.joint_names().len(), 7);
+    }
+
+    #[test]
+    fn only_the_subscribed_topics_are_converted() {
+        let mut b = bridge();
+        b.subscribed = Subscribed {
+            tf: true,
+            points: true,
+            ..Subscribed::default()
+        };
+        assert!(!b.subscribed.every_state());
+        assert_eq!(run(&mut b), (0, 3, 0, 2, 6, 0, 0));
+        assert_eq!((b.counts.joint_states, b.counts.depth), (0, 0));
     }
 }

@@ -14,11 +14,11 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_ipc::{
-    Queue, RepulsionResult, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST,
-    PERCEPTION_DEPTH, PERCEPTION_REPULSION, ROBOT_STATE,
+    Queue, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, PERCEPTION_DEPTH,
+    PERCEPTION_REPULSION, ROBOT_STATE,
 };
 use phri_ros2::msgs::{self, RosType};
-use phri_ros2::{Bridge, Clock};
+use phri_ros2::{Bridge, Clock, Subscribed};
 use phri_runtime::{now_ns, ServiceContext};
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{
@@ -45,8 +45,16 @@ const RELIABLE: QosProfile = QosProfile::publisher_default()
 
 /// The log filter when `RUST_LOG` is unset: the services' own, with
 /// RustDDS from `error` up (restricted to the loopback, it warns at every
-/// send that its own builtin readers have no other locators).
-const LOG_FILTER: &str = "info,rustdds=error,ros2_client=warn";
+/// send that its own builtin readers have no other locators), and
+/// ros2-client's node silent (it logs an error each time a publisher not
+/// yet matched is asked for its subscribers).
+const LOG_FILTER: &str = "info,rustdds=error,ros2_client=warn,ros2_client::node=off";
+
+/// How often the topics' matched subscribers are read from DDS discovery.
+const SUBSCRIBED_EVERY: Duration = Duration::from_millis(100);
+/// Without a `/joint_states` subscriber, `robot/state` is read in batches
+/// this far apart instead of at every state (no 1 kHz wake-ups).
+const BATCH: Duration = Duration::from_millis(10);
 
 fn main() -> ExitCode {
     if std::env::var("RUST_LOG").map_or(true, |f| f.trim().is_empty()) {
@@ -169,6 +177,19 @@ fn body() -> Result<(), Box<dyn Error>> {
         .create_subscription::<msgs::StringMsg>(&request_topic, None)
         .map_err(|e| format!("ROS 2 subscription of /phri/request: {e:?}"))?;
 
+    // ROS 2's discovery (matched subscribers, ros_discovery_info) runs on a
+    // thread of its own
+    let spinner = ros
+        .spinner()
+        .map_err(|e| format!("ROS 2 node's discovery: {e:?}"))?;
+    std::thread::Builder::new()
+        .name("ros2-discovery".into())
+        .spawn(move || {
+            if let Err(e) = futures::executor::block_on(spinner.spin()) {
+                tracing::warn!("ROS 2 discovery stopped: {e:?}");
+            }
+        })?;
+
     ctx.start_deadman()?;
     let node = ctx.node()?;
     let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
@@ -187,12 +208,35 @@ fn body() -> Result<(), Box<dyn Error>> {
     );
 
     let (mut newest_control, mut newest_collab, mut newest_residual) = (None, None, None);
-    let mut newest_results: Vec<RepulsionResult> = Vec::new();
     let mut last_frame = 0u64;
     let mut failed = 0u64;
+    let mut subscribed_at: Option<std::time::Instant> = None;
     while !ctx.shutdown.requested() {
-        // every robot state wakes us; without states, a poll every 20 ms
-        let _ = states.wait(Duration::from_millis(20));
+        if subscribed_at.is_none_or(|t| t.elapsed() >= SUBSCRIBED_EVERY) {
+            subscribed_at = Some(std::time::Instant::now());
+            let was = bridge.subscribed;
+            bridge.subscribed = Subscribed {
+                joint_states: joint_states.get_subscription_count(&ros) > 0,
+                tf: tf.get_subscription_count(&ros) > 0,
+                status: status.get_subscription_count(&ros) > 0,
+                contact_force: force.get_subscription_count(&ros) > 0,
+                repulsion: repulsion.get_subscription_count(&ros) > 0,
+                depth: depth.get_subscription_count(&ros) > 0,
+                points: points.get_subscription_count(&ros) > 0,
+            };
+            if bridge.subscribed != was {
+                tracing::info!("subscribed on ROS 2: {:?}", bridge.subscribed);
+            }
+        }
+        if bridge.subscribed.every_state() {
+            // every robot state wakes us; without states, a poll every 20 ms
+            let _ = states.wait(Duration::from_millis(20));
+        } else {
+            std::thread::sleep(BATCH);
+            // consume the wake-ups that came meanwhile (a zero timeout
+            // would wait without end on iceoryx2's socket-based events)
+            let _ = states.wait(Duration::from_micros(1));
+        }
         let now = now_ns();
         beat.beat(now);
         let clock = Clock::new(now, realtime_ns());
@@ -220,20 +264,9 @@ fn body() -> Result<(), Box<dyn Error>> {
         if let Some(m) = bridge.contact_force(now, &clock, newest_collab.as_ref()) {
             send(&force, m, &mut failed);
         }
-        results.drain(|r| {
-            // the newest result of each worker
-            match newest_results.iter_mut().find(|x| x.worker == r.worker) {
-                Some(x) => *x = *r,
-                None => newest_results.push(*r),
-            }
-        })?;
-        if !newest_results.is_empty() && bridge.repulsion_due(now) {
-            let stamp = clock.ros(now);
-            send(
-                &repulsion,
-                phri_ros2::convert::repulsion_markers(&newest_results, stamp),
-                &mut failed,
-            );
+        results.drain(|r| bridge.result(r))?;
+        if let Some(m) = bridge.repulsion(now, &clock) {
+            send(&repulsion, m, &mut failed);
         }
         if let Some(f) = frames.latest()? {
             let h = f.user_header();
@@ -246,16 +279,9 @@ fn body() -> Result<(), Box<dyn Error>> {
                 if let Some(pc) = out.points {
                     send(&points, pc.clone(), &mut failed);
                 }
-                send(
-                    &tf,
-                    msgs::TfMessage {
-                        transforms: vec![phri_ros2::convert::camera_transform(
-                            clock.ros(h.published_ns),
-                            h,
-                        )],
-                    },
-                    &mut failed,
-                );
+                if let Some(t) = out.camera_tf {
+                    send(&tf, t, &mut failed);
+                }
             }
         }
         while let Ok(Some((m, _info))) = requests_in.take() {
