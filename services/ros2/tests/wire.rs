@@ -1,14 +1,15 @@
 //! phri-ros2 against a DDS implementation nobody here wrote: Eclipse Cyclone
 //! DDS's Python binding (`deploy/ros2/install`, `deploy/ros2/peer.py`),
 //! subscribing with ROS 2's topic and type names and QoS and publishing a
-//! request. The real cell (the supervisor and every service, phri-ros2
-//! among them) runs in a network namespace of its own, made by the test
-//! (`unshare --net`, as root), with only its loopback, multicast on; the
-//! peer joins that namespace (`nsenter`): DDS's discovery and data never
-//! leave the machine. iceoryx2's shared memory is not a network: the test
-//! reads `robot/state` beside them. The bridge is killed (-9) at 4 s: the
-//! supervisor restarts it, the peer finds it again, and the cell misses
-//! nothing.
+//! request. Two hosts on one machine: the real cell (the supervisor and
+//! every service, phri-ros2 among them) runs in a network namespace of its
+//! own, the peer in another, made by the test (`unshare --net`, as root)
+//! and joined by a veth pair on a /24 of their own, multicast routed
+//! through it: DDS's discovery and data cross a network interface, as
+//! between two machines, and never leave this one. iceoryx2's shared memory
+//! is not a network: the test reads `robot/state` beside them. The bridge
+//! is killed (-9) at 4 s: the supervisor restarts it, the peer finds it
+//! again, and the cell misses nothing.
 
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -32,9 +33,40 @@ fn peer_python() -> PathBuf {
     PathBuf::from(dir.trim()).join("venv/bin/python")
 }
 
-/// The loopback of a new network namespace, multicast on, then the command.
-const NETNS_SETUP: &str = "ip link set lo up && ip link set lo multicast on \
-    && ip route add 224.0.0.0/4 dev lo && exec \"$0\" \"$@\"";
+/// A new network namespace, then the command: its loopback up; once the
+/// test has moved the veth end `$PHRI_VETH` in, that end up with address
+/// `$PHRI_ADDR` and multicast routed through it; then, if `$PHRI_AFTER` is
+/// set, a wait for that file (the cell's state, for the peer).
+const NETNS_SETUP: &str = "ip link set lo up \
+    && i=0 && while ! ip link show \"$PHRI_VETH\" >/dev/null 2>&1; do \
+         i=$((i+1)); [ $i -le 400 ] || exit 97; sleep 0.05; done \
+    && ip addr add \"$PHRI_ADDR\" dev \"$PHRI_VETH\" && ip link set \"$PHRI_VETH\" up \
+    && ip route add 224.0.0.0/4 dev \"$PHRI_VETH\" \
+    && i=0 && while [ -n \"$PHRI_AFTER\" ] && [ ! -e \"$PHRI_AFTER\" ]; do \
+         i=$((i+1)); [ $i -le 400 ] || exit 98; sleep 0.05; done \
+    && exec \"$0\" \"$@\"";
+
+/// Joins the network namespaces of processes `a` and `b` with a veth pair
+/// named `name_a` (in a's) and `name_b` (in b's).
+fn veth(a: u32, name_a: &str, b: u32, name_b: &str) {
+    let status = Command::new("ip")
+        .args(["link", "add", "name", name_a, "netns", &a.to_string()])
+        .args([
+            "type",
+            "veth",
+            "peer",
+            "name",
+            name_b,
+            "netns",
+            &b.to_string(),
+        ])
+        .status()
+        .expect("ip runs");
+    assert!(
+        status.success(),
+        "ip link add {name_a} … veth … {name_b}: {status}"
+    );
+}
 
 #[test]
 fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration() {
@@ -49,8 +81,14 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     // (6.5 s) and holds it out (9.5-17 s) where the voice asks to follow it;
     // here the ROS 2 peer asks, and ends it
     let duration_s = 22.0;
+    // the cell's namespace: its bridge on every interface (the veth), not
+    // the loopback only that cargo's environment asks for
     let mut supervisor = Command::new("unshare")
         .current_dir(repo())
+        .env("PHRI_VETH", "phri0")
+        .env("PHRI_ADDR", "10.231.0.1/24")
+        .env_remove("PHRI_AFTER")
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "SUBNET")
         .args(["--net", "--", "sh", "-c", NETNS_SETUP])
         .arg(bin("phri-supervisor"))
         .arg("--config")
@@ -67,21 +105,12 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .args(["--set", "services.voice.enabled=false"])
         .spawn()
         .expect("unshare starts");
-    let netns = format!("--net=/proc/{}/ns/net", supervisor.id());
-    // the namespace exists once unshare has exec'd sh: wait for the supervisor's run directory
-    let t0 = Instant::now();
-    while !run_dir.join("state.json").exists() {
-        if let Some(s) = supervisor.try_wait().unwrap() {
-            panic!(
-                "the cell did not start in a network namespace of its own ({s}): \
-                 this test needs root (unshare --net)"
-            );
-        }
-        assert!(t0.elapsed() < Duration::from_secs(20), "no state.json");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let peer = Command::new("nsenter")
-        .arg(&netns)
+    // the peer's namespace: it starts once the cell has
+    let peer = Command::new("unshare")
+        .env("PHRI_VETH", "peer0")
+        .env("PHRI_ADDR", "10.231.0.2/24")
+        .env("PHRI_AFTER", run_dir.join("state.json"))
+        .args(["--net", "--", "sh", "-c", NETNS_SETUP])
         .arg(&python)
         .arg(repo().join("deploy/ros2/peer.py"))
         .args(["--duration", "19"])
@@ -91,6 +120,29 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .stdout(Stdio::piped())
         .spawn()
         .expect("the peer starts");
+    // both namespaces exist once unshare has made them
+    let ns = |pid: u32| std::fs::read_link(format!("/proc/{pid}/ns/net")).ok();
+    let own = ns(std::process::id());
+    let t0 = Instant::now();
+    while ns(supervisor.id()) == own || ns(peer.id()) == own {
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "no network namespaces: this test needs root (unshare --net)"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    veth(supervisor.id(), "phri0", peer.id(), "peer0");
+    let t0 = Instant::now();
+    while !run_dir.join("state.json").exists() {
+        if let Some(s) = supervisor.try_wait().unwrap() {
+            panic!(
+                "the cell did not start in a network namespace of its own ({s}): \
+                 this test needs root (unshare --net, ip link)"
+            );
+        }
+        assert!(t0.elapsed() < Duration::from_secs(20), "no state.json");
+        std::thread::sleep(Duration::from_millis(50));
+    }
 
     // robot/state, beside the bridge: every state's positions, bit for bit
     let node = phri_ipc::node("test-ros2-wire", &prefix).unwrap();

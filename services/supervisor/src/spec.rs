@@ -44,7 +44,8 @@ mod tests {
                 "control",
                 "control_standby",
                 "mic",
-                "voice"
+                "voice",
+                "ros2"
             ]
         );
     }
