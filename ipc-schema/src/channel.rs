@@ -455,7 +455,8 @@ impl<T: Message> Subscriber<T> {
     }
 
     /// Block until a new sample is announced or `timeout` passes (channels that
-    /// wake); a channel that does not wake just sleeps `timeout`.
+    /// wake; zero: consume the pending announcements without blocking); a
+    /// channel that does not wake just sleeps `timeout`.
     pub fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
         match &self.listener {
             Some(l) => l.wait(timeout),
@@ -538,20 +539,22 @@ pub struct Listener {
 
 impl Listener {
     /// Block until an announcement arrives or `timeout` passes (a signal also
-    /// ends the wait). Pending announcements are consumed.
+    /// ends the wait). Pending announcements are consumed. A zero `timeout`
+    /// never blocks: it only consumes what is pending (iceoryx2's own timed
+    /// wait takes zero as no timeout at all on its socket-based events).
     pub fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
-        self.port
-            .timed_wait(|_| {}, timeout)
-            .map(|_| ())
-            .map_err(|e| IpcError::receive(self.channel, e))
+        self.wait_each(timeout, || {})
     }
 
     /// Like [`Listener::wait`], calling `f` once per announcement.
     pub fn wait_each(&self, timeout: Duration, mut f: impl FnMut()) -> Result<(), IpcError> {
-        self.port
-            .timed_wait(|_| f(), timeout)
-            .map(|_| ())
-            .map_err(|e| IpcError::receive(self.channel, e))
+        if timeout.is_zero() {
+            self.port.try_wait(|_| f())
+        } else {
+            self.port.timed_wait(|_| f(), timeout)
+        }
+        .map(|_| ())
+        .map_err(|e| IpcError::receive(self.channel, e))
     }
 }
 

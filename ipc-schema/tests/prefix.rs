@@ -1,7 +1,8 @@
 //! The run's prefix is checked against the limits of the names iceoryx2
 //! builds from it: a prefix that fits opens every kind of channel, one
 //! character more is refused with an error naming it (it made services
-//! panic deep inside iceoryx2 when a channel opened).
+//! panic deep inside iceoryx2 when a channel opened). And a waking
+//! channel's wait with a zero timeout only consumes what is pending.
 
 use std::time::Duration;
 
@@ -70,4 +71,40 @@ fn characters_iceoryx2_refuses_are_refused_by_name() {
             other => panic!("{p:?}: {:?}", other.map(|_| ())),
         }
     }
+}
+
+#[test]
+fn a_zero_wait_only_consumes_what_is_pending() {
+    // iceoryx2's timed wait takes a zero timeout as none on its socket
+    // events: a wait that blocks fails here instead of hanging the run
+    let (done, watched) = std::sync::mpsc::channel::<()>();
+    std::thread::spawn(move || {
+        if watched.recv_timeout(Duration::from_secs(10)).is_err() {
+            eprintln!("a zero wait blocked");
+            std::process::abort();
+        }
+    });
+    let prefix = prefix(20, 'w');
+    let node = node("wake-test", &prefix).unwrap();
+    let p = ROBOT_STATE.publisher(&node).unwrap();
+    let s = ROBOT_STATE.waking_subscriber(&node, Queue::Drain).unwrap();
+    let l = ROBOT_STATE.listener(&node).unwrap();
+    let count = || {
+        let mut n = 0;
+        l.wait_each(Duration::ZERO, || n += 1).unwrap();
+        n
+    };
+    // nothing pending: returns at once
+    assert_eq!(count(), 0);
+    for _ in 0..3 {
+        p.publish(&<JointState as Zeroed>::zeroed()).unwrap();
+    }
+    // the announcements are consumed, then nothing is pending again
+    assert!(count() >= 1);
+    assert_eq!(count(), 0);
+    s.wait(Duration::ZERO).unwrap();
+    assert_eq!(s.drain(|_| {}).unwrap(), 3);
+    done.send(()).unwrap();
+    drop((l, p, s, node));
+    let _ = remove_leftovers(&prefix);
 }

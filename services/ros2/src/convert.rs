@@ -98,11 +98,8 @@ pub fn transform(stamp: Time, parent: &str, child: &str, p: &Placement) -> Trans
 /// The camera's optical frame in [`BASE_FRAME`], from a frame's header
 /// (its pose: rotation row-major, translation [m]).
 pub fn camera_transform(stamp: Time, h: &FrameHeader) -> TransformStamped {
-    let p = Placement {
-        r: Matrix3::from_row_slice(&h.pose_r),
-        p: V3::new(h.pose_t[0], h.pose_t[1], h.pose_t[2]),
-    };
-    transform(stamp, BASE_FRAME, CAMERA_FRAME, &p)
+    let (r, p) = phri_viz::depth::camera_pose(h);
+    transform(stamp, BASE_FRAME, CAMERA_FRAME, &Placement { r, p })
 }
 
 /// The estimated contact forces F̂ of the collaboration as one wrench in

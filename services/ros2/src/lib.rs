@@ -8,7 +8,7 @@
 //!
 //! | topic | type | QoS |
 //! | --- | --- | --- |
-//! | `/joint_states` | `sensor_msgs/JointState` | best effort, keep last 5 |
+//! | `/joint_states` | `sensor_msgs/JointState` | best effort, keep last 200 (0.2 s at 1 kHz) |
 //! | `/tf` | `tf2_msgs/TFMessage` | best effort, keep last 5 |
 //! | `/phri/status` | `diagnostic_msgs/DiagnosticArray` | reliable, keep last 10 |
 //! | `/phri/contact_force` | `geometry_msgs/WrenchStamped` | best effort, keep last 5 |

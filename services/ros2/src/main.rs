@@ -233,9 +233,8 @@ fn body() -> Result<(), Box<dyn Error>> {
             let _ = states.wait(Duration::from_millis(20));
         } else {
             std::thread::sleep(BATCH);
-            // consume the wake-ups that came meanwhile (a zero timeout
-            // would wait without end on iceoryx2's socket-based events)
-            let _ = states.wait(Duration::from_micros(1));
+            // consume the wake-ups that came meanwhile
+            let _ = states.wait(Duration::ZERO);
         }
         let now = now_ns();
         beat.beat(now);
