@@ -13,11 +13,14 @@
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
+use std::mem::{size_of, MaybeUninit};
 use std::time::Duration;
 
 use iceoryx2::prelude::*;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
+use iceoryx2::service::marker::{CustomHeaderMarker, CustomPayloadMarker};
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
+use iceoryx2::service::static_config::message_type_details::{TypeDetail, TypeVariant};
 
 use crate::error::IpcError;
 use crate::messages::{FrameHeader, Zeroed};
@@ -77,9 +80,305 @@ impl Queue {
 
 /// The node type of this project.
 pub type IpcNode = Node<ipc::Service>;
-type Factory<P, H> = PortFactory<ipc::Service, P, H>;
 type RawListener = iceoryx2::port::listener::Listener<ipc::Service>;
 type RawNotifier = iceoryx2::port::notifier::Notifier<ipc::Service>;
+
+// Every channel's ports are iceoryx2's ports of opaque bytes: the payload a
+// byte slice, the user header opaque. The channel's own types are written
+// into the service's static config exactly as a typed port writes them (the
+// type's name, size and alignment: [`Layout`]), so outside clients (`iox2`,
+// the Python binding, a typed Rust port) see and match the same service.
+// iceoryx2's code is generic over the payload and header: opened this way it
+// is compiled once, in this crate, instead of once per message type in
+// every binary that uses it. The typed API below copies a message in and out
+// (a few hundred bytes); depth frames stay zero-copy.
+type Bytes = [CustomPayloadMarker];
+type Opaque = CustomHeaderMarker;
+type Factory = PortFactory<ipc::Service, Bytes, Opaque>;
+type RawPub = iceoryx2::port::publisher::Publisher<ipc::Service, Bytes, Opaque>;
+type RawSub = iceoryx2::port::subscriber::Subscriber<ipc::Service, Bytes, Opaque>;
+type RawSample = iceoryx2::sample::Sample<ipc::Service, Bytes, Opaque>;
+type RawSampleMut = iceoryx2::sample_mut::SampleMut<ipc::Service, Bytes, Opaque>;
+
+/// What a channel's service records of its types: the payload's and the
+/// user header's type details, as a typed iceoryx2 port would record them.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    payload: TypeDetail,
+    header: TypeDetail,
+}
+
+impl Layout {
+    /// One message of `T` per sample, no user header (`Channel<T>`).
+    fn message<T: ZeroCopySend>() -> Layout {
+        Layout {
+            payload: TypeDetail::new::<T>(TypeVariant::FixedSize),
+            header: TypeDetail::new::<()>(TypeVariant::FixedSize),
+        }
+    }
+
+    /// A slice of `T` per sample with a user header `H` (depth frames).
+    fn slice<T: ZeroCopySend, H: ZeroCopySend>() -> Layout {
+        Layout {
+            payload: TypeDetail::new::<T>(TypeVariant::Dynamic),
+            header: TypeDetail::new::<H>(TypeVariant::FixedSize),
+        }
+    }
+}
+
+/// A channel's name, QoS and types: everything that opens its service.
+#[derive(Clone, Copy)]
+struct Spec<'a> {
+    name: &'static str,
+    qos: &'a Qos,
+    layout: Layout,
+}
+
+impl Spec<'_> {
+    fn builder(
+        &self,
+        node: &IpcNode,
+    ) -> Result<
+        iceoryx2::service::builder::publish_subscribe::Builder<Bytes, Opaque, ipc::Service>,
+        IpcError,
+    > {
+        let name: ServiceName = self
+            .name
+            .try_into()
+            .map_err(|e| IpcError::open(self.name, e))?;
+        let q = self.qos;
+        let builder = node
+            .service_builder(&name)
+            .publish_subscribe::<Bytes>()
+            .user_header::<Opaque>();
+        // SAFETY: the details are those of the types this crate reads and
+        // writes through the ports (Layout::message, Layout::slice), so the
+        // chunks iceoryx2 lays out fit them
+        let builder = unsafe {
+            builder
+                .__internal_set_payload_type_details(&self.layout.payload)
+                .__internal_set_user_header_type_details(&self.layout.header)
+        };
+        Ok(builder
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
+            .subscriber_max_buffer_size(q.subscriber_max_buffer)
+            .history_size(q.history)
+            .enable_safe_overflow(true))
+    }
+
+    fn open_or_create(&self, node: &IpcNode) -> Result<Factory, IpcError> {
+        self.builder(node)?
+            .open_or_create()
+            .map_err(|e| IpcError::open(self.name, e))
+    }
+
+    /// The service if it exists: `Ok(None)` while it does not exist (yet),
+    /// and while it is half there: being removed by its last user (a service
+    /// that just exited) or not finished by its creator.
+    fn open_existing(&self, node: &IpcNode) -> Result<Option<Factory>, IpcError> {
+        match self.builder(node)?.open() {
+            Ok(f) => Ok(Some(f)),
+            Err(
+                PublishSubscribeOpenError::DoesNotExist
+                | PublishSubscribeOpenError::IsMarkedForDestruction
+                | PublishSubscribeOpenError::HangsInCreation,
+            ) => Ok(None),
+            Err(e) => Err(IpcError::open(self.name, e)),
+        }
+    }
+
+    fn publisher_pids(&self, node: &IpcNode) -> Result<Option<Vec<i32>>, IpcError> {
+        use iceoryx2::service::port_factory::PortFactory as _;
+        Ok(self.open_existing(node)?.map(|f| {
+            let mut pids = Vec::new();
+            f.dynamic_config().list_publishers(|p| {
+                if let Ok(pid) = p.node_id.pid::<ipc::Service>() {
+                    pids.push(pid.value());
+                }
+                CallbackProgression::Continue
+            });
+            pids
+        }))
+    }
+
+    fn ports(&self, node: &IpcNode) -> Result<Option<(usize, usize)>, IpcError> {
+        use iceoryx2::service::port_factory::PortFactory as _;
+        Ok(self.open_existing(node)?.map(|f| {
+            let d = f.dynamic_config();
+            (d.number_of_publishers(), d.number_of_subscribers())
+        }))
+    }
+
+    /// A publisher of up to `max_elements` payload elements per sample.
+    fn publisher(
+        &self,
+        node: &IpcNode,
+        wakes: bool,
+        max_elements: usize,
+    ) -> Result<Sender, IpcError> {
+        let port = self
+            .open_or_create(node)?
+            .publisher_builder()
+            .initial_max_slice_len(max_elements)
+            .create()
+            .map_err(|e| IpcError::publisher(self.name, self.qos.max_publishers, e))?;
+        let notifier = if wakes {
+            Some(notifier_of(node, self.name)?)
+        } else {
+            None
+        };
+        Ok(Sender {
+            port,
+            notifier,
+            channel: self.name,
+        })
+    }
+
+    fn subscribe(
+        &self,
+        factory: Factory,
+        wake_on: Option<&IpcNode>,
+        queue: Queue,
+    ) -> Result<Receiver, IpcError> {
+        let port = factory
+            .subscriber_builder()
+            .buffer_size(queue.depth(self.qos))
+            .create()
+            .map_err(|e| IpcError::port(self.name, e))?;
+        let listener = match wake_on {
+            Some(node) => Some(listener_of(node, self.name)?),
+            None => None,
+        };
+        Ok(Receiver {
+            port,
+            listener,
+            channel: self.name,
+        })
+    }
+}
+
+fn event_of(
+    node: &IpcNode,
+    channel: &'static str,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, IpcError> {
+    let name: ServiceName = channel.try_into().map_err(|e| IpcError::open(channel, e))?;
+    node.service_builder(&name)
+        .event()
+        .max_notifiers(4)
+        .max_listeners(16)
+        .open_or_create()
+        .map_err(|e| IpcError::open(channel, e))
+}
+
+fn listener_of(node: &IpcNode, channel: &'static str) -> Result<Listener, IpcError> {
+    let port = event_of(node, channel)?
+        .listener_builder()
+        .create()
+        .map_err(|e| IpcError::port(channel, e))?;
+    Ok(Listener { port, channel })
+}
+
+fn notifier_of(node: &IpcNode, channel: &'static str) -> Result<Notifier, IpcError> {
+    let port = event_of(node, channel)?
+        .notifier_builder()
+        .create()
+        .map_err(|e| IpcError::port(channel, e))?;
+    Ok(Notifier { port })
+}
+
+/// The sending end of any channel: a byte publisher and its wake-ups.
+struct Sender {
+    port: RawPub,
+    notifier: Option<Notifier>,
+    channel: &'static str,
+}
+
+impl Sender {
+    /// Copy `len` bytes from `src` into a loaned sample of one element,
+    /// send it and wake the readers.
+    ///
+    /// # Safety
+    /// `src` is valid for reads of `len` bytes.
+    unsafe fn send_copy(&self, src: *const u8, len: usize) -> Result<(), IpcError> {
+        // SAFETY: one element of a fixed-size payload
+        let mut sample = unsafe { self.port.loan_custom_payload(1) }
+            .map_err(|e| IpcError::send(self.channel, e))?;
+        let dst = sample.payload_mut();
+        if dst.len() != len {
+            return Err(IpcError::send(
+                self.channel,
+                format!("a sample holds {} bytes, the message {len}", dst.len()),
+            ));
+        }
+        // SAFETY: dst holds len bytes (checked), src is readable (the caller)
+        // and the sample's memory is not the caller's
+        let sample = unsafe {
+            std::ptr::copy_nonoverlapping(src, dst.as_mut_ptr().cast::<u8>(), len);
+            sample.assume_init()
+        };
+        sample.send().map_err(|e| IpcError::send(self.channel, e))?;
+        self.notify();
+        Ok(())
+    }
+
+    fn notify(&self) {
+        if let Some(n) = &self.notifier {
+            n.notify();
+        }
+    }
+
+    fn update_connections(&self) {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        let _ = self.port.update_connections();
+    }
+}
+
+/// The receiving end of any channel: a byte subscriber and its listener.
+struct Receiver {
+    port: RawSub,
+    listener: Option<Listener>,
+    channel: &'static str,
+}
+
+impl Receiver {
+    fn receive(&self) -> Result<Option<RawSample>, IpcError> {
+        self.port
+            .receive()
+            .map_err(|e| IpcError::receive(self.channel, e))
+    }
+
+    /// Copy the next sample's payload (`len` bytes) to `dst`; the process id
+    /// of its sender (0: not decodable), `None` when nothing is queued.
+    ///
+    /// # Safety
+    /// `dst` is valid for writes of `len` bytes.
+    unsafe fn receive_copy(&self, dst: *mut u8, len: usize) -> Result<Option<i32>, IpcError> {
+        let Some(s) = self.receive()? else {
+            return Ok(None);
+        };
+        let src = s.payload();
+        if src.len() != len {
+            return Err(IpcError::receive(
+                self.channel,
+                format!("a sample of {} bytes, the message has {len}", src.len()),
+            ));
+        }
+        // SAFETY: both hold len bytes (checked; the caller) and do not overlap
+        unsafe { std::ptr::copy_nonoverlapping(src.as_ptr().cast::<u8>(), dst, len) };
+        Ok(Some(sender_pid(s.header())))
+    }
+
+    fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
+        match &self.listener {
+            Some(l) => l.wait(timeout),
+            None => {
+                std::thread::sleep(timeout);
+                Ok(())
+            }
+        }
+    }
+}
 
 impl<P: ?Sized, H> Channel<P, H> {
     /// A channel; the constants in [`crate::channels`] are the only ones a cell uses.
@@ -92,145 +391,53 @@ impl<P: ?Sized, H> Channel<P, H> {
         }
     }
 
-    fn service_name(&self) -> Result<ServiceName, IpcError> {
-        self.name
-            .try_into()
-            .map_err(|e| IpcError::open(self.name, e))
-    }
-
-    fn event(
-        &self,
-        node: &IpcNode,
-    ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, IpcError> {
+    /// A listener woken by every new sample (channels that wake only).
+    pub fn listener(&self, node: &IpcNode) -> Result<Listener, IpcError> {
         if !self.wakes {
             return Err(IpcError::NoEvent { channel: self.name });
         }
-        node.service_builder(&self.service_name()?)
-            .event()
-            .max_notifiers(4)
-            .max_listeners(16)
-            .open_or_create()
-            .map_err(|e| IpcError::open(self.name, e))
-    }
-
-    /// A listener woken by every new sample (channels that wake only).
-    pub fn listener(&self, node: &IpcNode) -> Result<Listener, IpcError> {
-        let port = self
-            .event(node)?
-            .listener_builder()
-            .create()
-            .map_err(|e| IpcError::port(self.name, e))?;
-        Ok(Listener {
-            port,
-            channel: self.name,
-        })
+        listener_of(node, self.name)
     }
 
     /// A notifier that announces new samples (channels that wake only).
     pub fn notifier(&self, node: &IpcNode) -> Result<Notifier, IpcError> {
-        let port = self
-            .event(node)?
-            .notifier_builder()
-            .create()
-            .map_err(|e| IpcError::port(self.name, e))?;
-        Ok(Notifier { port })
-    }
-
-    fn notifier_if_wakes(&self, node: &IpcNode) -> Result<Option<Notifier>, IpcError> {
-        if self.wakes {
-            self.notifier(node).map(Some)
-        } else {
-            Ok(None)
+        if !self.wakes {
+            return Err(IpcError::NoEvent { channel: self.name });
         }
-    }
-
-    fn listener_if_wakes(&self, node: &IpcNode) -> Result<Option<Listener>, IpcError> {
-        if self.wakes {
-            self.listener(node).map(Some)
-        } else {
-            Ok(None)
-        }
+        notifier_of(node, self.name)
     }
 }
 
-impl<P: Debug + ZeroCopySend + IceoryxSend + ?Sized, H: Debug + ZeroCopySend> Channel<P, H> {
-    fn builder(
-        &self,
-        node: &IpcNode,
-    ) -> Result<iceoryx2::service::builder::publish_subscribe::Builder<P, H, ipc::Service>, IpcError>
-    {
-        let q = &self.qos;
-        Ok(node
-            .service_builder(&self.service_name()?)
-            .publish_subscribe::<P>()
-            .user_header::<H>()
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer)
-            .history_size(q.history)
-            .enable_safe_overflow(true))
-    }
-}
-
-/// Opening a channel's service: iceoryx2 has one implementation for sized
-/// payloads and one for slices, with the same shape.
+/// What every channel's service offers, whatever it carries.
 macro_rules! opening {
-    ($(impl[$($g:tt)*] $payload:ty, $header:ty;)+) => {$(
+    ($(impl[$($g:tt)*] $payload:ty, $header:ty => $layout:expr;)+) => {$(
         impl<$($g)*> Channel<$payload, $header> {
-            fn open_or_create(&self, node: &IpcNode) -> Result<Factory<$payload, $header>, IpcError> {
-                self.builder(node)?
-                    .open_or_create()
-                    .map_err(|e| IpcError::open(self.name, e))
-            }
-
-            /// The channel's service if it exists, for tools that watch a cell and must
-            /// never create one: `Ok(None)` while it does not exist (yet), and while
-            /// it is half there: being removed by its last user (a service that just
-            /// exited) or not finished by its creator.
-            fn open_existing(&self, node: &IpcNode) -> Result<Option<Factory<$payload, $header>>, IpcError> {
-                match self.builder(node)?.open() {
-                    Ok(f) => Ok(Some(f)),
-                    Err(
-                        PublishSubscribeOpenError::DoesNotExist
-                        | PublishSubscribeOpenError::IsMarkedForDestruction
-                        | PublishSubscribeOpenError::HangsInCreation,
-                    ) => Ok(None),
-                    Err(e) => Err(IpcError::open(self.name, e)),
+            fn spec(&self) -> Spec<'_> {
+                Spec {
+                    name: self.name,
+                    qos: &self.qos,
+                    layout: $layout,
                 }
             }
 
             /// `None` while the channel does not exist; else the process id of
             /// each of its publishers (who commands, who publishes).
             pub fn publisher_pids(&self, node: &IpcNode) -> Result<Option<Vec<i32>>, IpcError> {
-                use iceoryx2::service::port_factory::PortFactory as _;
-                Ok(self.open_existing(node)?.map(|f| {
-                    let mut pids = Vec::new();
-                    f.dynamic_config().list_publishers(|p| {
-                        if let Ok(pid) = p.node_id.pid::<ipc::Service>() {
-                            pids.push(pid.value());
-                        }
-                        iceoryx2::prelude::CallbackProgression::Continue
-                    });
-                    pids
-                }))
+                self.spec().publisher_pids(node)
             }
 
             /// `None` while the channel does not exist; else how many publishers
             /// and subscribers it has now.
             pub fn ports(&self, node: &IpcNode) -> Result<Option<(usize, usize)>, IpcError> {
-                use iceoryx2::service::port_factory::PortFactory as _;
-                Ok(self.open_existing(node)?.map(|f| {
-                    let d = f.dynamic_config();
-                    (d.number_of_publishers(), d.number_of_subscribers())
-                }))
+                self.spec().ports(node)
             }
         }
     )+};
 }
 
 opening! {
-    impl[T: Message] T, ();
-    impl[] [u16], FrameHeader;
+    impl[T: Message] T, () => Layout::message::<T>();
+    impl[] [u16], FrameHeader => Layout::slice::<u16, FrameHeader>();
 }
 
 /// A message type: plain data with a sequence number, and a JSON view for
@@ -265,22 +472,13 @@ fn sender_pid(h: &iceoryx2::service::header::publish_subscribe::Header) -> i32 {
     h.node_id().pid::<ipc::Service>().map_or(0, |p| p.value())
 }
 
-type RawPub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>;
-type RawSub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
-
 impl<T: Message> Channel<T> {
     /// Publish on this channel: refused when it already has as many publishers as
     /// its QoS allows (one for every command and state channel).
     pub fn publisher(&self, node: &IpcNode) -> Result<Publisher<T>, IpcError> {
-        let port = self
-            .open_or_create(node)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| IpcError::publisher(self.name, self.qos.max_publishers, e))?;
         Ok(Publisher {
-            port,
-            notifier: self.notifier_if_wakes(node)?,
-            channel: self.name,
+            raw: self.spec().publisher(node, self.wakes, 1)?,
+            _t: PhantomData,
         })
     }
 
@@ -288,7 +486,8 @@ impl<T: Message> Channel<T> {
     /// listener that nobody waits on still receives every wake-up, so only a
     /// reader that waits for new samples asks for one ([`Channel::waking_subscriber`]).
     pub fn subscriber(&self, node: &IpcNode, queue: Queue) -> Result<Subscriber<T>, IpcError> {
-        self.subscribe(self.open_or_create(node)?, None, queue)
+        let spec = self.spec();
+        self.typed(spec.subscribe(spec.open_or_create(node)?, None, queue)?)
     }
 
     /// Subscribe with a listener, for a reader that waits for new samples
@@ -301,7 +500,8 @@ impl<T: Message> Channel<T> {
         if !self.wakes {
             return Err(IpcError::NoEvent { channel: self.name });
         }
-        self.subscribe(self.open_or_create(node)?, Some(node), queue)
+        let spec = self.spec();
+        self.typed(spec.subscribe(spec.open_or_create(node)?, Some(node), queue)?)
     }
 
     /// Subscribe only if the channel exists, for tools that watch a cell:
@@ -311,31 +511,17 @@ impl<T: Message> Channel<T> {
         node: &IpcNode,
         queue: Queue,
     ) -> Result<Option<Subscriber<T>>, IpcError> {
-        match self.open_existing(node)? {
-            Some(f) => self.subscribe(f, None, queue).map(Some),
+        let spec = self.spec();
+        match spec.open_existing(node)? {
+            Some(f) => self.typed(spec.subscribe(f, None, queue)?).map(Some),
             None => Ok(None),
         }
     }
 
-    fn subscribe(
-        &self,
-        factory: Factory<T, ()>,
-        wake_on: Option<&IpcNode>,
-        queue: Queue,
-    ) -> Result<Subscriber<T>, IpcError> {
-        let port = factory
-            .subscriber_builder()
-            .buffer_size(queue.depth(&self.qos))
-            .create()
-            .map_err(|e| IpcError::port(self.name, e))?;
-        let listener = match wake_on {
-            Some(node) => self.listener_if_wakes(node)?,
-            None => None,
-        };
+    fn typed(&self, raw: Receiver) -> Result<Subscriber<T>, IpcError> {
         Ok(Subscriber {
-            port,
-            listener,
-            channel: self.name,
+            raw,
+            _t: PhantomData,
         })
     }
 
@@ -350,30 +536,22 @@ impl<T: Message> Channel<T> {
 
 /// Publisher of one channel; announces each sample when the channel wakes its readers.
 pub struct Publisher<T: Message> {
-    port: RawPub<T>,
-    notifier: Option<Notifier>,
-    channel: &'static str,
+    raw: Sender,
+    _t: PhantomData<fn(T)>,
 }
 
 impl<T: Message> Publisher<T> {
     /// Copy `value` into a loaned sample, send it and wake the readers.
     pub fn publish(&self, value: &T) -> Result<(), IpcError> {
-        let sample = self
-            .port
-            .loan_uninit()
-            .map_err(|e| IpcError::send(self.channel, e))?;
-        sample
-            .write_payload(*value)
-            .send()
-            .map_err(|e| IpcError::send(self.channel, e))?;
-        if let Some(n) = &self.notifier {
-            n.notify();
+        // SAFETY: value is a T of size_of::<T>() bytes
+        unsafe {
+            self.raw
+                .send_copy((value as *const T).cast::<u8>(), size_of::<T>())
         }
-        Ok(())
     }
 
     pub fn channel(&self) -> &'static str {
-        self.channel
+        self.raw.channel
     }
 
     /// Connect the readers that appeared since the last send, without
@@ -382,26 +560,20 @@ impl<T: Message> Publisher<T> {
     /// sends cost a real-time loop no more than the others. A failed
     /// connection is retried at the next send.
     pub fn update_connections(&self) {
-        use iceoryx2::port::update_connections::UpdateConnections;
-        let _ = self.port.update_connections();
+        self.raw.update_connections();
     }
 }
 
 /// Subscriber of one channel.
 pub struct Subscriber<T: Message> {
-    port: RawSub<T>,
-    listener: Option<Listener>,
-    channel: &'static str,
+    raw: Receiver,
+    _t: PhantomData<fn() -> T>,
 }
 
 impl<T: Message> Subscriber<T> {
     /// The next queued sample, copied out.
     pub fn receive(&self) -> Result<Option<T>, IpcError> {
-        Ok(self
-            .port
-            .receive()
-            .map_err(|e| IpcError::receive(self.channel, e))?
-            .map(|s| *s))
+        Ok(self.receive_from()?.map(|(_, v)| v))
     }
 
     /// The newest sample (older queued ones are consumed), or `None`.
@@ -416,11 +588,14 @@ impl<T: Message> Subscriber<T> {
     /// The next queued sample and its sender's process id (see
     /// [`Subscriber::drain_from`]), copied out.
     pub fn receive_from(&self) -> Result<Option<(i32, T)>, IpcError> {
-        Ok(self
-            .port
-            .receive()
-            .map_err(|e| IpcError::receive(self.channel, e))?
-            .map(|s| (sender_pid(s.header()), *s)))
+        let mut v = MaybeUninit::<T>::uninit();
+        // SAFETY: v has room for size_of::<T>() bytes; a message type is
+        // plain data, so the bytes a publisher of T wrote are a T
+        Ok(unsafe {
+            self.raw
+                .receive_copy(v.as_mut_ptr().cast::<u8>(), size_of::<T>())?
+                .map(|pid| (pid, v.assume_init()))
+        })
     }
 
     /// Hand every queued sample to `f` with the process id of its sender
@@ -429,12 +604,8 @@ impl<T: Message> Subscriber<T> {
     /// nothing is allocated or looked up.
     pub fn drain_from(&self, mut f: impl FnMut(i32, &T)) -> Result<usize, IpcError> {
         let mut n = 0;
-        while let Some(s) = self
-            .port
-            .receive()
-            .map_err(|e| IpcError::receive(self.channel, e))?
-        {
-            f(sender_pid(s.header()), &s);
+        while let Some((pid, v)) = self.receive_from()? {
+            f(pid, &v);
             n += 1;
         }
         Ok(n)
@@ -442,33 +613,18 @@ impl<T: Message> Subscriber<T> {
 
     /// Hand every queued sample to `f`, oldest first; returns how many.
     pub fn drain(&self, mut f: impl FnMut(&T)) -> Result<usize, IpcError> {
-        let mut n = 0;
-        while let Some(s) = self
-            .port
-            .receive()
-            .map_err(|e| IpcError::receive(self.channel, e))?
-        {
-            f(&s);
-            n += 1;
-        }
-        Ok(n)
+        self.drain_from(|_, v| f(v))
     }
 
     /// Block until a new sample is announced or `timeout` passes (channels that
     /// wake; zero: consume the pending announcements without blocking); a
     /// channel that does not wake just sleeps `timeout`.
     pub fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
-        match &self.listener {
-            Some(l) => l.wait(timeout),
-            None => {
-                std::thread::sleep(timeout);
-                Ok(())
-            }
-        }
+        self.raw.wait(timeout)
     }
 
     pub fn channel(&self) -> &'static str {
-        self.channel
+        self.raw.channel
     }
 }
 
@@ -571,12 +727,54 @@ impl Notifier {
     }
 }
 
-type RawFramePub = iceoryx2::port::publisher::Publisher<ipc::Service, [u16], FrameHeader>;
-type RawFrameSub = iceoryx2::port::subscriber::Subscriber<ipc::Service, [u16], FrameHeader>;
 /// A received frame: header and depths, in shared memory (no copy).
-pub type FrameSample = iceoryx2::sample::Sample<ipc::Service, [u16], FrameHeader>;
+pub struct FrameSample(RawSample);
+
+impl FrameSample {
+    /// the frame's header
+    pub fn user_header(&self) -> &FrameHeader {
+        // SAFETY: the service's user header is a FrameHeader (Layout::slice),
+        // written by its publisher
+        unsafe { &*(self.0.user_header() as *const Opaque).cast::<FrameHeader>() }
+    }
+
+    /// depths [mm], row-major
+    pub fn payload(&self) -> &[u16] {
+        let bytes = self.0.payload();
+        // SAFETY: the payload is a slice of u16 (Layout::slice), aligned
+        // for it by iceoryx2's chunk layout
+        unsafe { std::slice::from_raw_parts(bytes.as_ptr().cast::<u16>(), bytes.len() / 2) }
+    }
+}
+
 /// A loaned frame being written in shared memory.
-pub type FrameSampleMut = iceoryx2::sample_mut::SampleMut<ipc::Service, [u16], FrameHeader>;
+pub struct FrameSampleMut(RawSampleMut);
+
+impl FrameSampleMut {
+    /// the frame's header
+    pub fn user_header(&self) -> &FrameHeader {
+        // SAFETY: as FrameSample::user_header; initialised at the loan
+        unsafe { &*(self.0.user_header() as *const Opaque).cast::<FrameHeader>() }
+    }
+
+    pub fn user_header_mut(&mut self) -> &mut FrameHeader {
+        // SAFETY: as FrameSampleMut::user_header
+        unsafe { &mut *(self.0.user_header_mut() as *mut Opaque).cast::<FrameHeader>() }
+    }
+
+    /// depths [mm], row-major
+    pub fn payload(&self) -> &[u16] {
+        let bytes = self.0.payload();
+        // SAFETY: as FrameSample::payload; zeroed at the loan
+        unsafe { std::slice::from_raw_parts(bytes.as_ptr().cast::<u16>(), bytes.len() / 2) }
+    }
+
+    pub fn payload_mut(&mut self) -> &mut [u16] {
+        let bytes = self.0.payload_mut();
+        // SAFETY: as FrameSampleMut::payload
+        unsafe { std::slice::from_raw_parts_mut(bytes.as_mut_ptr().cast::<u16>(), bytes.len() / 2) }
+    }
+}
 
 impl FrameChannel {
     /// Publish frames of up to `max_pixels` depths.
@@ -585,16 +783,8 @@ impl FrameChannel {
         node: &IpcNode,
         max_pixels: usize,
     ) -> Result<FramePublisher, IpcError> {
-        let port = self
-            .open_or_create(node)?
-            .publisher_builder()
-            .initial_max_slice_len(max_pixels)
-            .create()
-            .map_err(|e| IpcError::publisher(self.name, self.qos.max_publishers, e))?;
         Ok(FramePublisher {
-            port,
-            notifier: self.notifier_if_wakes(node)?,
-            channel: self.name,
+            raw: self.spec().publisher(node, self.wakes, max_pixels)?,
         })
     }
 
@@ -604,7 +794,10 @@ impl FrameChannel {
         node: &IpcNode,
         queue: Queue,
     ) -> Result<FrameSubscriber, IpcError> {
-        self.frame_subscribe(self.open_or_create(node)?, None, queue)
+        let spec = self.spec();
+        Ok(FrameSubscriber {
+            raw: spec.subscribe(spec.open_or_create(node)?, None, queue)?,
+        })
     }
 
     /// Subscribe to frames with a listener, for a reader that waits for them.
@@ -616,7 +809,10 @@ impl FrameChannel {
         if !self.wakes {
             return Err(IpcError::NoEvent { channel: self.name });
         }
-        self.frame_subscribe(self.open_or_create(node)?, Some(node), queue)
+        let spec = self.spec();
+        Ok(FrameSubscriber {
+            raw: spec.subscribe(spec.open_or_create(node)?, Some(node), queue)?,
+        })
     }
 
     /// Subscribe only if the channel exists, for tools: `Ok(None)` otherwise.
@@ -626,80 +822,72 @@ impl FrameChannel {
         node: &IpcNode,
         queue: Queue,
     ) -> Result<Option<FrameSubscriber>, IpcError> {
-        match self.open_existing(node)? {
-            Some(f) => self.frame_subscribe(f, None, queue).map(Some),
+        let spec = self.spec();
+        match spec.open_existing(node)? {
+            Some(f) => Ok(Some(FrameSubscriber {
+                raw: spec.subscribe(f, None, queue)?,
+            })),
             None => Ok(None),
         }
-    }
-
-    fn frame_subscribe(
-        &self,
-        factory: Factory<[u16], FrameHeader>,
-        wake_on: Option<&IpcNode>,
-        queue: Queue,
-    ) -> Result<FrameSubscriber, IpcError> {
-        let port = factory
-            .subscriber_builder()
-            .buffer_size(queue.depth(&self.qos))
-            .create()
-            .map_err(|e| IpcError::port(self.name, e))?;
-        let listener = match wake_on {
-            Some(node) => self.listener_if_wakes(node)?,
-            None => None,
-        };
-        Ok(FrameSubscriber {
-            port,
-            listener,
-            channel: self.name,
-        })
     }
 }
 
 /// Publisher of depth frames: loan a frame, write it in place, send it.
 pub struct FramePublisher {
-    port: RawFramePub,
-    notifier: Option<Notifier>,
-    channel: &'static str,
+    raw: Sender,
 }
 
 impl FramePublisher {
     /// A frame of `pixels` depths in shared memory, zeroed, header zeroed.
     pub fn loan(&self, pixels: usize) -> Result<FrameSampleMut, IpcError> {
-        let mut s = self
-            .port
-            .loan_slice(pixels)
-            .map_err(|e| IpcError::send(self.channel, e))?;
-        *s.user_header_mut() = FrameHeader::zeroed();
-        Ok(s)
+        let channel = self.raw.channel;
+        // SAFETY: a slice payload (Layout::slice): any number of elements
+        let mut s = unsafe { self.raw.port.loan_custom_payload(pixels) }
+            .map_err(|e| IpcError::send(channel, e))?;
+        let bytes = s.payload_mut();
+        if bytes.len() != pixels * size_of::<u16>() {
+            return Err(IpcError::send(
+                channel,
+                format!("a frame of {} bytes for {pixels} depths", bytes.len()),
+            ));
+        }
+        // SAFETY: zeroes are valid depths and a valid FrameHeader
+        // (FrameHeader::zeroed); the header's memory is the chunk's, laid
+        // out for a FrameHeader (Layout::slice)
+        let s = unsafe {
+            std::ptr::write_bytes(bytes.as_mut_ptr().cast::<u8>(), 0, bytes.len());
+            (s.user_header_mut() as *mut Opaque)
+                .cast::<FrameHeader>()
+                .write(FrameHeader::zeroed());
+            s.assume_init()
+        };
+        Ok(FrameSampleMut(s))
     }
 
     /// Send a loaned frame and wake the readers.
     pub fn send(&self, sample: FrameSampleMut) -> Result<(), IpcError> {
-        sample.send().map_err(|e| IpcError::send(self.channel, e))?;
-        if let Some(n) = &self.notifier {
-            n.notify();
-        }
+        sample
+            .0
+            .send()
+            .map_err(|e| IpcError::send(self.raw.channel, e))?;
+        self.raw.notify();
         Ok(())
     }
 
     pub fn channel(&self) -> &'static str {
-        self.channel
+        self.raw.channel
     }
 }
 
 /// Subscriber of depth frames.
 pub struct FrameSubscriber {
-    port: RawFrameSub,
-    listener: Option<Listener>,
-    channel: &'static str,
+    raw: Receiver,
 }
 
 impl FrameSubscriber {
     /// The next queued frame.
     pub fn receive(&self) -> Result<Option<FrameSample>, IpcError> {
-        self.port
-            .receive()
-            .map_err(|e| IpcError::receive(self.channel, e))
+        Ok(self.raw.receive()?.map(FrameSample))
     }
 
     /// The newest queued frame (older ones are released).
@@ -713,17 +901,11 @@ impl FrameSubscriber {
 
     /// Block until a new frame is announced or `timeout` passes.
     pub fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
-        match &self.listener {
-            Some(l) => l.wait(timeout),
-            None => {
-                std::thread::sleep(timeout);
-                Ok(())
-            }
-        }
+        self.raw.wait(timeout)
     }
 
     pub fn channel(&self) -> &'static str {
-        self.channel
+        self.raw.channel
     }
 }
 
@@ -736,7 +918,7 @@ impl FrameSubscriber {
 pub fn wait_any(subscribers: &[&FrameSubscriber], timeout: Duration) -> Result<(), IpcError> {
     let listeners: Vec<&Listener> = subscribers
         .iter()
-        .filter_map(|s| s.listener.as_ref())
+        .filter_map(|s| s.raw.listener.as_ref())
         .collect();
     let Some(first) = listeners.first() else {
         std::thread::sleep(timeout);
