@@ -32,11 +32,14 @@ fn within(x: f64, nominal: f64, tol: f64) -> bool {
 /// A measured rate of a stream published at `nominal` [Hz]: never faster, and
 /// at most `slack` slower (a loaded 2-core machine makes the robot's loop slip
 /// ticks, which it reports as overruns); and consistent with the monitor's own
-/// mean interval.
+/// mean interval. The rate counts samples over the window, the mean interval
+/// spans first to last sample: they differ by the window's edges, up to a
+/// sample period at either end (two of 62 frames in a 2 s window: 3 %).
 fn rate_ok(c: &serde_json::Value, nominal: f64, slack: f64) -> bool {
     let rate = c["rate_hz"].as_f64().unwrap_or(0.0);
+    let samples = c["samples"].as_f64().unwrap_or(0.0).max(1.0);
     let consistent = match c["mean_interval_ms"].as_f64() {
-        Some(mean) => within(rate * mean / 1000.0, 1.0, 0.03),
+        Some(mean) => within(rate * mean / 1000.0, 1.0, 0.03 + 2.0 / samples),
         None => false,
     };
     rate <= nominal * 1.03 && rate >= nominal * (1.0 - slack) && consistent
