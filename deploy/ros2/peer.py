@@ -109,6 +109,23 @@ class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
     data: sequence[uint8]
 
 
+def read_as_bytes(cls, member):
+    """Read a sequence<uint8> member of `cls` as bytes, in one copy: the
+    binding's own machine builds a list of ints (6 ms for a 640x480 depth
+    image, 0.15 ms as bytes), which a subscriber at 30 Hz cannot afford
+    beside a cell on 2 cores. The wire format and the type's XTypes
+    description stay sequence<uint8>; unchanged if the binding differs."""
+    from cyclonedds.idl._machinery import BytesMachine
+    cls.__idl__.populate()
+    for machine in (cls.__idl__.v1_machine, cls.__idl__.v2_machine):
+        members = getattr(machine, "members_machines", None)
+        if members is not None and member in members:
+            members[member] = BytesMachine()
+
+
+read_as_bytes(Image, "data")
+
+
 @dataclass
 class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
     key: str
