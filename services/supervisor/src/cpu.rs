@@ -104,6 +104,43 @@ pub fn culprit(
     (share > STARVING_SHARE && index != frozen).then_some((index, share))
 }
 
+/// What the CPU use of the services sharing a silent service's CPUs says of
+/// its silence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Verdict {
+    /// another service used more than [`STARVING_SHARE`] of a CPU they
+    /// share: it starved the silent one (its index and share)
+    Starved { culprit: usize, share: f64 },
+    /// nobody starved it: frozen by itself (the busiest service on its
+    /// CPUs, itself included, and its share)
+    Frozen { busiest: usize, share: f64 },
+}
+
+/// Judge a silence of `silent_ns` on `frozen`'s heartbeat over its later
+/// half (the starvation had surely begun by then) or, when that half holds
+/// too few CPU samples because the supervisor itself was held up for part
+/// of it, over the whole silence (windows clamped to 0.1-1 × [`WINDOW_NS`]).
+/// `None` without samples over either: no verdict without evidence.
+pub fn judge(roster: &Roster, cpu: &CpuUse, frozen: usize, silent_ns: u64) -> Option<Verdict> {
+    let clamp = |w: u64| w.clamp(WINDOW_NS / 10, WINDOW_NS);
+    [clamp(silent_ns / 2), clamp(silent_ns)]
+        .into_iter()
+        .find_map(|window| busiest(roster, cpu, frozen, window))
+        .map(|(index, share)| {
+            if share > STARVING_SHARE && index != frozen {
+                Verdict::Starved {
+                    culprit: index,
+                    share,
+                }
+            } else {
+                Verdict::Frozen {
+                    busiest: index,
+                    share,
+                }
+            }
+        })
+}
+
 /// The running service sharing `frozen`'s CPUs (itself included) that used
 /// the largest share of a CPU over the last `window_ns`, and that share.
 pub fn busiest(
@@ -191,6 +228,47 @@ mod tests {
         let mut cpu = CpuUse::new(3);
         sample(&mut cpu, 0, 2000, &[0.3, 0.99, 0.0]);
         assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+    }
+
+    #[test]
+    fn a_silence_the_supervisor_was_held_up_in_is_judged_over_all_of_it() {
+        let r = roster();
+        let mut cpu = CpuUse::new(3);
+        // sampled every 20 ms, the camera (1) stopped at 903 ms; the
+        // supervisor held up from 1000 to 1108 ms, then sampling again
+        for t in (0..=1000).step_by(20).chain([1108, 1128]) {
+            cpu.record(0, t * MS, Some(t * MS * 3 / 10));
+            cpu.record(1, t * MS, Some(t.min(903) * MS / 5));
+            cpu.record(2, t * MS, Some(t * MS / 10));
+        }
+        let silent = 225 * MS;
+        // the later half of the silence holds 20 ms of samples: too few
+        assert_eq!(busiest(&r, &cpu, 1, silent / 2), None);
+        // the whole silence holds enough: nobody starved it, it is frozen
+        match judge(&r, &cpu, 1, silent) {
+            Some(Verdict::Frozen { busiest, share }) => {
+                assert_eq!(busiest, 2);
+                assert!((share - 0.1).abs() < 0.01, "{share}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // a spinner over the whole silence is still the culprit
+        let mut cpu = CpuUse::new(3);
+        for t in (0..=1000).step_by(20).chain([1108, 1128]) {
+            cpu.record(1, t * MS, Some(t.min(903) * MS / 5));
+            cpu.record(2, t * MS, Some(t.saturating_sub(900) * MS));
+        }
+        assert!(matches!(
+            judge(&r, &cpu, 1, silent),
+            Some(Verdict::Starved { culprit: 2, .. })
+        ));
+        // no samples at all over the silence: no verdict
+        let mut cpu = CpuUse::new(3);
+        for t in [1108, 1128] {
+            cpu.record(1, t * MS, Some(0));
+            cpu.record(2, t * MS, Some(0));
+        }
+        assert_eq!(judge(&r, &cpu, 1, silent), None);
     }
 
     #[test]

@@ -1026,12 +1026,10 @@ fn body() -> Result<(), SupervisorError> {
         // themselves; a service that starves them on their CPUs dies instead
         let mut killed: Vec<usize> = Vec::new();
         for f in cell.roster.frozen(now) {
-            // the later half of the silence: the starvation had surely begun
-            let window = (f.silent_ns / 2).clamp(cpu::WINDOW_NS / 10, cpu::WINDOW_NS);
             let sv = cell.roster.get(f.index);
             let heartbeat = liveness::liveness_name(&sv.name);
-            let victim = match cpu::culprit(&cell.roster, &cpu_use, f.index, window) {
-                Some((c, share)) => {
+            let victim = match cpu::judge(&cell.roster, &cpu_use, f.index, f.silent_ns) {
+                Some(cpu::Verdict::Starved { culprit: c, share }) => {
                     let culprit = &cell.roster.get(c).name;
                     tracing::warn!(
                         "{} silent on {heartbeat} for {} ms while {culprit} used {:.0} % of a CPU they share: killing {culprit} instead",
@@ -1060,34 +1058,32 @@ fn body() -> Result<(), SupervisorError> {
                     );
                     c
                 }
-                None => match cpu::busiest(&cell.roster, &cpu_use, f.index, window) {
-                    // no CPU samples over its silence (this process was held
-                    // up too): no verdict without evidence, judged again
-                    None => {
-                        tracing::warn!(
-                            "{} silent on {heartbeat} for {} ms; no CPU samples over that time: judged again",
-                            sv.name,
-                            f.silent_ns / 1_000_000
-                        );
-                        continue;
-                    }
-                    Some((b, share)) => {
-                        tracing::warn!(
-                            "{} silent on {heartbeat} for {} ms: frozen, killing it (busiest on its CPUs: {} at {:.0} %)",
-                            sv.name,
-                            f.silent_ns / 1_000_000,
-                            cell.roster.get(b).name,
-                            share.min(1.0) * 100.0
-                        );
-                        eval.event(
-                            now,
-                            "frozen",
-                            &sv.name,
-                            format!("no beat on {heartbeat} for {} ms", f.silent_ns / 1_000_000),
-                        );
-                        f.index
-                    }
-                },
+                Some(cpu::Verdict::Frozen { busiest: b, share }) => {
+                    tracing::warn!(
+                        "{} silent on {heartbeat} for {} ms: frozen, killing it (busiest on its CPUs: {} at {:.0} %)",
+                        sv.name,
+                        f.silent_ns / 1_000_000,
+                        cell.roster.get(b).name,
+                        share.min(1.0) * 100.0
+                    );
+                    eval.event(
+                        now,
+                        "frozen",
+                        &sv.name,
+                        format!("no beat on {heartbeat} for {} ms", f.silent_ns / 1_000_000),
+                    );
+                    f.index
+                }
+                // no CPU samples over its silence (this process was held
+                // up too): no verdict without evidence, judged again
+                None => {
+                    tracing::warn!(
+                        "{} silent on {heartbeat} for {} ms; no CPU samples over that time: judged again",
+                        sv.name,
+                        f.silent_ns / 1_000_000
+                    );
+                    continue;
+                }
             };
             if !killed.contains(&victim) {
                 killed.push(victim);
