@@ -4,7 +4,7 @@
 //! culprit. So before a silent service is killed, the CPU time of the
 //! services that share its CPUs over the last second is looked at
 //! ([`CpuUse`]), and one that used most of a CPU is killed instead
-//! ([`culprit`]). Pure: samples come in with their time, read by the caller
+//! ([`judge`]). Pure: samples come in with their time, read by the caller
 //! from `/proc` ([`crate::process::cpu_time_ns`]).
 
 use std::collections::VecDeque;
@@ -87,21 +87,6 @@ impl CpuUse {
 /// Two CPU sets overlap (an empty set is any CPU).
 pub fn share_cpus(a: &[usize], b: &[usize]) -> bool {
     a.is_empty() || b.is_empty() || a.iter().any(|c| b.contains(c))
-}
-
-/// The service to kill instead of `frozen` (silent on its heartbeat): the
-/// running service sharing its CPUs that used the largest share of a CPU
-/// over the last `window_ns`, if above [`STARVING_SHARE`] and not `frozen`
-/// itself (a service that spins without publishing is its own culprit).
-/// Returns its index and share.
-pub fn culprit(
-    roster: &Roster,
-    cpu: &CpuUse,
-    frozen: usize,
-    window_ns: u64,
-) -> Option<(usize, f64)> {
-    let (index, share) = busiest(roster, cpu, frozen, window_ns)?;
-    (share > STARVING_SHARE && index != frozen).then_some((index, share))
 }
 
 /// What the CPU use of the services sharing a silent service's CPUs says of
@@ -194,13 +179,22 @@ mod tests {
         }
     }
 
+    /// The service starving `frozen`, judged over the last `window_ns`
+    /// (the later half of a silence twice as long), and its share.
+    fn culprit(r: &Roster, cpu: &CpuUse, frozen: usize, window_ns: u64) -> Option<(usize, f64)> {
+        match judge(r, cpu, frozen, 2 * window_ns) {
+            Some(Verdict::Starved { culprit, share }) => Some((culprit, share)),
+            _ => None,
+        }
+    }
+
     #[test]
     fn a_spinner_on_the_silent_services_cpu_is_the_culprit() {
         let r = roster();
         let mut cpu = CpuUse::new(3);
         // not enough history yet: no verdict
         sample(&mut cpu, 0, 300, &[0.3, 0.0, 1.0]);
-        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+        assert_eq!(judge(&r, &cpu, 1, 2 * WINDOW_NS), None);
         let mut cpu = CpuUse::new(3);
         sample(&mut cpu, 400, 2000, &[0.3, 0.0, 0.97]);
         let (i, share) = culprit(&r, &cpu, 1, WINDOW_NS).unwrap();
