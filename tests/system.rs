@@ -1160,14 +1160,33 @@ fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else()
             assert_eq!(j["within_limit"], true, "{j}");
         }
     }
-    // the wrist push (15.5-16.5 s) ended it and the task resumed
-    let resumed = events(&r, "resume", "control");
+    // the wrist push (15.5-16.5 s of the scenario) ended it, and the task
+    // resumed once the residual had been quiet for `resume_quiet_s` (1 s)
+    let ended = c["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["phase"] == "idle" && p["reason"] == "wrist_push")
+        .filter_map(|p| p["t_s"].as_f64())
+        .next_back()
+        .expect("ended by the wrist push");
+    assert!((15.5..18.5).contains(&ended), "ended at {ended} s: {c}");
+    let resumed: Vec<f64> = events(&r, "resume", "control")
+        .iter()
+        .filter_map(|e| e["t_s"].as_f64())
+        .collect();
+    eprintln!("ended by the wrist push at {ended:.2} s, the task resumed at {resumed:?} s");
     assert!(
         resumed
             .iter()
-            .any(|e| (15.5..19.0).contains(&e["t_s"].as_f64().unwrap())),
-        "{}",
+            .any(|t| (ended + 1.0..ended + 3.5).contains(t)),
+        "ended at {ended} s, resumed at {resumed:?}; events but detections: {:?}",
         r["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|e| e["kind"] != "detection")
+            .collect::<Vec<_>>()
     );
 }
 

@@ -372,6 +372,8 @@ pub struct Evaluator {
     episodes: Vec<Episode>,
     collision_edges: Vec<f64>,
     last_collision: bool,
+    /// when the collision flag was last raised [s]
+    last_collision_t: Option<f64>,
     min_distance: f64,
     events: Vec<Event>,
     stats: Restartable<(u64, u64, u64, u64, u64)>,
@@ -444,6 +446,9 @@ fn plural(n: u64, what: &str) -> String {
 const CONTACT_GAP_S: f64 = 0.05;
 /// A collision flag within this long after a contact ended still belongs to it [s].
 const DETECTION_GRACE_S: f64 = 0.5;
+/// A collision flag raised again within this long of its last period [s]
+/// is the same detection (a residual that hovers at the threshold).
+const DETECTION_MERGE_S: f64 = 0.1;
 
 impl Evaluator {
     /// An evaluator of a run that started at `t0_ns` [ns, CLOCK_MONOTONIC]:
@@ -468,6 +473,7 @@ impl Evaluator {
             episodes: Vec::new(),
             collision_edges: Vec::new(),
             last_collision: false,
+            last_collision_t: None,
             min_distance: f64::INFINITY,
             events: Vec::new(),
             stats: Restartable::default(),
@@ -755,7 +761,11 @@ impl Evaluator {
                     e.t_detect = Some(t);
                 }
             }
-            if !self.last_collision {
+            let again = self
+                .last_collision_t
+                .is_some_and(|tl| t - tl <= DETECTION_MERGE_S);
+            self.last_collision_t = Some(t);
+            if !self.last_collision && !again {
                 self.collision_edges.push(t);
                 let detail = if m.isolated_joint >= 0 {
                     format!(
@@ -1343,6 +1353,20 @@ mod tests {
         assert_eq!(r.false_detections, 1);
         assert_eq!(r.min_distance_m, Some(-0.01));
         assert_eq!(r.events.iter().filter(|e| e.kind == "detection").count(), 2);
+    }
+
+    #[test]
+    fn a_flag_that_chatters_at_the_threshold_is_one_detection() {
+        let mut e = eval();
+        // raised every other period from 100 to 300 ms, then again at 500 ms
+        for t in 0..1000 {
+            e.on_truth(&truth(t, 0.0, 0.0));
+            let on = ((100..300).contains(&t) && t % 2 == 0) || (500..510).contains(&t);
+            e.on_residual(&residual(t, on));
+        }
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.events.iter().filter(|e| e.kind == "detection").count(), 2);
+        assert_eq!(r.false_detections, 2);
     }
 
     #[test]
