@@ -560,9 +560,26 @@ struct Sense<'a> {
 /// missing one is `z` itself) and the random `bits` of [`pixel_bits`]: range limits, a drop-out with
 /// probability `edge_dropout` where a neighbour jumps by more than
 /// `edge_jump_m + edge_jump_sigmas σ_z`, axial noise `σ_z(z) N(0, 1)`,
-/// rounded half up to the millimetre. Branch-free: it vectorises.
+/// rounded half up to the millimetre.
 #[inline(always)]
 fn sensed(s: &Sense<'_>, z: f64, near: [f64; 4], bits: u32) -> u16 {
+    sensed_with(s, z, near, bits, noise_of(s, bits))
+}
+
+/// The standard normal draw of `bits` (0 without noise).
+#[inline(always)]
+fn noise_of(s: &Sense<'_>, bits: u32) -> f64 {
+    if s.options.noise {
+        f64::from(s.table[normal_index(bits)])
+    } else {
+        0.0
+    }
+}
+
+/// [`sensed`] with the normal draw `noise` of `bits` already looked up.
+/// Branch-free: it vectorises (the table's lookup, a gather, does not).
+#[inline(always)]
+fn sensed_with(s: &Sense<'_>, z: f64, near: [f64; 4], bits: u32, noise: f64) -> u16 {
     let o = &s.options;
     let valid = (z >= o.min_range_m) & (z <= o.max_range_m);
     let sigma = sigma_z(z);
@@ -570,11 +587,6 @@ fn sensed(s: &Sense<'_>, z: f64, near: [f64; 4], bits: u32) -> u16 {
     // a neighbour without surface (infinite) is a discontinuity
     let largest = near.iter().fold(0.0f64, |m, &n| m.max((n - z).abs()));
     let dropped = (largest > jump) & draws(bits, o.edge_dropout);
-    let noise = if o.noise {
-        f64::from(s.table[normal_index(bits)])
-    } else {
-        0.0
-    };
     // round half up (positive values: truncation after + 0.5); the integer
     // read from the bits of `2^52 +` it, which converts in lanes (a cast
     // went element by element)
@@ -621,10 +633,17 @@ fn sense_any(s: &Sense<'_>, zbuf: &[f64], out: &mut [u16]) {
                 let right: [f64; RUN] = lanes::load(row, c + 1);
                 let a: [f64; RUN] = lanes::load(up, c);
                 let b: [f64; RUN] = lanes::load(down, c);
+                // in passes: the hash and the arithmetic vectorise, the
+                // table's lookup between them stays element by element
+                let mut bits = [0u32; RUN];
+                for (i, b) in bits.iter_mut().enumerate() {
+                    *b = pixel_bits(s.key, first + (c + i) as u32);
+                }
+                let noise: [f64; RUN] = std::array::from_fn(|i| noise_of(s, bits[i]));
                 let mut r = [0u16; RUN];
                 for i in 0..RUN {
-                    let bits = pixel_bits(s.key, first + (c + i) as u32);
-                    r[i] = sensed(s, z[i], [left[i], right[i], a[i], b[i]], bits);
+                    let near = [left[i], right[i], a[i], b[i]];
+                    r[i] = sensed_with(s, z[i], near, bits[i], noise[i]);
                 }
                 lanes::store(out_row, c, &r);
             } else {
