@@ -636,8 +636,8 @@ fn sense_any(s: &Sense<'_>, zbuf: &[f64], out: &mut [u16]) {
                 // in passes: the hash and the arithmetic vectorise, the
                 // table's lookup between them stays element by element
                 let mut bits = [0u32; RUN];
-                for (i, b) in bits.iter_mut().enumerate() {
-                    *b = pixel_bits(s.key, first + (c + i) as u32);
+                for (i, bit) in bits.iter_mut().enumerate() {
+                    *bit = pixel_bits(s.key, first + (c + i) as u32);
                 }
                 let noise: [f64; RUN] = std::array::from_fn(|i| noise_of(s, bits[i]));
                 let mut r = [0u16; RUN];
