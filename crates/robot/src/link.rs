@@ -352,9 +352,19 @@ impl RobotLink {
         self.cycle_slots([newest, None], state_seq, timing)
     }
 
+    /// How long a link that has never applied a fresh command (the arm
+    /// braked since its start) waits for slot 0, in charge at the start,
+    /// before the other slot's answers may start the arm \[ns\]: a standby
+    /// that answers first does not take charge of a start the first
+    /// controller is about to make, and a first controller that never
+    /// answers does not keep the arm braked for good.
+    pub const FIRST_START_WAIT_NS: u64 = 3_000_000_000;
+
     /// Decide this period with a hot standby: `newest[s]` is slot `s`'s newest
     /// command. The slot in charge's fresh command is applied; without it the
-    /// other slot's fresh one, which then takes charge. Allocates nothing.
+    /// other slot's fresh one, which then takes charge (before the link's
+    /// first fresh command only after [`RobotLink::FIRST_START_WAIT_NS`]:
+    /// slot 0 starts the arm). Allocates nothing.
     pub fn cycle_slots(
         &mut self,
         newest: [Option<&TorqueCommand>; SLOTS],
@@ -373,11 +383,14 @@ impl RobotLink {
                 .max_answer_diff_nm
                 .max(largest_difference(&a.tau[..n], &b.tau[..n]));
         }
+        // the first start is slot 0's (braked meanwhile), unless it keeps silent
+        let other_may = self.loop_established
+            || self.stats.cycles.saturating_mul(self.period_ns) >= Self::FIRST_START_WAIT_NS;
         let applied = match (answer[primary], answer[1 - primary]) {
             (Some(cmd), _) => Some((primary, cmd)),
-            (None, Some(cmd)) => Some((1 - primary, cmd)),
+            (None, Some(cmd)) if other_may => Some((1 - primary, cmd)),
             // a late answer to an older state is still the newest torque: reuse it
-            (None, None) => valid[primary].map(|c| (primary, c)),
+            (None, _) => valid[primary].map(|c| (primary, c)),
         };
         let mut fresh = false;
         let mut takeover = false;
