@@ -1002,6 +1002,14 @@ fn body() -> Result<(), SupervisorError> {
                     stop_reason = Some(reason);
                     break;
                 }
+                ExitVerdict::PartnerCrashLoop(reason, at) => {
+                    tracing::warn!("{reason}");
+                    eval.event(now, "crash_loop", &name, reason.clone());
+                    eval.degrade(reason);
+                    if let Some(at) = at {
+                        tracing::warn!("{name} restarting in {} ms", (at - now) / 1_000_000);
+                    }
+                }
                 ExitVerdict::Restart(Some(at)) => tracing::warn!(
                     "{name} {detail}; restarting in {} ms",
                     (at - now) / 1_000_000

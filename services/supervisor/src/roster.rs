@@ -227,6 +227,26 @@ impl Roster {
         (n > self.sup.crash_loop_restarts as usize).then_some(n)
     }
 
+    /// The hot standby's partner of service `index`: `X` for `X_standby`,
+    /// `X_standby` for `X`, when both are in the roster (the controllers,
+    /// the residuals).
+    pub fn partner(&self, index: usize) -> Option<usize> {
+        let name = self.services.get(index)?.name.as_str();
+        let other = match name.strip_suffix("_standby") {
+            Some(first) => first.to_string(),
+            None => format!("{name}_standby"),
+        };
+        self.index_of(&other).filter(|&i| i != index)
+    }
+
+    /// Service `index` runs and has been heard since its start, within its
+    /// liveness deadline: it does its part.
+    pub fn healthy(&self, index: usize) -> bool {
+        self.services.get(index).is_some_and(|s| {
+            s.pid.is_some() && !s.missed && (s.spec.heartbeat.is_none() || s.heard_since_start)
+        })
+    }
+
     /// Whether service `index` is to be started now; the pending restart is
     /// taken (a failed start is [`Roster::restart_failed`]).
     pub fn restart_due(&mut self, index: usize, now_ns: u64) -> bool {

@@ -1,6 +1,7 @@
 //! The supervisor's verdicts on what happened to the cell, as decisions on
 //! the roster and the clock alone: a service that ended (a crash to
-//! restart, a start that failed, a crash loop that ends the run, or a
+//! restart, a start that failed, a crash loop that ends the run, a crash
+//! loop of one of a hot-standby pair whose partner carries on, or a
 //! dead-man stop that holds the cell until an operator resumes it), and a
 //! stall of the supervisor itself. The main loop logs, records and acts on
 //! them.
@@ -19,6 +20,12 @@ pub enum ExitVerdict {
     StartFailed(String),
     /// it ended too often: the run ends
     CrashLoop(String),
+    /// one of a hot-standby pair (`control_standby`, `dynamics_standby`,
+    /// or the first of a pair) ended too often while its partner runs
+    /// healthy: the cell is whole without it, so the run goes on; it is
+    /// reported (the reason) and started again after its back-off (the time
+    /// \[ns\], or never with `restart = false`)
+    PartnerCrashLoop(String, Option<u64>),
     /// a crash: started again at this time [ns], or never (`restart = false`)
     Restart(Option<u64>),
 }
@@ -51,6 +58,18 @@ pub fn on_exit(
     }
     let at = roster.exited(index, now_ns);
     if let Some(n) = roster.crash_looping(index, now_ns) {
+        if let Some(p) = roster.partner(index).filter(|&p| roster.healthy(p)) {
+            // the reason is the same at every further exit: reported once
+            return ExitVerdict::PartnerCrashLoop(
+                format!(
+                    "{name} crash-loops (ended more than {} times within {} s): restarted with back-off while {} carries the cell",
+                    sup.crash_loop_restarts,
+                    sup.crash_loop_window_s,
+                    roster.get(p).name
+                ),
+                at,
+            );
+        }
         return ExitVerdict::CrashLoop(format!(
             "{name} ended {n} times within {} s (last: {detail}): the cell is not whole",
             sup.crash_loop_window_s
@@ -127,6 +146,82 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A hot standby killed six times (one more than the crash loop's
+    /// limit) while the controller in charge runs healthy: reported and
+    /// restarted with back-off, the run goes on; the same crash loop with
+    /// its partner down ends the run as any other.
+    #[test]
+    fn a_standby_s_crash_loop_is_reported_and_restarted_while_its_partner_carries_the_cell() {
+        let defaults = phri_config::Config::defaults();
+        let spec = |binary: &str| ServiceSpec {
+            binary: binary.into(),
+            ..defaults.services["sim"].clone()
+        };
+        let mut r = Roster::new(
+            defaults.supervisor.clone(),
+            vec![
+                ("sim".into(), spec("phri-sim")),
+                ("control".into(), spec("phri-control")),
+                ("control_standby".into(), spec("phri-control")),
+            ],
+        );
+        for i in 0..3 {
+            r.started(i, S, 100 + i as u32);
+            r.heard(i, S);
+        }
+        assert_eq!((r.partner(1), r.partner(2), r.partner(0)), (Some(2), Some(1), None));
+        let limit = r.config().crash_loop_restarts as u64;
+        let min_ms = r.config().restart_backoff_min_ms;
+        let max_ms = r.config().restart_backoff_max_ms;
+        let mut t = 10 * S;
+        let mut verdicts = Vec::new();
+        for k in 0..=limit {
+            let v = on_exit(&mut r, 2, t, "killed by signal 9", false);
+            // started again once its back-off passed, killed 1 ms later
+            let at = match &v {
+                ExitVerdict::Restart(Some(at)) | ExitVerdict::PartnerCrashLoop(_, Some(at)) => *at,
+                other => panic!("exit {k}: {other:?}"),
+            };
+            verdicts.push((t, v));
+            assert!(!r.restart_due(2, at - 1), "exit {k} restarted early");
+            assert!(r.restart_due(2, at), "exit {k} not restarted");
+            r.started(2, at, 300 + k as u32);
+            t = at + 1_000_000;
+        }
+        assert!(
+            verdicts[..limit as usize]
+                .iter()
+                .all(|(_, v)| matches!(v, ExitVerdict::Restart(Some(_)))),
+            "{verdicts:?}"
+        );
+        match verdicts.last().unwrap() {
+            (exit_t, ExitVerdict::PartnerCrashLoop(why, Some(at))) => {
+                assert!(
+                    why.starts_with("control_standby crash-loops")
+                        && why.ends_with("while control carries the cell"),
+                    "{why}"
+                );
+                // with back-off: grown past the shortest by the quick exits
+                assert!(*at >= exit_t + 2 * min_ms * 1_000_000, "{at} {exit_t}");
+                assert!(*at <= exit_t + max_ms * 1_000_000, "{at} {exit_t}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(r.get(2).restarts(), limit as u32 + 1);
+        // the controller in charge killed now: its partner, the standby, is
+        // just restarted and not heard yet: the cell is not whole, the run ends
+        let mut last = ExitVerdict::Restart(None);
+        for k in 0..=limit {
+            last = on_exit(&mut r, 1, t, "killed by signal 9", false);
+            if let ExitVerdict::Restart(Some(at)) = last {
+                assert!(r.restart_due(1, at));
+                r.started(1, at, 400 + k as u32);
+                t = at + 1_000_000;
+            }
+        }
+        assert!(matches!(last, ExitVerdict::CrashLoop(_)), "{last:?}");
     }
 
     #[test]
