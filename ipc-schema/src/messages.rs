@@ -377,6 +377,16 @@ pub struct BoxStatus {
     /// (FCI's `tau_ext_hat_filtered`), for comparison with phri's residual
     #[serde(with = "crate::json::finite_array")]
     pub tau_ext_hat: [f64; MAX_DOF],
+    /// state datagrams refused, by why: from another address or port than
+    /// the box's, of the wrong size, a message id not above the newest, one
+    /// too far ahead; states whose joint positions are not finite, or moved
+    /// faster than the joints' velocity limits allow (never published)
+    pub refused_foreign: u64,
+    pub refused_malformed: u64,
+    pub refused_stale_id: u64,
+    pub refused_id_ahead: u64,
+    pub refused_non_finite: u64,
+    pub refused_too_fast: u64,
 }
 
 impl BoxStatus {
@@ -965,6 +975,16 @@ pub struct CommanderStats {
     /// same state, while both answered and the brakes were off [Nm]
     #[serde(with = "crate::json::finite")]
     pub max_answer_diff_nm: f64,
+    /// commands refused per slot because their sender is not the controller
+    /// the supervisor started for that slot (never applied)
+    pub refused_stranger: [u64; 2],
+    /// commands refused per slot as malformed (wrong joint count, a
+    /// non-finite torque)
+    pub refused_malformed: [u64; 2],
+    /// the newest refused stranger's pid (0: none)
+    pub stranger_pid: i32,
+    #[serde(skip)]
+    pub _pad2: u32,
 }
 
 impl Zeroed for CommanderStats {}

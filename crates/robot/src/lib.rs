@@ -5,6 +5,6 @@
 pub mod link;
 
 pub use link::{
-    poll_slots, CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake, GRACE_POLL_NS,
-    LATE_CYCLE_GRACE_NS, MAX_MISSED, SLOTS, STATS_EVERY,
+    CommandGate, CycleTiming, LinkError, LinkOutput, MissRun, RobotLink, Wake, GRACE_POLL_NS,
+    LATE_CYCLE_GRACE_NS, MAX_MISSED, SLOTS, SLOT_SERVICES, STATS_EVERY,
 };

@@ -33,11 +33,23 @@
 //! torque step it made in [`CommanderStats`]). The state's
 //! `STANDBY_IN_CHARGE` bit tells both controllers which one is in charge.
 //!
+//! **Who may command**: a command sample is taken only from the controller
+//! the supervisor started for its slot ([`CommandGate`]: `control` for slot
+//! 0, `control_standby` for slot 1), judged per sample by its sender's pid
+//! as [`RobotLink::poll`] receives it; any other sender's sample is never
+//! applied, and is counted (`refused_stranger`, the newest one's pid in
+//! `stranger_pid` of `robot/commanders`), as are malformed ones. Without a
+//! supervisor (a robot run by hand, the lock-step cell) every sender is
+//! taken, as the controller takes its inputs ([`phri_ipc::OwnerTable`]).
+//!
 //! [`RobotLink::cycle`] is pure and allocates nothing: every time it needs
 //! enters as a number ([`CycleTiming`], nanoseconds on one clock).
 
+use std::sync::Arc;
+
 use phri_ipc::{
-    robot_status, CommanderStats, RobotStats, TorqueCommand, Zeroed, LATENCY_BINS, MAX_DOF,
+    robot_status, CommanderStats, OwnerTable, RobotStats, TorqueCommand, Zeroed, LATENCY_BINS,
+    MAX_DOF,
 };
 
 /// Consecutive missing commands the robot tolerates before braking (as Franka's FCI).
@@ -52,6 +64,12 @@ pub const GRACE_POLL_NS: u64 = 50_000;
 /// Runs of missed deadlines logged in full; afterwards only runs whose last
 /// miss number is a power of two.
 const MISS_LOG_LINES: u64 = 2000;
+/// While commands are being refused, `robot/commanders` is due at most this
+/// often ([`LinkOutput::refused`]) \[cycles\].
+const REFUSED_PUBLISH_EVERY: u64 = 10;
+/// The services that may command each slot (their names in the
+/// supervisor's configuration and `supervisor/health`).
+pub const SLOT_SERVICES: [&str; SLOTS] = ["control", "control_standby"];
 
 /// Why a [`RobotLink`] could not be built.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -179,6 +197,10 @@ pub struct LinkOutput {
     /// the slot not in charge answered for the one in charge this period
     /// (publish [`RobotLink::commanders_message`] now)
     pub takeover: bool,
+    /// commands were refused since the last [`RobotLink::commanders_message`]
+    /// (a stranger's, a malformed one): publish it now (at most every
+    /// [`REFUSED_PUBLISH_EVERY`] periods)
+    pub refused: bool,
 }
 
 impl LinkOutput {
@@ -224,6 +246,46 @@ impl MissLog {
     }
 }
 
+/// Who may command each slot: the process of the controller the supervisor
+/// started for it ([`SLOT_SERVICES`]), as `supervisor/health` names it
+/// (the [`OwnerTable`] a service's supervision thread keeps up to date).
+/// Locks nothing, allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub struct CommandGate {
+    /// `None`: every sender is taken (no supervisor)
+    owners: Option<Arc<OwnerTable>>,
+}
+
+impl CommandGate {
+    /// The gate of a supervised cell's owner table (one that is not
+    /// supervised takes every sender, as [`CommandGate::unchecked`]).
+    pub fn new(owners: Arc<OwnerTable>) -> CommandGate {
+        CommandGate {
+            owners: Some(owners),
+        }
+    }
+
+    /// Every sender taken: a robot run by hand, a test, the lock-step cell.
+    pub fn unchecked() -> CommandGate {
+        CommandGate { owners: None }
+    }
+
+    /// May process `pid` command `slot`? Supervised, only the pid the
+    /// supervisor gave for the slot's controller (none known yet, or the
+    /// controller down: nobody), as the controller judges its inputs.
+    pub fn admits(&self, slot: usize, pid: i32) -> bool {
+        match &self.owners {
+            Some(o) if o.supervised() => {
+                pid > 0
+                    && SLOT_SERVICES
+                        .get(slot)
+                        .is_some_and(|name| o.pid_of(name) == pid)
+            }
+            _ => true,
+        }
+    }
+}
+
 /// The robot's protocol state: the command in force, missed commands,
 /// brakes, loop statistics. One per robot; [`RobotLink::cycle`] once per
 /// control period.
@@ -237,29 +299,15 @@ pub struct RobotLink {
     stats: RobotStats,
     commanders: CommanderStats,
     last: LinkOutput,
+    gate: CommandGate,
+    /// commands refused since the last `robot/commanders` message
+    refused_unpublished: bool,
+    /// the cycle of the last `robot/commanders` message
+    commanders_cycle: u64,
 }
 
 /// Number of command slots ([`RobotLink::cycle_slots`]).
 pub const SLOTS: usize = 2;
-
-/// Take each slot's newest command from its channel into `newest` (a slot
-/// without a new one keeps its last); true when some slot's answers state
-/// `state_seq`. What the adapters poll between a state and their decision.
-pub fn poll_slots(
-    channels: [&phri_ipc::Subscriber<TorqueCommand>; SLOTS],
-    newest: &mut [Option<TorqueCommand>; SLOTS],
-    state_seq: u64,
-) -> Result<bool, phri_ipc::IpcError> {
-    for (slot, channel) in newest.iter_mut().zip(channels) {
-        if let Some(c) = channel.latest()? {
-            *slot = Some(c);
-        }
-    }
-    Ok(newest
-        .iter()
-        .flatten()
-        .any(|c| RobotLink::answers(c, state_seq)))
-}
 
 /// The largest joint difference between two torques \[Nm\].
 fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
@@ -300,8 +348,63 @@ impl RobotLink {
                 publish_stats: false,
                 in_charge: 0,
                 takeover: false,
+                refused: false,
             },
+            gate: CommandGate::unchecked(),
+            refused_unpublished: false,
+            commanders_cycle: 0,
         })
+    }
+
+    /// Take commands only from the senders `gate` admits (the default:
+    /// every sender, [`CommandGate::unchecked`]).
+    pub fn set_gate(&mut self, gate: CommandGate) {
+        self.gate = gate;
+    }
+
+    /// Judge command sample `cmd` for `slot`, sent by process `pid`: taken
+    /// only from the slot's controller ([`CommandGate`]) and only when
+    /// valid ([`RobotLink::valid`]); a refused one is counted by kind.
+    /// Allocates nothing, locks nothing.
+    pub fn admit(&mut self, slot: usize, pid: i32, cmd: &TorqueCommand) -> bool {
+        if slot >= SLOTS {
+            return false;
+        }
+        let stranger = !self.gate.admits(slot, pid);
+        let malformed = !stranger && !self.valid(cmd);
+        let c = &mut self.commanders;
+        if stranger {
+            c.refused_stranger[slot] = c.refused_stranger[slot].saturating_add(1);
+            c.stranger_pid = pid;
+        } else if malformed {
+            c.refused_malformed[slot] = c.refused_malformed[slot].saturating_add(1);
+        }
+        self.refused_unpublished |= stranger || malformed;
+        !(stranger || malformed)
+    }
+
+    /// Take every queued command sample of each slot's channel, keeping in
+    /// `newest` the newest one [`RobotLink::admit`] takes (a slot without
+    /// one keeps its last); true when some slot's answers state
+    /// `state_seq`. What the adapters poll between a state and their
+    /// decision. Allocates nothing.
+    pub fn poll(
+        &mut self,
+        channels: [&phri_ipc::Subscriber<TorqueCommand>; SLOTS],
+        newest: &mut [Option<TorqueCommand>; SLOTS],
+        state_seq: u64,
+    ) -> Result<bool, phri_ipc::IpcError> {
+        for (slot, (kept, channel)) in newest.iter_mut().zip(channels).enumerate() {
+            while let Some((pid, c)) = channel.receive_from()? {
+                if self.admit(slot, pid, &c) {
+                    *kept = Some(c);
+                }
+            }
+        }
+        Ok(newest
+            .iter()
+            .flatten()
+            .any(|c| RobotLink::answers(c, state_seq)))
     }
 
     /// The control period \[ns\].
@@ -473,6 +576,8 @@ impl RobotLink {
         out.brake_engaged = brake_engaged;
         out.miss_run = miss_run;
         out.publish_stats = self.stats.cycles.is_multiple_of(STATS_EVERY);
+        out.refused = self.refused_unpublished
+            && self.stats.cycles >= self.commanders_cycle + REFUSED_PUBLISH_EVERY;
         *out
     }
 
@@ -496,6 +601,8 @@ impl RobotLink {
     /// Which controller commanded, as the next `robot/commanders` message,
     /// stamped `stamp_ns`.
     pub fn commanders_message(&mut self, stamp_ns: u64) -> &CommanderStats {
+        self.refused_unpublished = false;
+        self.commanders_cycle = self.stats.cycles;
         self.commanders.seq += 1;
         self.commanders.stamp_ns = stamp_ns;
         &self.commanders

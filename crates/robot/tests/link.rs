@@ -428,3 +428,96 @@ fn the_step_of_one_period_is_measured_apart_from_takeovers() {
     cycle2(&mut link, None, Some(&b), 14);
     assert_eq!(link.commanders().max_step_nm, 0.5);
 }
+
+/// The owners of a supervised cell: `control` runs as 100, `control_standby` as 200.
+fn supervised_gate() -> phri_robot::CommandGate {
+    use phri_ipc::{OwnerTable, ServiceRole};
+    let role = |name: &str| ServiceRole {
+        name: name.into(),
+        binary: "phri-control".into(),
+        worker: None,
+    };
+    let owners = OwnerTable::new(vec![role("control"), role("control_standby")], true);
+    owners.set_pid("control", 100);
+    owners.set_pid("control_standby", 200);
+    phri_robot::CommandGate::new(std::sync::Arc::new(owners))
+}
+
+#[test]
+fn only_the_slot_s_own_controller_commands_it_and_the_rest_is_counted() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    link.set_gate(supervised_gate());
+    let good = command(1, 1, PERIOD_NS, 2.0);
+    // the slot's controller: taken
+    assert!(link.admit(0, 100, &good));
+    assert!(link.admit(1, 200, &good));
+    // the other slot's controller, a stranger, an unknown sender: refused
+    assert!(!link.admit(0, 200, &good));
+    assert!(!link.admit(1, 100, &good));
+    assert!(!link.admit(0, 0, &good));
+    assert!(!link.admit(0, 4242, &good));
+    // the slot's controller, malformed: refused as such
+    let mut nan = good;
+    nan.tau[3] = f64::NAN;
+    assert!(!link.admit(0, 100, &nan));
+    let mut wrong = good;
+    wrong.dof = 6;
+    assert!(!link.admit(1, 200, &wrong));
+    let c = *link.commanders();
+    assert_eq!(c.refused_stranger, [3, 1]);
+    assert_eq!(c.refused_malformed, [1, 1]);
+    assert_eq!(c.stranger_pid, 4242);
+    // the newest stranger's pid is kept
+    assert!(!link.admit(1, 31337, &good));
+    assert_eq!(link.commanders().stranger_pid, 31337);
+    // the refusals make robot/commanders due (not at every period)
+    let out = link.cycle(None, 20, &timing(20));
+    assert!(!out.refused, "not before 10 periods");
+    for seq in 21..=30 {
+        link.cycle(None, seq, &timing(seq));
+    }
+    let out = link.cycle(None, 31, &timing(31));
+    assert!(out.refused);
+    link.commanders_message(1);
+    let out = link.cycle(None, 32, &timing(32));
+    assert!(!out.refused, "published: nothing new refused");
+}
+
+#[test]
+fn a_controller_restarted_under_a_new_pid_is_taken_from_when_the_supervisor_names_it() {
+    use phri_ipc::{OwnerTable, ServiceRole};
+    let owners = std::sync::Arc::new(OwnerTable::new(
+        vec![ServiceRole {
+            name: "control".into(),
+            binary: "phri-control".into(),
+            worker: None,
+        }],
+        true,
+    ));
+    let gate = phri_robot::CommandGate::new(std::sync::Arc::clone(&owners));
+    // no health yet: nobody commands (as the controller takes no input)
+    assert!(!gate.admits(0, 100));
+    owners.set_pid("control", 100);
+    assert!(gate.admits(0, 100));
+    owners.set_pid("control", 0);
+    assert!(!gate.admits(0, 100), "down");
+    owners.set_pid("control", 101);
+    assert!(gate.admits(0, 101) && !gate.admits(0, 100));
+    // no standby configured: nobody on slot 1
+    assert!(!gate.admits(1, 101));
+}
+
+#[test]
+fn without_a_supervisor_every_sender_commands_as_before() {
+    let unsupervised = phri_ipc::OwnerTable::new(Vec::new(), false);
+    for gate in [
+        phri_robot::CommandGate::unchecked(),
+        phri_robot::CommandGate::new(std::sync::Arc::new(unsupervised)),
+    ] {
+        let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+        link.set_gate(gate);
+        assert!(link.admit(0, 4242, &command(1, 1, PERIOD_NS, 2.0)));
+        assert!(link.admit(1, 0, &command(1, 1, PERIOD_NS, 2.0)));
+        assert_eq!(link.commanders().refused_stranger, [0, 0]);
+    }
+}

@@ -39,6 +39,32 @@ impl BoxError {
     }
 }
 
+/// What the adapter refused so far: state datagrams its FCI client dropped
+/// (another sender's, malformed, a stale or far-ahead message id) and
+/// states it did not act on (positions not finite, or moved faster than
+/// the joints can).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Refused {
+    pub foreign: u64,
+    pub malformed: u64,
+    pub stale_id: u64,
+    pub id_ahead: u64,
+    pub non_finite: u64,
+    pub too_fast: u64,
+}
+
+impl Refused {
+    /// Everything refused.
+    pub fn total(&self) -> u64 {
+        self.foreign
+            + self.malformed
+            + self.stale_id
+            + self.id_ahead
+            + self.non_finite
+            + self.too_fast
+    }
+}
+
 /// The figures of `robot/box`, kept across torque controls.
 pub struct BoxLog {
     msg: BoxStatus,
@@ -85,6 +111,17 @@ impl BoxLog {
         self.msg.errors += 1;
         self.msg.last_error_ns = now_ns;
         self.msg.last_error = phri_ipc::json::to_c_str(&error.names);
+    }
+
+    /// What was refused so far (cumulative counts).
+    pub fn set_refused(&mut self, r: &Refused) {
+        let m = &mut self.msg;
+        m.refused_foreign = r.foreign;
+        m.refused_malformed = r.malformed;
+        m.refused_stale_id = r.stale_id;
+        m.refused_id_ahead = r.id_ahead;
+        m.refused_non_finite = r.non_finite;
+        m.refused_too_fast = r.too_fast;
     }
 
     /// The adapter ran the box's automatic error recovery.

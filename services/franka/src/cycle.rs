@@ -3,7 +3,7 @@
 
 use phri_ipc::TorqueCommand;
 use phri_model::{Data, Model};
-use phri_robot::{CycleTiming, LinkError, LinkOutput, RobotLink};
+use phri_robot::{CommandGate, CycleTiming, LinkError, LinkOutput, RobotLink};
 
 /// Largest change of a commanded joint torque the control box accepts
 /// \[Nm/s\] (libfranka's `kMaxTorqueRate`).
@@ -83,6 +83,28 @@ impl FciCycle {
     /// The protocol's bookkeeping.
     pub fn link(&self) -> &RobotLink {
         &self.link
+    }
+
+    /// Take commands only from the senders `gate` admits ([`RobotLink::set_gate`]).
+    pub fn set_gate(&mut self, gate: CommandGate) {
+        self.link.set_gate(gate);
+    }
+
+    /// Take the newest admitted command of each slot ([`RobotLink::poll`]);
+    /// true when one answers state `state_seq`.
+    pub fn poll(
+        &mut self,
+        channels: [&phri_ipc::Subscriber<TorqueCommand>; phri_robot::SLOTS],
+        newest: &mut [Option<TorqueCommand>; phri_robot::SLOTS],
+        state_seq: u64,
+    ) -> Result<bool, phri_ipc::IpcError> {
+        self.link.poll(channels, newest, state_seq)
+    }
+
+    /// The torque sent last, without gravity \[Nm\]: what the box is sent
+    /// again for a state the adapter refused.
+    pub fn held(&self) -> [f64; JOINTS] {
+        self.last
     }
 
     /// `robot/stats` now (`stamp_ns` on this machine's clock).

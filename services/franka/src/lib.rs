@@ -8,10 +8,14 @@
 
 pub mod box_status;
 pub mod cycle;
+pub mod fci_error;
 pub mod model_check;
 pub mod state;
+pub mod state_guard;
 
-pub use box_status::{BoxError, BoxLog, BoxTorques};
+pub use box_status::{BoxError, BoxLog, BoxTorques, Refused};
 pub use cycle::{CycleError, FciCycle, FciTorque, JOINTS, MAX_TORQUE_RATE_NM_PER_S};
+pub use fci_error::FciError;
 pub use model_check::first_difference;
 pub use state::fill_state;
+pub use state_guard::{StateGuard, StateRefusal};

@@ -7,16 +7,28 @@
 //! publishing the arm's states; the first command that answers one starts
 //! torque control again, from zero torque. Only channel wiring and the FCI
 //! session live here.
+//!
+//! It takes states only from its box: its FCI client (franka-rs, patched:
+//! `patches/franka-rs/PATCH.md`) drops datagrams of any other sender, of the
+//! wrong size, or with a stale or far-ahead message id; a state whose joints
+//! are not finite or moved faster than their velocity limits allow
+//! ([`phri_franka::StateGuard`]) is not published and gets the last torque
+//! again. Everything refused is counted on `robot/box`. The start-up
+//! (connect, handshake, first state, robot model) has a deadline.
 
 use std::error::Error;
 use std::process::ExitCode;
+use std::time::Duration;
 
-use phri_franka::{fill_state, first_difference, BoxError, BoxLog, BoxTorques, FciCycle, JOINTS};
+use phri_franka::{
+    fill_state, first_difference, BoxError, BoxLog, BoxTorques, FciCycle, FciError, Refused,
+    StateGuard, JOINTS,
+};
 use phri_ipc::{
     BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
     ROBOT_COMMANDERS, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS,
 };
-use phri_robot::{poll_slots, CycleTiming, LinkOutput, GRACE_POLL_NS};
+use phri_robot::{CommandGate, CycleTiming, LinkOutput, GRACE_POLL_NS, MAX_MISSED};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
 
 /// The adapter's own flag.
@@ -32,6 +44,78 @@ struct RobotAddress {
 /// How long after publishing a state the adapter waits for its command [ns]
 /// (the box wants one every millisecond).
 const ANSWER_BUDGET_NS: u64 = 700_000;
+
+/// The start-up's deadline: connect, the FCI handshake, the first state and
+/// the robot model \[s\] (a box that accepts and never answers ends here).
+const START_DEADLINE_S: f64 = 5.0;
+
+/// The box's period \[s\] (FCI: one state per millisecond).
+const FCI_PERIOD_S: f64 = 1e-3;
+
+/// Connect to the box at `address` and fetch its URDF (FCI v10; v5 serves
+/// none), within [`START_DEADLINE_S`]. The FCI client's own timeouts end
+/// most failures earlier; this one also covers a box that goes silent
+/// after the handshake. The connecting thread is left behind on a timeout
+/// (the process then exits).
+fn connect(address: &str) -> Result<(franka::Robot, Option<String>), FciError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let a = address.to_owned();
+    std::thread::Builder::new()
+        .name("fci-connect".into())
+        .spawn(move || {
+            // phri keeps its own real-time discipline (go_realtime)
+            let result = franka::Robot::new(&a, franka::RealtimeConfig::Ignore)
+                .map_err(|e| FciError::from_franka(&a, "connect", e))
+                .and_then(|robot| {
+                    let urdf = match robot.server_version() >= 10 {
+                        true => Some(
+                            robot
+                                .robot_model()
+                                .map_err(|e| FciError::from_franka(&a, "GetRobotModel", e))?,
+                        ),
+                        false => None,
+                    };
+                    Ok((robot, urdf))
+                });
+            let _ = tx.send(result);
+        })
+        .map_err(|_| FciError::StartDeadline {
+            address: address.to_owned(),
+            seconds: 0.0,
+        })?;
+    rx.recv_timeout(Duration::from_secs_f64(START_DEADLINE_S))
+        .map_err(|_| FciError::StartDeadline {
+            address: address.to_owned(),
+            seconds: START_DEADLINE_S,
+        })?
+}
+
+/// The states the adapter acts on ([`StateGuard`]) and what it and the FCI
+/// client refused.
+struct Gate<'a> {
+    robot: &'a franka::Robot,
+    guard: StateGuard,
+}
+
+impl Gate<'_> {
+    /// Is state `s` one to act on (counted when not)?
+    fn take(&mut self, s: &franka::RobotState) -> bool {
+        self.guard.check(&s.q, s.time.as_millis()).is_ok()
+    }
+
+    /// Everything refused so far.
+    fn refused(&self) -> Refused {
+        let d = self.robot.refused_datagrams();
+        Refused {
+            foreign: d.foreign,
+            malformed: d.malformed,
+            stale_id: d.stale_id,
+            id_ahead: d.id_ahead,
+            non_finite: self.guard.non_finite,
+            too_fast: self.guard.too_fast,
+        }
+    }
+}
 
 /// Why torque control ended other than by the protocol's brakes.
 enum Served {
@@ -72,7 +156,13 @@ struct BoxChannel {
 }
 
 impl BoxChannel {
-    fn state(&mut self, controlled: bool, s: &franka::RobotState) -> Result<(), Box<dyn Error>> {
+    /// A state the adapter took (`refused`: everything refused so far).
+    fn state(
+        &mut self,
+        controlled: bool,
+        s: &franka::RobotState,
+        refused: &Refused,
+    ) -> Result<(), Box<dyn Error>> {
         let torques = BoxTorques {
             tau_j: s.tau_J,
             tau_ext_hat: s.tau_ext_hat_filtered,
@@ -81,8 +171,16 @@ impl BoxChannel {
             .log
             .on_state(controlled, s.control_command_success_rate, &torques)
         {
+            self.log.set_refused(refused);
             self.publisher.publish(self.log.message(now_ns()))?;
         }
+        Ok(())
+    }
+
+    /// Publish now, with everything refused so far.
+    fn publish(&mut self, refused: &Refused) -> Result<(), Box<dyn Error>> {
+        self.log.set_refused(refused);
+        self.publisher.publish(self.log.message(now_ns()))?;
         Ok(())
     }
 
@@ -100,13 +198,28 @@ fn serve(
     cycle: &mut FciCycle,
     period: &mut Period<'_>,
     boxed: &mut BoxChannel,
+    gate: &mut Gate<'_>,
     shutdown: &phri_runtime::Shutdown,
 ) -> Result<(), Served> {
     cycle.restart();
     let mut control = robot.start_torque_control()?;
+    // refused states in a row: past the protocol's brakes, the torque
+    // control ends as it would without commands
+    let mut refused_run = 0u32;
     loop {
         let (s, _) = control.read_once()?;
-        boxed.state(true, &s)?;
+        if !gate.take(&s) {
+            refused_run += 1;
+            let held = franka::Torques::new(cycle.held());
+            if refused_run > MAX_MISSED || shutdown.requested() {
+                control.write_once(&franka::motion_finished(held))?;
+                break;
+            }
+            control.write_once(&held)?;
+            continue;
+        }
+        refused_run = 0;
+        boxed.state(true, &s, &gate.refused())?;
         let (_, out) = period(&s.q, s.time.as_millis(), cycle)?;
         if out.brake || shutdown.requested() {
             control.write_once(&franka::motion_finished(franka::Torques::new(out.tau)))?;
@@ -118,7 +231,10 @@ fn serve(
     // braked: the arm's states go on; a fresh answer resumes control
     while !shutdown.requested() {
         let s = robot.read_once()?;
-        boxed.state(false, &s)?;
+        if !gate.take(&s) {
+            continue;
+        }
+        boxed.state(false, &s, &gate.refused())?;
         let (link, _) = period(&s.q, s.time.as_millis(), cycle)?;
         if !link.brake {
             break;
@@ -137,25 +253,25 @@ fn body() -> Result<(), Box<dyn Error>> {
         "robot",
         "A Franka arm over FCI behind robot/state and robot/command (torques sent without gravity: the box adds it)",
     )?;
-    let address = robot_ip
-        .or_else(|| Some(ctx.config().robot.ip.clone()).filter(|ip| !ip.is_empty()))
-        .ok_or(
-            "--robot-ip: the control box's address is required (or robot.ip in the configuration)",
-        )?;
+    let address = match robot_ip {
+        Some(ip) if ip.trim().is_empty() => return Err(FciError::EmptyAddress.into()),
+        Some(ip) => ip,
+        None => Some(ctx.config().robot.ip.clone())
+            .filter(|ip| !ip.is_empty())
+            .ok_or(
+                "--robot-ip: the control box's address is required (or robot.ip in the configuration)",
+            )?,
+    };
     let model = ctx.robot_model()?;
+    let guard = StateGuard::for_model(&model, FCI_PERIOD_S);
     // 7 joints, a positive period: refused here, before any connection
-    let mut cycle = FciCycle::new(model, 1e-3)?;
+    let mut cycle = FciCycle::new(model, FCI_PERIOD_S)?;
     if ctx.checking() {
         return Ok(());
     }
-    // phri keeps its own real-time discipline (go_realtime below)
-    let robot = franka::Robot::new(&address, franka::RealtimeConfig::Ignore)
-        .map_err(|e| format!("{address}: {e}"))?;
+    let (robot, urdf) = connect(&address)?;
     // FCI v10 (FR3) serves the arm's URDF; v5 (Panda/FER) serves none
-    if robot.server_version() >= 10 {
-        let urdf = robot
-            .robot_model()
-            .map_err(|e| format!("{address}: GetRobotModel: {e}"))?;
+    if let Some(urdf) = urdf {
         // the arm's joints to lock may be missing from another arm's URDF:
         // then the comparison below names the difference
         let served =
@@ -179,6 +295,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     // the hot standby's (slot 1): applied when the controller in charge misses
     let standby = ROBOT_COMMAND_STANDBY.subscriber(&node, Queue::Latest)?;
     let commanders_pub = ROBOT_COMMANDERS.publisher(&node)?;
+    // commands only from the controllers the supervisor started (every
+    // sender without a supervisor); the owners follow supervisor/health
+    cycle.set_gate(CommandGate::new(ctx.watch_inputs()));
+    let mut gate = Gate {
+        robot: &robot,
+        guard,
+    };
     let mut boxed = BoxChannel {
         log: BoxLog::default(),
         publisher: ROBOT_BOX.publisher(&node)?,
@@ -213,7 +336,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         );
         state_pub.publish(&state)?;
         let mut newest: [Option<TorqueCommand>; 2] = [None, None];
-        while !poll_slots([&commands, &standby], &mut newest, seq)?
+        while !cycle.poll([&commands, &standby], &mut newest, seq)?
             && now_ns() < published + ANSWER_BUDGET_NS
         {
             sleep_until_ns(now_ns() + GRACE_POLL_NS);
@@ -228,14 +351,21 @@ fn body() -> Result<(), Box<dyn Error>> {
         if decided.0.publish_stats {
             stats_pub.publish(cycle.stats_message(now_ns()))?;
         }
-        if decided.0.publish_stats || decided.0.takeover {
+        if decided.0.publish_stats || decided.0.takeover || decided.0.refused {
             commanders_pub.publish(cycle.commanders_message(now_ns()))?;
         }
         Ok(decided)
     };
 
     while !ctx.shutdown.requested() {
-        match serve(&robot, &mut cycle, &mut period, &mut boxed, &ctx.shutdown) {
+        match serve(
+            &robot,
+            &mut cycle,
+            &mut period,
+            &mut boxed,
+            &mut gate,
+            &ctx.shutdown,
+        ) {
             Ok(()) => {}
             // the box ended the motion (a reflex, a joint limit, commands
             // lost): its own error recovery, then torque control again
@@ -243,16 +373,29 @@ fn body() -> Result<(), Box<dyn Error>> {
                 let error = BoxError::new(&e.last_motion_errors.names(), &e.message);
                 boxed.error(&error)?;
                 tracing::warn!("{error}; automatic error recovery");
-                robot
-                    .automatic_error_recovery()
-                    .map_err(|e| format!("{address}: automatic error recovery: {e}"))?;
+                if let Err(e) = robot.automatic_error_recovery() {
+                    let _ = boxed.publish(&gate.refused());
+                    return Err(
+                        FciError::from_franka(&address, "automatic error recovery", e).into(),
+                    );
+                }
                 boxed.log.on_recovery();
             }
-            Err(Served::Fatal(e)) => return Err(e),
+            Err(Served::Fatal(e)) => {
+                // the FCI client's errors named by what happened at the box
+                let e = match e.downcast::<franka::FrankaError>() {
+                    Ok(f) => Box::new(FciError::from_franka(&address, "FCI", *f)) as Box<dyn Error>,
+                    Err(e) => e,
+                };
+                // the last word on what was refused, then the one line
+                let _ = boxed.publish(&gate.refused());
+                let _ = commanders_pub.publish(cycle.commanders_message(now_ns()));
+                return Err(e);
+            }
         }
     }
     let _ = stats_pub.publish(cycle.stats_message(now_ns()));
     let _ = commanders_pub.publish(cycle.commanders_message(now_ns()));
-    let _ = boxed.publisher.publish(boxed.log.message(now_ns()));
+    let _ = boxed.publish(&gate.refused());
     Ok(())
 }

@@ -27,7 +27,7 @@ use phri_ipc::{
     ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
 };
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
-use phri_sim::link::{poll_slots, GRACE_POLL_NS};
+use phri_sim::link::{CommandGate, GRACE_POLL_NS};
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
     fill_state, fill_truth, fill_world, forces_out::ForcesDatagram, ContactLog, CycleTiming,
@@ -93,6 +93,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     // the hot standby's (slot 1): applied when the controller in charge misses
     let standby = ROBOT_COMMAND_STANDBY.subscriber(&node, Queue::Latest)?;
     let commanders_pub = ROBOT_COMMANDERS.publisher(&node)?;
+    // commands only from the controllers the supervisor started (every
+    // sender without a supervisor); the owners follow supervisor/health
+    link.set_gate(CommandGate::new(ctx.watch_inputs()));
     // the arm's positions for a successor, saved by a thread at normal
     // priority (started before this one turns real-time)
     let shared_arm = Arc::new(SharedArm::new(n));
@@ -143,13 +146,13 @@ fn body() -> Result<(), Box<dyn Error>> {
             let wake = link.wake(tick, now_ns());
             tick = wake.deadline_ns;
             let mut newest = [None, None];
-            poll_slots([&commands, &standby], &mut newest, seq)?;
+            link.poll([&commands, &standby], &mut newest, seq)?;
             if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
                 // the machine stalled us and maybe the controller too: in
                 // simulated time the cycle is not over yet
                 while now_ns() < until {
                     sleep_until_ns(now_ns() + GRACE_POLL_NS);
-                    if poll_slots([&commands, &standby], &mut newest, seq)? {
+                    if link.poll([&commands, &standby], &mut newest, seq)? {
                         break;
                     }
                 }
@@ -173,7 +176,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             if out.publish_stats {
                 stats_pub.publish(link.stats_message(now_ns()))?;
             }
-            if out.publish_stats || out.takeover {
+            if out.publish_stats || out.takeover || out.refused {
                 commanders_pub.publish(link.commanders_message(now_ns()))?;
             }
         }
