@@ -815,9 +815,16 @@ fn body() -> Result<(), SupervisorError> {
             collab_eval.on_state(m);
         })?;
         ports.ssm.drain(|m| eval.on_ssm(m))?;
-        ports
-            .commanders
-            .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)))?;
+        ports.commanders.drain(|m| {
+            standby_eval.on_commanders(m, eval.time_s(m.stamp_ns));
+            box_eval.on_commanders(m);
+        })?;
+        // commands the robot refused from a process this supervisor did not start
+        for reason in box_eval.intruders(|pid| !roster.runs(pid as u32)) {
+            tracing::warn!("{reason}");
+            eval.event(now, "intruder", "robot", reason.clone());
+            eval.degrade(reason);
+        }
         let mut resume = false;
         ports.requests.drain(|m| {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
@@ -1182,9 +1189,10 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.status.drain(|m| eval.on_status(m, reaction));
     let _ = ports.stats.drain(|m| eval.on_stats(m));
     cell.stop();
-    let _ = ports
-        .commanders
-        .drain(|m| standby_eval.on_commanders(m, eval.time_s(m.stamp_ns)));
+    let _ = ports.commanders.drain(|m| {
+        standby_eval.on_commanders(m, eval.time_s(m.stamp_ns));
+        box_eval.on_commanders(m);
+    });
     // what the services said last (the simulator's contacts as it braked)
     let _ = ports.contacts.drain(|m| eval.on_contact_event(m));
     eval.set_realtime(rt_watch.report());

@@ -155,6 +155,9 @@ pub struct RobotReport {
     pub max_joint_step_rad: f64,
     /// ... when it came \[s\] (null: no step measured)
     pub max_joint_step_t_s: Option<f64>,
+    /// what the robot refused: the control box's states, commands not from
+    /// the slot's controller or malformed (`box_report`)
+    pub refused: crate::box_report::RobotRefused,
 }
 
 /// `--report` JSON.
