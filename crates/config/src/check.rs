@@ -10,20 +10,43 @@ use crate::error::Invalid;
 pub const MAX_FILE_BYTES: u64 = 1 << 20;
 
 /// The text of `path`, at most `MAX_FILE_BYTES` of UTF-8 (read so, even
-/// from a file whose size the file system does not report, such as a pipe).
-pub(crate) fn read_text(path: &Path) -> std::io::Result<String> {
+/// from a file whose size the file system does not report), once the file
+/// passed [`crate::trust`]'s rule: a regular file of this user or root that
+/// no one else can write, in directories no one else can write.
+pub(crate) fn read_text(path: &Path) -> Result<String, crate::trust::TrustError> {
+    let io = |source| crate::trust::TrustError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let mut bytes = Vec::new();
-    std::fs::File::open(path)?
+    crate::trust::open_trusted(path)?
         .take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut bytes)?;
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
     if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(std::io::Error::new(
+        return Err(io(std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!("larger than {MAX_FILE_BYTES} bytes: not a configuration"),
-        ));
+        )));
     }
-    String::from_utf8(bytes)
-        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+    String::from_utf8(bytes).map_err(|_| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "not UTF-8 text",
+        ))
+    })
+}
+
+/// The text of a system file (`/etc/passwd`), at most `max` bytes; `None`
+/// when it cannot be read.
+pub(crate) fn read_small(path: &Path, max: u64) -> Option<String> {
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(max)
+        .read_to_end(&mut bytes)
+        .ok()?;
+    String::from_utf8(bytes).ok()
 }
 
 /// `section.key` for errors.

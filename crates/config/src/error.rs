@@ -33,6 +33,9 @@ pub enum ConfigError {
     Parse { origin: String, message: String },
     #[error("--set '{0}': expected section.key=value")]
     Override(String),
+    /// a `--set` whose key or value cannot be applied, and why
+    #[error("--set '{set}': {reason}")]
+    SetValue { set: String, reason: String },
     /// a section or key the configuration does not have
     #[error("{origin}: unknown section [{section}] (known: {known})")]
     UnknownSection {
@@ -56,6 +59,9 @@ pub enum ConfigError {
     },
     #[error(transparent)]
     Scenario(#[from] crate::scenario::ScenarioError),
+    /// a file another user could have written, or not a regular file
+    #[error(transparent)]
+    Untrusted(crate::trust::TrustError),
     #[error("--scenario: '{name}' is neither a file nor a scenario in {dir} (known: {known})")]
     NoScenario {
         name: String,
@@ -77,12 +83,28 @@ pub enum ConfigError {
         path: PathBuf,
         source: phri_model::ModelError,
     },
+    /// a URDF no arm has (too many links or joints), named by what gave `robot.urdf`
+    #[error("{origin}: robot.urdf: {}: {invalid}", path.display())]
+    Urdf {
+        origin: String,
+        path: PathBuf,
+        invalid: String,
+    },
     #[error("{}: {joints} joints, the messages carry at most {max}", path.display())]
     TooManyJoints {
         path: PathBuf,
         joints: usize,
         max: usize,
     },
+}
+
+impl From<crate::trust::TrustError> for ConfigError {
+    fn from(e: crate::trust::TrustError) -> ConfigError {
+        match e {
+            crate::trust::TrustError::Io { path, source } => ConfigError::Io { path, source },
+            e => ConfigError::Untrusted(e),
+        }
+    }
 }
 
 /// The model's error, prefixed with the file unless it names it already.

@@ -19,6 +19,7 @@ pub mod human_script;
 pub mod merge;
 pub mod per_joint;
 pub mod perception;
+pub mod ranges;
 pub mod record;
 pub mod robot;
 pub mod ros2;
@@ -26,6 +27,8 @@ pub mod scenario;
 pub mod sim;
 pub mod ssm;
 pub mod supervisor;
+pub mod trust;
+pub mod urdf;
 pub mod voice;
 
 use std::collections::BTreeMap;
@@ -121,16 +124,82 @@ pub struct Loaded {
     /// about a key it alone gives)
     pub robot_origin: PathBuf,
     robot_keys: Table,
-    /// what the file, the scenario and `--set` gave
-    given: Table,
+    /// what the configuration file alone gave
+    file_keys: Table,
+    /// the scenario's `[config]` and its file (to name it as a value's origin)
+    scenario_keys: Table,
+    scenario_origin: Option<PathBuf>,
+    /// the `--set` flags, as given
+    sets: Vec<String>,
+}
+
+/// Where a value of the merged configuration came from (last wins in this
+/// order): the built-in defaults, the robot file, the configuration file,
+/// the scenario's `[config]`, a `--set`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// `deploy/phri.toml` as built
+    Defaults,
+    /// the arm's robot file
+    RobotFile(PathBuf),
+    /// the `--config` file
+    File(PathBuf),
+    /// the scenario's `[config]`
+    Scenario(PathBuf),
+    /// a `--set` flag, as typed (`--set control.avoidance=false`)
+    Set(String),
+}
+
+impl std::fmt::Display for Origin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Origin::Defaults => write!(f, "the built-in defaults (deploy/phri.toml)"),
+            Origin::RobotFile(p) => write!(f, "robot file {}", p.display()),
+            Origin::File(p) => write!(f, "{}", p.display()),
+            Origin::Scenario(p) => write!(f, "scenario {}", p.display()),
+            Origin::Set(s) => write!(f, "{s}"),
+        }
+    }
+}
+
+/// A safety function switched off on purpose, and what switched it off.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SafetyOff {
+    /// the function, in a few words (`collision avoidance`)
+    pub function: &'static str,
+    /// the key that switched it off (`control.avoidance`)
+    pub key: String,
+    pub origin: Origin,
+}
+
+impl std::fmt::Display for SafetyOff {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} switched off ({} by {})",
+            self.function, self.key, self.origin
+        )
+    }
 }
 
 fn parse_table(text: &str, origin: &str) -> Result<Table, ConfigError> {
-    text.parse::<Table>()
-        .map_err(|e: toml::de::Error| ConfigError::Parse {
+    text.parse::<Table>().map_err(|e: toml::de::Error| {
+        let at = e.span().map_or(text.len(), |s| s.start);
+        let line = scenario::locate(text, at, false).0;
+        let message = e.message().trim();
+        // a file that ends in the middle of a key (cut short) has no message of its own
+        let message = match message.is_empty() {
+            true if text[at.min(text.len())..].trim().is_empty() => {
+                "the file ends in the middle of a key or value (cut short?)".to_string()
+            }
+            true => "not valid TOML".to_string(),
+            false => message.to_string(),
+        };
+        ConfigError::Parse {
             origin: origin.to_string(),
-            message: e.message().trim_end().to_string(),
-        })
+            message: format!("line {line}: {message}"),
+        }
+    })
 }
 
 /// The defaults as a table: `deploy/phri.toml` with the default arm's
@@ -225,10 +294,7 @@ pub fn robot_file(
             },
         });
     };
-    let text = crate::check::read_text(&path).map_err(|source| ConfigError::Io {
-        path: path.clone(),
-        source,
-    })?;
+    let text = crate::check::read_text(&path)?;
     let mut table = parse_table(&text, &path.display().to_string())?;
     absolute_urdf(&mut table, &path);
     Ok((table, path))
@@ -539,6 +605,8 @@ impl Config {
         self.voice.validate()?;
         self.audio.validate()?;
         self.ros2.validate()?;
+        // the safe ranges of the safety-relevant settings, in one place
+        ranges::check(self)?;
         Ok(())
     }
 
@@ -606,6 +674,7 @@ impl Config {
         for (i, p) in self.repulsion.points.iter().enumerate() {
             link(format!("repulsion.points[{i}].link"), &p.link)?;
         }
+        ranges::check_model(self, model)?;
         if let Some(joint) = singular_at(model, &self.sim.q0) {
             return Err(Invalid::new(
                 "robot.urdf",
@@ -680,10 +749,7 @@ impl Loaded {
     /// `[scenario] file` (written by the supervisor) gives the person's script,
     /// its `[config]` already merged.
     pub fn load(path: &Path, scenario: Option<&str>, sets: &[&str]) -> Result<Loaded, ConfigError> {
-        let text = crate::check::read_text(path).map_err(|source| ConfigError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::check::read_text(path)?;
         Self::load_text(&text, path, scenario, sets)
     }
 
@@ -698,6 +764,7 @@ impl Loaded {
         let file = parse_table(text, &origin)?;
         // over the file: the scenario's [config], its name and file, --set
         let mut over = Table::new();
+        let mut scenario_origin = None;
         let scen = match scenario {
             Some(name) => {
                 let file = find_scenario(name, path)?;
@@ -708,10 +775,12 @@ impl Loaded {
                 sect.insert("name".into(), Value::String(s.name.clone()));
                 sect.insert("file".into(), Value::String(abs.display().to_string()));
                 over.insert("scenario".into(), Value::Table(sect));
+                scenario_origin = Some(abs);
                 Some(s)
             }
             None => None,
         };
+        let scenario_keys = over.clone();
         for s in sets {
             apply_set(&mut over, s)?;
         }
@@ -768,6 +837,21 @@ impl Loaded {
             invalid,
         })?;
         let config = Config::from_table(&table, &origin).map_err(|e| match e {
+            // a key no one gave: the defaults leave the arm's keys to its
+            // robot file, so that file lacks it (cut short, or incomplete)
+            // unless the key is in an entry of a list another file gave
+            ConfigError::Key { key, message, .. }
+                if message.starts_with("missing field")
+                    && !(key.contains('[') && (gives(&file, &key) || gives(&over, &key))) =>
+            {
+                ConfigError::Key {
+                    origin: robot_origin.clone(),
+                    key,
+                    message: format!(
+                        "{message} (the robot file of arm '{name}' must give it: is it complete?)"
+                    ),
+                }
+            }
             ConfigError::Key { key, message, .. } => ConfigError::Key {
                 origin: blame(&key),
                 key,
@@ -794,11 +878,20 @@ impl Loaded {
             None => Scenario::free_motion(),
         };
         let mut scenario = scenario;
+        // the recordings a scenario pulls in are read only if no one else could write them
+        if !config.scenario.file.is_empty() {
+            let scenario_file = PathBuf::from(&config.scenario.file);
+            for v in &scenario.voice {
+                let wav = v.path(&scenario_file);
+                if wav.exists() {
+                    crate::trust::check_file(&wav)?;
+                }
+            }
+        }
         if let Some(h) = scenario.human.as_mut() {
             h.name_link_roles(&config.collaboration.wrist_link, &config.control.ee_link);
         }
-        let mut given = file;
-        merge(&mut given, &over);
+        let file_keys = file;
         Ok(Loaded {
             config,
             scenario,
@@ -806,7 +899,10 @@ impl Loaded {
             origin: path.to_path_buf(),
             robot_origin: robot_path,
             robot_keys: robot,
-            given,
+            file_keys,
+            scenario_keys,
+            scenario_origin,
+            sets: sets.iter().map(|s| s.to_string()).collect(),
         })
     }
 
@@ -820,8 +916,87 @@ impl Loaded {
             origin: PathBuf::from("<defaults>"),
             robot_origin: default_robot_path(),
             robot_keys: parse_table(DEFAULT_ROBOT_FILE, "<default robot>").unwrap_or_default(),
-            given: Table::new(),
+            file_keys: Table::new(),
+            scenario_keys: Table::new(),
+            scenario_origin: None,
+            sets: Vec::new(),
         }
+    }
+
+    /// Where the value of `key` (`section.key`) came from: the last of a
+    /// `--set`, the scenario's `[config]`, the configuration file, the robot
+    /// file that gives it, else the built-in defaults.
+    pub fn origin_of(&self, key: &str) -> Origin {
+        let sets: Vec<&str> = self.sets.iter().map(String::as_str).collect();
+        if let Some(flag) = merge::set_giving(&sets, key) {
+            return Origin::Set(flag);
+        }
+        if let Some(s) = &self.scenario_origin {
+            if gives(&self.scenario_keys, key) {
+                return Origin::Scenario(s.clone());
+            }
+        }
+        if gives(&self.file_keys, key) {
+            return Origin::File(self.origin.clone());
+        }
+        if gives(&self.robot_keys, key) {
+            return Origin::RobotFile(self.robot_origin.clone());
+        }
+        Origin::Defaults
+    }
+
+    /// What to name for a key that does not fit the arm's model: what gave
+    /// it, or, for a value of the built-in defaults, the robot file (which
+    /// should have given one that fits its arm).
+    fn blame_model(&self, key: &str) -> String {
+        // `control.waypoints[2]` is given where `control.waypoints` is
+        let base = key.split('[').next().unwrap_or(key);
+        match self.origin_of(base) {
+            Origin::Set(flag) => flag,
+            Origin::Scenario(p) | Origin::File(p) | Origin::RobotFile(p) => p.display().to_string(),
+            Origin::Defaults => self.robot_origin.display().to_string(),
+        }
+    }
+
+    /// The safety functions this configuration switches off on purpose
+    /// (`control.avoidance = false`, `ssm.enabled = false`, a service of the
+    /// perception or the residual dropped), each with what switched it off:
+    /// every run of such a configuration is reported degraded, naming them.
+    pub fn safety_off(&self) -> Vec<SafetyOff> {
+        let c = &self.config;
+        let mut out = Vec::new();
+        let mut off = |function: &'static str, key: String| {
+            let origin = self.origin_of(&key);
+            out.push(SafetyOff {
+                function,
+                key,
+                origin,
+            });
+        };
+        if !c.control.avoidance {
+            off("collision avoidance", "control.avoidance".into());
+        }
+        if !c.ssm.enabled {
+            off("speed and separation monitoring", "ssm.enabled".into());
+        }
+        // services whose absence leaves a function without its input
+        for (name, spec) in &c.services {
+            if spec.enabled {
+                continue;
+            }
+            let function = match spec.binary.as_str() {
+                "phri-camera" if c.perception.source != DepthSource::Camera => continue,
+                "phri-camera" | "phri-perception" | "phri-repulsion" => {
+                    "collision avoidance (perception)"
+                }
+                "phri-dynamics" if !spec.args.iter().any(|a| a == "--standby") => {
+                    "collision detection (the residual)"
+                }
+                _ => continue,
+            };
+            off(function, format!("services.{name}.enabled"));
+        }
+        out
     }
 
     /// The robot description's path (absolute once loaded).
@@ -833,6 +1008,22 @@ impl Loaded {
     /// carry or when the configuration does not fit it.
     pub fn model(&self) -> Result<phri_model::Model, ConfigError> {
         let path = self.urdf();
+        // what the URDF is, before the model reads it: a file no one else
+        // can write, and the description of an arm, not of a forest
+        let urdf_origin = self.blame_model("robot.urdf");
+        let text = crate::trust::open_trusted(&path)
+            .map_err(ConfigError::from)
+            .and_then(|f| {
+                urdf::read_bounded(f, &path).map_err(|source| ConfigError::Io {
+                    path: path.clone(),
+                    source,
+                })
+            })?;
+        urdf::check_size(&text).map_err(|invalid| ConfigError::Urdf {
+            origin: urdf_origin,
+            path: path.clone(),
+            invalid,
+        })?;
         let mut model =
             phri_model::Model::from_urdf_file_locked(&path, &self.config.robot.locked_joints)
                 .map_err(|source| ConfigError::Model {
@@ -863,11 +1054,7 @@ impl Loaded {
             Ok(())
         });
         checked.map_err(|invalid| ConfigError::Invalid {
-            origin: match !gives(&self.given, &invalid.key) && gives(&self.robot_keys, &invalid.key)
-            {
-                true => self.robot_origin.display().to_string(),
-                false => self.origin.display().to_string(),
-            },
+            origin: self.blame_model(&invalid.key),
             invalid,
         })?;
         Ok(model)

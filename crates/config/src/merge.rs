@@ -55,21 +55,57 @@ pub fn apply_set(table: &mut Table, set: &str) -> Result<(), ConfigError> {
         .unwrap_or_else(|| Value::String(value.to_string()));
     let list_of_tables =
         matches!(&parsed, Value::Array(a) if !a.is_empty() && a.iter().all(Value::is_table));
-    if keys.iter().any(|k| k.is_empty()) || (keys.len() < 2 && !list_of_tables) {
-        return Err(ConfigError::Override(set.to_string()));
+    let refuse = |reason: String| ConfigError::SetValue {
+        set: set.to_string(),
+        reason,
+    };
+    if keys.iter().any(|k| k.is_empty()) {
+        return Err(refuse(format!(
+            "'{}' has an empty key: expected section.key=value",
+            path.trim()
+        )));
+    }
+    if keys.len() < 2 && !list_of_tables {
+        let what = match &parsed {
+            Value::Array(a) if a.is_empty() => "an empty list".to_string(),
+            Value::Array(_) => "a list whose entries are not all tables".to_string(),
+            Value::Table(_) => "a table".to_string(),
+            v => a_type(v),
+        };
+        return Err(refuse(format!(
+            "[{}] is a whole section, and {value} is {what}: give one of its keys \
+             ({}.KEY=VALUE) or a list of at least one table ({}=[{{…}}, …], as [[{}]] entries)",
+            keys[0], keys[0], keys[0], keys[0]
+        )));
     }
     let mut cur = table;
-    for k in &keys[..keys.len() - 1] {
+    for (i, k) in keys[..keys.len() - 1].iter().enumerate() {
         let entry = cur
             .entry(k.to_string())
             .or_insert_with(|| Value::Table(Table::new()));
         cur = match entry {
             Value::Table(t) => t,
-            _ => return Err(ConfigError::Override(set.to_string())),
+            v => {
+                return Err(refuse(format!(
+                    "{} is {} ({v}), not a table with keys",
+                    keys[..=i].join("."),
+                    a_type(v)
+                )))
+            }
         };
     }
     cur.insert(keys[keys.len() - 1].to_string(), parsed);
     Ok(())
+}
+
+/// `a string`, `an integer`: a value's type, for messages.
+fn a_type(v: &Value) -> String {
+    let t = v.type_str();
+    let article = match t.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        true => "an",
+        false => "a",
+    };
+    format!("{article} {t}")
 }
 
 /// The `--set` of `sets` (the last one) that gave `key` (`section.key`,
@@ -100,8 +136,25 @@ mod tests {
         assert_eq!(t["control"]["reaction"].as_str(), Some("stop"));
         assert_eq!(t["control"]["k"].as_float(), Some(2.5));
         assert_eq!(t["sim"]["q0"].as_array().map(|a| a.len()), Some(2));
-        assert!(apply_set(&mut t, "nokey").is_err());
-        assert!(apply_set(&mut t, "control.reaction.x=1").is_err());
+        assert_eq!(
+            apply_set(&mut t, "nokey").unwrap_err().to_string(),
+            "--set 'nokey': expected section.key=value"
+        );
+        assert_eq!(
+            apply_set(&mut t, "control.reaction.x=1").unwrap_err().to_string(),
+            "--set 'control.reaction.x=1': control.reaction is a string (\"stop\"), not a table with keys"
+        );
+        // a whole section: says what is wrong with the value
+        let e = apply_set(&mut t, "camera=[]").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "--set 'camera=[]': [camera] is a whole section, and [] is an empty list: give one of its keys \
+             (camera.KEY=VALUE) or a list of at least one table (camera=[{…}, …], as [[camera]] entries)"
+        );
+        let e = apply_set(&mut t, "camera=3").unwrap_err().to_string();
+        assert!(e.contains("3 is an integer"), "{e}");
+        let e = apply_set(&mut t, "control..kp=3").unwrap_err().to_string();
+        assert!(e.contains("empty key"), "{e}");
     }
 
     #[test]

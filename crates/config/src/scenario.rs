@@ -111,6 +111,18 @@ pub enum ScenarioError {
         field: String,
         reason: String,
     },
+    /// a file another user could have written, or not a regular file
+    #[error(transparent)]
+    Untrusted(crate::trust::TrustError),
+}
+
+impl From<crate::trust::TrustError> for ScenarioError {
+    fn from(e: crate::trust::TrustError) -> ScenarioError {
+        match e {
+            crate::trust::TrustError::Io { path, source } => ScenarioError::Io { path, source },
+            e => ScenarioError::Untrusted(e),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -229,10 +241,7 @@ impl Scenario {
     /// Read and check a scenario file; errors name the file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scenario, ScenarioError> {
         let path = path.as_ref();
-        let text = crate::check::read_text(path).map_err(|source| ScenarioError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::check::read_text(path)?;
         Self::parse(&text, &path.display().to_string())
     }
 
