@@ -1458,3 +1458,172 @@ fn a_dead_man_stop_stays_stopped_until_an_operator_resumes() {
     assert_nothing_left(&p);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The command channel is checked per sample where the robot applies it: a
+/// process that takes `robot/command` for 25 ms at a time while the
+/// controller restarts (three episodes, answering every state with 20 Nm on
+/// every joint), between the supervisor's 50 ms looks at the channel, gets
+/// none of its commands applied: the arm stays braked, the robot counts
+/// them (`robot.refused.commands`) and the supervisor names the pid (an
+/// `intruder` event), the run not clean.
+#[test]
+fn commands_from_a_process_the_supervisor_did_not_start_are_never_applied() {
+    use phri_ipc::{robot_status, Queue, TorqueCommand, Zeroed};
+    let _g = serial();
+    let p = prefix("cmdgate");
+    let d = scratch("cmdgate");
+    let rd = d.join("rd");
+    let report_path = d.join("report.json");
+    let cell = Running::start(
+        supervisor(
+            &p,
+            Some(&rd),
+            &[
+                "--scenario",
+                "free-motion",
+                "--duration",
+                "14",
+                "--report",
+                &report_path.to_string_lossy(),
+                // one controller: its slot is the one that commands
+                "--set",
+                "control.standby=false",
+                // a long restart gap, for the probe to step in
+                "--set",
+                "supervisor.restart_backoff_min_ms=3000",
+                "--set",
+                "supervisor.restart_backoff_max_ms=3000",
+            ],
+        ),
+        &p,
+        &d,
+    );
+    let st = cell.state(&rd);
+    wait(3.0);
+    let node = phri_ipc::node("command-probe", &p).unwrap();
+    let states = phri_ipc::ROBOT_STATE
+        .subscriber(&node, Queue::Latest)
+        .unwrap();
+    let commanders = phri_ipc::ROBOT_COMMANDERS
+        .subscriber(&node, Queue::Drain)
+        .unwrap();
+    let newest_commanders = || {
+        let mut last = None;
+        while let Some(m) = commanders.receive().unwrap() {
+            last = Some(m);
+        }
+        last
+    };
+    let control = st["services"]["control"]["pid"].as_i64().unwrap() as i32;
+    // SAFETY: kill(2) on the cell's controller, read from its state.json
+    assert_eq!(unsafe { libc::kill(control, libc::SIGKILL) }, 0);
+    wait_until("the controller's exit", 5.0, || !alive(control));
+    // the robot brakes; its commanders message after that
+    wait(0.3);
+    let before = newest_commanders().expect("robot/commanders");
+    const FORGED_NM: f64 = 20.0;
+    let (mut forged, mut seen, mut applied) = (0u64, 0u64, 0u64);
+    for _episode in 0..3 {
+        // the free slot (the dead controller's port goes with its node)
+        let deadline = Instant::now() + Duration::from_secs(2);
+        let publisher = loop {
+            match phri_ipc::ROBOT_COMMAND.publisher(&node) {
+                Ok(publisher) => break publisher,
+                Err(e) => {
+                    assert!(Instant::now() < deadline, "robot/command never free: {e}");
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+            }
+        };
+        let until = Instant::now() + Duration::from_millis(25);
+        let mut answered = 0;
+        while Instant::now() < until {
+            if let Some(s) = states.latest().unwrap() {
+                seen += 1;
+                let n = (s.dof as usize).min(s.tau.len());
+                let braking = s.status & robot_status::BRAKING != 0;
+                if !braking || s.tau[..n].iter().all(|&t| t == FORGED_NM) {
+                    applied += 1;
+                }
+                if s.seq != answered {
+                    answered = s.seq;
+                    forged += 1;
+                    let mut c = TorqueCommand::zeroed();
+                    c.seq = forged;
+                    c.state_seq = s.seq;
+                    c.state_stamp_ns = s.stamp_ns;
+                    c.dof = s.dof;
+                    c.tau[..n].fill(FORGED_NM);
+                    publisher.publish(&c).unwrap();
+                }
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        drop(publisher);
+        // what the robot did with the last of them shows in its next states
+        let until = Instant::now() + Duration::from_millis(300);
+        while Instant::now() < until {
+            if let Some(s) = states.latest().unwrap() {
+                seen += 1;
+                applied += u64::from(s.status & robot_status::BRAKING == 0);
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    // the robot's figures, before the controller's restart (3 s after its death)
+    wait(0.2);
+    let after = newest_commanders().expect("robot/commanders");
+    drop((states, commanders, node));
+    let me = std::process::id() as i32;
+    let (code, err) = cell.finish();
+    let _ = phri_ipc::remove_leftovers(&p);
+    eprintln!(
+        "forged {forged} commands in 3 episodes; {seen} states read, {applied} not braked; \
+         robot/commanders before {:?}, after {:?} (slot periods, refused stranger, stranger pid); supervisor exit {code}",
+        (before.periods, before.refused_stranger, before.stranger_pid),
+        (after.periods, after.refused_stranger, after.stranger_pid),
+    );
+    // (the supervisor's own look at the channel may stop the cell at any
+    // episode: the robot's refusals are what is judged here)
+    assert!(forged >= 1, "{forged} commands forged");
+    // none applied: the arm stayed braked, no period was the slot's answer
+    assert_eq!(
+        applied, 0,
+        "{applied} states not braked while the probe commanded"
+    );
+    assert_eq!(
+        after.periods[0], before.periods[0],
+        "a forged command was applied"
+    );
+    // refused, counted, named
+    assert!(
+        after.refused_stranger[0] >= 1,
+        "{:?}",
+        after.refused_stranger
+    );
+    assert_eq!(after.stranger_pid, me);
+    let r = report(&report_path);
+    assert_eq!(r["clean"], false, "{}", r["degraded"]);
+    let refused = &r["robot"]["refused"]["commands"];
+    assert!(
+        refused["stranger"][0].as_u64().unwrap_or(0) >= after.refused_stranger[0],
+        "{}",
+        r["robot"]
+    );
+    assert!(
+        refused["stranger_pids"]
+            .as_array()
+            .is_some_and(|a| a.iter().any(|p| p == me)),
+        "{}",
+        r["robot"]
+    );
+    let named = events(&r, "intruder", "").into_iter().any(|e| {
+        e["detail"]
+            .as_str()
+            .unwrap_or("")
+            .contains(&format!("pid {me}"))
+    });
+    assert!(named, "{err}\n{}", r["events"]);
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
