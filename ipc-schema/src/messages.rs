@@ -900,6 +900,10 @@ pub struct SsmStatus {
     /// T_r: the age of the perception acted on [s] (null: not monitoring)
     #[serde(with = "crate::json::finite")]
     pub reaction_s: f64,
+    /// violations of the standard's own protective separation distance:
+    /// ISO 13855's human speed in place of the configured one, the same
+    /// other terms (8 bytes added)
+    pub violations_standard: u64,
 }
 
 impl Zeroed for SsmStatus {}

@@ -35,7 +35,8 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<CollabState>("phri::CollabState", 240);
     check::<AudioChunk>("phri::AudioChunk", 672);
     check::<Utterance>("phri::Utterance", 128);
-    check::<SsmStatus>("phri::SsmStatus", 88);
+    // 8 bytes larger: the violations of the standard's own S_p
+    check::<SsmStatus>("phri::SsmStatus", 96);
     check::<ControlBehaviour>("phri::ControlBehaviour", 8232);
     // 40 bytes larger: the commands refused per slot (a stranger's, malformed)
     check::<CommanderStats>("phri::CommanderStats", 144);

@@ -140,6 +140,7 @@ pub fn write_ssm_status(
         limited_periods: c.limited_periods,
         violation_periods: c.violation_periods,
         violations: c.violations,
+        violations_standard: c.violations_standard,
         min_margin_m: p.min_margin_m,
         human_speed_m_s: p.human_speed_m_s,
         reaction_s: p.reaction_s,

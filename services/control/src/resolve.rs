@@ -40,6 +40,10 @@ pub struct SsmCounters {
     pub violation_periods: u64,
     /// violations: runs of such periods
     pub violations: u64,
+    /// violations judged against the standard's own protective separation
+    /// distance: ISO 13855's human speed (2.0 m/s within 0.5 m, 1.6 m/s
+    /// beyond) in place of the configured one, the same other terms
+    pub violations_standard: u64,
 }
 
 /// What speed and separation monitoring saw in the last period.
@@ -49,6 +53,8 @@ pub struct SsmPeriod {
     pub limiting: bool,
     /// a violation (see [`SsmCounters::violation_periods`])
     pub violating: bool,
+    /// a violation of the standard's S_p (see [`SsmCounters::violations_standard`])
+    pub violating_standard: bool,
     /// some control point approached its obstacle inside the protective
     /// separation distance of a standing robot: the reference dropped to
     /// the bounded solution at once (a stop of the approach), not at the
@@ -68,6 +74,7 @@ impl Default for SsmPeriod {
         SsmPeriod {
             limiting: false,
             violating: false,
+            violating_standard: false,
             stopping: false,
             min_margin_m: f64::INFINITY,
             human_speed_m_s: 0.0,
@@ -79,12 +86,14 @@ impl Default for SsmPeriod {
 snapshot_fields!(SsmCounters {
     limited_periods,
     violation_periods,
-    violations
+    violations,
+    violations_standard
 });
 
 snapshot_fields!(SsmPeriod {
     limiting,
     violating,
+    violating_standard,
     stopping,
     min_margin_m,
     human_speed_m_s,
@@ -108,6 +117,7 @@ impl Snapshot for Resolver {
         self.ssm_counters.save(w);
         self.ssm_period.save(w);
         self.ssm_was_violating.save(w);
+        self.ssm_was_violating_standard.save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.v_call_filtered.load(r);
@@ -122,6 +132,7 @@ impl Snapshot for Resolver {
         self.ssm_counters.load(r);
         self.ssm_period.load(r);
         self.ssm_was_violating.load(r);
+        self.ssm_was_violating_standard.load(r);
     }
 }
 
@@ -157,6 +168,8 @@ pub struct Resolver {
     ssm_period: SsmPeriod,
     /// the last period monitored was a violation (a new one counts once)
     ssm_was_violating: bool,
+    /// ... of the standard's S_p
+    ssm_was_violating_standard: bool,
 }
 
 impl Resolver {
@@ -181,6 +194,7 @@ impl Resolver {
             ssm_counters: SsmCounters::default(),
             ssm_period: SsmPeriod::default(),
             ssm_was_violating: false,
+            ssm_was_violating_standard: false,
         }
     }
 
@@ -232,6 +246,7 @@ impl Resolver {
     pub fn skip_ssm_period(&mut self) {
         self.ssm_period = SsmPeriod::default();
         self.ssm_was_violating = false;
+        self.ssm_was_violating_standard = false;
     }
 
     /// Speed and separation monitoring is configured.
@@ -346,6 +361,7 @@ impl Resolver {
             1.0
         };
         let was_violating = self.ssm_was_violating;
+        let was_violating_standard = self.ssm_was_violating_standard;
         self.ssm_period = SsmPeriod {
             reaction_s: ssm.filter(|_| self.ssm.is_some()).unwrap_or(f64::NAN),
             ..SsmPeriod::default()
@@ -384,6 +400,7 @@ impl Resolver {
                 // obstacle no faster than the separation allows
                 // approaching its obstacle inside S_p this period
                 let mut inside = false;
+                let mut inside_standard = false;
                 if let Some((m, t_r)) = monitor.as_mut().filter(|_| p.active != 0) {
                     let t_r = *t_r;
                     let allowed = m.allowed_speed(k, p.min_distance, t_r);
@@ -411,6 +428,8 @@ impl Resolver {
                                 period.min_margin_m = period.min_margin_m.min(margin);
                                 let moving = v_r > SSM_MOVING_M_S;
                                 inside = moving && margin < 0.0;
+                                let standard = m.separation_standard(p.min_distance, v_r, t_r);
+                                inside_standard = moving && p.min_distance < standard;
                                 period.stopping |= moving && allowed <= 0.0;
                                 match self.avoidance.limit_approach(j, &away, allowed) {
                                     Ok(f) => period.limiting |= f > 0.0,
@@ -426,6 +445,8 @@ impl Resolver {
                 if let Some((m, _)) = monitor.as_mut() {
                     let for_s = m.approaching_inside(k, inside, dt);
                     period.violating |= for_s > m.config().stop_time_s;
+                    let for_s = m.approaching_inside_standard(k, inside_standard, dt);
+                    period.violating_standard |= for_s > m.config().stop_time_s;
                 }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
                     break;
@@ -451,6 +472,9 @@ impl Resolver {
         self.ssm_counters.violation_periods += u64::from(period.violating);
         self.ssm_counters.violations += u64::from(period.violating && !was_violating);
         self.ssm_was_violating = period.violating;
+        self.ssm_counters.violations_standard +=
+            u64::from(period.violating_standard && !was_violating_standard);
+        self.ssm_was_violating_standard = period.violating_standard;
         // position feedback: toward the end effector's obstacle capped below
         // the repulsion's V_max; the task's elsewhere faster (to rejoin its
         // path), the collaboration's at the cautious cap everywhere (it

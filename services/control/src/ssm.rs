@@ -45,6 +45,9 @@ pub struct SsmMonitor {
     /// per control point, how long it has been approaching its obstacle
     /// inside the protective separation distance [s]
     inside_s: Vec<f64>,
+    /// ... inside the standard's protective separation distance
+    /// ([`SsmMonitor::separation_standard`]) [s]
+    inside_standard_s: Vec<f64>,
     /// capture time of the last frame observed [ns]
     frame_ns: u64,
 }
@@ -60,6 +63,7 @@ snapshot_fields!(SsmMonitor {
     last,
     v_h,
     inside_s,
+    inside_standard_s,
     frame_ns
 });
 
@@ -71,6 +75,7 @@ impl SsmMonitor {
             last: vec![None; points],
             v_h: vec![0.0; points],
             inside_s: vec![0.0; points],
+            inside_standard_s: vec![0.0; points],
             frame_ns: 0,
         }
     }
@@ -152,6 +157,19 @@ impl SsmMonitor {
         *b
     }
 
+    /// As [`SsmMonitor::approaching_inside`], inside the standard's protective
+    /// separation distance ([`SsmMonitor::separation_standard`]).
+    pub fn approaching_inside_standard(&mut self, k: usize, inside: bool, dt: f64) -> f64 {
+        let Some(b) = self.inside_standard_s.get_mut(k) else {
+            return 0.0;
+        };
+        *b = match inside {
+            true => *b + dt,
+            false => 0.0,
+        };
+        *b
+    }
+
     /// The person's speed toward point `k` at clearance `d` \[m\] \[m/s\].
     pub fn human_speed(&self, k: usize, d: f64) -> f64 {
         match self.cfg.human_speed {
@@ -182,6 +200,19 @@ impl SsmMonitor {
     pub fn separation(&self, k: usize, d: f64, v_r: f64, t_r: f64) -> f64 {
         let s_s = self.cfg.stop_distance_per_speed_s * v_r.max(0.0);
         protective_separation_distance(self.human_speed(k, d), v_r, s_s, &self.terms(t_r))
+    }
+}
+
+impl SsmMonitor {
+    /// The standard's own protective separation distance \[m\] at clearance
+    /// `d`, the point moving toward its obstacle at `v_r` \[m/s\],
+    /// perception `t_r` \[s\] old: ISO 13855's human speed (2.0 m/s within
+    /// 0.5 m, 1.6 m/s beyond) whatever `human_speed` configures, the other
+    /// terms as configured.
+    pub fn separation_standard(&self, d: f64, v_r: f64, t_r: f64) -> f64 {
+        let s_s = self.cfg.stop_distance_per_speed_s * v_r.max(0.0);
+        let v_h = phri_iso15066::human_speed(d);
+        protective_separation_distance(v_h, v_r, s_s, &self.terms(t_r))
     }
 }
 
@@ -226,6 +257,27 @@ mod tests {
         // at 0.2 m (inside S_p of a standing robot) nothing toward the person
         assert_eq!(m.allowed_speed(0, 0.2, 0.04), 0.0);
         assert_eq!(m.allowed_speed(0, f64::NAN, 0.04), 0.0);
+    }
+
+    /// With a person measured standing, the configured S_p is the
+    /// standard's less v_h (T_r + T_s): 2.0 m/s within 0.5 m, 1.6 beyond.
+    #[test]
+    fn the_standard_s_separation_takes_iso_13855_s_speed_whatever_is_configured() {
+        let m = SsmMonitor::new(&cfg(HumanSpeed::Measured), 1);
+        // T_r 40 ms, T_s 50 ms, Z 0.025 m, v_r 0.5 m/s (S_s 0.01 m)
+        let configured = m.separation(0, 0.3, 0.5, 0.04);
+        assert!((configured - (0.5 * 0.04 + 0.01 + 0.025)).abs() < 1e-12);
+        let standard = m.separation_standard(0.3, 0.5, 0.04);
+        assert!(
+            (standard - (configured + 2.0 * 0.09)).abs() < 1e-12,
+            "{standard}"
+        );
+        let far = m.separation_standard(0.8, 0.5, 0.04);
+        assert!((far - (configured + 1.6 * 0.09)).abs() < 1e-12, "{far}");
+        let mut m = m;
+        assert_eq!(m.approaching_inside_standard(0, true, 0.001), 0.001);
+        assert_eq!(m.approaching_inside_standard(0, false, 0.001), 0.0);
+        assert_eq!(m.approaching_inside_standard(3, true, 0.001), 0.0);
     }
 
     #[test]
