@@ -14,8 +14,11 @@
 use std::fmt::Debug;
 use std::marker::PhantomData;
 use std::mem::{size_of, MaybeUninit};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
+use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 use iceoryx2::prelude::*;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::marker::{CustomHeaderMarker, CustomPayloadMarker};
@@ -24,7 +27,7 @@ use iceoryx2::service::static_config::message_type_details::{TypeDetail, TypeVar
 
 use crate::error::IpcError;
 use crate::messages::{FrameHeader, Zeroed};
-use crate::qos::Qos;
+use crate::qos::{Qos, DELIVERY_WAIT};
 
 /// A publish-subscribe channel of payload `P` with user header `H`.
 /// Messages are `Channel<T>`; depth frames are [`FrameChannel`].
@@ -164,7 +167,7 @@ impl Spec<'_> {
             .max_subscribers(q.max_subscribers)
             .subscriber_max_buffer_size(q.subscriber_max_buffer)
             .history_size(q.history)
-            .enable_safe_overflow(true))
+            .enable_safe_overflow(q.overflow))
     }
 
     fn open_or_create(&self, node: &IpcNode) -> Result<Factory, IpcError> {
@@ -217,10 +220,28 @@ impl Spec<'_> {
         wakes: bool,
         max_elements: usize,
     ) -> Result<Sender, IpcError> {
-        let port = self
-            .open_or_create(node)?
+        let factory = self.open_or_create(node)?;
+        let builder = factory
             .publisher_builder()
-            .initial_max_slice_len(max_elements)
+            .initial_max_slice_len(max_elements);
+        // a channel that does not overflow: wait for a full reader, then
+        // leave it out of this sample and count it
+        let undelivered = (!self.qos.overflow).then(|| Arc::new(AtomicU64::new(0)));
+        let builder = match &undelivered {
+            Some(count) => {
+                let count = Arc::clone(count);
+                builder.set_backpressure_handler(move |info: &BackpressureInfo| {
+                    if info.elapsed_time < DELIVERY_WAIT {
+                        BackpressureAction::Retry
+                    } else {
+                        count.fetch_add(1, Ordering::Relaxed);
+                        BackpressureAction::DiscardData
+                    }
+                })
+            }
+            None => builder,
+        };
+        let port = builder
             .create()
             .map_err(|e| IpcError::publisher(self.name, self.qos.max_publishers, e))?;
         let notifier = if wakes {
@@ -232,6 +253,7 @@ impl Spec<'_> {
             port,
             notifier,
             channel: self.name,
+            undelivered,
         })
     }
 
@@ -292,6 +314,9 @@ struct Sender {
     port: RawPub,
     notifier: Option<Notifier>,
     channel: &'static str,
+    /// a channel that does not overflow: how often a reader was left out
+    /// of a sample after [`DELIVERY_WAIT`]
+    undelivered: Option<Arc<AtomicU64>>,
 }
 
 impl Sender {
@@ -552,6 +577,17 @@ impl<T: Message> Publisher<T> {
 
     pub fn channel(&self) -> &'static str {
         self.raw.channel
+    }
+
+    /// How often a reader was left out of a sample of this publisher: on a
+    /// channel that does not overflow ([`Qos::overflow`]), a reader whose
+    /// queue stayed full for [`DELIVERY_WAIT`] (0 on the others, where a
+    /// full queue drops its oldest instead).
+    pub fn undelivered(&self) -> u64 {
+        self.raw
+            .undelivered
+            .as_ref()
+            .map_or(0, |c| c.load(Ordering::Relaxed))
     }
 
     /// Connect the readers that appeared since the last send, without

@@ -70,8 +70,10 @@ pub const PERCEPTION_SKELETON: Channel<Skeleton> =
 /// ingestion, per frame while a collaboration is on.
 pub const PERCEPTION_HAND: Channel<HandObservation> =
     Channel::new("perception/hand", Qos::ONE_PUBLISHER, false);
-/// [`HriRequest`]s from people (gesture, voice, command line): several publishers.
-pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::WORKERS, false);
+/// [`HriRequest`]s from people (gesture, voice, command line): several
+/// publishers; a full reader makes its publisher wait, never loses its
+/// oldest ([`Qos::REQUESTS`]).
+pub const HRI_REQUEST: Channel<HriRequest> = Channel::new("hri/request", Qos::REQUESTS, false);
 /// [`CollabState`] from the controller in charge, 1 kHz.
 pub const COLLAB_STATE: Channel<CollabState> =
     Channel::new("collab/state", Qos::CONTROLLERS, false);

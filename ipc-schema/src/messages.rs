@@ -852,8 +852,11 @@ pub struct CollabState {
     #[serde(with = "crate::json::finite")]
     pub unexplained_norm: f64,
     pub n_forces: u32,
-    #[serde(skip)]
-    pub _pad: u32,
+    /// requests this controller may have lost since it started: each time
+    /// it found its `hri/request` queue full after not reading it for
+    /// `phri_ipc::DELIVERY_WAIT` (a publisher may have left it out), once
+    /// (what was the padding: same size)
+    pub requests_dropped: u32,
     pub forces: [ContactForce; MAX_COLLAB_FORCES],
 }
 

@@ -15,7 +15,21 @@ pub struct Qos {
     pub subscriber_max_buffer: usize,
     /// samples a late subscriber receives on connecting
     pub history: usize,
+    /// a full subscriber queue drops its oldest sample for the newest
+    /// (iceoryx2's safe overflow); `false`: the publisher waits up to
+    /// [`DELIVERY_WAIT`] for the reader to make room, then leaves that reader
+    /// out of this sample and counts it (`Publisher::undelivered`)
+    pub overflow: bool,
 }
+
+/// How long a publisher of a channel that does not overflow waits for a
+/// full reader to make room before it leaves that reader out of a sample:
+/// 100 control periods (a controller that has not read its queue for that
+/// long has let the arm brake after 20, and its standby is in charge; the
+/// supervisor reads every 10 ms), short enough that a reader stopped for
+/// good (a tool suspended in a terminal) delays a flood's requests, not
+/// blocks them.
+pub const DELIVERY_WAIT: std::time::Duration = std::time::Duration::from_millis(100);
 
 impl Qos {
     /// One publisher, deep enough for an evaluation reader draining at 100 Hz.
@@ -24,6 +38,7 @@ impl Qos {
         max_subscribers: 16,
         subscriber_max_buffer: 256,
         history: 1,
+        overflow: true,
     };
     /// What the controller in charge publishes: the hot standby holds the
     /// second publisher, idle until it takes over.
@@ -63,6 +78,20 @@ impl Qos {
         max_subscribers: 16,
         subscriber_max_buffer: 32,
         history: 0,
+        overflow: true,
+    };
+    /// People's requests (`hri/request`): several publishers (gesture,
+    /// voice, the ROS 2 bridge, the command line), 256 deep, and no request
+    /// is ever pushed out by a newer one: a publisher that finds a reader's
+    /// queue full waits for it ([`DELIVERY_WAIT`] at most), so a flood from
+    /// one publisher is slowed to the pace of the controllers, which empty
+    /// their queue every period, and a `stop` after it still arrives.
+    pub const REQUESTS: Qos = Qos {
+        max_publishers: 16,
+        max_subscribers: 16,
+        subscriber_max_buffer: 256,
+        history: 0,
+        overflow: false,
     };
     /// Rare evaluation events: one publisher, a deep queue (1024 events, minutes
     /// of contact episodes), so that a stalled reader loses none.
@@ -71,6 +100,7 @@ impl Qos {
         max_subscribers: 8,
         subscriber_max_buffer: 1024,
         history: 0,
+        overflow: true,
     };
     /// Audio chunks (50 Hz): one capture source, 4 s of queue per reader
     /// (a decode takes tens of ms; nothing is lost), no history (a restarted
@@ -80,6 +110,7 @@ impl Qos {
         max_subscribers: 8,
         subscriber_max_buffer: 200,
         history: 0,
+        overflow: true,
     };
     /// Fault injection: one injector at a time; a restarted camera must not
     /// replay an old fault, so no history.

@@ -6,7 +6,7 @@
 use nalgebra::Vector3;
 use phri_config::{Config, ControlConfig, PointConfig};
 use phri_estimation::VelocityEstimator;
-use phri_ipc::{CollabPhase, ControlMode, Reaction, MAX_DOF};
+use phri_ipc::{CollabPhase, ControlMode, Reaction, RequestKind, MAX_DOF};
 use phri_model::{check_len, Data, Model};
 
 use crate::collab::RobotState;
@@ -117,6 +117,10 @@ pub struct Controller {
     /// `on_request = "complete"`: the task's segments ended when the request
     /// was accepted (the approach waits for the next to end)
     collab_from_segment: Option<u64>,
+    /// a `stop` request this period without a collaboration layer to
+    /// answer it (it is the person's word all the same); taken by the
+    /// period's conditions
+    stop_asked: bool,
     /// end-effector position at the measured joints \[m\], base frame
     ee: Vector3<f64>,
     /// the task's latest end-effector reference \[m\], base frame
@@ -197,6 +201,7 @@ impl Controller {
             t: 0.0,
             quiet_since: None,
             collab_from_segment: None,
+            stop_asked: false,
             ee: Vector3::zeros(),
             task_x_d: Vector3::zeros(),
             accel: vec![0.0; n],
@@ -515,9 +520,18 @@ impl Controller {
         }
     }
 
+    /// Requests may have been lost before this controller read them (its
+    /// queue stayed full past the publishers' wait): one of them may have
+    /// been a `stop`, so the next step stops as if it had been.
+    pub fn requests_lost(&mut self) {
+        self.stop_asked = true;
+    }
+
     /// The collaboration's requests, hand, force and phase of this period.
     fn observe_collaboration(&mut self, q: &[f64], dt: f64, s: &Safety, input: &ControlInput<'_>) {
         let Some(collab) = self.collab.as_mut() else {
+            let stop = RequestKind::Stop as u32;
+            self.stop_asked |= input.collab.requests.iter().any(|r| r.kind == stop);
             return;
         };
         use ControlMode::*;
@@ -597,7 +611,8 @@ impl Controller {
             segment_done,
             collab_collision: self.collab.as_ref().is_some_and(Collaboration::collision),
             rearming: self.collab.as_ref().is_some_and(Collaboration::rearming),
-            stop_requested: self.collab.as_mut().is_some_and(Collaboration::take_stop),
+            stop_requested: self.collab.as_mut().is_some_and(Collaboration::take_stop)
+                | std::mem::take(&mut self.stop_asked),
             restart: self.hold,
         }
     }

@@ -106,6 +106,10 @@ pub struct CollabReport {
     /// requests, utterances and phase changes past the first
     /// [`MAX_LISTED`] of each, counted but not listed
     pub requests_left_out: u64,
+    /// requests that never reached the controller's collaboration: dropped
+    /// by a full queue or by the controller's own limit per period (the run
+    /// is degraded when one was)
+    pub requests_dropped: u64,
     pub utterances_left_out: u64,
     pub phases_left_out: u64,
     /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
@@ -164,6 +168,10 @@ pub struct CollabEvaluator {
     /// the contact phase's touches as F̂ tells them (the last may be open)
     estimated: Vec<EstimatedContact>,
     estimating: Option<EstimatedContact>,
+    /// `requests_dropped` of the controllers before the one publishing now
+    /// (a restarted controller counts from 0), and the newest value
+    dropped_base: u64,
+    dropped_last: u64,
 }
 
 /// A touch of the collaborative hand as the estimated force F̂ tells it:
@@ -214,6 +222,8 @@ impl CollabEvaluator {
             voice: BTreeMap::new(),
             estimated: Vec::new(),
             estimating: None,
+            dropped_base: 0,
+            dropped_last: 0,
         }
     }
 
@@ -223,6 +233,12 @@ impl CollabEvaluator {
 
     pub fn on_state(&mut self, s: &CollabState) {
         let t = self.t(s.stamp_ns);
+        let dropped = u64::from(s.requests_dropped);
+        if dropped < self.dropped_last {
+            // another controller (restarted, or the standby after a takeover)
+            self.dropped_base += self.dropped_last;
+        }
+        self.dropped_last = dropped;
         if s.request_source != 0 && self.last_request != Some((s.request_source, s.request_seq)) {
             self.last_request = Some((s.request_source, s.request_seq));
             push_capped(
@@ -456,6 +472,7 @@ impl CollabEvaluator {
                 peak = Some(peak.map_or(f, |p| p.max(f)));
             }
         }
+        r.requests_dropped = self.dropped_base + self.dropped_last;
         r.contacts_intended = self.touches;
         r.intended_episodes = intended;
         r.peak_intended_force_n = peak;
@@ -497,6 +514,26 @@ mod tests {
         s.reason = reason as u32;
         s.human_part = CollabPart::RightHand as u32;
         s
+    }
+
+    /// The requests the controllers may have lost add up across a
+    /// controller that restarted (its count starts from 0 again).
+    #[test]
+    fn requests_dropped_add_up_across_controllers() {
+        let mut e = CollabEvaluator::new(1_000_000_000, vec![], 1_000_000);
+        for (t, dropped) in [
+            (1000, 0),
+            (1001, 2),
+            (1002, 3),
+            (1003, 3),
+            (1004, 0),
+            (1005, 1),
+        ] {
+            let mut s = state(t, CollabPhase::Idle, CollabReason::None);
+            s.requests_dropped = dropped;
+            e.on_state(&s);
+        }
+        assert_eq!(e.report(std::iter::empty()).requests_dropped, 4);
     }
 
     #[test]

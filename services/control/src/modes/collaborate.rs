@@ -27,8 +27,8 @@ use nalgebra::Vector3;
 use phri_config::{CollaborationConfig, Config, OnRequest};
 use phri_estimation::{ContactPoint, ForceEstimate, ForceEstimator};
 use phri_ipc::{
-    CollabPart, CollabPhase, HandObservation, HriRequest, Skeleton, SkeletonJoint, Zeroed, MAX_DOF,
-    MAX_PEOPLE,
+    CollabPart, CollabPhase, HandObservation, HriRequest, RequestKind, Skeleton, SkeletonJoint,
+    Zeroed, MAX_DOF, MAX_PEOPLE,
 };
 use phri_model::{Model, Placement};
 
@@ -506,8 +506,15 @@ impl Collaboration {
         let fresh_skeleton = input.skeleton.filter(|sk| {
             stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
         });
-        // 1. requests: the named hand's confidence in the newest skeleton
-        for r in input.requests {
+        // 1. requests, stops first: a stop anywhere among them is acted on,
+        // and what follows it finds the robot stopped; the named hand's
+        // confidence in the newest skeleton
+        let is_stop = |r: &&HriRequest| r.kind == RequestKind::Stop as u32;
+        let stops = input.requests.iter().filter(is_stop);
+        let others = input.requests.iter().filter(|r| !is_stop(r));
+        let mut robot = robot;
+        let mut stopped = None;
+        for r in stops.chain(others) {
             let part = CollabPart::try_from(r.part).unwrap_or(CollabPart::None);
             let part = if part == CollabPart::None {
                 self.machine.part()
@@ -522,10 +529,19 @@ impl Collaboration {
             if answer.accepted && !was_active && self.machine.active() {
                 self.forget_hand();
             }
-            self.last_answer = Some(Answered {
+            let answered = Answered {
                 request: *r,
                 answer,
-            });
+            };
+            if is_stop(&r) && answer.accepted {
+                robot = RobotState::Stopped;
+                stopped.get_or_insert(answered);
+            }
+            self.last_answer = Some(answered);
+        }
+        // the period's answer collab/state tells is its stop, if it had one
+        if let Some(a) = stopped {
+            self.last_answer = Some(a);
         }
         // 2. the collaborative hand
         self.hand_seen = false;
