@@ -1219,6 +1219,8 @@ fn body() -> Result<(), SupervisorError> {
         let link = &plan.loaded.config.collaboration.robot_link;
         collab_eval.judge_estimated(&mut report.iso_ts_15066, link);
     }
+    // judged from everything the report holds now
+    eval.conclude(&mut report);
     close_ipc(node, Some(ports), &prefix);
     cell.remove_state();
     if let Some(file) = report_file.as_mut() {

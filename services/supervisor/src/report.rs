@@ -195,7 +195,7 @@ pub struct Report {
     pub collaboration: crate::collab_report::CollabReport,
     /// ISO/TS 15066: every contact against its body region's force limit
     /// (Annex A): region, transient or quasi-static, limit and margin
-    pub iso_ts_15066: phri_iso15066::Judged,
+    pub iso_ts_15066: IsoSection,
     /// real-time scheduling as the services got it
     pub realtime: RealtimeReport,
     /// protective stops by cause: `stale_residual`, `stale_perception`
@@ -212,6 +212,35 @@ pub struct Report {
     pub control: crate::standby_report::ControlReport,
     /// the residual services: the hot standby's beside the first
     pub dynamics: crate::standby_report::DynamicsReport,
+}
+
+/// `iso_ts_15066` in the report: every contact judged against its body
+/// region's limit and speed and separation monitoring's counts
+/// ([`phri_iso15066::Judged`], its keys at this level), and the violations of
+/// the standard's own protective separation distance beside the configured
+/// one's (`ssm_violations`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct IsoSection {
+    #[serde(flatten)]
+    pub judged: phri_iso15066::Judged,
+    /// violations of the protective separation distance computed with
+    /// ISO 13855's human speed (2.0 m/s within 0.5 m, 1.6 m/s beyond) in
+    /// place of the configured one (`[ssm] human_speed`), the other terms
+    /// as configured: what the standard's own S_p would have counted
+    pub ssm_violations_standard: u64,
+}
+
+impl std::ops::Deref for IsoSection {
+    type Target = phri_iso15066::Judged;
+    fn deref(&self) -> &phri_iso15066::Judged {
+        &self.judged
+    }
+}
+
+impl std::ops::DerefMut for IsoSection {
+    fn deref_mut(&mut self) -> &mut phri_iso15066::Judged {
+        &mut self.judged
+    }
 }
 
 /// The controller's perception staleness bound until the configuration's
@@ -432,6 +461,12 @@ pub struct Evaluator {
     realtime: RealtimeReport,
     /// speed and separation monitoring as `control/ssm` told it (contacts are added at the end)
     ssm: phri_iso15066::Judged,
+    /// violations of the standard's S_p: the counts of the controllers
+    /// before the one publishing now, and its newest
+    ssm_standard: (u64, u64),
+    /// the newest `control/ssm` counts (limited periods, violations), to
+    /// tell a restarted controller's
+    ssm_last: (u64, u64),
     /// the control period [s]
     period_s: f64,
 }
@@ -511,6 +546,8 @@ impl Evaluator {
                 ..Default::default()
             },
             ssm: phri_iso15066::Judged::default(),
+            ssm_standard: (0, 0),
+            ssm_last: (0, 0),
             period_s: 0.001,
         }
     }
@@ -531,6 +568,17 @@ impl Evaluator {
     /// A `control/ssm` message: speed and separation monitoring's counts.
     pub fn on_ssm(&mut self, m: &phri_ipc::SsmStatus) {
         let t = self.t(m.stamp_ns);
+        let (base, last) = self.ssm_standard;
+        // a count below the last seen: a restarted controller's, counted anew
+        // (as Judged::ssm_counts does with the configured one's)
+        let restarted = m.violations_standard < last
+            || m.limited_periods < self.ssm_last.0
+            || m.violations < self.ssm_last.1;
+        self.ssm_last = (m.limited_periods, m.violations);
+        self.ssm_standard = match restarted {
+            true => (base + last, m.violations_standard),
+            false => (base, m.violations_standard),
+        };
         self.ssm.ssm_counts(
             m.enabled != 0,
             m.limited_periods,
@@ -1001,13 +1049,13 @@ impl Evaluator {
     /// What a user must know about the run: the report's `degraded` lines
     /// (the reasons given to [`Evaluator::degrade`] first, then refused
     /// real-time scheduling, missed deadlines, protective stops a service
-    /// caused, restarts, lost evaluation samples) and the summary line
-    /// (`clean`, or `degraded (…)` with each in a few words).
-    fn verdict(
-        &self,
-        missed_deadlines: u64,
-        services: &BTreeMap<String, ServiceReport>,
-    ) -> (Vec<String>, String) {
+    /// caused, restarts, lost evaluation samples, a robot that never cycled,
+    /// perception that never delivered a frame, unintended contacts,
+    /// contacts never detected, contacts over their ISO/TS 15066 limit,
+    /// violations of the protective separation distance, requests dropped)
+    /// and the summary line (`clean`, or `degraded (…)` with each in a few
+    /// words), judged from the finished report `r`.
+    fn verdict(&self, r: &Report) -> (Vec<String>, String) {
         let mut lines = self.degraded.clone();
         let mut words: Vec<String> = Vec::new();
         words.extend(self.realtime.kinds().into_iter().map(String::from));
@@ -1017,6 +1065,7 @@ impl Evaluator {
                 lines.push(format!("real-time: {why}"));
             }
         }
+        let missed_deadlines = r.torque_loop.missed_deadlines;
         if missed_deadlines > 0 {
             let w = plural(missed_deadlines, "missed deadline");
             lines.push(format!("torque loop: {w}"));
@@ -1055,10 +1104,11 @@ impl Evaluator {
             ));
             words.push(plural(holds, "restart hold"));
         }
-        let restarted: Vec<String> = services
+        let restarted: Vec<String> = r
+            .services
             .iter()
-            .filter(|(_, r)| r.restarts > 0)
-            .map(|(n, r)| format!("{n} {}", r.restarts))
+            .filter(|(_, s)| s.restarts > 0)
+            .map(|(n, s)| format!("{n} {}", s.restarts))
             .collect();
         if !restarted.is_empty() {
             lines.push(format!("restarts: {}", restarted.join(", ")));
@@ -1084,6 +1134,10 @@ impl Evaluator {
                 plural(self.truth_lost, "ground-truth sample")
             ));
         }
+        for (line, word) in Self::safety_findings(r, self.has_perception()) {
+            lines.push(line);
+            words.push(word);
+        }
         // the reasons given by the supervisor, in their own words, last
         words.extend(self.degraded.iter().cloned());
         let summary = if lines.is_empty() {
@@ -1092,6 +1146,105 @@ impl Evaluator {
             format!("degraded ({})", words.join("; "))
         };
         (lines, summary)
+    }
+
+    /// The cell ran perception (a staleness bound for it was given).
+    fn has_perception(&self) -> bool {
+        self.stale.is_some_and(|b| b.perception_ns.is_some())
+    }
+
+    /// What the run did to the person and how the cell's parts delivered,
+    /// from the finished report: (a `degraded` line, its words in the
+    /// summary) for each of a robot that never cycled, perception that
+    /// never delivered a frame (`perception`: the cell runs it),
+    /// unintended contacts, unintended contacts never detected, contacts
+    /// over their ISO/TS 15066 limit (intended ones too: a touch of the
+    /// collaboration within its limit is no finding), violations of the
+    /// protective separation distance (the configured and the standard's),
+    /// and requests dropped.
+    fn safety_findings(r: &Report, perception: bool) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        if r.torque_loop.cycles == 0 {
+            out.push((
+                "torque loop: the robot never cycled (0 cycles): nothing was controlled"
+                    .to_string(),
+                "0 cycles".to_string(),
+            ));
+        }
+        if perception && r.perception.as_ref().is_none_or(|p| p.frames == 0) {
+            out.push((
+                "perception: no camera frame arrived: the cell ran blind".to_string(),
+                "no perception frame".to_string(),
+            ));
+        }
+        let unintended: Vec<&ContactReport> = r.contacts.iter().filter(|c| !c.intended).collect();
+        if !unintended.is_empty() {
+            let peak = unintended
+                .iter()
+                .map(|c| c.peak_force_n)
+                .fold(0.0f64, f64::max);
+            let n = unintended.len() as u64;
+            out.push((
+                format!(
+                    "{} (ground truth; the largest {peak:.1} N)",
+                    plural(n, "unintended contact")
+                ),
+                plural(n, "unintended contact"),
+            ));
+        }
+        let undetected = unintended
+            .iter()
+            .filter(|c| c.detected_after_ms.is_none())
+            .count() as u64;
+        if undetected > 0 {
+            let w = format!("{} never detected", plural(undetected, "contact"));
+            out.push((format!("{w} by the residual (unintended, ground truth)"), w));
+        }
+        let iso = &r.iso_ts_15066;
+        if iso.over_limit > 0 {
+            let n = iso.over_limit as u64;
+            let w = format!("{} over the ISO/TS 15066 limit", plural(n, "contact"));
+            let worst = iso
+                .min_margin_n
+                .map_or(String::new(), |m| format!(" (the worst {:.1} N over)", -m));
+            out.push((format!("{w}{worst}"), w));
+        }
+        if iso.ssm_violations > 0 {
+            let w = plural(iso.ssm_violations, "SSM violation");
+            out.push((
+                format!("{w}: a control point approached inside the configured protective separation distance for longer than the stop time"),
+                w,
+            ));
+        }
+        if iso.ssm_violations_standard > 0 {
+            let w = format!(
+                "{} of the standard's S_p",
+                plural(iso.ssm_violations_standard, "SSM violation")
+            );
+            out.push((
+                format!("{w}: a control point approached inside the protective separation distance with ISO 13855's human speed for longer than the stop time"),
+                w,
+            ));
+        }
+        let dropped = r.collaboration.requests_dropped;
+        if dropped > 0 {
+            let w = format!("{} dropped", plural(dropped, "request"));
+            out.push((
+                format!("hri/request: {w} before the controller acted on them"),
+                w,
+            ));
+        }
+        out
+    }
+
+    /// Judge the finished report `r` (after the supervisor added what other
+    /// evaluators found: the collaboration, a real arm's estimated contacts):
+    /// `clean`, `degraded` and `summary` from everything in it.
+    pub fn conclude(&self, r: &mut Report) {
+        let (degraded, summary) = self.verdict(r);
+        r.clean = degraded.is_empty();
+        r.degraded = degraded;
+        r.summary = summary;
     }
 
     /// The report at the end of the run.
@@ -1165,19 +1318,21 @@ impl Evaluator {
         let mut events = self.events.clone();
         events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
         let missed = s.1 + b.1;
-        let (degraded, summary) = self.verdict(missed, &services);
-        let mut iso_ts_15066 = self.ssm.clone();
+        let mut iso_ts_15066 = IsoSection {
+            judged: self.ssm.clone(),
+            ssm_violations_standard: self.ssm_standard.0 + self.ssm_standard.1,
+        };
         for c in &contacts {
             let touching = ((c.t_start_s, c.t_end_s), c.link.as_str(), c.part.as_str());
             let truth = phri_iso15066::ForceSource::Truth;
             iso_ts_15066.contact(touching, c.peak_force_n, c.intended, truth);
         }
-        Report {
-            clean: degraded.is_empty(),
-            degraded,
+        let mut report = Report {
+            clean: false,
+            degraded: Vec::new(),
             realtime: self.realtime.clone(),
             protective_stop_causes: self.stop_causes.clone(),
-            summary,
+            summary: String::new(),
             inputs: Default::default(),
             control: Default::default(),
             dynamics: Default::default(),
@@ -1215,7 +1370,9 @@ impl Evaluator {
             perception: self.perception(),
             collaboration: Default::default(),
             iso_ts_15066,
-        }
+        };
+        self.conclude(&mut report);
+        report
     }
 }
 
@@ -1234,6 +1391,24 @@ mod tests {
             },
             vec!["link_a".into()],
         )
+    }
+
+    /// An evaluator whose robot ran 1000 cycles (a run that never cycled is degraded).
+    fn cycled() -> Evaluator {
+        let mut e = eval();
+        let mut s = RobotStats::zeroed();
+        s.seq = 1;
+        s.cycles = 1000;
+        e.on_stats(&s);
+        e
+    }
+
+    /// As [`cycled`], of a cell with perception (these bounds) whose camera
+    /// delivered a frame.
+    fn seeing(bounds: StaleBounds) -> Evaluator {
+        let mut e = cycled().with_stale_bounds(bounds);
+        e.on_frame(0, &FrameHeader::zeroed());
+        e
     }
 
     fn truth(t_ms: u64, force: f64, tau: f64) -> Truth {
@@ -1560,7 +1735,12 @@ mod tests {
         assert_eq!(r.contacts[0].peak_force_n, 135.0);
         assert!((r.contacts[0].t_start_s - 2.0).abs() < 1e-9);
         assert!((r.contacts[0].t_end_s - 2.4).abs() < 1e-9);
-        assert!(r.clean, "{:?}", r.degraded);
+        // an unintended contact, never detected, over the face's limit: none of it clean
+        assert!(!r.clean, "{:?}", r.degraded);
+        assert_eq!(
+            r.summary,
+            "degraded (0 cycles; 1 unintended contact; 1 contact never detected; 1 contact over the ISO/TS 15066 limit)"
+        );
         // judged against its region (part 0 is the head: the face, where no
         // transient contact is allowed)
         let iso = &r.iso_ts_15066;
@@ -1600,10 +1780,14 @@ mod tests {
         };
         e.on_ssm(&ssm(1000, 0, 0));
         e.on_ssm(&ssm(1500, 250, 0));
-        e.on_ssm(&ssm(2500, 500, 1));
+        let mut m = ssm(2500, 500, 1);
+        m.violations_standard = 3;
+        e.on_ssm(&m);
         // a restarted controller counts from 0
         e.on_ssm(&ssm(3000, 100, 0));
-        e.on_ssm(&ssm(4000, 100, 1));
+        let mut m = ssm(4000, 100, 1);
+        m.violations_standard = 2;
+        e.on_ssm(&m);
         let r = e.report(5_000_000_000, "walk-in", BTreeMap::new());
         let iso = &r.iso_ts_15066;
         assert!(iso.ssm_enabled);
@@ -1616,6 +1800,12 @@ mod tests {
         assert_eq!(iso.ssm_violation_times_s, [2.5, 4.0]);
         let json = serde_json::to_value(&r).unwrap();
         assert_eq!(json["iso_ts_15066"]["ssm_violations"], 2);
+        // the standard's own S_p beside it, added up across the restart
+        assert_eq!(json["iso_ts_15066"]["ssm_violations_standard"], 5);
+        assert_eq!(
+            r.summary,
+            "degraded (0 cycles; 2 SSM violations; 5 SSM violations of the standard's S_p)"
+        );
     }
 
     #[test]
@@ -1658,7 +1848,7 @@ mod tests {
             m
         };
         // nothing happened
-        let r = eval().report(1_000_000_000, "x", services(0));
+        let r = cycled().report(1_000_000_000, "x", services(0));
         assert!(r.clean && r.degraded.is_empty(), "{:?}", r.degraded);
         assert_eq!(r.summary, "clean");
         // a missed deadline
@@ -1672,11 +1862,11 @@ mod tests {
         assert!(!r.clean);
         assert_eq!(r.summary, "degraded (3 missed deadlines)");
         // a restart
-        let r = eval().report(1_000_000_000, "x", services(1));
+        let r = cycled().report(1_000_000_000, "x", services(1));
         assert!(!r.clean);
         assert_eq!(r.summary, "degraded (restarts: control 1)");
         // lost ground truth
-        let mut e = eval();
+        let mut e = cycled();
         let mut first = truth(1, 0.0, 0.0);
         first.seq = 1;
         e.on_truth(&first);
@@ -1687,7 +1877,7 @@ mod tests {
         assert!(!r.clean);
         assert_eq!(r.summary, "degraded (8 ground-truth samples lost)");
         // refused real-time scheduling
-        let mut e = eval();
+        let mut e = cycled();
         e.set_realtime(
             crate::realtime::RealtimeWatch::new(Some("SCHED_FIFO 80 refused".into())).report(),
         );
@@ -1699,7 +1889,7 @@ mod tests {
             .iter()
             .any(|l| l.contains("SCHED_FIFO 80 refused")));
         // the supervisor's own reasons come first in `degraded`, and in its words
-        let mut e = eval();
+        let mut e = cycled();
         e.degrade("dier ended 3 times");
         let r = e.report(1_000_000_000, "x", services(3));
         assert_eq!(r.degraded[0], "dier ended 3 times");
@@ -1707,6 +1897,92 @@ mod tests {
             r.summary,
             "degraded (restarts: control 3; dier ended 3 times)"
         );
+        // a robot that never cycled
+        let r = eval().report(1_000_000_000, "x", services(0));
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (0 cycles)");
+        // a cell with perception whose cameras never delivered a frame; one
+        // without perception is not missing any
+        let bounds = StaleBounds {
+            residual_ns: 5_000_000,
+            perception_ns: Some(100_000_000),
+        };
+        let mut e = cycled().with_stale_bounds(bounds);
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert_eq!(r.summary, "degraded (no perception frame)");
+        e.on_frame(0, &FrameHeader::zeroed());
+        assert!(e.report(1_000_000_000, "x", services(0)).clean);
+        let blind = cycled().with_stale_bounds(StaleBounds {
+            perception_ns: None,
+            ..bounds
+        });
+        assert!(blind.report(1_000_000_000, "x", services(0)).clean);
+        // a contact: unintended and detected (a collision the cell reacted to)
+        let contact = |intended: u32, peak: f64, detect: bool| {
+            let mut e = cycled();
+            let mut m = event(1, 2000, 2000, ContactPhase::Begin, peak);
+            m.intended = intended;
+            m.human_part = BodyPart::ForearmRight as i32;
+            e.on_contact_event(&m);
+            if detect {
+                e.on_residual(&residual(2010, true));
+            }
+            let mut m = event(2, 2100, 2000, ContactPhase::End, peak);
+            m.intended = intended;
+            m.human_part = BodyPart::ForearmRight as i32;
+            e.on_contact_event(&m);
+            e.report(3_000_000_000, "x", services(0))
+        };
+        let r = contact(0, 60.0, true);
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (1 unintended contact)");
+        assert!(
+            r.degraded[0].starts_with("1 unintended contact (ground truth; the largest 60.0 N)"),
+            "{:?}",
+            r.degraded
+        );
+        // ... never detected
+        let r = contact(0, 60.0, false);
+        assert_eq!(
+            r.summary,
+            "degraded (1 unintended contact; 1 contact never detected)"
+        );
+        // ... over its region's limit (the lower arm: 320 N transient)
+        let r = contact(0, 400.0, true);
+        assert_eq!(
+            r.summary,
+            "degraded (1 unintended contact; 1 contact over the ISO/TS 15066 limit)"
+        );
+        // an intended touch of the collaboration within its limit is no finding;
+        // over its limit it is
+        let r = contact(1, 60.0, false);
+        assert!(r.clean, "{:?}", r.degraded);
+        let r = contact(1, 400.0, false);
+        assert_eq!(
+            r.summary,
+            "degraded (1 contact over the ISO/TS 15066 limit)"
+        );
+        // speed and separation monitoring violated
+        let mut e = cycled();
+        e.on_ssm(&phri_ipc::SsmStatus {
+            stamp_ns: 500_000_000,
+            enabled: 1,
+            violations: 2,
+            ..phri_ipc::SsmStatus::zeroed()
+        });
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert_eq!(r.summary, "degraded (2 SSM violations)");
+        // requests dropped (the supervisor fills the collaboration, then concludes)
+        let e = cycled();
+        let mut r = e.report(1_000_000_000, "x", services(0));
+        assert!(r.clean);
+        r.collaboration.requests_dropped = 145;
+        e.conclude(&mut r);
+        assert!(!r.clean);
+        assert_eq!(r.summary, "degraded (145 requests dropped)");
+        // concluding again judges afresh, nothing counted twice
+        e.conclude(&mut r);
+        assert_eq!(r.degraded.len(), 1, "{:?}", r.degraded);
     }
 
     /// A protective stop a service caused (its input went stale) degrades
@@ -1728,7 +2004,7 @@ mod tests {
             m
         };
         let run = |stop: ControlStatus| {
-            let mut e = eval().with_stale_bounds(bounds);
+            let mut e = seeing(bounds);
             e.on_status(&status(1, ControlMode::Task, 1, 30), "reflex");
             e.on_status(&stop, "reflex");
             e.report(1_000_000_000, "x", BTreeMap::new())
@@ -1744,7 +2020,7 @@ mod tests {
             .unwrap();
         assert_eq!(ev.detail, "a stop request");
         // the request's source, when collab/state told it first
-        let mut e = eval().with_stale_bounds(bounds);
+        let mut e = seeing(bounds);
         e.on_status(&status(1, ControlMode::Task, 1, 30), "reflex");
         e.stop_requested_by("voice", 3);
         e.stop_requested_by("voice", 3);
@@ -1770,7 +2046,7 @@ mod tests {
         assert!(!r.clean);
         assert_eq!(r.protective_stop_causes["stale_perception"], 1);
         // a cell without perception: its age says nothing
-        let mut e = eval().with_stale_bounds(StaleBounds {
+        let mut e = cycled().with_stale_bounds(StaleBounds {
             perception_ns: None,
             ..bounds
         });
@@ -1782,7 +2058,7 @@ mod tests {
         // a restarted controller (its status sequence starts again) holds on
         // fresh inputs before its task: its hold, not a request; once it ran
         // its task, a stop on fresh inputs is a request again
-        let mut e = eval().with_stale_bounds(bounds);
+        let mut e = seeing(bounds);
         e.on_status(&status(500, ControlMode::Contact, 1, 30), "reflex");
         e.on_status(&status(3, ControlMode::Sync, 1, 30), "reflex");
         e.on_status(&status(4, ControlMode::ProtectiveStop, 1, 30), "reflex");

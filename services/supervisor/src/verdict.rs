@@ -171,7 +171,10 @@ mod tests {
             r.started(i, S, 100 + i as u32);
             r.heard(i, S);
         }
-        assert_eq!((r.partner(1), r.partner(2), r.partner(0)), (Some(2), Some(1), None));
+        assert_eq!(
+            (r.partner(1), r.partner(2), r.partner(0)),
+            (Some(2), Some(1), None)
+        );
         let limit = r.config().crash_loop_restarts as u64;
         let min_ms = r.config().restart_backoff_min_ms;
         let max_ms = r.config().restart_backoff_max_ms;
