@@ -93,6 +93,18 @@ impl Plan {
         &self.loaded.scenario.name
     }
 
+    /// The report's `degraded` lines for the safety functions the
+    /// configuration switches off on purpose (`control.avoidance = false`,
+    /// `ssm.enabled = false`, a perception or residual service dropped), each
+    /// naming the key and the file or `--set` that switched it off.
+    pub fn safety_off(&self) -> Vec<String> {
+        self.loaded
+            .safety_off()
+            .iter()
+            .map(|o| o.to_string())
+            .collect()
+    }
+
     /// The configured reaction to a detected collision (named in the report's events).
     pub fn reaction(&self) -> Reaction {
         self.loaded.config.control.reaction
@@ -277,6 +289,26 @@ mod tests {
         ));
         assert!(e.contains("camera") && e.contains("at most 4"), "{e}");
         assert_eq!(e.lines().count(), 1, "{e}");
+    }
+
+    #[test]
+    fn a_safety_function_switched_off_is_a_degraded_line_naming_what_did_it() {
+        let p = Plan::load(&deploy(), None, &[], None).unwrap();
+        assert!(p.safety_off().is_empty());
+        let p = Plan::load(
+            &deploy(),
+            Some("free-motion"),
+            &["control.avoidance=false", "ssm.enabled=false"],
+            None,
+        )
+        .unwrap();
+        assert_eq!(
+            p.safety_off(),
+            [
+                "collision avoidance switched off (control.avoidance by --set control.avoidance=false)",
+                "speed and separation monitoring switched off (ssm.enabled by --set ssm.enabled=false)"
+            ]
+        );
     }
 
     #[test]
