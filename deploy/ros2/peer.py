@@ -151,6 +151,12 @@ BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(4000))
 RELIABLE = Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)), Policy.History.KeepLast(100))
 
 
+def take(reader, n):
+    """Up to n samples of the reader, without the invalid ones (a writer's
+    end or disposal: no data)."""
+    return [m for m in reader.take(N=n) if type(m).__name__ != "InvalidSample"]
+
+
 def stamp_ns(h):
     return h.stamp.sec * 1_000_000_000 + h.stamp.nanosec
 
@@ -252,19 +258,19 @@ def main():
             writer.write(String(data=text))
             sent.append({"t_s": round(t, 3), "text": text})
         got = 0
-        for m in readers["joint_states"].take(N=4000) if "joint_states" in readers else []:
+        for m in take(readers["joint_states"], 4000) if "joint_states" in readers else []:
             got += 1
             seen["joint_states"].add(m.header)
             names = list(m.name)
             if positions:
                 positions.write(" ".join(repr(x) for x in m.position) + "\n")
-        for m in readers["tf"].take(N=1000) if "tf" in readers else []:
+        for m in take(readers["tf"], 1000) if "tf" in readers else []:
             got += 1
             for tr in m.transforms:
                 frames.add((tr.header.frame_id, tr.child_frame_id))
             if m.transforms:
                 seen["tf"].add(m.transforms[0].header)
-        for m in readers["status"].take(N=100) if "status" in readers else []:
+        for m in take(readers["status"], 100) if "status" in readers else []:
             got += 1
             seen["status"].add(m.header)
             if m.status:
@@ -273,12 +279,12 @@ def main():
                 p = status_last.get("phase")
                 if p and (not phases or phases[-1] != p):
                     phases.append(p)
-        for m in readers["contact_force"].take(N=1000) if "contact_force" in readers else []:
+        for m in take(readers["contact_force"], 1000) if "contact_force" in readers else []:
             got += 1
             seen["contact_force"].add(m.header)
             f = m.wrench.force
             max_force = max(max_force, (f.x * f.x + f.y * f.y + f.z * f.z) ** 0.5)
-        for m in readers["depth"].take(N=10) if "depth" in readers else []:
+        for m in take(readers["depth"], 10) if "depth" in readers else []:
             got += 1
             seen["depth"].add(m.header)
             depth_shape = [m.width, m.height, m.encoding, len(m.data)]

@@ -7,10 +7,37 @@ use crate::error::Invalid;
 
 const S: &str = "ros2";
 
+/// `[ros2] discovery`: how far the bridge's DDS looks for peers and answers.
+/// ROS 2's own variables, when set, override it (`ROS_AUTOMATIC_DISCOVERY_RANGE`,
+/// `ROS_LOCALHOST_ONLY=1`: phri-ros2 resolves them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Ros2Discovery {
+    /// every socket of the bridge bound to 127.0.0.1: it neither sends nor
+    /// answers on any other interface; ROS 2 peers on this host only
+    Localhost,
+    /// every interface: DDS's multicast discovery (239.255.0.1) and its
+    /// traffic on the machine's networks, for ROS 2 peers on other hosts
+    Subnet,
+}
+
+impl Ros2Discovery {
+    /// The name in `[ros2] discovery`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ros2Discovery::Localhost => "localhost",
+            Ros2Discovery::Subnet => "subnet",
+        }
+    }
+}
+
 /// `[ros2]` (defaults and their reasons: `deploy/phri.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Ros2Config {
+    /// `localhost` (the default: nothing on the network) or `subnet` (peers on
+    /// other hosts)
+    pub discovery: Ros2Discovery,
     /// `/joint_states`: every N-th robot state (1: every state, 1 kHz)
     pub joint_states_every: u32,
     /// `/tf`: every N-th robot state
@@ -29,6 +56,11 @@ pub struct Ros2Config {
     pub points_stride: u32,
     /// take `/phri/request` into `hri/request`; false: refused (and counted)
     pub accept_requests: bool,
+    /// `/phri/request`: each peer's (DDS writer's) sustained rate [requests/s];
+    /// `stop` is never limited
+    pub requests_per_s: f64,
+    /// `/phri/request`: each peer's burst above that rate [requests]
+    pub requests_burst: u32,
 }
 
 impl Ros2Config {
@@ -55,6 +87,18 @@ impl Ros2Config {
                     format!("{v} is not in (0, 1000] Hz"),
                 ));
             }
+        }
+        if !(self.requests_per_s > 0.0 && self.requests_per_s <= 1000.0) {
+            return Err(Invalid::new(
+                format!("{S}.requests_per_s"),
+                format!("{} is not in (0, 1000] requests/s", self.requests_per_s),
+            ));
+        }
+        if self.requests_burst == 0 {
+            return Err(Invalid::new(
+                format!("{S}.requests_burst"),
+                "must be at least 1",
+            ));
         }
         Ok(())
     }

@@ -3,8 +3,10 @@
 //!
 //! [`Bridge`] is the pure part: it turns the cell's messages into ROS 2
 //! messages ([`msgs`], [`convert`]) at the configured rates (`[ros2]`) and
-//! `/phri/request` texts into `hri/request` requests ([`request`]); the
-//! binary wires iceoryx2 and DDS to it. Topics, types and QoS:
+//! `/phri/request` texts into `hri/request` requests ([`request`]), stops
+//! first and each peer rate-limited ([`gate`]); the binary wires iceoryx2
+//! and DDS to it, on the loopback only unless `[ros2] discovery = "subnet"`
+//! ([`discovery`]). Topics, types and QoS:
 //!
 //! | topic | type | QoS |
 //! | --- | --- | --- |
@@ -15,7 +17,7 @@
 //! | `/phri/repulsion` | `visualization_msgs/MarkerArray` | best effort, keep last 5 |
 //! | `/phri/depth` | `sensor_msgs/Image` (16UC1) | best effort, keep last 1 |
 //! | `/phri/points` | `sensor_msgs/PointCloud2` | best effort, keep last 1 |
-//! | `/phri/request` (taken) | `std_msgs/String` | reliable, keep last 10 |
+//! | `/phri/request` (taken) | `std_msgs/String` | reliable, keep last 64 |
 //!
 //! A topic nobody subscribes to costs nothing: the binary tells the bridge
 //! which topics DDS has matched readers for ([`Subscribed`]), and the bridge
@@ -23,15 +25,20 @@
 //! spent on images nobody looks at).
 
 pub mod convert;
+pub mod discovery;
+pub mod gate;
 pub mod msgs;
 pub mod request;
 
 use phri_config::{Config, Ros2Config};
-use phri_ipc::{CollabState, ControlStatus, FrameHeader, HriRequest, RepulsionResult, Residual};
+use phri_ipc::{
+    CollabState, ControlStatus, FrameHeader, HriRequest, RepulsionResult, RequestKind, Residual,
+};
 use phri_viz::status::{Status, Thresholds};
 use phri_viz::RobotView;
 
 pub use convert::{Clock, BASE_FRAME, CAMERA_FRAME};
+pub use gate::{PeerId, RefusalKind};
 use msgs::{
     DiagnosticArray, DiagnosticStatus, Header, Image, JointState, KeyValue, MarkerArray,
     PointCloud2, TfMessage, WrenchStamped,
@@ -51,8 +58,36 @@ pub enum Refused {
     /// `[ros2] accept_requests = false`: ROS 2 peers are not trusted
     #[error("requests from ROS 2 are refused (ros2.accept_requests = false)")]
     NotAccepted,
+    /// not a request the cell takes from ROS 2
     #[error(transparent)]
-    Malformed(#[from] RequestError),
+    NotARequest(#[from] RequestError),
+    /// its peer (DDS writer) sent more than `[ros2] requests_per_s` and
+    /// `requests_burst` allow
+    #[error("over the rate limit of its peer (ros2.requests_per_s, ros2.requests_burst)")]
+    RateLimited,
+}
+
+impl Refused {
+    pub fn kind(&self) -> RefusalKind {
+        match self {
+            Refused::NotAccepted => RefusalKind::NotAccepted,
+            Refused::NotARequest(_) => RefusalKind::NotARequest,
+            Refused::RateLimited => RefusalKind::RateLimited,
+        }
+    }
+}
+
+/// Is this parsed request a stop?
+fn is_stop(r: &Result<HriRequest, RequestError>) -> bool {
+    matches!(r, Ok(q) if q.kind == RequestKind::Stop as u32)
+}
+
+/// One `/phri/request` sample as DDS delivered it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RequestSample {
+    /// the DDS writer that sent it
+    pub peer: PeerId,
+    pub text: String,
 }
 
 /// Published and refused, per topic, since the bridge started.
@@ -65,8 +100,16 @@ pub struct Counts {
     pub repulsion: u64,
     pub depth: u64,
     pub points: u64,
+    /// requests passed into `hri/request` (stops among them)
     pub requests: u64,
+    /// stops passed into `hri/request`
+    pub requests_stops: u64,
+    /// refused: `accept_requests = false`, or not a request
     pub requests_refused: u64,
+    /// dropped: over their peer's rate limit
+    pub requests_dropped: u64,
+    /// samples DDS could not make a `std_msgs/String` of
+    pub requests_malformed: u64,
 }
 
 /// Which published topics have at least one matched subscriber (DDS
@@ -160,6 +203,8 @@ pub struct Bridge {
     force_every: Every,
     repulsion_every: Every,
     request_seq: u64,
+    /// `/phri/request` per peer
+    limit: gate::RateLimit,
     /// the newest repulsion result of each worker
     results: Vec<RepulsionResult>,
     /// the arm's name (`[robot] name`)
@@ -208,6 +253,7 @@ impl Bridge {
             image: Image::default(),
             cloud: PointCloud2::default(),
             request_seq: 0,
+            limit: gate::RateLimit::new(config.ros2.requests_per_s, config.ros2.requests_burst),
             results: Vec::new(),
             robot: config.robot.name.clone(),
             subscribed: Subscribed::default(),
@@ -255,7 +301,9 @@ impl Bridge {
 
     /// `/phri/status` at `status_hz` (phri's clock `now_ns`): the
     /// controller's mode, the collaboration's phase, the residual and its
-    /// thresholds as one `DiagnosticStatus` named `phri`, its level ERROR on
+    /// thresholds, and the bridge's `/phri/request` counts (`requests_passed`,
+    /// `_stops`, `_refused`, `_dropped`, `_malformed`) as one
+    /// `DiagnosticStatus` named `phri`, its level ERROR on
     /// a collision, WARN on a contact, STALE before the controller reported.
     pub fn status(
         &mut self,
@@ -278,7 +326,7 @@ impl Bridge {
         } else {
             DiagnosticStatus::OK
         };
-        let values = match serde_json::to_value(&s) {
+        let mut values = match serde_json::to_value(&s) {
             Ok(serde_json::Value::Object(m)) => m
                 .into_iter()
                 .filter(|(k, _)| k != "stale" && k != "input_age")
@@ -292,6 +340,21 @@ impl Bridge {
                 .collect(),
             _ => Vec::new(),
         };
+        // what became of /phri/request since the bridge started
+        let c = &self.counts;
+        values.extend(
+            [
+                ("requests_passed", c.requests),
+                ("requests_stops", c.requests_stops),
+                ("requests_refused", c.requests_refused),
+                ("requests_dropped", c.requests_dropped),
+                ("requests_malformed", c.requests_malformed),
+            ]
+            .map(|(key, n)| KeyValue {
+                key: key.to_string(),
+                value: n.to_string(),
+            }),
+        );
         self.counts.status += 1;
         Some(DiagnosticArray {
             header: Header {
@@ -375,25 +438,58 @@ impl Bridge {
         }
     }
 
-    /// A `/phri/request` text received at `now_ns` [CLOCK_MONOTONIC]: the
-    /// request for `hri/request`, or why it is refused.
-    pub fn request(&mut self, text: &str, now_ns: u64) -> Result<HriRequest, Refused> {
+    /// The `/phri/request` samples received since the last call, at
+    /// `now_ns` [ns, CLOCK_MONOTONIC]: what becomes of each, as (its index
+    /// in `batch`, the request for `hri/request` or why it is refused), in
+    /// the order to publish them: every stop first (never rate-limited),
+    /// then the others in arrival order, each within its peer's rate.
+    /// Every refusal is counted.
+    pub fn requests(
+        &mut self,
+        batch: &[RequestSample],
+        now_ns: u64,
+    ) -> Vec<(usize, Result<HriRequest, Refused>)> {
+        let mut out = Vec::with_capacity(batch.len());
         if !self.cfg.accept_requests {
-            self.counts.requests_refused += 1;
-            return Err(Refused::NotAccepted);
+            self.counts.requests_refused += batch.len() as u64;
+            out.extend((0..batch.len()).map(|i| (i, Err(Refused::NotAccepted))));
+            return out;
         }
-        // numbers that grow across restarts: microseconds of CLOCK_MONOTONIC
-        self.request_seq = (now_ns / 1_000).max(self.request_seq + 1);
-        match request::parse(text, self.request_seq, now_ns) {
-            Ok(r) => {
-                self.counts.requests += 1;
-                Ok(r)
+        let parsed: Vec<Result<HriRequest, RequestError>> = batch
+            .iter()
+            .map(|s| request::parse(&s.text, 0, now_ns))
+            .collect();
+        let stops = parsed.iter().enumerate().filter(|(_, r)| is_stop(r));
+        let others = parsed.iter().enumerate().filter(|(_, r)| !is_stop(r));
+        for (i, r) in stops.chain(others) {
+            let result = match r {
+                Err(e) => Err(Refused::NotARequest(e.clone())),
+                Ok(q) if is_stop(r) => Ok(*q),
+                Ok(q) if self.limit.admit(batch[i].peer, now_ns) => Ok(*q),
+                Ok(_) => Err(Refused::RateLimited),
+            };
+            let result = result.map(|mut q| {
+                // numbers that grow across restarts: microseconds of CLOCK_MONOTONIC
+                self.request_seq = (now_ns / 1_000).max(self.request_seq + 1);
+                q.seq = self.request_seq;
+                q
+            });
+            match &result {
+                Ok(q) => {
+                    self.counts.requests += 1;
+                    self.counts.requests_stops += u64::from(q.kind == RequestKind::Stop as u32);
+                }
+                Err(Refused::RateLimited) => self.counts.requests_dropped += 1,
+                Err(_) => self.counts.requests_refused += 1,
             }
-            Err(e) => {
-                self.counts.requests_refused += 1;
-                Err(e.into())
-            }
+            out.push((i, result));
         }
+        out
+    }
+
+    /// A `/phri/request` sample DDS could not make a `std_msgs/String` of.
+    pub fn malformed_request(&mut self) {
+        self.counts.requests_malformed += 1;
     }
 }
 
@@ -409,6 +505,109 @@ mod tests {
         ))
         .unwrap();
         Bridge::new(&Config::defaults(), model).unwrap()
+    }
+
+    fn accepting() -> Bridge {
+        let model = phri_model::Model::from_urdf_file(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../deploy/robots/kuka_lwr4.urdf"
+        ))
+        .unwrap();
+        let mut c = Config::defaults();
+        c.ros2.accept_requests = true;
+        (c.ros2.requests_per_s, c.ros2.requests_burst) = (2.0, 3);
+        Bridge::new(&c, model).unwrap()
+    }
+
+    fn sample(peer: u8, text: &str) -> RequestSample {
+        RequestSample {
+            peer: [peer; 16],
+            text: text.to_string(),
+        }
+    }
+
+    #[test]
+    fn stops_go_first_and_past_every_rate_limit() {
+        let mut b = accepting();
+        // one peer floods with begins, another asks to stop at the end of it
+        let mut batch: Vec<RequestSample> = (0..20).map(|_| sample(1, "begin")).collect();
+        batch.push(sample(1, "stop"));
+        batch.push(sample(2, "STOP"));
+        batch.push(sample(2, "follow left_hand"));
+        let out = b.requests(&batch, 10_000_000_000);
+        assert_eq!(out.len(), batch.len(), "every sample has an outcome");
+        let kinds: Vec<u32> = out
+            .iter()
+            .filter_map(|(_, r)| r.as_ref().ok().map(|q| q.kind))
+            .collect();
+        let stop = RequestKind::Stop as u32;
+        assert_eq!(&kinds[..2], &[stop, stop], "{kinds:?}");
+        assert_eq!((out[0].0, out[1].0), (20, 21));
+        // peer 1: its burst of 3 begins; peer 2: its follow
+        assert_eq!(kinds.len(), 2 + 3 + 1, "{kinds:?}");
+        let dropped = out
+            .iter()
+            .filter(|(_, r)| r.as_ref().err() == Some(&Refused::RateLimited))
+            .count();
+        assert_eq!(dropped, 17);
+        assert_eq!(
+            (
+                b.counts.requests,
+                b.counts.requests_stops,
+                b.counts.requests_dropped,
+                b.counts.requests_refused
+            ),
+            (6, 2, 17, 0)
+        );
+        // the requests passed are numbered in the order published
+        let seqs: Vec<u64> = out
+            .iter()
+            .filter_map(|(_, r)| r.as_ref().ok().map(|q| q.seq))
+            .collect();
+        assert!(seqs.windows(2).all(|w| w[0] < w[1]), "{seqs:?}");
+        // ROS 2 sees the counts on /phri/status
+        b.subscribed.status = true;
+        let clock = Clock::new(0, 1_764_000_000_000_000_000);
+        let m = b.status(10_000_000_000, &clock, None, None, None).unwrap();
+        let value = |key: &str| {
+            m.status[0]
+                .values
+                .iter()
+                .find(|kv| kv.key == key)
+                .map(|kv| kv.value.clone())
+        };
+        assert_eq!(value("requests_dropped").as_deref(), Some("17"));
+        assert_eq!(value("requests_stops").as_deref(), Some("2"));
+        // a stop while the flood goes on still passes
+        let out = b.requests(&[sample(1, "begin"), sample(1, "stop")], 10_100_000_000);
+        assert_eq!(out[0].1.as_ref().map(|q| q.kind).ok(), Some(stop));
+        assert!(matches!(out[1].1, Err(Refused::RateLimited)));
+    }
+
+    #[test]
+    fn refused_requests_are_counted_and_not_rate_limited_tokens() {
+        let mut b = accepting();
+        let batch = [sample(1, "dance"), sample(1, "resume"), sample(1, "end")];
+        let out = b.requests(&batch, 1_000_000_000);
+        assert!(matches!(out[0].1, Err(Refused::NotARequest(_))));
+        assert!(matches!(
+            out[1].1,
+            Err(Refused::NotARequest(RequestError::Resume))
+        ));
+        assert!(out[2].1.is_ok());
+        assert_eq!((b.counts.requests, b.counts.requests_refused), (1, 2));
+        b.malformed_request();
+        assert_eq!(b.counts.requests_malformed, 1);
+    }
+
+    #[test]
+    fn without_accept_requests_every_request_is_refused_stops_too() {
+        let mut b = bridge();
+        let out = b.requests(&[sample(1, "stop"), sample(2, "begin")], 1);
+        assert!(out
+            .iter()
+            .all(|(_, r)| matches!(r, Err(Refused::NotAccepted))));
+        assert_eq!((b.counts.requests, b.counts.requests_refused), (0, 2));
     }
 
     fn state(k: u64) -> phri_ipc::JointState {

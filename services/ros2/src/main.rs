@@ -2,9 +2,12 @@
 //! `control/status`, `collab/state`, `dynamics/residual`,
 //! `perception/repulsion` and `perception/depth` and publishes them as ROS
 //! 2 topics over DDS ([`phri_ros2`]'s table); takes `/phri/request` into
-//! `hri/request` when `[ros2] accept_requests` is set. ROS 2's domain:
-//! `ROS_DOMAIN_ID` (default 0); this host only with
-//! `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` or `ROS_LOCALHOST_ONLY=1`. Off the torque loop's CPUs, under the
+//! `hri/request` when `[ros2] accept_requests` is set, stops first and each
+//! peer within its rate. ROS 2's domain: `ROS_DOMAIN_ID` (default 0). This
+//! host only unless `[ros2] discovery = "subnet"`: every DDS socket bound to
+//! 127.0.0.1 (ROS 2's `ROS_AUTOMATIC_DISCOVERY_RANGE` or
+//! `ROS_LOCALHOST_ONLY=1` overrides the configuration, [`phri_ros2::discovery`]).
+//! Off the torque loop's CPUs, under the
 //! normal scheduler: DDS's threads never compete with the 1 kHz loop, and a
 //! slow or absent ROS 2 subscriber never slows a phri service (best-effort
 //! writers never wait; reliable ones give up at once when full).
@@ -13,12 +16,14 @@ use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use phri_config::ros2::Ros2Discovery;
 use phri_ipc::{
     Queue, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, PERCEPTION_DEPTH,
     PERCEPTION_REPULSION, ROBOT_STATE,
 };
+use phri_ros2::gate::{shown, RefusalLog};
 use phri_ros2::msgs::{self, RosType};
-use phri_ros2::{Bridge, Clock, Subscribed};
+use phri_ros2::{discovery, Bridge, Clock, RefusalKind, RequestSample, Subscribed};
 use phri_runtime::{now_ns, ServiceContext};
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{
@@ -42,6 +47,14 @@ const IMAGE: QosProfile =
 const RELIABLE: QosProfile = QosProfile::publisher_default()
     .reliability_reliable(WhenFull::Fail)
     .history(History::KeepLast { depth: 10 });
+/// `/phri/request` as read: reliable, the newest 64 samples between two
+/// takes (one every 1-20 ms): a flood of one peer has to outrun that to
+/// push another's stop out before the bridge sees it.
+const REQUESTS: QosProfile = QosProfile::publisher_default()
+    .reliability_reliable(WhenFull::Fail)
+    .history(History::KeepLast { depth: 64 });
+/// `/phri/request` samples taken per loop at most (the rest wait for the next).
+const MAX_REQUESTS_PER_LOOP: usize = 256;
 
 /// The log filter when `RUST_LOG` is unset: the services' own, with
 /// RustDDS from `error` up (restricted to the loopback, it warns at every
@@ -105,20 +118,26 @@ fn send<M: Serialize>(p: &Publisher<M>, m: M, failed: &mut u64) {
     }
 }
 
-/// How far DDS looks for peers, as ROS 2 says it: `ROS_AUTOMATIC_DISCOVERY_RANGE`
-/// (`LOCALHOST`, `SUBNET`, the default, or `OFF`; Iron and later) or, before
-/// it, `ROS_LOCALHOST_ONLY=1`. `true`: this host's loopback only.
-fn localhost_only() -> Result<bool, String> {
-    if let Ok(r) = std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE") {
-        return match r.trim().to_ascii_uppercase().as_str() {
-            "" | "SUBNET" | "SYSTEM_DEFAULT" => Ok(false),
-            "LOCALHOST" | "OFF" => Ok(true),
-            _ => Err(format!(
-                "ROS_AUTOMATIC_DISCOVERY_RANGE: '{r}' is not LOCALHOST, SUBNET or OFF"
-            )),
-        };
+/// The local addresses of this process's UDP sockets (`/proc/self/fd`,
+/// `/proc/self/net/udp`).
+fn own_udp_sockets() -> Result<Vec<std::net::SocketAddrV4>, String> {
+    let mut inodes = Vec::new();
+    let fds = std::fs::read_dir("/proc/self/fd").map_err(|e| format!("/proc/self/fd: {e}"))?;
+    for fd in fds.flatten() {
+        if let Ok(link) = std::fs::read_link(fd.path()) {
+            let link = link.to_string_lossy();
+            if let Some(inode) = link
+                .strip_prefix("socket:[")
+                .and_then(|s| s.strip_suffix(']'))
+                .and_then(|s| s.parse::<u64>().ok())
+            {
+                inodes.push(inode);
+            }
+        }
     }
-    Ok(std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v.trim() == "1"))
+    let table = std::fs::read_to_string("/proc/self/net/udp")
+        .map_err(|e| format!("/proc/self/net/udp: {e}"))?;
+    Ok(discovery::udp_local_addresses(&table, &inodes))
 }
 
 /// CLOCK_REALTIME [ns].
@@ -137,7 +156,13 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     let mut bridge = Bridge::new(ctx.config(), ctx.robot_model()?)?;
     let domain = domain_id()?;
-    let local = localhost_only()?;
+    let env = |name: &str| std::env::var(name).ok();
+    let (reach, decided_by) = discovery::resolve(
+        ctx.config().ros2.discovery,
+        env(discovery::RANGE_VAR).as_deref(),
+        env(discovery::LOCALHOST_ONLY_VAR).as_deref(),
+    )?;
+    let local = reach == Ros2Discovery::Localhost;
     if ctx.checking() {
         return Ok(());
     }
@@ -145,6 +170,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     // DDS's own threads start here, under the normal scheduler, off the loop's CPUs
     let mut participant = DomainParticipantBuilder::new(domain);
     if local {
+        // RustDDS (patches/rustdds) binds every socket to 127.0.0.1 then: the
+        // kernel neither delivers to it nor lets it send on another interface
         participant = participant.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
     }
     let dds = participant
@@ -153,6 +180,19 @@ fn body() -> Result<(), Box<dyn Error>> {
         .and_then(|p| {
             Context::from_domain_participant(p).map_err(|e| format!("DDS domain {domain}: {e:?}"))
         })?;
+    if local {
+        // the kernel's word, not the DDS library's: every socket on 127.0.0.1
+        // (a RustDDS without patches/rustdds binds 0.0.0.0)
+        let sockets = own_udp_sockets()?;
+        if let Some(a) = sockets.iter().find(|a| !a.ip().is_loopback()) {
+            return Err(format!(
+                "ros2.discovery = localhost, but a DDS socket is bound to {a}: not started \
+                 (RustDDS must be patches/rustdds)"
+            )
+            .into());
+        }
+        tracing::debug!("DDS sockets: {sockets:?}");
+    }
     let mut ros = dds
         .new_node(
             NodeName::new("/", "phri").map_err(|e| format!("ROS 2 node name: {e}"))?,
@@ -174,7 +214,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         )
         .map_err(|e| format!("ROS 2 topic /phri/request: {e:?}"))?;
     let requests_in = ros
-        .create_subscription::<msgs::StringMsg>(&request_topic, None)
+        .create_subscription::<msgs::StringMsg>(&request_topic, Some(REQUESTS))
         .map_err(|e| format!("ROS 2 subscription of /phri/request: {e:?}"))?;
 
     // ROS 2's discovery (matched subscribers, ros_discovery_info) runs on a
@@ -201,16 +241,27 @@ fn body() -> Result<(), Box<dyn Error>> {
     let requests_out = HRI_REQUEST.publisher(&node)?;
     let mut beat = ctx.beat(&node)?;
     tracing::info!(
-        "on ROS 2 domain {domain}{}: /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
-        if local { " (this host only)" } else { "" },
+        "on ROS 2 domain {domain}, {} ({}): /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
+        if local { "this host only (every DDS socket on 127.0.0.1)" } else { "every interface (subnet)" },
+        decided_by.name(),
         bridge.joint_names().len(),
-        if ctx.config().ros2.accept_requests { "taken into hri/request" } else { "refused (ros2.accept_requests = false)" }
+        if ctx.config().ros2.accept_requests {
+            format!(
+                "taken into hri/request, stops first, {} per s and {} at once per peer",
+                ctx.config().ros2.requests_per_s,
+                ctx.config().ros2.requests_burst
+            )
+        } else {
+            "refused (ros2.accept_requests = false)".to_string()
+        }
     );
 
     let (mut newest_control, mut newest_collab, mut newest_residual) = (None, None, None);
     let mut last_frame = 0u64;
     let mut failed = 0u64;
     let mut subscribed_at: Option<std::time::Instant> = None;
+    let mut refusals = RefusalLog::default();
+    let mut batch: Vec<RequestSample> = Vec::new();
     while !ctx.shutdown.requested() {
         if subscribed_at.is_none_or(|t| t.elapsed() >= SUBSCRIBED_EVERY) {
             subscribed_at = Some(std::time::Instant::now());
@@ -283,20 +334,51 @@ fn body() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
-        while let Ok(Some((m, _info))) = requests_in.take() {
-            match bridge.request(&m.data, now_ns()) {
+        // /phri/request: every sample waiting (up to a bound), stops first
+        batch.clear();
+        let now = now_ns();
+        for _ in 0..MAX_REQUESTS_PER_LOOP {
+            match requests_in.take() {
+                Ok(Some((m, info))) => batch.push(RequestSample {
+                    peer: info.publisher_gid().to_bytes16(),
+                    text: m.data,
+                }),
+                Ok(None) => break,
+                Err(e) => {
+                    bridge.malformed_request();
+                    let why = format!("malformed sample ({})", shown(&format!("{e:?}")));
+                    if let Some(line) = refusals.note(RefusalKind::Malformed, "", &why, now) {
+                        tracing::warn!("{line}");
+                    }
+                }
+            }
+        }
+        for (i, result) in bridge.requests(&batch, now) {
+            let text = &batch[i].text;
+            match result {
                 Ok(r) => {
                     requests_out.publish(&r)?;
-                    tracing::info!("/phri/request '{}': on hri/request", m.data.trim());
+                    tracing::info!("/phri/request '{}': on hri/request", shown(text.trim()));
                 }
-                Err(e) => tracing::warn!("/phri/request '{}' refused: {e}", m.data.trim()),
+                Err(e) => {
+                    if let Some(line) = refusals.note(e.kind(), text, &e.to_string(), now) {
+                        tracing::warn!("{line}");
+                    }
+                }
             }
+        }
+        if let Some(line) = refusals.flush(now) {
+            tracing::warn!("{line}");
         }
     }
     let c = &bridge.counts;
     tracing::info!(
-        "published /joint_states {}, /tf {}, /phri/status {}, /phri/contact_force {}, /phri/repulsion {}, /phri/depth {}, /phri/points {}; requests {} passed, {} refused; {failed} not sent",
-        c.joint_states, c.tf, c.status, c.contact_force, c.repulsion, c.depth, c.points, c.requests, c.requests_refused
+        "published /joint_states {}, /tf {}, /phri/status {}, /phri/contact_force {}, /phri/repulsion {}, /phri/depth {}, /phri/points {}; {failed} not sent",
+        c.joint_states, c.tf, c.status, c.contact_force, c.repulsion, c.depth, c.points
+    );
+    tracing::info!(
+        "/phri/request: passed {} (stops {}), refused {}, dropped {} (over the rate limit), malformed {}",
+        c.requests, c.requests_stops, c.requests_refused, c.requests_dropped, c.requests_malformed
     );
     Ok(())
 }

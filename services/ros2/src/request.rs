@@ -5,7 +5,10 @@
 
 use phri_ipc::{CollabPart, HriRequest, RequestKind, RequestSource, Zeroed, REQUEST_TEXT};
 
-/// Why a request text was refused.
+use crate::gate::shown;
+
+/// Why a request text was refused. The words it holds are the received
+/// ones cut and escaped ([`shown`]): an error is fit for a log line.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum RequestError {
     #[error("empty request")]
@@ -34,7 +37,7 @@ pub fn parse(text: &str, seq: u64, stamp_ns: u64) -> Result<HriRequest, RequestE
         .to_ascii_lowercase();
     let kind = match first.as_str() {
         "start" => RequestKind::Begin,
-        w => RequestKind::from_name(w).map_err(|_| RequestError::Kind(w.to_string()))?,
+        w => RequestKind::from_name(w).map_err(|_| RequestError::Kind(shown(w)))?,
     };
     if kind == RequestKind::Resume {
         return Err(RequestError::Resume);
@@ -42,12 +45,12 @@ pub fn parse(text: &str, seq: u64, stamp_ns: u64) -> Result<HriRequest, RequestE
     let part = match words.next() {
         Some(p) => {
             let p = p.to_ascii_lowercase();
-            CollabPart::from_name(&p).map_err(|_| RequestError::Part(p.clone()))?
+            CollabPart::from_name(&p).map_err(|_| RequestError::Part(shown(&p)))?
         }
         None => CollabPart::None,
     };
     if let Some(rest) = words.next() {
-        return Err(RequestError::Trailing(rest.to_string()));
+        return Err(RequestError::Trailing(shown(rest)));
     }
     match kind {
         RequestKind::Follow if part == CollabPart::None => return Err(RequestError::PartMissing),
@@ -64,7 +67,10 @@ pub fn parse(text: &str, seq: u64, stamp_ns: u64) -> Result<HriRequest, RequestE
     r.part = part as u32;
     r.person = u32::MAX;
     r.confidence = 1.0;
-    let t = text.trim().as_bytes();
+    // the words as understood (a request is at most two short words)
+    let words: Vec<&str> = text.split_whitespace().collect();
+    let t = words.join(" ");
+    let t = t.as_bytes();
     let n = t.len().min(REQUEST_TEXT - 1);
     r.text[..n].copy_from_slice(&t[..n]);
     Ok(r)
@@ -120,5 +126,21 @@ mod tests {
             parse("follow left_hand now", 1, 1).err(),
             Some(RequestError::Trailing("now".into()))
         );
+    }
+
+    #[test]
+    fn a_refused_word_is_cut_and_escaped_in_its_error() {
+        let huge = format!("{}\u{1b}", "d".repeat(1 << 20));
+        let e = parse(&huge, 1, 1).unwrap_err().to_string();
+        assert!(e.len() < 200, "{} bytes", e.len());
+        let e = parse("follow left\u{7}hand", 1, 1).unwrap_err().to_string();
+        assert!(e.contains("left\\u{7}hand"), "{e}");
+        assert!(!e.chars().any(char::is_control), "{e}");
+    }
+
+    #[test]
+    fn the_text_passed_on_is_the_words_as_understood() {
+        let r = parse("follow\n\tleft_hand\r\n", 1, 1).unwrap();
+        assert_eq!(&r.text[..17], b"follow left_hand\0");
     }
 }

@@ -6,13 +6,15 @@
 //! own, the peer in another, made by the test (`unshare --net`, as root)
 //! and joined by a veth pair on a /24 of their own, multicast routed
 //! through it: DDS's discovery and data cross a network interface, as
-//! between two machines, and never leave this one. iceoryx2's shared memory
+//! between two machines, and never leave this one. The cell asks for that
+//! (`--set ros2.discovery=subnet`, as `deploy/up --ros2-subnet` does; ROS
+//! 2's variables unset): by default its bridge stays on the loopback
+//! (`tests/localhost.rs`). iceoryx2's shared memory
 //! is not a network: the test reads `robot/state` beside them. The bridge
 //! is killed (-9) at 4 s: the supervisor restarts it, the peer finds it
 //! again, and the cell misses nothing.
 
 use std::collections::HashSet;
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -21,56 +23,12 @@ use serde_json::Value;
 #[path = "../../../tests/support/workspace.rs"]
 mod workspace;
 use workspace::{bin, repo};
-
-/// The peer's Python (Cyclone DDS installed by the project's script).
-fn peer_python() -> PathBuf {
-    let out = Command::new(repo().join("deploy/ros2/install"))
-        .stderr(Stdio::inherit())
-        .output()
-        .expect("deploy/ros2/install runs");
-    assert!(out.status.success(), "deploy/ros2/install failed");
-    let dir = String::from_utf8(out.stdout).unwrap();
-    PathBuf::from(dir.trim()).join("venv/bin/python")
-}
-
-/// A new network namespace, then the command: its loopback up; once the
-/// test has moved the veth end `$PHRI_VETH` in, that end up with address
-/// `$PHRI_ADDR` and multicast routed through it; then, if `$PHRI_AFTER` is
-/// set, a wait for that file (the cell's state, for the peer).
-const NETNS_SETUP: &str = "ip link set lo up \
-    && i=0 && while ! ip link show \"$PHRI_VETH\" >/dev/null 2>&1; do \
-         i=$((i+1)); [ $i -le 400 ] || exit 97; sleep 0.05; done \
-    && ip addr add \"$PHRI_ADDR\" dev \"$PHRI_VETH\" && ip link set \"$PHRI_VETH\" up \
-    && ip route add 224.0.0.0/4 dev \"$PHRI_VETH\" \
-    && i=0 && while [ -n \"$PHRI_AFTER\" ] && [ ! -e \"$PHRI_AFTER\" ]; do \
-         i=$((i+1)); [ $i -le 400 ] || exit 98; sleep 0.05; done \
-    && exec \"$0\" \"$@\"";
-
-/// Joins the network namespaces of processes `a` and `b` with a veth pair
-/// named `name_a` (in a's) and `name_b` (in b's).
-fn veth(a: u32, name_a: &str, b: u32, name_b: &str) {
-    let status = Command::new("ip")
-        .args(["link", "add", "name", name_a, "netns", &a.to_string()])
-        .args([
-            "type",
-            "veth",
-            "peer",
-            "name",
-            name_b,
-            "netns",
-            &b.to_string(),
-        ])
-        .status()
-        .expect("ip runs");
-    assert!(
-        status.success(),
-        "ip link add {name_a} … veth … {name_b}: {status}"
-    );
-}
+mod netns;
+use netns::{peer_python, veth, wait_at_most, wait_for_cell, NETNS_SETUP};
 
 #[test]
 fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration() {
-    let python = peer_python();
+    let python = peer_python(&repo());
     let prefix = format!("ros2w{}_", std::process::id());
     let run_dir = std::env::temp_dir().join(format!("phri-test-{prefix}"));
     let _ = std::fs::remove_dir_all(&run_dir);
@@ -81,14 +39,18 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     // (6.5 s) and holds it out (9.5-17 s) where the voice asks to follow it;
     // here the ROS 2 peer asks, and ends it
     let duration_s = 22.0;
-    // the cell's namespace: its bridge on every interface (the veth), not
-    // the loopback only that cargo's environment asks for
+    // the cell's namespace: its bridge on every interface (the veth) as
+    // `deploy/up --ros2-subnet` asks, by the configuration: ROS 2's
+    // variables, which cargo's environment sets to LOCALHOST, would
+    // override it
     let mut supervisor = Command::new("unshare")
         .current_dir(repo())
         .env("PHRI_VETH", "phri0")
         .env("PHRI_ADDR", "10.231.0.1/24")
         .env_remove("PHRI_AFTER")
-        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "SUBNET")
+        .env_remove("PHRI_NO_IPV6")
+        .env_remove("ROS_AUTOMATIC_DISCOVERY_RANGE")
+        .env_remove("ROS_LOCALHOST_ONLY")
         .args(["--net", "--", "sh", "-c", NETNS_SETUP])
         .arg(bin("phri-supervisor"))
         .arg("--config")
@@ -100,6 +62,7 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .arg(&report)
         .args(["--duration", &duration_s.to_string()])
         .args(["--set", "services.ros2.enabled=true"])
+        .args(["--set", "ros2.discovery=subnet"])
         .args(["--set", "ros2.accept_requests=true"])
         .args(["--set", "services.mic.enabled=false"])
         .args(["--set", "services.voice.enabled=false"])
@@ -110,6 +73,7 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .env("PHRI_VETH", "peer0")
         .env("PHRI_ADDR", "10.231.0.2/24")
         .env("PHRI_AFTER", run_dir.join("state.json"))
+        .env_remove("PHRI_NO_IPV6")
         .args(["--net", "--", "sh", "-c", NETNS_SETUP])
         .arg(&python)
         .arg(repo().join("deploy/ros2/peer.py"))
@@ -120,29 +84,8 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .stdout(Stdio::piped())
         .spawn()
         .expect("the peer starts");
-    // both namespaces exist once unshare has made them
-    let ns = |pid: u32| std::fs::read_link(format!("/proc/{pid}/ns/net")).ok();
-    let own = ns(std::process::id());
-    let t0 = Instant::now();
-    while ns(supervisor.id()) == own || ns(peer.id()) == own {
-        assert!(
-            t0.elapsed() < Duration::from_secs(10),
-            "no network namespaces: this test needs root (unshare --net)"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    veth(supervisor.id(), "phri0", peer.id(), "peer0");
-    let t0 = Instant::now();
-    while !run_dir.join("state.json").exists() {
-        if let Some(s) = supervisor.try_wait().unwrap() {
-            panic!(
-                "the cell did not start in a network namespace of its own ({s}): \
-                 this test needs root (unshare --net, ip link)"
-            );
-        }
-        assert!(t0.elapsed() < Duration::from_secs(20), "no state.json");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    veth(&supervisor, "phri0", &peer, "peer0");
+    wait_for_cell(&mut supervisor, &run_dir);
 
     // robot/state, beside the bridge: every state's positions, bit for bit
     let node = phri_ipc::node("test-ros2-wire", &prefix).unwrap();
@@ -182,14 +125,7 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     assert!(out.status.success(), "peer.py failed");
     let p: Value = serde_json::from_slice(&out.stdout).expect("peer.py prints JSON");
     eprintln!("peer {p}");
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let status = loop {
-        if let Some(s) = supervisor.try_wait().unwrap() {
-            break s;
-        }
-        assert!(Instant::now() < deadline, "the supervisor did not stop");
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let status = wait_at_most(&mut supervisor, Duration::from_secs(60), "the supervisor");
     assert!(status.success(), "the supervisor failed: {status}");
     let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
 
