@@ -116,6 +116,7 @@ pub const SAFETY_RANGES: &[Range] = &[
     r("robot.capsules.radius", 0.0, 0.3, "m", "a capsule larger than an arm's link masks the person from perception and contacts"),
     // the residual and detection
     r("dynamics.gain", 10.0, 1000.0, "1/s", "a slower observer detects a collision after the arm has pressed on"),
+    r("dynamics.velocity_cutoff_hz", 5.0, 500.0, "Hz", "a lower cutoff delays the velocity the residual's model needs: false or late detections"),
     ro("dynamics.max_gap_s", 0.0, 1.0, "s", STALE),
     r("dynamics.warmup_samples", 0.0, 1000.0, "samples", "no detection for longer than 1 s after a (re)start"),
     // the controller's inputs, reactions and speeds
@@ -255,6 +256,17 @@ pub fn check(config: &Config) -> Result<(), Invalid> {
             ),
         ));
     }
+    let co = &config.collaboration;
+    let force_limit = co.force_limit_fraction * co.iso_hand_n;
+    if co.contact_hold_n >= force_limit {
+        return Err(Invalid::new(
+            "collaboration.contact_hold_n",
+            format!(
+                "{} is outside its safe range [0, force_limit_fraction × iso_hand_n = {force_limit}) N: the hold itself would reach the force limit",
+                co.contact_hold_n
+            ),
+        ));
+    }
     if c.perception_stop_after_ms < c.perception_max_age_ms {
         return Err(Invalid::new(
             "control.perception_stop_after_ms",
@@ -311,6 +323,17 @@ pub fn check_model(config: &Config, model: &phri_model::Model) -> Result<(), Inv
                 ));
             }
         }
+    }
+    // ‖r‖ above the norm of every joint's limit is never reached either
+    let norm = limits.iter().map(|(_, e)| e * e).sum::<f64>().sqrt();
+    if !(d.collision_norm_threshold <= norm) {
+        return Err(Invalid::new(
+            "dynamics.collision_norm_threshold",
+            format!(
+                "{} is outside its safe range (0, {norm:.1}] Nm: the norm of the joints' URDF effort limits, which the residual never exceeds: detection off",
+                d.collision_norm_threshold
+            ),
+        ));
     }
     let reach = reach_m(model, &config.control.ee_link);
     for (i, w) in config.control.waypoints.iter().enumerate() {
@@ -372,6 +395,9 @@ mod tests {
     fn each_range_refuses_past_its_ends_naming_key_value_and_range_and_takes_its_ends() {
         // relations between keys are tested apart
         let relational = [
+            "collaboration.contact_hold_n",
+            "collaboration.iso_hand_n",
+            "collaboration.force_limit_fraction",
             "control.feedback_max_speed",
             "control.perception_stop_after_ms",
             "repulsion.params.v_max",
@@ -453,6 +479,11 @@ mod tests {
             "{e}"
         );
         c.control.feedback_max_speed = 0.3;
+        check(&c).unwrap();
+        c.collaboration.contact_hold_n = 70.0;
+        let e = check(&c).unwrap_err();
+        assert_eq!(e.key, "collaboration.contact_hold_n");
+        c.collaboration.contact_hold_n = 69.0;
         check(&c).unwrap();
         c.control.perception_stop_after_ms = 99.0;
         let e = check(&c).unwrap_err();

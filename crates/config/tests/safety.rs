@@ -139,6 +139,13 @@ fn values_outside_their_safe_range_are_refused_naming_what_gave_them() {
             && e.contains("Nm: joint '"),
         "{e}"
     );
+    let e = err(&["dynamics.collision_norm_threshold=1000"]);
+    assert!(
+        e.contains(
+            "dynamics.collision_norm_threshold: 1000 is outside its safe range (0, 308.0] Nm"
+        ),
+        "{e}"
+    );
     let e = err(&["dynamics.contact_threshold=1000"]);
     assert!(
         e.contains("dynamics.contact_threshold: 1000 is outside its safe range"),
