@@ -9,7 +9,9 @@
 //!   read only through [`read_trusted`]: no symbolic link, a regular file
 //!   owned by this user, writable by no one else, no larger than a bound.
 //! - A configuration file given to a service must be owned by this user or
-//!   root and writable by no one else ([`check_trusted_file`]).
+//!   root and writable by no one else, in directories no one else can write
+//!   (`phri_config::trust`, which services apply; [`check_trusted_file`]
+//!   checks the file alone).
 //!
 //! The default run directory ([`default_run_dir`]) is under the user's
 //! runtime directory (`$XDG_RUNTIME_DIR`, else `/run/user/<uid>`), or, where

@@ -199,8 +199,11 @@ impl ServiceContext {
         default_name: &str,
         flags: ServiceFlags,
     ) -> Result<ServiceContext, ServiceError> {
-        // settings that another user could write are never read
-        crate::rundir::check_trusted_file(&flags.config)?;
+        // settings that another user could write are never read: the file
+        // (a regular one: a FIFO is refused, not waited on) and every
+        // directory above it (phri-config's rule, which the loader applies
+        // to the robot file, the scenario and the URDF it pulls in as well)
+        phri_config::trust::check_file(&flags.config).map_err(ConfigError::from)?;
         let sets: Vec<&str> = flags.set.iter().map(String::as_str).collect();
         let loaded = Loaded::load(&flags.config, None, &sets)?;
         let prefix = flags.prefix();
