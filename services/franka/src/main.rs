@@ -100,7 +100,7 @@ struct Gate<'a> {
 impl Gate<'_> {
     /// Is state `s` one to act on (counted when not)?
     fn take(&mut self, s: &franka::RobotState) -> bool {
-        self.guard.check(&s.q, s.time.as_millis()).is_ok()
+        self.guard.check(&s.q, &s.dq, s.time.as_millis()).is_ok()
     }
 
     /// Everything refused so far.
