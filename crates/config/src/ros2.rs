@@ -103,3 +103,27 @@ impl Ros2Config {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_stays_on_this_host_and_a_rate_limit_must_let_some_through() {
+        let d = crate::Config::defaults().ros2;
+        assert_eq!(d.discovery, Ros2Discovery::Localhost);
+        assert!(d.validate().is_ok());
+        for bad in [0.0, -1.0, f64::NAN, 1e6] {
+            let c = Ros2Config {
+                requests_per_s: bad,
+                ..d.clone()
+            };
+            assert!(c.validate().is_err(), "requests_per_s {bad}");
+        }
+        let c = Ros2Config {
+            requests_burst: 0,
+            ..d.clone()
+        };
+        assert!(c.validate().is_err());
+    }
+}
