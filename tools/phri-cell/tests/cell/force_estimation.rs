@@ -16,9 +16,11 @@ use phri_estimation::ResidualObserver;
 use phri_estimation::{ContactPoint, ForceEstimator};
 use phri_sim::ExternalForce;
 
+/// Detection out of the way: each threshold at the largest value its safe
+/// range allows for the LWR-IV (the joints' effort limits and their norm)
 const NO_DETECTION: [&str; 2] = [
-    "dynamics.collision_threshold=[1000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1000.0]",
-    "dynamics.collision_norm_threshold=1000.0",
+    "dynamics.collision_threshold=[176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0]",
+    "dynamics.collision_norm_threshold=307.0",
 ];
 
 /// A person who stands back and, from 8.0 s to 9.5 s, pushes link 4 with
