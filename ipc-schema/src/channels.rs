@@ -26,6 +26,9 @@ pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SL
 /// [`BoxStatus`] from a real robot's adapter: its control box's own figures
 /// and errors, 10 Hz and at every error (none with the simulated arm).
 pub const ROBOT_BOX: Channel<BoxStatus> = Channel::new("robot/box", Qos::SLOW, false);
+/// [`BridgeRequests`] from the ROS 2 bridge: what it did with `/phri/request`, 2 Hz.
+pub const ROS2_REQUESTS: Channel<BridgeRequests> =
+    Channel::new("ros2/requests", Qos::SLOW, false);
 /// [`Truth`]: simulator ground truth for evaluation only, 1 kHz. No controller may read it.
 pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISHER, false);
 /// [`Residual`] from the dynamics service, 1 kHz. Wakes: new residual.
@@ -253,6 +256,7 @@ pub const ALL: &[&str] = &[
     CONTROL_BEHAVIOUR.name,
     CONTROL_STANDBY_BEHAVIOUR.name,
     DYNAMICS_RESIDUAL_STANDBY.name,
+    ROS2_REQUESTS.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -270,6 +274,7 @@ pub const ON_DEMAND: &[&str] = &[
     CONTROL_BEHAVIOUR.name,
     CONTROL_STANDBY_BEHAVIOUR.name,
     DYNAMICS_RESIDUAL_STANDBY.name,
+    ROS2_REQUESTS.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -308,6 +313,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(CONTROL_BEHAVIOUR);
     v.message(CONTROL_STANDBY_BEHAVIOUR);
     v.message(DYNAMICS_RESIDUAL_STANDBY);
+    v.message(ROS2_REQUESTS);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

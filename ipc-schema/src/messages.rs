@@ -332,6 +332,31 @@ impl InputAudit {
     }
 }
 
+/// What the ROS 2 bridge (`phri-ros2`) did with the requests it read on
+/// `/phri/request`, 2 Hz ([`crate::ROS2_REQUESTS`]): counts cumulative since
+/// that bridge process started (a restarted bridge starts again at 0).
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::BridgeRequests")]
+pub struct BridgeRequests {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// requests passed on to `hri/request`
+    pub passed: u64,
+    /// of them, stops (never rate-limited)
+    pub stops: u64,
+    /// refused by rule: requests not accepted (`accept_requests = false`),
+    /// not a request phri knows
+    pub refused: u64,
+    /// dropped: over a peer's rate limit, or not delivered to `hri/request`
+    pub dropped: u64,
+    /// samples that could not be decoded
+    pub malformed: u64,
+}
+
+impl Zeroed for BridgeRequests {}
+
 /// Bytes of [`BoxStatus::last_error`].
 pub const BOX_ERROR_TEXT: usize = 128;
 
@@ -1057,3 +1082,4 @@ message!(ControlBehaviour, published: |m| Some(m.stamp_ns));
 message!(CommanderStats, published: |m| Some(m.stamp_ns));
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
 message!(BoxStatus, published: |m| Some(m.stamp_ns), counted: [dof => tau_j, tau_ext_hat]);
+message!(BridgeRequests, published: |m| Some(m.stamp_ns));

@@ -40,6 +40,7 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<ControlBehaviour>("phri::ControlBehaviour", 8232);
     // 40 bytes larger: the commands refused per slot (a stranger's, malformed)
     check::<CommanderStats>("phri::CommanderStats", 144);
+    check::<BridgeRequests>("phri::BridgeRequests", 56);
 }
 
 /// phri opens its channels' services without naming their types to iceoryx2

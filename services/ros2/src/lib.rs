@@ -212,6 +212,8 @@ pub struct Bridge {
     /// the topics with subscribers (the binary keeps it current)
     pub subscribed: Subscribed,
     pub counts: Counts,
+    /// the last `ros2/requests` message's sequence number
+    requests_seq: u64,
 }
 
 impl Bridge {
@@ -258,6 +260,7 @@ impl Bridge {
             robot: config.robot.name.clone(),
             subscribed: Subscribed::default(),
             counts: Counts::default(),
+            requests_seq: 0,
         })
     }
 
@@ -490,6 +493,24 @@ impl Bridge {
     /// A `/phri/request` sample DDS could not make a `std_msgs/String` of.
     pub fn malformed_request(&mut self) {
         self.counts.requests_malformed += 1;
+    }
+
+    /// The next `ros2/requests` message, stamped `now_ns`: what the bridge
+    /// did with `/phri/request` so far; `undelivered`, the requests
+    /// `hri/request` did not deliver to some reader
+    /// (`phri_ipc::Publisher::undelivered`), count as dropped.
+    pub fn requests_message(&mut self, now_ns: u64, undelivered: u64) -> phri_ipc::BridgeRequests {
+        self.requests_seq += 1;
+        let c = &self.counts;
+        phri_ipc::BridgeRequests {
+            seq: self.requests_seq,
+            stamp_ns: now_ns,
+            passed: c.requests,
+            stops: c.requests_stops,
+            refused: c.requests_refused,
+            dropped: c.requests_dropped + undelivered,
+            malformed: c.requests_malformed,
+        }
     }
 }
 

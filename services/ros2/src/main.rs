@@ -19,7 +19,7 @@ use std::time::Duration;
 use phri_config::ros2::Ros2Discovery;
 use phri_ipc::{
     Queue, COLLAB_STATE, CONTROL_STATUS, DYNAMICS_RESIDUAL, HRI_REQUEST, PERCEPTION_DEPTH,
-    PERCEPTION_REPULSION, ROBOT_STATE,
+    PERCEPTION_REPULSION, ROBOT_STATE, ROS2_REQUESTS,
 };
 use phri_ros2::gate::{shown, RefusalLog};
 use phri_ros2::msgs::{self, RosType};
@@ -68,6 +68,8 @@ const SUBSCRIBED_EVERY: Duration = Duration::from_millis(100);
 /// Without a `/joint_states` subscriber, `robot/state` is read in batches
 /// this far apart instead of at every state (no 1 kHz wake-ups).
 const BATCH: Duration = Duration::from_millis(10);
+/// How often `ros2/requests` tells the supervisor what became of `/phri/request`.
+const REQUESTS_AUDIT_EVERY: Duration = Duration::from_millis(500);
 
 fn main() -> ExitCode {
     if std::env::var("RUST_LOG").map_or(true, |f| f.trim().is_empty()) {
@@ -239,6 +241,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     let results = PERCEPTION_REPULSION.subscriber(&node, Queue::Drain)?;
     let frames = PERCEPTION_DEPTH.frame_subscriber(&node, Queue::Latest)?;
     let requests_out = HRI_REQUEST.publisher(&node)?;
+    let requests_audit = ROS2_REQUESTS.publisher(&node)?;
+    let mut audited_at = std::time::Instant::now();
     let mut beat = ctx.beat(&node)?;
     tracing::info!(
         "on ROS 2 domain {domain}, {} ({}): /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
@@ -370,7 +374,12 @@ fn body() -> Result<(), Box<dyn Error>> {
         if let Some(line) = refusals.flush(now) {
             tracing::warn!("{line}");
         }
+        if audited_at.elapsed() >= REQUESTS_AUDIT_EVERY {
+            audited_at = std::time::Instant::now();
+            requests_audit.publish(&bridge.requests_message(now, requests_out.undelivered()))?;
+        }
     }
+    requests_audit.publish(&bridge.requests_message(now_ns(), requests_out.undelivered()))?;
     let c = &bridge.counts;
     tracing::info!(
         "published /joint_states {}, /tf {}, /phri/status {}, /phri/contact_force {}, /phri/repulsion {}, /phri/depth {}, /phri/points {}; {failed} not sent",

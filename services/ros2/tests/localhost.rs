@@ -294,5 +294,15 @@ fn by_default_the_bridge_sends_and_answers_nothing_on_the_network_and_serves_its
     assert_eq!(passed + dropped, 8, "{summary}");
     assert!((5..=6).contains(&passed), "{summary}");
     assert_eq!(after("(stops "), 0, "{summary}");
+    // ... and the report has them (ros2/requests), the run degraded by them
+    let c = &r["collaboration"];
+    assert_eq!(c["requests_dropped_ros2"], dropped, "{c}");
+    assert!(c["requests_dropped"].as_u64() >= Some(dropped), "{c}");
+    assert_eq!(r["clean"], false, "{}", r["summary"]);
+    assert!(
+        r["summary"].as_str().unwrap_or("").contains("dropped"),
+        "{}",
+        r["summary"]
+    );
     let _ = std::fs::remove_dir_all(&run_dir);
 }

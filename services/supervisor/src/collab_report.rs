@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 
 use phri_ipc::{
-    CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, RequestSource, Truth,
+    BridgeRequests, CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, RequestSource, Truth,
     Utterance, VoiceIntent, VoiceVerdict,
 };
 use serde::Serialize;
@@ -107,9 +107,12 @@ pub struct CollabReport {
     /// [`MAX_LISTED`] of each, counted but not listed
     pub requests_left_out: u64,
     /// requests that never reached the controller's collaboration: dropped
-    /// by a full queue or by the controller's own limit per period (the run
-    /// is degraded when one was)
+    /// by a full queue or by the controller's own limit per period, or by
+    /// the ROS 2 bridge (over a peer's rate limit, undelivered); the run is
+    /// degraded when one was
     pub requests_dropped: u64,
+    /// of them, dropped by the ROS 2 bridge (`ros2/requests`)
+    pub requests_dropped_ros2: u64,
     pub utterances_left_out: u64,
     pub phases_left_out: u64,
     /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
@@ -172,6 +175,11 @@ pub struct CollabEvaluator {
     /// (a restarted controller counts from 0), and the newest value
     dropped_base: u64,
     dropped_last: u64,
+    /// the same for the ROS 2 bridge's drops (`ros2/requests`; a restarted
+    /// bridge counts from 0): earlier bridges' and the newest value
+    bridge_base: u64,
+    bridge_last: u64,
+    bridge_seq: u64,
 }
 
 /// A touch of the collaborative hand as the estimated force F̂ tells it:
@@ -224,11 +232,24 @@ impl CollabEvaluator {
             estimating: None,
             dropped_base: 0,
             dropped_last: 0,
+            bridge_base: 0,
+            bridge_last: 0,
+            bridge_seq: 0,
         }
     }
 
     fn t(&self, stamp_ns: u64) -> f64 {
         stamp_ns.saturating_sub(self.t0_ns) as f64 * 1e-9
+    }
+
+    /// What the ROS 2 bridge did with `/phri/request` (`ros2/requests`).
+    pub fn on_bridge(&mut self, m: &BridgeRequests) {
+        if m.seq <= self.bridge_seq || m.dropped < self.bridge_last {
+            // another bridge process (restarted): its counts start at 0
+            self.bridge_base += self.bridge_last;
+        }
+        self.bridge_seq = m.seq;
+        self.bridge_last = m.dropped;
     }
 
     pub fn on_state(&mut self, s: &CollabState) {
@@ -472,7 +493,8 @@ impl CollabEvaluator {
                 peak = Some(peak.map_or(f, |p| p.max(f)));
             }
         }
-        r.requests_dropped = self.dropped_base + self.dropped_last;
+        r.requests_dropped_ros2 = self.bridge_base + self.bridge_last;
+        r.requests_dropped = self.dropped_base + self.dropped_last + r.requests_dropped_ros2;
         r.contacts_intended = self.touches;
         r.intended_episodes = intended;
         r.peak_intended_force_n = peak;
@@ -534,6 +556,25 @@ mod tests {
             e.on_state(&s);
         }
         assert_eq!(e.report(std::iter::empty()).requests_dropped, 4);
+    }
+
+    /// The ROS 2 bridge's drops count among the requests dropped, added
+    /// up across a bridge that restarted (its counts start from 0 again).
+    #[test]
+    fn the_bridges_drops_add_up_across_restarts() {
+        let mut e = CollabEvaluator::new(1_000_000_000, vec![], 1_000_000);
+        let mut s = state(1000, CollabPhase::Idle, CollabReason::None);
+        s.requests_dropped = 1;
+        e.on_state(&s);
+        for (seq, dropped) in [(1, 0), (2, 5), (3, 7), (1, 0), (2, 2)] {
+            e.on_bridge(&BridgeRequests {
+                seq,
+                dropped,
+                ..BridgeRequests::default()
+            });
+        }
+        let r = e.report(std::iter::empty());
+        assert_eq!((r.requests_dropped_ros2, r.requests_dropped), (9, 10));
     }
 
     #[test]

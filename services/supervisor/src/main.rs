@@ -129,6 +129,8 @@ struct Ports {
     collab: Subscriber<phri_ipc::CollabState>,
     ssm: Subscriber<phri_ipc::SsmStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
+    /// what the ROS 2 bridge did with `/phri/request`
+    bridge_requests: Subscriber<phri_ipc::BridgeRequests>,
     utterances: Subscriber<phri_ipc::Utterance>,
     audits: Subscriber<phri_ipc::InputAudit>,
     boxes: Subscriber<phri_ipc::BoxStatus>,
@@ -165,6 +167,7 @@ impl Ports {
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
             ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
+            bridge_requests: phri_ipc::ROS2_REQUESTS.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
             audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
             boxes: phri_ipc::ROBOT_BOX.subscriber(node, Queue::Drain)?,
@@ -835,6 +838,7 @@ fn body() -> Result<(), SupervisorError> {
             resume |= m.kind == phri_ipc::RequestKind::Resume as u32;
             collab_eval.on_request(m);
         })?;
+        ports.bridge_requests.drain(|m| collab_eval.on_bridge(m))?;
         ports.audits.drain(|m| audits.on_audit(m))?;
         ports.boxes.drain(|m| box_eval.on_box(m))?;
         if resume && roster.resume(now) {
@@ -1185,6 +1189,7 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.collab.drain(|m| collab_eval.on_state(m));
     let _ = ports.ssm.drain(|m| eval.on_ssm(m));
     let _ = ports.requests.drain(|m| collab_eval.on_request(m));
+    let _ = ports.bridge_requests.drain(|m| collab_eval.on_bridge(m));
     let _ = ports.utterances.drain(|m| collab_eval.on_utterance(m));
     let _ = ports.truth.drain(|m| {
         eval.on_truth(m);
