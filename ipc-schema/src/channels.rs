@@ -27,8 +27,7 @@ pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SL
 /// and errors, 10 Hz and at every error (none with the simulated arm).
 pub const ROBOT_BOX: Channel<BoxStatus> = Channel::new("robot/box", Qos::SLOW, false);
 /// [`BridgeRequests`] from the ROS 2 bridge: what it did with `/phri/request`, 2 Hz.
-pub const ROS2_REQUESTS: Channel<BridgeRequests> =
-    Channel::new("ros2/requests", Qos::SLOW, false);
+pub const ROS2_REQUESTS: Channel<BridgeRequests> = Channel::new("ros2/requests", Qos::SLOW, false);
 /// [`Truth`]: simulator ground truth for evaluation only, 1 kHz. No controller may read it.
 pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISHER, false);
 /// [`Residual`] from the dynamics service, 1 kHz. Wakes: new residual.

@@ -8,8 +8,8 @@
 use std::collections::BTreeMap;
 
 use phri_ipc::{
-    BridgeRequests, CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, RequestSource, Truth,
-    Utterance, VoiceIntent, VoiceVerdict,
+    BridgeRequests, CollabPart, CollabPhase, CollabReason, CollabState, HriRequest, RequestSource,
+    Truth, Utterance, VoiceIntent, VoiceVerdict,
 };
 use serde::Serialize;
 
