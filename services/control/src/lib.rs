@@ -39,6 +39,7 @@ pub mod modes;
 pub mod outputs;
 pub mod path;
 pub mod reference;
+pub mod requests;
 pub mod resolve;
 pub mod safety;
 pub mod snapshot;

@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_control::cut::{CutLatest, HeldBack};
+use phri_control::requests::{RequestQueueWatch, MAX_REQUESTS};
 use phri_control::standby::{
     fresher_residual, inputs_fresh, save_behaviour, BehaviourInbox, Duty, RolePriority, Slot,
     Standby,
@@ -22,18 +23,11 @@ use phri_control::{
 use phri_ipc::{
     CollabState, ControlBehaviour, ControlStatus, HriRequest, Queue, SsmStatus, TorqueCommand,
     Zeroed, COLLAB_STATE, CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR,
-    CONTROL_STATUS, DELIVERY_WAIT, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST,
-    ROBOT_COMMAND, ROBOT_COMMAND_STANDBY, ROBOT_STATE,
+    CONTROL_STATUS, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE,
 };
 
 use phri_runtime::{now_ns, ServiceContext};
-
-/// The depth of this controller's `hri/request` queue.
-const REQUEST_QUEUE: usize = HRI_REQUEST.qos.subscriber_max_buffer;
-/// Requests taken per period at most: twice the queue, so that every
-/// period empties it (more, arrived while it was read, wait for the next;
-/// the queue never drops one, its publishers wait).
-const MAX_REQUESTS: usize = 2 * REQUEST_QUEUE;
 
 /// The controller's own flag.
 #[derive(clap::Args, Debug)]
@@ -167,10 +161,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     let mut collab_state = CollabState::zeroed();
     let mut ssm_status = SsmStatus::zeroed();
     let mut pending = vec![HriRequest::zeroed(); MAX_REQUESTS];
-    // when the queue was last read, and the requests this controller may
-    // have lost (collab/state's requests_dropped)
-    let mut requests_read_ns: Option<u64> = None;
-    let mut requests_dropped = 0u32;
+    // the requests this controller may have lost (collab/state's requests_dropped)
+    let mut request_watch = RequestQueueWatch::default();
     let mut seq = 0u64;
     while !ctx.shutdown.requested() {
         // a wait ended early (a signal, a failed wake-up) is one more poll
@@ -243,17 +235,10 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
                 k += 1;
             }
         }
-        // found full after not being read for the publishers' whole wait: a
-        // publisher may have left this controller out of a request, which
-        // may have been a stop: the controller in charge stops
-        let unread_ns = requests_read_ns.map_or(0, |t| mono.saturating_sub(t));
-        if taken >= REQUEST_QUEUE && unread_ns >= DELIVERY_WAIT.as_nanos() as u64 {
-            requests_dropped = requests_dropped.saturating_add(1);
-            if !with_standby || role.in_charge(&state) {
-                controller.requests_lost();
-            }
+        // a request lost may have been a stop: the controller in charge stops
+        if request_watch.read(taken, mono) && (!with_standby || role.in_charge(&state)) {
+            controller.requests_lost();
         }
-        requests_read_ns = Some(mono);
         input.collab.requests = &pending[..k];
         if collaborating {
             let mut views = [None; phri_ipc::MAX_CAMERAS];
@@ -336,7 +321,7 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
         }
         status_pub.publish(&status)?;
         write_collab_state(&controller, &state, seq, now_ns(), &mut collab_state);
-        collab_state.requests_dropped = requests_dropped;
+        collab_state.requests_dropped = request_watch.dropped();
         collab_pub.publish(&collab_state)?;
         write_ssm_status(&controller, &state, seq, now_ns(), &mut ssm_status);
         ssm_pub.publish(&ssm_status)?;
