@@ -77,6 +77,7 @@ fn the_walk_finds_every_binary() {
         "phri-dynamics",
         "phri-perception",
         "phri-repulsion",
+        "phri-tracker",
         "phri-camera",
         "phri-voice",
         "phri-mic",

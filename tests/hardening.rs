@@ -1008,16 +1008,27 @@ fn a_cell_whose_supervisor_died_stops_by_its_dead_man() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Repro 7 (the watchdog): a service spinning at real-time priority on the
-/// perception CPU starves the camera, which falls silent; the supervisor
-/// kills the spinner (the culprit), not the camera, and the report says so.
-#[test]
-fn the_watchdog_kills_the_service_that_starves_the_others() {
-    let _g = serial();
-    let p = prefix("spin");
-    let d = scratch("spin");
+/// A `free-motion` cell of `duration` seconds (its own prefix and scratch
+/// from `name`) with `phri-test-service` added as `spinner`, pinned to
+/// `cpu` at real-time `priority`, spinning from 3 s to `until_s` of the
+/// cell's clock in whichever process runs then. Its exit code, stderr and
+/// report, the prefix and the scratch directory.
+fn run_with_a_spinner(
+    name: &str,
+    duration: &str,
+    cpu: usize,
+    priority: i32,
+    until_s: &str,
+) -> (i32, String, Value, String, PathBuf) {
+    let p = prefix(name);
+    let d = scratch(name);
     let rd = d.join("rd");
     let report_path = d.join("report.json");
+    let cpus = format!("services.spinner.cpus=[{cpu}]");
+    let prio = format!("services.spinner.rt_priority={priority}");
+    let args = format!(
+        "services.spinner.args=[\"--spin-from\", \"3.0\", \"--spin-until\", \"{until_s}\"]"
+    );
     let cell = Running::start(
         supervisor(
             &p,
@@ -1026,7 +1037,7 @@ fn the_watchdog_kills_the_service_that_starves_the_others() {
                 "--scenario",
                 "free-motion",
                 "--duration",
-                "8",
+                duration,
                 "--report",
                 &report_path.to_string_lossy(),
                 "--set",
@@ -1034,20 +1045,30 @@ fn the_watchdog_kills_the_service_that_starves_the_others() {
                 "--set",
                 "services.spinner.order=8",
                 "--set",
-                "services.spinner.cpus=[0]",
+                &cpus,
                 "--set",
-                "services.spinner.rt_priority=30",
-                // spins from 3 s to 3.4 s of the cell's clock, in whichever process runs then
+                &prio,
                 "--set",
-                "services.spinner.args=[\"--spin-from\", \"3.0\", \"--spin-until\", \"3.4\"]",
+                &args,
             ],
         ),
         &p,
         &d,
     );
     let (code, err) = cell.finish();
-    assert_eq!(code, 0, "{err}");
     let r = report(&report_path);
+    (code, err, r, p, d)
+}
+
+/// Repro 7 (the watchdog): a service spinning at real-time priority on the
+/// perception CPU starves the camera, which falls silent; the supervisor
+/// kills the spinner (the culprit), not the camera, and the report says so.
+#[test]
+fn the_watchdog_kills_the_service_that_starves_the_others() {
+    let _g = serial();
+    // on the perception CPU, above the camera, for 0.4 s
+    let (code, err, r, p, d) = run_with_a_spinner("spin", "8", 0, 30, "3.4");
+    assert_eq!(code, 0, "{err}");
     let blamed = events(&r, "blame", "spinner");
     assert!(!blamed.is_empty(), "no blame: {}\n{err}", r["events"]);
     assert!(
@@ -1061,6 +1082,35 @@ fn the_watchdog_kills_the_service_that_starves_the_others() {
     assert_eq!(r["services"]["camera"]["restarts"], 0, "{}", r["events"]);
     assert!(r["services"]["spinner"]["restarts"].as_u64().unwrap() >= 1);
     assert_eq!(r["services"]["camera"]["alive_at_end"], true);
+    assert_nothing_left(&p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A robot loop that slips is reported: a process spinning above the
+/// torque loop on its CPU for 0.3 s keeps the simulated robot from waking;
+/// its schedule slips, and the run is degraded, the summary naming the
+/// overruns and the report the cycles the loop did not run.
+#[test]
+fn a_robot_loop_starved_of_its_cpu_makes_the_run_degraded_with_its_counts() {
+    let _g = serial();
+    // on the torque loop's CPU, above every one of its services, for 0.3 s
+    let (code, err, r, p, d) = run_with_a_spinner("slip", "6", 1, 90, "3.3");
+    assert_eq!(code, 0, "{err}");
+    let tl = &r["torque_loop"];
+    assert!(tl["overruns"].as_u64().unwrap_or(0) >= 1, "{tl}");
+    assert!(tl["cycles_short"].as_u64().unwrap_or(0) >= 150, "{tl}");
+    assert!(tl["startup_braked_cycles"].as_u64().is_some(), "{tl}");
+    assert_eq!(r["clean"], false);
+    let summary = r["summary"].as_str().unwrap_or("");
+    assert!(summary.contains("robot loop behind: "), "{summary}");
+    assert!(
+        r["degraded"].as_array().unwrap().iter().any(|l| l
+            .as_str()
+            .unwrap_or("")
+            .contains("cycles short of the run's")),
+        "{}",
+        r["degraded"]
+    );
     assert_nothing_left(&p);
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -10,6 +10,9 @@ arrival (both ROS time, this host's clock), and samples of the content.
 
 --positions writes every /joint_states' positions, one line each (Python's
 repr of each float: the exact double), for comparison with robot/state.
+--topics humans reads ROS4HRI's /humans/bodies/tracked (hri_msgs/IdsList):
+the lists of ids as they changed; tf gives the newest transform of each
+child frame besides the frames' names.
 """
 import argparse
 import json
@@ -147,6 +150,12 @@ class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnosti
     status: sequence[DiagnosticStatus]
 
 
+@dataclass
+class IdsList(IdlStruct, typename="hri_msgs::msg::dds_::IdsList_"):
+    header: Header
+    ids: sequence[str]
+
+
 BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(4000))
 RELIABLE = Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)), Policy.History.KeepLast(100))
 
@@ -220,7 +229,7 @@ def main():
     ap.add_argument("--positions", help="write every /joint_states' positions here")
     ap.add_argument("--domain", type=int, default=0)
     ap.add_argument("--topics", default="joint_states,tf,status,contact_force,depth",
-                    help="comma-separated topics to read (default: all of them)")
+                    help="comma-separated topics to read (default: all of them but humans)")
     a = ap.parse_args()
     requests = []
     for r in a.request:
@@ -238,6 +247,7 @@ def main():
         "status": DataReader(dp, Topic(dp, "rt/phri/status", DiagnosticArray), qos=RELIABLE),
         "contact_force": DataReader(dp, Topic(dp, "rt/phri/contact_force", WrenchStamped), qos=BEST_EFFORT),
         "depth": DataReader(dp, Topic(dp, "rt/phri/depth", Image), qos=Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(2))),
+        "humans": DataReader(dp, Topic(dp, "rt/humans/bodies/tracked", IdsList), qos=RELIABLE),
     }
     wanted = set(a.topics.split(","))
     unknown = wanted - set(readers)
@@ -247,6 +257,7 @@ def main():
     writer = DataWriter(dp, Topic(dp, "rt/phri/request", String), qos=RELIABLE)
     seen = {k: Seen() for k in readers}
     names, frames, status_last, depth_shape = None, set(), None, None
+    transforms, id_lists = {}, []
     max_force, phases = 0.0, []
     positions = open(a.positions, "w") if a.positions else None
     sent = []
@@ -268,6 +279,13 @@ def main():
             got += 1
             for tr in m.transforms:
                 frames.add((tr.header.frame_id, tr.child_frame_id))
+                t, q = tr.transform.translation, tr.transform.rotation
+                transforms[tr.child_frame_id] = {
+                    "parent": tr.header.frame_id,
+                    "stamp_ns": stamp_ns(tr.header),
+                    "t": [t.x, t.y, t.z],
+                    "q": [q.x, q.y, q.z, q.w],
+                }
             if m.transforms:
                 seen["tf"].add(m.transforms[0].header)
         for m in take(readers["status"], 100) if "status" in readers else []:
@@ -288,6 +306,12 @@ def main():
             got += 1
             seen["depth"].add(m.header)
             depth_shape = [m.width, m.height, m.encoding, len(m.data)]
+        for m in take(readers["humans"], 100) if "humans" in readers else []:
+            got += 1
+            seen["humans"].add(m.header)
+            ids = list(m.ids)
+            if not id_lists or id_lists[-1] != ids:
+                id_lists.append(ids)
         if not got:
             time.sleep(0.0005)
     if positions:
@@ -295,10 +319,11 @@ def main():
     out = {k: s.summary() for k, s in seen.items()}
     extra = {
         "joint_states": {"names": names},
-        "tf": {"frames": sorted(f"{p}>{c}" for p, c in frames)},
+        "tf": {"frames": sorted(f"{p}>{c}" for p, c in frames), "last": transforms},
         "status": {"last": status_last, "phases": phases},
         "contact_force": {"max_force_n": max_force},
         "depth": {"last": depth_shape},
+        "humans": {"lists": id_lists},
     }
     for k in out:
         out[k].update(extra[k])

@@ -192,17 +192,16 @@ impl Spec<'_> {
     }
 
     fn publisher_pids(&self, node: &IpcNode) -> Result<Option<Vec<i32>>, IpcError> {
-        use iceoryx2::service::port_factory::PortFactory as _;
-        Ok(self.open_existing(node)?.map(|f| {
-            let mut pids = Vec::new();
-            f.dynamic_config().list_publishers(|p| {
-                if let Ok(pid) = p.node_id.pid::<ipc::Service>() {
-                    pids.push(pid.value());
-                }
-                CallbackProgression::Continue
-            });
-            pids
-        }))
+        Ok(self.open_existing(node)?.as_ref().map(publisher_pids_of))
+    }
+
+    fn publisher_watch(&self) -> PublisherWatch {
+        PublisherWatch {
+            name: self.name,
+            qos: *self.qos,
+            layout: self.layout,
+            factory: None,
+        }
     }
 
     fn ports(&self, node: &IpcNode) -> Result<Option<(usize, usize)>, IpcError> {
@@ -451,6 +450,11 @@ macro_rules! opening {
                 self.spec().publisher_pids(node)
             }
 
+            /// A watch over who publishes on this channel, for asking often.
+            pub fn publisher_watch(&self) -> PublisherWatch {
+                self.spec().publisher_watch()
+            }
+
             /// `None` while the channel does not exist; else how many publishers
             /// and subscribers it has now.
             pub fn ports(&self, node: &IpcNode) -> Result<Option<(usize, usize)>, IpcError> {
@@ -463,6 +467,51 @@ macro_rules! opening {
 opening! {
     impl[T: Message] T, () => Layout::message::<T>();
     impl[] [u16], FrameHeader => Layout::slice::<u16, FrameHeader>();
+}
+
+/// The process id of each publisher of an open service.
+fn publisher_pids_of(f: &Factory) -> Vec<i32> {
+    use iceoryx2::service::port_factory::PortFactory as _;
+    let mut pids = Vec::new();
+    f.dynamic_config().list_publishers(|p| {
+        if let Ok(pid) = p.node_id.pid::<ipc::Service>() {
+            pids.push(pid.value());
+        }
+        CallbackProgression::Continue
+    });
+    pids
+}
+
+/// Who publishes on one channel, asked again and again (a supervisor's
+/// watch): the channel's service is opened once, when it first exists, and
+/// kept open, so each question reads its publisher list only (opening a
+/// service reads its files and maps its memory, milliseconds each time).
+pub struct PublisherWatch {
+    name: &'static str,
+    qos: Qos,
+    layout: Layout,
+    factory: Option<Factory>,
+}
+
+impl PublisherWatch {
+    /// The channel's name.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// `None` while the channel does not exist; else the process id of each
+    /// of its publishers now.
+    pub fn publisher_pids(&mut self, node: &IpcNode) -> Result<Option<Vec<i32>>, IpcError> {
+        if self.factory.is_none() {
+            let spec = Spec {
+                name: self.name,
+                qos: &self.qos,
+                layout: self.layout,
+            };
+            self.factory = spec.open_existing(node)?;
+        }
+        Ok(self.factory.as_ref().map(publisher_pids_of))
+    }
 }
 
 /// A message type: plain data with a sequence number, and a JSON view for

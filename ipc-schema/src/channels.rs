@@ -26,6 +26,18 @@ pub const ROBOT_STATS: Channel<RobotStats> = Channel::new("robot/stats", Qos::SL
 /// [`BoxStatus`] from a real robot's adapter: its control box's own figures
 /// and errors, 10 Hz and at every error (none with the simulated arm).
 pub const ROBOT_BOX: Channel<BoxStatus> = Channel::new("robot/box", Qos::SLOW, false);
+/// [`CameraStatus`] from every camera process (the simulated camera, a
+/// Kinect's, a ROS 2 camera's, a replay), 2 Hz: frames and drops by cause.
+pub const CAMERA_STATUS: Channel<CameraStatus> = Channel::new(
+    "camera/status",
+    Qos {
+        max_publishers: MAX_CAMERAS,
+        ..Qos::SLOW
+    },
+    false,
+);
+/// [`MicStatus`] from the microphone (`phri-mic`), 2 Hz: chunks, overruns.
+pub const AUDIO_MIC_STATUS: Channel<MicStatus> = Channel::new("audio/mic/status", Qos::SLOW, false);
 /// [`BridgeRequests`] from the ROS 2 bridge: what it did with `/phri/request`, 2 Hz.
 pub const ROS2_REQUESTS: Channel<BridgeRequests> = Channel::new("ros2/requests", Qos::SLOW, false);
 /// [`Truth`]: simulator ground truth for evaluation only, 1 kHz. No controller may read it.
@@ -52,6 +64,11 @@ pub const CONTROL_STANDBY_BEHAVIOUR: Channel<ControlBehaviour> =
     Channel::new("control/standby/behaviour", Qos::BEHAVIOUR, false);
 /// [`Health`] from the supervisor, 10 Hz.
 pub const SUPERVISOR_HEALTH: Channel<Health> = Channel::new("supervisor/health", Qos::SLOW, false);
+/// [`Health`] of the services past the first [`crate::MAX_SERVICES`] in
+/// start order (its `services[0]` is service number `MAX_SERVICES`),
+/// published with each `supervisor/health` while the roster holds more.
+pub const SUPERVISOR_HEALTH_MORE: Channel<Health> =
+    Channel::new("supervisor/health/more", Qos::SLOW, false);
 /// [`WorldState`]: the simulated world for the simulated camera, 1 kHz. Simulation only.
 pub const SIM_WORLD: Channel<WorldState> = Channel::new("sim/world", Qos::ONE_PUBLISHER, false);
 /// Raw depth frames from the camera (`[u16]` with a [`FrameHeader`]), 30 Hz. Wakes: new frame.
@@ -235,6 +252,7 @@ pub const ALL: &[&str] = &[
     DYNAMICS_RESIDUAL.name,
     CONTROL_STATUS.name,
     SUPERVISOR_HEALTH.name,
+    SUPERVISOR_HEALTH_MORE.name,
     SIM_WORLD.name,
     CAMERA_DEPTH.name,
     PERCEPTION_DEPTH.name,
@@ -256,11 +274,13 @@ pub const ALL: &[&str] = &[
     CONTROL_STANDBY_BEHAVIOUR.name,
     DYNAMICS_RESIDUAL_STANDBY.name,
     ROS2_REQUESTS.name,
+    CAMERA_STATUS.name,
+    AUDIO_MIC_STATUS.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
-/// fault, a contact, a request, a collaboration, an arm outside the cell):
-/// monitors and tests must not
+/// fault, a contact, a request, a collaboration, an arm outside the cell, a
+/// roster past one health message): monitors and tests must not
 /// expect traffic on them.
 pub const ON_DEMAND: &[&str] = &[
     FAULT_DEPTH.name,
@@ -274,6 +294,7 @@ pub const ON_DEMAND: &[&str] = &[
     CONTROL_STANDBY_BEHAVIOUR.name,
     DYNAMICS_RESIDUAL_STANDBY.name,
     ROS2_REQUESTS.name,
+    SUPERVISOR_HEALTH_MORE.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -292,6 +313,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(DYNAMICS_RESIDUAL);
     v.message(CONTROL_STATUS);
     v.message(SUPERVISOR_HEALTH);
+    v.message(SUPERVISOR_HEALTH_MORE);
     v.message(SIM_WORLD);
     v.frames(CAMERA_DEPTH);
     v.frames(PERCEPTION_DEPTH);
@@ -313,6 +335,8 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(CONTROL_STANDBY_BEHAVIOUR);
     v.message(DYNAMICS_RESIDUAL_STANDBY);
     v.message(ROS2_REQUESTS);
+    v.message(CAMERA_STATUS);
+    v.message(AUDIO_MIC_STATUS);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

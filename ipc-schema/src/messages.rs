@@ -357,6 +357,60 @@ pub struct BridgeRequests {
 
 impl Zeroed for BridgeRequests {}
 
+/// A camera's own figures, 2 Hz and at exit ([`crate::CAMERA_STATUS`], one
+/// channel for every camera): what it published and why it dropped what it
+/// did not. Counts cumulative since that camera process started.
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::CameraStatus")]
+pub struct CameraStatus {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// the camera's index in `[[camera]]`
+    pub camera: u32,
+    /// where its frames come from: 0 simulated, 1 freenect (Kinect v1),
+    /// 2 ROS 2, 3 replay (`phri_config::CameraSource` in that order)
+    pub source: u32,
+    /// frames published on its `camera/depth` channel
+    pub frames: u64,
+    /// dropped: captured longer ago than `[camera] max_age_s` when they arrived
+    pub dropped_old: u64,
+    /// dropped: stamped in the future
+    pub dropped_future: u64,
+    /// dropped: malformed (wrong size or step, an encoding refused, values
+    /// that are not depths, a truncated file)
+    pub dropped_malformed: u64,
+    /// dropped: no usable intrinsics yet (a ROS 2 image before its
+    /// CameraInfo, or a CameraInfo refused)
+    pub dropped_no_info: u64,
+    /// dropped: the source ran behind its rate (a replay's tick overrun, a
+    /// frame the driver replaced before it was published)
+    pub dropped_behind: u64,
+}
+
+impl Zeroed for CameraStatus {}
+
+/// The microphone's own figures, 2 Hz and at exit ([`crate::AUDIO_MIC_STATUS`]).
+#[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::MicStatus")]
+pub struct MicStatus {
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// where the sound comes from: 0 the stand-in (`[audio]`), 1 ALSA
+    pub source: u32,
+    /// the capture device's own rate [Hz] (16 000 for the stand-in)
+    pub device_rate_hz: u32,
+    /// `audio/mic` chunks published
+    pub chunks: u64,
+    /// capture overruns (the device's buffer overflowed: sound lost)
+    pub overruns: u64,
+}
+
+impl Zeroed for MicStatus {}
+
 /// Bytes of [`BoxStatus::last_error`].
 pub const BOX_ERROR_TEXT: usize = 128;
 
@@ -431,6 +485,7 @@ pub trait Zeroed: Sized + Copy {
 
 impl Zeroed for JointState {}
 impl Zeroed for TorqueCommand {}
+impl Zeroed for ServiceHealth {}
 impl Zeroed for Residual {}
 impl Zeroed for ControlStatus {}
 impl Zeroed for Truth {}
@@ -1083,3 +1138,5 @@ message!(CommanderStats, published: |m| Some(m.stamp_ns));
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));
 message!(BoxStatus, published: |m| Some(m.stamp_ns), counted: [dof => tau_j, tau_ext_hat]);
 message!(BridgeRequests, published: |m| Some(m.stamp_ns));
+message!(CameraStatus, published: |m| Some(m.stamp_ns), stream: |m| u64::from(m.camera));
+message!(MicStatus, published: |m| Some(m.stamp_ns));

@@ -14,6 +14,11 @@ use std::sync::atomic::{AtomicI32, AtomicU64, Ordering};
 
 use crate::messages::MAX_SERVICES;
 
+/// Services whose pids an [`OwnerTable`] holds: as many as
+/// `supervisor/health` and `supervisor/health/more` list together (the
+/// supervisor's roster holds no more).
+pub const MAX_OWNERS: usize = 2 * MAX_SERVICES;
+
 /// The channels whose publishers are owned: what the controller, the
 /// residual and the voice recogniser act on, each with the binaries
 /// allowed to publish it.
@@ -21,8 +26,8 @@ pub const PUBLISHERS: &[(&str, &[&str])] = &[
     ("robot/state", &["phri-sim", "phri-franka"]),
     ("dynamics/residual", &["phri-dynamics"]),
     ("perception/repulsion", &["phri-repulsion"]),
-    // the simulated camera's body tracker (a real tracker's driver alike)
-    ("perception/skeleton", &["phri-camera"]),
+    // the simulated camera's stand-in body tracker, and the tracker on depth
+    ("perception/skeleton", &["phri-camera", "phri-tracker"]),
     ("perception/hand", &["phri-perception"]),
     ("hri/request", &["phri-gesture", "phri-voice", "phri-ros2"]),
     ("audio/mic", &["phri-mic"]),
@@ -132,17 +137,17 @@ pub struct ServiceRole {
 pub struct OwnerTable {
     supervised: bool,
     roles: Vec<ServiceRole>,
-    pids: [AtomicI32; MAX_SERVICES],
+    pids: [AtomicI32; MAX_OWNERS],
     refused: [[AtomicU64; REFUSALS]; PUBLISHERS.len()],
     /// the newest stranger's pid per owned channel
     stranger_pid: [AtomicI32; PUBLISHERS.len()],
 }
 
 impl OwnerTable {
-    /// A table for the configured `roles` (at most [`MAX_SERVICES`]; the
+    /// A table for the configured `roles` (at most [`MAX_OWNERS`]; the
     /// rest are never owners). `supervised`: false accepts every sender.
     pub fn new(mut roles: Vec<ServiceRole>, supervised: bool) -> OwnerTable {
-        roles.truncate(MAX_SERVICES);
+        roles.truncate(MAX_OWNERS);
         OwnerTable {
             supervised,
             roles,

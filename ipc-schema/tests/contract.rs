@@ -41,6 +41,8 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     // 40 bytes larger: the commands refused per slot (a stranger's, malformed)
     check::<CommanderStats>("phri::CommanderStats", 144);
     check::<BridgeRequests>("phri::BridgeRequests", 56);
+    check::<CameraStatus>("phri::CameraStatus", 72);
+    check::<MicStatus>("phri::MicStatus", 40);
 }
 
 /// phri opens its channels' services without naming their types to iceoryx2

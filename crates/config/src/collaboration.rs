@@ -13,6 +13,22 @@ use crate::error::Invalid;
 pub struct SkeletonConfig {
     /// publish `perception/skeleton` with every frame of the simulated camera
     pub enabled: bool,
+    /// where the skeletons come from: `sim`, the simulated camera's stand-in
+    /// tracker from the simulation's truth (the settings below); `depth`,
+    /// phri's own tracker (`phri-tracker`) on the depth frames. A camera
+    /// whose source is not `sim` always uses `depth`.
+    #[serde(default)]
+    pub source: SkeletonSource,
+    /// which way the depth tracker takes a person to face, for their own
+    /// left and right (depth alone cannot tell front from back): `robot`,
+    /// toward the robot's base (a person working with the arm faces it);
+    /// `camera`, toward the camera
+    #[serde(default)]
+    pub facing: Facing,
+    /// the depth tracker's settings (`[skeleton.tracker]`, defaults in
+    /// `phri_people::TrackerConfig`)
+    #[serde(default)]
+    pub tracker: phri_people::TrackerConfig,
     /// standard deviation of the joint position jitter [m], per axis, white from frame to frame
     pub noise_m: f64,
     /// standard deviation of each joint's slowly drifting offset [m], per
@@ -32,9 +48,44 @@ pub struct SkeletonConfig {
     pub seed: u64,
 }
 
+/// Where a camera's skeletons come from (`[skeleton] source`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SkeletonSource {
+    /// the simulated camera's stand-in tracker, from the simulation's truth
+    #[default]
+    Sim,
+    /// phri's own tracker on the depth frames (`phri-tracker`)
+    Depth,
+}
+
+/// Which way a person seen in depth faces (`[skeleton] facing`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Facing {
+    /// toward the robot's base
+    #[default]
+    Robot,
+    /// toward the camera
+    Camera,
+}
+
+impl SkeletonSource {
+    /// The name the configuration gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SkeletonSource::Sim => "sim",
+            SkeletonSource::Depth => "depth",
+        }
+    }
+}
+
 impl SkeletonConfig {
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "skeleton";
+        self.tracker
+            .validate()
+            .map_err(|e| Invalid::new("skeleton.tracker", e.to_string()))?;
         within(S, "noise_m", self.noise_m, 0.0, 0.5)?;
         within(S, "bias_m", self.bias_m, 0.0, 0.5)?;
         positive(S, "bias_time_s", self.bias_time_s)?;

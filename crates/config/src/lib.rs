@@ -37,7 +37,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use toml::{Table, Value};
 
-pub use collaboration::{CollaborationConfig, GestureConfig, OnRequest, SkeletonConfig};
+pub use collaboration::{
+    CollaborationConfig, Facing, GestureConfig, OnRequest, SkeletonConfig, SkeletonSource,
+};
 pub use control::{AvoidanceParams, BodyAvoidance, ControlConfig, PathPace};
 pub use dynamics::ResidualConfig;
 pub use error::{ConfigError, Invalid};
@@ -45,7 +47,8 @@ pub use human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};
 pub use merge::{apply_set, merge};
 pub use per_joint::PerJoint;
 pub use perception::{
-    CameraConfig, DepthSource, FusedDirection, IngestConfig, PointConfig, RepulsionConfig,
+    valid_topic, CameraConfig, CameraSource, DepthSource, FusedDirection, IngestConfig,
+    PointConfig, RepulsionConfig,
 };
 pub use record::{Compression, RecordConfig};
 pub use robot::{CapsuleConfig, RobotSection, DEFAULT_ROBOT, DEFAULT_ROBOT_FILE};
@@ -54,8 +57,11 @@ pub use scenario::VoiceLine;
 pub use scenario::{Scenario, ScenarioError};
 pub use sim::SimConfig;
 pub use ssm::{HumanSpeed, SsmConfig};
-pub use supervisor::{camera_of, derive_camera_services, ServiceSpec, SupervisorConfig};
-pub use voice::{AudioConfig, AudioSource, VoiceConfig};
+pub use supervisor::{
+    camera_of, derive_camera_services, ServiceSpec, SupervisorConfig, CAMERA_SOURCE_BINARIES,
+    TRACKER_BINARY,
+};
+pub use voice::{AudioConfig, AudioSource, MicConfig, MicSource, VoiceConfig};
 
 /// The default configuration: `deploy/phri.toml` as built.
 pub const DEFAULTS: &str = include_str!("../../../deploy/phri.toml");
@@ -105,6 +111,7 @@ pub struct Config {
     pub collaboration: CollaborationConfig,
     pub voice: VoiceConfig,
     pub audio: AudioConfig,
+    pub mic: MicConfig,
     pub ros2: Ros2Config,
     #[serde(default)]
     pub scenario: ScenarioSection,
@@ -448,6 +455,37 @@ fn absolute_urdf(table: &mut Table, base_file: &Path) {
     }
 }
 
+/// The recording directories a camera replays (`[camera] replay_dir`, each
+/// `[[camera]]`'s, and the older `[perception] png_dir`) resolved against
+/// `base_file` ([`resolve`]) and made absolute, so that the services, which
+/// load the merged file from elsewhere, find them.
+fn absolute_dirs(table: &mut Table, base_file: &Path) {
+    let fix = |t: &mut Table, key: &str| {
+        let dir = t
+            .get(key)
+            .and_then(|v| v.as_str())
+            .filter(|d| !d.is_empty());
+        if let Some(dir) = dir.map(|d| resolve(base_file, d)) {
+            let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+            t.insert(key.into(), Value::String(dir.display().to_string()));
+        }
+    };
+    match table.get_mut("camera") {
+        Some(Value::Table(c)) => fix(c, "replay_dir"),
+        Some(Value::Array(list)) => {
+            for c in list.iter_mut() {
+                if let Value::Table(c) = c {
+                    fix(c, "replay_dir");
+                }
+            }
+        }
+        _ => {}
+    }
+    if let Some(Value::Table(p)) = table.get_mut("perception") {
+        fix(p, "png_dir");
+    }
+}
+
 /// `path` as given if absolute, else relative to the directory of `base_file`,
 /// then to the current directory, then to the defaults' directory.
 pub fn resolve(base_file: &Path, path: &str) -> PathBuf {
@@ -494,6 +532,7 @@ impl Config {
             "collaboration",
             "voice",
             "audio",
+            "mic",
             "ros2",
             "scenario",
         ];
@@ -541,6 +580,7 @@ impl Config {
                 });
             }
             derive_camera_services(&mut config.services, config.cameras.len());
+            config.apply_camera_sources();
             return Ok(config);
         }
         // through text, so that an error's position names the key
@@ -563,7 +603,61 @@ impl Config {
         })?;
         config.control.avoidance_params.v_max_repulsion = config.repulsion.params.v_max;
         config.cameras = vec![config.camera.clone()];
+        config.apply_camera_sources();
         Ok(config)
+    }
+
+    /// Each camera's source decides its service's binary (a Kinect is
+    /// served by `phri-freenect`, a ROS 2 camera by `phri-camera-ros2`, the
+    /// simulation and a replay by `phri-camera`); `[perception] source =
+    /// "png"`, the older way to replay, becomes the first camera's replay.
+    fn apply_camera_sources(&mut self) {
+        if self.perception.source == DepthSource::Png {
+            let p = &self.perception;
+            for c in [&mut self.camera]
+                .into_iter()
+                .chain(self.cameras.first_mut())
+            {
+                c.source = CameraSource::Replay;
+                c.replay_dir = p.png_dir.clone();
+                c.depth_scale_m = p.png_depth_scale;
+                c.rate_hz = p.png_rate_hz;
+                c.replay_loop = p.png_loop;
+            }
+            self.perception.source = DepthSource::Camera;
+        }
+        // a camera's depth tracker runs only where its skeletons come from depth
+        let depth: Vec<bool> = (0..self.cameras.len())
+            .map(|i| self.skeleton_source(i) == SkeletonSource::Depth)
+            .collect();
+        for spec in self.services.values_mut() {
+            if spec.binary == TRACKER_BINARY {
+                let camera = camera_of(&spec.args).unwrap_or(0);
+                spec.enabled &= depth.get(camera).copied().unwrap_or(false);
+                continue;
+            }
+            if !CAMERA_SOURCE_BINARIES.contains(&spec.binary.as_str()) {
+                continue;
+            }
+            let camera = camera_of(&spec.args).and_then(|i| self.cameras.get(i));
+            if let Some(c) = camera {
+                spec.binary = c.source.binary().to_string();
+            }
+        }
+    }
+
+    /// Where camera `camera`'s skeletons come from: `[skeleton] source`,
+    /// and always the depth tracker for a camera that is not simulated.
+    pub fn skeleton_source(&self, camera: usize) -> SkeletonSource {
+        match self.cameras.get(camera).map(|c| c.source) {
+            Some(CameraSource::Sim) | None => self.skeleton.source,
+            Some(_) => SkeletonSource::Depth,
+        }
+    }
+
+    /// Which source each camera runs, by camera index (for the report).
+    pub fn camera_sources(&self) -> Vec<CameraSource> {
+        self.cameras.iter().map(|c| c.source).collect()
     }
 
     /// Range checks of every section, naming the key at fault.
@@ -584,6 +678,8 @@ impl Config {
             ));
         }
         self.sim.validate()?;
+        // the older replay keys first: a camera replaying them names them
+        self.perception.validate()?;
         self.camera.validate()?;
         for (i, c) in self.cameras.iter().enumerate() {
             c.validate().map_err(|e| {
@@ -593,7 +689,6 @@ impl Config {
                 )
             })?;
         }
-        self.perception.validate()?;
         self.repulsion.validate()?;
         self.dynamics.validate()?;
         self.control.validate()?;
@@ -604,6 +699,7 @@ impl Config {
         self.collaboration.validate()?;
         self.voice.validate()?;
         self.audio.validate()?;
+        self.mic.validate()?;
         self.ros2.validate()?;
         // the safe ranges of the safety-relevant settings, in one place
         ranges::check(self)?;
@@ -816,8 +912,10 @@ impl Loaded {
         // relative paths anchored at the file that gave them
         let mut file = file;
         absolute_urdf(&mut file, path);
+        absolute_dirs(&mut file, path);
         merge(&mut table, &file);
         absolute_urdf(&mut over, path);
+        absolute_dirs(&mut over, path);
         merge(&mut table, &over);
         set_robot_file(&mut table, &robot_path);
         // an error about a key names what gave it: a --set, the file, the
@@ -985,8 +1083,10 @@ impl Loaded {
                 continue;
             }
             let function = match spec.binary.as_str() {
-                "phri-camera" if c.perception.source != DepthSource::Camera => continue,
-                "phri-camera" | "phri-perception" | "phri-repulsion" => {
+                b if CAMERA_SOURCE_BINARIES.contains(&b)
+                    || b == "phri-perception"
+                    || b == "phri-repulsion" =>
+                {
                     "collision avoidance (perception)"
                 }
                 "phri-dynamics" if !spec.args.iter().any(|a| a == "--standby") => {

@@ -7,11 +7,60 @@ use serde::{Deserialize, Serialize};
 use crate::check::{finite, non_negative, positive, within};
 use crate::error::Invalid;
 
-/// `[camera]`: the simulated depth camera.
+/// Where a camera's frames come from (`[camera] source`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CameraSource {
+    /// the simulated camera rendering the simulated cell (`phri-camera`)
+    #[default]
+    Sim,
+    /// a Kinect v1 through libfreenect (`phri-freenect`)
+    Freenect,
+    /// any ROS 2 depth camera: a `sensor_msgs/Image` and its `CameraInfo`
+    /// (`phri-camera-ros2`)
+    Ros2,
+    /// a directory of recorded frames (`phri-camera`)
+    Replay,
+}
+
+impl CameraSource {
+    /// The name the configuration gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraSource::Sim => "sim",
+            CameraSource::Freenect => "freenect",
+            CameraSource::Ros2 => "ros2",
+            CameraSource::Replay => "replay",
+        }
+    }
+
+    /// The binary that serves a camera of this source.
+    pub fn binary(self) -> &'static str {
+        match self {
+            CameraSource::Sim | CameraSource::Replay => "phri-camera",
+            CameraSource::Freenect => "phri-freenect",
+            CameraSource::Ros2 => "phri-camera-ros2",
+        }
+    }
+
+    /// Every source, in the configuration's order.
+    pub const ALL: [CameraSource; 4] = [
+        CameraSource::Sim,
+        CameraSource::Freenect,
+        CameraSource::Ros2,
+        CameraSource::Replay,
+    ];
+}
+
+/// `[camera]`: one depth camera (simulated, a Kinect, a ROS 2 camera or a
+/// recording), on `camera/depth` (`camera/I/depth` for `[[camera]]` entry I).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraConfig {
-    /// frame rate [Hz]
+    /// where the frames come from
+    pub source: CameraSource,
+    /// frame rate [Hz] (the simulated camera's and a replay's; a real
+    /// camera runs at its own)
     pub rate_hz: f64,
     /// capture → publish delay on top of rendering [ms] (a real sensor's latency)
     pub latency_ms: f64,
@@ -26,6 +75,23 @@ pub struct CameraConfig {
     /// the table under the robot: box corners [m], base frame
     pub table_min: [f64; 3],
     pub table_max: [f64; 3],
+    /// a real camera's frame whose capture lies further in the past than
+    /// this when it arrives is dropped (counted) [s]
+    pub max_age_s: f64,
+    /// `source = "freenect"`: the Kinect's index among libfreenect's devices
+    pub device_index: u32,
+    /// `source = "ros2"`: the `sensor_msgs/Image` topic (16UC1 or 32FC1)
+    pub image_topic: String,
+    /// `source = "ros2"`: its `sensor_msgs/CameraInfo` topic
+    pub info_topic: String,
+    /// `source = "replay"`: the directory of recorded frames (16-bit PNG,
+    /// headerless little-endian 16-bit raw, or a fakenect recording)
+    pub replay_dir: String,
+    /// `source = "replay"`: start over after the last frame
+    pub replay_loop: bool,
+    /// `source = "replay"`: metres per sample unit of the recorded frames
+    /// (0.001: millimetres; a fakenect recording is disparity, converted)
+    pub depth_scale_m: f64,
 }
 
 impl CameraConfig {
@@ -37,6 +103,33 @@ impl CameraConfig {
 
     pub fn validate(&self) -> Result<(), Invalid> {
         within("camera", "rate_hz", self.rate_hz, 1e-3, 1000.0)?;
+        within("camera", "max_age_s", self.max_age_s, 1e-3, 10.0)?;
+        if self.device_index > 63 {
+            return Err(Invalid::new(
+                "camera.device_index",
+                format!("{} is not a device index in 0..=63", self.device_index),
+            ));
+        }
+        if self.source == CameraSource::Replay && self.replay_dir.trim().is_empty() {
+            return Err(Invalid::new(
+                "camera.replay_dir",
+                "source = \"replay\" needs a directory",
+            ));
+        }
+        if self.source == CameraSource::Ros2 {
+            for (k, t) in [
+                ("image_topic", &self.image_topic),
+                ("info_topic", &self.info_topic),
+            ] {
+                if !valid_topic(t) {
+                    return Err(Invalid::new(
+                        format!("camera.{k}"),
+                        format!("'{t}' is not a ROS 2 topic name (letters, digits, _ and /)"),
+                    ));
+                }
+            }
+        }
+        within("camera", "depth_scale_m", self.depth_scale_m, 1e-6, 1.0)?;
         within("camera", "latency_ms", self.latency_ms, 0.0, 10_000.0)?;
         self.pose()?;
         let i = &self.intrinsics;
@@ -61,7 +154,21 @@ impl CameraConfig {
     }
 }
 
-/// Where ingestion takes its frames from.
+/// A ROS 2 topic name as phri accepts it: 1-256 characters of letters,
+/// digits, `_` and `/`, not starting with a digit, no empty segment.
+pub fn valid_topic(t: &str) -> bool {
+    let body = t.strip_prefix('/').unwrap_or(t);
+    !body.is_empty()
+        && t.len() <= 256
+        && !body.starts_with(|c: char| c.is_ascii_digit())
+        && body.split('/').all(|seg| {
+            !seg.is_empty() && seg.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
+}
+
+/// Where ingestion takes its frames from (`[perception] source`): kept
+/// so that older configurations load; `png` is a replay camera
+/// (`[camera] source = "replay"`), which the loader turns it into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DepthSource {

@@ -108,6 +108,7 @@ pub const SAFETY_RANGES: &[Range] = &[
     r("perception.self_filter.depth_tolerance_m", 0.0, 0.1, "m", "a larger tolerance removes a hand lying on the arm"),
     r("perception.self_filter.noise_sigmas", 0.0, 5.0, "", "more sigmas of depth noise remove a hand lying on the arm"),
     ro("camera.rate_hz", 0.0, 1000.0, "Hz", "frames per second"),
+    ro("camera.max_age_s", 0.0, 1.0, "s", STALE),
     // the repulsion (eq. 16)
     r("repulsion.params.rho", 0.1, 2.0, "m", "below 0.1 m the repulsion begins too close to evade a person; above 2 m it holds the arm away from the whole room"),
     r("repulsion.params.v_max", 0.05, 1.0, "m/s", "below 0.05 m/s the arm cannot evade a walking person; above 1 m/s the evasion is itself a hazard"),

@@ -42,6 +42,19 @@ pub struct SupervisorConfig {
     /// CPU pinning, is not permitted (`--require-rt`); otherwise the cell
     /// runs under the normal scheduler and its report says it was degraded
     pub require_rt: bool,
+    /// the supervisor's own watch loop runs under SCHED_FIFO at this
+    /// priority (1-99; 0: the normal scheduler) where the machine permits:
+    /// above every process under the normal scheduler, below every
+    /// real-time service (perception runs at 20-22, the torque loop at
+    /// 76-80), so it never delays them; a real-time service spinning on its
+    /// CPU pushes it to another
+    #[serde(default = "watchdog_priority")]
+    pub rt_priority: i32,
+}
+
+/// The supervisor's default SCHED_FIFO priority.
+fn watchdog_priority() -> i32 {
+    15
 }
 
 impl SupervisorConfig {
@@ -68,6 +81,12 @@ impl SupervisorConfig {
             return Err(Invalid::new(
                 "supervisor.restart_backoff_min_ms",
                 "larger than restart_backoff_max_ms",
+            ));
+        }
+        if !(0..=99).contains(&self.rt_priority) {
+            return Err(Invalid::new(
+                "supervisor.rt_priority",
+                format!("{} is outside 0-99", self.rt_priority),
             ));
         }
         if self.heartbeat_timeout_ms == 0 {
@@ -120,6 +139,10 @@ pub struct ServiceSpec {
     /// CPUs the service may run on (empty: any)
     #[serde(default)]
     pub cpus: Vec<usize>,
+    /// the share of one core the service may use, on average over the time
+    /// it ran (0-1; past it the run is degraded; none: not judged)
+    #[serde(default)]
+    pub cpu_budget: Option<f64>,
 }
 
 fn yes() -> bool {
@@ -145,6 +168,14 @@ impl ServiceSpec {
                 format!("{} is not in 0..=99", self.rt_priority),
             ));
         }
+        if let Some(b) = self.cpu_budget {
+            if !(b > 0.0 && b <= 1.0) {
+                return Err(Invalid::new(
+                    key("cpu_budget"),
+                    format!("{b} is not a share of one core in (0, 1]"),
+                ));
+            }
+        }
         if let Some(h) = &self.heartbeat {
             if !phri_ipc::ALL.contains(&h.as_str()) && phri_ipc::camera_of_channel(h).is_none() {
                 return Err(Invalid::new(
@@ -157,9 +188,25 @@ impl ServiceSpec {
     }
 }
 
-/// The binaries that run once per camera: the camera (or its driver) and
-/// its ingestion. Repulsion workers serve every camera's frames.
-pub const PER_CAMERA_BINARIES: &[&str] = &["phri-camera", "phri-perception"];
+/// The binaries that serve a camera's frames, one per source
+/// ([`crate::CameraSource::binary`]): a camera's service runs the one its
+/// `[camera] source` names, whichever of them the service lists.
+pub const CAMERA_SOURCE_BINARIES: &[&str] = &["phri-camera", "phri-freenect", "phri-camera-ros2"];
+
+/// The depth person tracker's binary: run for a camera whose skeletons
+/// come from depth ([`crate::Config::skeleton_source`]), disabled otherwise.
+pub const TRACKER_BINARY: &str = "phri-tracker";
+
+/// The binaries that run once per camera: the camera (or its driver), its
+/// ingestion and its person tracker. Repulsion workers serve every camera's
+/// frames.
+pub const PER_CAMERA_BINARIES: &[&str] = &[
+    "phri-camera",
+    "phri-freenect",
+    "phri-camera-ros2",
+    "phri-perception",
+    TRACKER_BINARY,
+];
 
 /// The services of cameras after the first, derived from the first's: for
 /// each service of a [`PER_CAMERA_BINARIES`] binary that has no `--camera`

@@ -127,3 +127,45 @@ impl AudioConfig {
         Ok(())
     }
 }
+
+/// Where `phri-mic` takes its sound from (`[mic] source`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MicSource {
+    /// the stand-in of `[audio]` (the simulated room or recordings)
+    #[default]
+    Sim,
+    /// a real microphone through ALSA
+    Alsa,
+}
+
+impl MicSource {
+    pub fn name(self) -> &'static str {
+        match self {
+            MicSource::Sim => "sim",
+            MicSource::Alsa => "alsa",
+        }
+    }
+}
+
+/// `[mic]`: the microphone behind `audio/mic`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MicConfig {
+    pub source: MicSource,
+    /// `source = "alsa"`: the ALSA capture device (`arecord -L` lists them)
+    pub device: String,
+}
+
+impl MicConfig {
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let d = self.device.trim();
+        if d.is_empty() || d.len() > 256 || d.chars().any(|c| c.is_control()) {
+            return Err(Invalid::new(
+                "mic.device",
+                "must name an ALSA device (1-256 printable characters, e.g. \"default\", \"hw:1,0\")",
+            ));
+        }
+        Ok(())
+    }
+}

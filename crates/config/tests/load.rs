@@ -476,3 +476,62 @@ fn each_further_camera_gets_its_own_camera_and_ingestion_services() {
     let got = format!("got {}", phri_config::MAX_ROSTER + 1);
     assert!(e.contains("services") && e.contains(&got), "{e}");
 }
+
+#[test]
+fn a_cameras_tracker_runs_only_where_its_skeletons_come_from_depth() {
+    let tracker = |l: &Loaded, name: &str| l.config.services.get(name).map(|s| s.enabled);
+    // the simulated camera's stand-in tracker by default: no phri-tracker
+    let l = load(&[]).unwrap();
+    assert_eq!(
+        l.config.skeleton_source(0),
+        phri_config::SkeletonSource::Sim
+    );
+    assert_eq!(tracker(&l, "tracker"), Some(false));
+    // depth for every camera, the second camera's derived tracker too
+    let two = deploy().with_file_name("two-cameras.toml");
+    let l = Loaded::load(&two, None, &["skeleton.source=\"depth\""]).unwrap();
+    assert_eq!(tracker(&l, "tracker"), Some(true));
+    assert_eq!(tracker(&l, "tracker-1"), Some(true));
+    assert!(l.config.services["tracker-1"]
+        .args
+        .windows(2)
+        .any(|w| w == ["--camera", "1"]));
+    // a camera that is not simulated always tracks on depth
+    let l = load(&["camera.source=\"replay\"", "camera.replay_dir=\"/tmp\""]).unwrap();
+    assert_eq!(
+        l.config.skeleton_source(0),
+        phri_config::SkeletonSource::Depth
+    );
+    assert_eq!(tracker(&l, "tracker"), Some(true));
+    // the tracker's own settings are checked by name
+    let e = err(&["skeleton.tracker.grid_step_px=0"]);
+    assert!(e.contains("skeleton.tracker"), "{e}");
+    let e = err(&["skeleton.facing=\"left\""]);
+    assert!(e.contains("skeleton.facing") || e.contains("facing"), "{e}");
+}
+
+/// A service's CPU budget is a share of one core: the default roster's sum
+/// to at most 1.5 cores of 2, and a budget outside (0, 1] is refused by key.
+#[test]
+fn cpu_budgets_are_shares_of_a_core_within_the_machine() {
+    let l = Loaded::load(&deploy(), None, &[]).unwrap();
+    let enabled: Vec<_> = l
+        .config
+        .services
+        .iter()
+        .filter(|(_, s)| s.enabled)
+        .collect();
+    let sum: f64 = enabled.iter().filter_map(|(_, s)| s.cpu_budget).sum();
+    assert!(
+        enabled.iter().all(|(_, s)| s.cpu_budget.is_some()),
+        "every default service has a budget"
+    );
+    assert!(sum <= 1.5, "{sum} cores");
+    for bad in ["0", "1.5", "-0.1"] {
+        let set = format!("services.sim.cpu_budget={bad}");
+        let e = Loaded::load(&deploy(), None, &[set.as_str()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("services.sim.cpu_budget"), "{e}");
+    }
+}

@@ -14,6 +14,7 @@
 //! - [`fusion`]: [`CameraView`] and [`fuse`], distances fused across several
 //!   cameras, each a lower bound of the truth.
 //! - [`png`](mod@png): 16-bit grayscale depth PNGs.
+//! - [`kinect`]: the Kinect v1's 11-bit disparity and millimetres.
 //!
 //! Frames: base frame of the robot (SI units); camera frame z forward, x right,
 //! y down. Depth frames are `width × height` row-major `u16` millimetres, 0 = no
@@ -25,10 +26,12 @@ pub mod distance;
 pub mod error;
 pub mod flying;
 pub mod fusion;
+pub mod kinect;
 mod lanes;
 pub mod noise;
 pub mod png;
 pub mod render;
+pub mod ros_image;
 pub mod selffilter;
 pub mod shapes;
 

@@ -4,6 +4,7 @@
 
 pub mod cli;
 pub mod clock;
+pub mod cputime;
 pub mod log;
 pub mod rt;
 pub mod rundir;

@@ -55,6 +55,32 @@ pub fn set_fifo_priority(priority: i32) -> Result<(), RtError> {
     fifo(priority)
 }
 
+/// Run the calling thread, a watchdog of real-time services, under
+/// SCHED_FIFO at `priority` (1-99) with SCHED_RESET_ON_FORK: processes and
+/// threads it starts begin under the normal scheduler (each service sets
+/// its own priority). A watchdog below the services it watches can be
+/// starved by the one that misbehaves, and then blames nobody. Memory is
+/// not locked: the thread does not run a control loop.
+pub fn make_watchdog(priority: i32) -> Result<(), RtError> {
+    if priority <= 0 {
+        return Err(RtError::NoPriority);
+    }
+    let param = libc::sched_param {
+        sched_priority: priority.min(99),
+    };
+    // SAFETY: plain syscall with valid arguments on the calling thread.
+    let rc = unsafe {
+        libc::sched_setscheduler(0, libc::SCHED_FIFO | libc::SCHED_RESET_ON_FORK, &param)
+    };
+    if rc != 0 {
+        return Err(RtError::Scheduler {
+            priority,
+            source: std::io::Error::last_os_error(),
+        });
+    }
+    Ok(())
+}
+
 /// SCHED_FIFO at `priority` (capped at 99) for the calling thread.
 fn fifo(priority: i32) -> Result<(), RtError> {
     let param = libc::sched_param {

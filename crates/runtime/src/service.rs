@@ -270,6 +270,8 @@ impl ServiceContext {
             let deadline = std::time::Duration::from_nanos(limit_ns.max(1));
             let opened = phri_ipc::node(&node_name, &prefix).and_then(|node| {
                 let sub = phri_ipc::SUPERVISOR_HEALTH.subscriber(&node, phri_ipc::Queue::Drain)?;
+                let more =
+                    phri_ipc::SUPERVISOR_HEALTH_MORE.subscriber(&node, phri_ipc::Queue::Drain)?;
                 let audits = if audit {
                     Some(phri_ipc::INPUT_AUDIT.publisher(&node)?)
                 } else {
@@ -283,7 +285,7 @@ impl ServiceContext {
                 .into_iter()
                 .collect();
                 let waitset = phri_ipc::liveness::waitset()?;
-                Ok((node, sub, audits, watched, waitset))
+                Ok((node, [sub, more], audits, watched, waitset))
             });
             let (_node, health, audits, watched, waitset) = match opened {
                 Ok(x) => x,
@@ -341,28 +343,34 @@ impl ServiceContext {
                     }
                 }
                 let now = crate::now_ns();
-                let mut newest: Option<phri_ipc::Health> = None;
-                let _ = health.drain_from(|pid, h| {
-                    if trusted == Some(pid) || is_supervisor(pid, &prefix) {
-                        trusted = Some(pid);
-                        newest = Some(*h);
-                    } else if refused_pid != pid {
-                        refused_pid = pid;
-                        tracing::warn!(
-                            "supervisor/health from pid {pid}, not this cell's supervisor: ignored"
-                        );
-                    }
-                });
-                if let Some(h) = newest {
-                    last = now;
-                    told_dead = false;
-                    for s in h
-                        .services
-                        .iter()
-                        .take((h.count as usize).min(h.services.len()))
-                    {
+                // the newest of each page: the first services, and those past them
+                let mut newest: [Option<phri_ipc::Health>; 2] = [None, None];
+                for (page, sub) in newest.iter_mut().zip(&health) {
+                    let _ = sub.drain_from(|pid, h| {
+                        if trusted == Some(pid) || is_supervisor(pid, &prefix) {
+                            trusted = Some(pid);
+                            *page = Some(*h);
+                        } else if refused_pid != pid {
+                            refused_pid = pid;
+                            tracing::warn!(
+                                "supervisor/health from pid {pid}, not this cell's supervisor: ignored"
+                            );
+                        }
+                    });
+                }
+                for (k, h) in newest.iter().enumerate() {
+                    let Some(h) = h else { continue };
+                    let listed = (h.count as usize)
+                        .saturating_sub(k * phri_ipc::MAX_SERVICES)
+                        .min(h.services.len());
+                    for s in &h.services[..listed] {
                         owners.set_pid(s.name_str(), if s.alive != 0 { s.pid } else { 0 });
                     }
+                }
+                let newest = newest[0];
+                if newest.is_some() {
+                    last = now;
+                    told_dead = false;
                 }
                 if first {
                     if newest.is_none() && now <= first_by {

@@ -236,7 +236,9 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         // a request lost may have been a stop: the controller in charge stops
-        if request_watch.read(taken, mono) && (!with_standby || role.in_charge(&state)) {
+        // (seen as the standby, when the charge comes here within the hold)
+        request_watch.read(taken, mono);
+        if request_watch.stop_for_loss(!with_standby || role.in_charge(&state), mono) {
             controller.requests_lost();
         }
         input.collab.requests = &pending[..k];

@@ -12,6 +12,12 @@ pub const REQUEST_QUEUE: usize = HRI_REQUEST.qos.subscriber_max_buffer;
 /// period empties it (more, arrived while it was read, wait for the next).
 pub const MAX_REQUESTS: usize = 2 * REQUEST_QUEUE;
 
+/// How long a loss seen while this controller is not in charge still stops
+/// it when it takes charge [s]: both controllers of a hot standby stalled
+/// together, the one that read its full queue first may still be the
+/// standby while the robot hands the charge over to it.
+pub const LOSS_HOLD: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// When the queue was last read and how often it may have lost requests.
 /// Allocates nothing.
 #[derive(Clone, Copy, Debug, Default)]
@@ -21,6 +27,8 @@ pub struct RequestQueueWatch {
     /// occasions on which requests may have been lost (`collab/state`'s
     /// `requests_dropped`)
     dropped: u32,
+    /// the last loss not yet acted on, when it was seen [ns, CLOCK_MONOTONIC]
+    unanswered_ns: Option<u64>,
 }
 
 impl RequestQueueWatch {
@@ -33,8 +41,27 @@ impl RequestQueueWatch {
         let lost = taken >= REQUEST_QUEUE && unread_ns >= DELIVERY_WAIT.as_nanos() as u64;
         if lost {
             self.dropped = self.dropped.saturating_add(1);
+            self.unanswered_ns = Some(now_ns);
         }
         lost
+    }
+
+    /// After [`read`](Self::read) at `now_ns`: must the controller stop as
+    /// if a lost request had been a stop? Yes once, the first time it is in
+    /// charge within [`LOSS_HOLD`] of a loss (a loss seen as the standby is
+    /// the one in charge's to answer, unless the charge comes here).
+    pub fn stop_for_loss(&mut self, in_charge: bool, now_ns: u64) -> bool {
+        let Some(seen) = self.unanswered_ns else {
+            return false;
+        };
+        if now_ns.saturating_sub(seen) > LOSS_HOLD.as_nanos() as u64 {
+            self.unanswered_ns = None;
+            return false;
+        }
+        if in_charge {
+            self.unanswered_ns = None;
+        }
+        in_charge
     }
 
     /// Occasions on which requests may have been lost since the start.
@@ -62,5 +89,25 @@ mod tests {
         assert!(w.read(REQUEST_QUEUE, 1_000 + 3 * WAIT));
         assert!(!w.read(REQUEST_QUEUE, 1_000 + 3 * WAIT + 1));
         assert_eq!(w.dropped(), 1);
+    }
+
+    #[test]
+    fn a_loss_stops_the_controller_in_charge_once_even_if_the_charge_comes_later() {
+        const HOLD: u64 = LOSS_HOLD.as_nanos() as u64;
+        let mut w = RequestQueueWatch::default();
+        assert!(!w.stop_for_loss(true, 0));
+        w.read(0, 1_000);
+        assert!(w.read(REQUEST_QUEUE, 1_000 + WAIT));
+        // seen as the standby: nothing yet; in charge a period later: stop, once
+        assert!(!w.stop_for_loss(false, 1_000 + WAIT));
+        assert!(w.stop_for_loss(true, 1_000 + WAIT + 1_000_000));
+        assert!(!w.stop_for_loss(true, 1_000 + WAIT + 2_000_000));
+        // a loss whose hold ran out as the standby stops nobody
+        let t = 1_000 + 2 * WAIT + HOLD;
+        w.read(0, t);
+        assert!(w.read(REQUEST_QUEUE, t + WAIT));
+        assert!(!w.stop_for_loss(false, t + WAIT));
+        assert!(!w.stop_for_loss(true, t + WAIT + HOLD + 1));
+        assert_eq!(w.dropped(), 2);
     }
 }

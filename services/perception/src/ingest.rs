@@ -126,6 +126,9 @@ pub struct Ingest {
     max_age_ns: u64,
     /// the collaborative hand to remove (while a collaboration is on)
     mask: Option<HandMask>,
+    /// remove isolated flying pixels (off for a reader that ignores them,
+    /// the person tracker)
+    flying: bool,
 }
 
 /// What [`Ingest::step`] did.
@@ -154,8 +157,16 @@ impl Ingest {
             max_state_gap_ns: (cfg.max_state_gap_ms * 1e6) as u64,
             max_age_ns: (cfg.max_frame_age_ms * 1e6) as u64,
             mask: None,
+            flying: true,
             model,
         })
+    }
+
+    /// Leave isolated flying pixels in (a reader that ignores them anyway:
+    /// the person tracker, whose segmentation drops what is too small).
+    pub fn keep_flying_pixels(mut self) -> Ingest {
+        self.flying = false;
+        self
     }
 
     /// From the next frame on, remove the collaborative hand of `mask` (the
@@ -247,8 +258,8 @@ impl Ingest {
             ));
         }
         let flying = match self.filter.as_ref() {
-            Some((_, _, fp)) => fp.apply(input, out).map_err(filter_err)?,
-            None => {
+            Some((_, _, fp)) if self.flying => fp.apply(input, out).map_err(filter_err)?,
+            _ => {
                 out.copy_from_slice(input);
                 0
             }

@@ -22,6 +22,7 @@ use crate::ingest::{FrameError, Ingest, StateHistory};
 use crate::mask::{collaborating_part, hand_observation, MaskHold};
 use crate::repulsion::{RepulsionError, Worker};
 use crate::skeleton::{merge_views, SkeletonTracker};
+use crate::tracker::{DepthTracker, TrackerError};
 
 /// Why a perception step failed, by the service whose step it was.
 #[derive(Debug, thiserror::Error)]
@@ -44,6 +45,12 @@ pub enum PipelineError {
         #[source]
         source: RepulsionError,
     },
+    #[error("camera {camera}: {source}")]
+    Tracker {
+        camera: usize,
+        #[source]
+        source: TrackerError,
+    },
     #[error(transparent)]
     Config(#[from] Invalid),
 }
@@ -55,6 +62,7 @@ impl PipelineError {
             PipelineError::Camera { .. } => "camera",
             PipelineError::Frame { .. } | PipelineError::Config(_) => "perception",
             PipelineError::Repulsion { .. } => "repulsion",
+            PipelineError::Tracker { .. } => "tracker",
         }
     }
 }
@@ -63,6 +71,8 @@ impl PipelineError {
 struct Eye {
     camera: CameraSim,
     tracker: SkeletonTracker,
+    /// the tracker on depth, where this camera's skeletons come from depth
+    depth: Option<DepthTracker>,
     skeleton: Skeleton,
     ingest: Ingest,
     workers: Vec<Worker>,
@@ -99,8 +109,18 @@ impl Perception {
                     false => worker,
                 });
             }
+            let depth = match config.skeleton_source(i) {
+                phri_config::SkeletonSource::Depth => Some(DepthTracker::new(
+                    model.clone(),
+                    &config.skeleton,
+                    &config.perception,
+                    c,
+                )?),
+                phri_config::SkeletonSource::Sim => None,
+            };
             eyes.push(Eye {
                 tracker: SkeletonTracker::new(&config.skeleton, c.intrinsics, camera.pose()),
+                depth,
                 skeleton: Skeleton::zeroed(),
                 ingest: Ingest::new(model.clone(), &config.perception)?,
                 header: FrameHeader::zeroed(),
@@ -126,26 +146,34 @@ impl Perception {
 
     /// Every camera captures `world` at `now_ns` (robot clock, also its
     /// capture wall time), and its tracker finds the people of that frame
-    /// (`frame_period_s` apart); the skeletons are merged (a joint either
+    /// (`frame_period_s` apart; the tracker on depth removes the robot at
+    /// its state in `history`); the skeletons are merged (a joint either
     /// camera sees is seen). Returns the merged skeleton.
     pub fn capture(
         &mut self,
         world: &WorldState,
         now_ns: u64,
         frame_period_s: f64,
+        history: &StateHistory,
     ) -> Result<&Skeleton, PipelineError> {
         for (i, eye) in self.eyes.iter_mut().enumerate() {
             eye.header = FrameHeader::zeroed();
             eye.camera
                 .step(world, now_ns, &mut eye.frame, &mut eye.header)
                 .map_err(|source| PipelineError::Camera { camera: i, source })?;
-            eye.tracker.step(
-                world,
-                &eye.header,
-                &eye.frame,
-                frame_period_s,
-                &mut eye.skeleton,
-            );
+            match eye.depth.as_mut() {
+                Some(t) => {
+                    t.step(&eye.header, &eye.frame, history, now_ns, &mut eye.skeleton)
+                        .map_err(|source| PipelineError::Tracker { camera: i, source })?;
+                }
+                None => eye.tracker.step(
+                    world,
+                    &eye.header,
+                    &eye.frame,
+                    frame_period_s,
+                    &mut eye.skeleton,
+                ),
+            }
             match i {
                 0 => self.skeleton = eye.skeleton,
                 _ => merge_views(&mut self.skeleton, &eye.skeleton),

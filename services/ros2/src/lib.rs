@@ -17,22 +17,33 @@
 //! | `/phri/repulsion` | `visualization_msgs/MarkerArray` | best effort, keep last 5 |
 //! | `/phri/depth` | `sensor_msgs/Image` (16UC1) | best effort, keep last 1 |
 //! | `/phri/points` | `sensor_msgs/PointCloud2` | best effort, keep last 1 |
+//! | `/humans/bodies/tracked` | `hri_msgs/IdsList` | reliable, keep last 10 |
 //! | `/phri/request` (taken) | `std_msgs/String` | reliable, keep last 64 |
+//!
+//! The people the body trackers see (every camera's `perception/skeleton`)
+//! are published as ROS4HRI does (REP 155, [`humans`]): the ids of the
+//! bodies tracked on `/humans/bodies/tracked`, and on `/tf` a frame
+//! `body_<id>` per body and one per joint seen (`head_<id>`,
+//! `l_wrist_<id>`, ...).
 //!
 //! A topic nobody subscribes to costs nothing: the binary tells the bridge
 //! which topics DDS has matched readers for ([`Subscribed`]), and the bridge
 //! converts only those (ROS 2's "lazy publisher"; the cell's CPU is not
 //! spent on images nobody looks at).
 
+pub mod camera;
 pub mod convert;
 pub mod discovery;
 pub mod gate;
+pub mod humans;
 pub mod msgs;
+pub mod participant;
 pub mod request;
 
 use phri_config::{Config, Ros2Config};
 use phri_ipc::{
     CollabState, ControlStatus, FrameHeader, HriRequest, RepulsionResult, RequestKind, Residual,
+    Skeleton,
 };
 use phri_viz::status::{Status, Thresholds};
 use phri_viz::RobotView;
@@ -40,7 +51,7 @@ use phri_viz::RobotView;
 pub use convert::{Clock, BASE_FRAME, CAMERA_FRAME};
 pub use gate::{PeerId, RefusalKind};
 use msgs::{
-    DiagnosticArray, DiagnosticStatus, Header, Image, JointState, KeyValue, MarkerArray,
+    DiagnosticArray, DiagnosticStatus, Header, IdsList, Image, JointState, KeyValue, MarkerArray,
     PointCloud2, TfMessage, WrenchStamped,
 };
 pub use request::RequestError;
@@ -100,6 +111,10 @@ pub struct Counts {
     pub repulsion: u64,
     pub depth: u64,
     pub points: u64,
+    /// `/humans/bodies/tracked`
+    pub humans: u64,
+    /// `/tf` messages of the bodies' frames
+    pub bodies_tf: u64,
     /// requests passed into `hri/request` (stops among them)
     pub requests: u64,
     /// stops passed into `hri/request`
@@ -123,6 +138,8 @@ pub struct Subscribed {
     pub repulsion: bool,
     pub depth: bool,
     pub points: bool,
+    /// `/humans/bodies/tracked`
+    pub humans: bool,
 }
 
 impl Subscribed {
@@ -135,6 +152,7 @@ impl Subscribed {
         repulsion: true,
         depth: true,
         points: true,
+        humans: true,
     };
 
     /// Does any subscriber need every robot state (1 kHz wake-ups)?
@@ -156,6 +174,14 @@ pub struct FrameOut<'a> {
     pub points: Option<&'a PointCloud2>,
     /// the camera's optical frame in [`BASE_FRAME`] at the frame's time
     pub camera_tf: Option<TfMessage>,
+}
+
+/// What one skeleton gives.
+pub struct SkeletonOut {
+    /// `/humans/bodies/tracked`
+    pub tracked: Option<IdsList>,
+    /// its bodies' frames (none without a body seen)
+    pub tf: Option<TfMessage>,
 }
 
 /// A rate limit on phri's clock: due at most once per period.
@@ -214,6 +240,8 @@ pub struct Bridge {
     pub counts: Counts,
     /// the last `ros2/requests` message's sequence number
     requests_seq: u64,
+    /// the bodies every camera tracks
+    tracked: humans::Tracked,
 }
 
 impl Bridge {
@@ -261,6 +289,7 @@ impl Bridge {
             subscribed: Subscribed::default(),
             counts: Counts::default(),
             requests_seq: 0,
+            tracked: humans::Tracked::default(),
         })
     }
 
@@ -438,6 +467,28 @@ impl Bridge {
             image: image.then_some(&self.image),
             points: points.then_some(&self.cloud),
             camera_tf,
+        }
+    }
+
+    /// Camera `camera`'s skeleton (`perception/skeleton`, `perception/1/skeleton`, ...)
+    /// as ROS4HRI ([`humans`]): `/humans/bodies/tracked` (every camera's
+    /// bodies), and its bodies' frames on `/tf`; each only when subscribed.
+    pub fn skeleton(&mut self, camera: usize, s: &Skeleton, clock: &Clock) -> SkeletonOut {
+        if !self.subscribed.humans && !self.subscribed.tf {
+            return SkeletonOut {
+                tracked: None,
+                tf: None,
+            };
+        }
+        let t = humans::stamp_ns(s);
+        let (mut list, transforms) = humans::bodies(s, camera, BASE_FRAME, clock.ros(t));
+        list.ids = self.tracked.update(camera, list.ids, t);
+        self.counts.humans += u64::from(self.subscribed.humans);
+        let tf = (self.subscribed.tf && !transforms.is_empty()).then_some(TfMessage { transforms });
+        self.counts.bodies_tf += u64::from(tf.is_some());
+        SkeletonOut {
+            tracked: self.subscribed.humans.then_some(list),
+            tf,
         }
     }
 
@@ -696,6 +747,66 @@ mod tests {
         // force 100 Hz, repulsion 10 Hz
         assert_eq!(run(&mut b), (30, 3, 6, 2, 6, 10, 100 + 1000 * 10));
         assert_eq!(b.joint_names().len(), 7);
+    }
+
+    fn skeleton_of(camera_wall_ns: u64, ids: &[u32]) -> Skeleton {
+        let mut s = Skeleton::zeroed();
+        (s.capture_wall_ns, s.published_ns) = (camera_wall_ns, camera_wall_ns + 20_000_000);
+        s.n_people = ids.len() as u32;
+        for (p, id) in s.people.iter_mut().zip(ids) {
+            (p.id, p.tracked) = (*id, 1);
+            p.confidence[phri_ipc::SkeletonJoint::Head as usize] = 1.0;
+            p.joints[phri_ipc::SkeletonJoint::Head as usize] = [1.0, 0.0, 1.7];
+        }
+        s
+    }
+
+    #[test]
+    fn skeletons_become_ros4hri_bodies_only_when_subscribed() {
+        let clock = Clock::new(1_000_000_000, 1_764_000_000_000_000_000);
+        let mut b = bridge();
+        let out = b.skeleton(0, &skeleton_of(2_000_000_000, &[7]), &clock);
+        assert!(out.tracked.is_none() && out.tf.is_none());
+        assert_eq!(b.counts, Counts::default());
+        // /humans/bodies/tracked only: every camera's bodies, stamped with
+        // the capture time on ROS time; empty messages too
+        b.subscribed.humans = true;
+        let out = b.skeleton(0, &skeleton_of(2_000_000_000, &[7]), &clock);
+        let list = out.tracked.unwrap();
+        assert_eq!(list.ids, ["b07"]);
+        assert_eq!(list.header.stamp.to_ns(), 1_764_000_001_000_000_000);
+        assert!(out.tf.is_none());
+        let out = b.skeleton(1, &skeleton_of(2_010_000_000, &[7, 8]), &clock);
+        assert_eq!(out.tracked.unwrap().ids, ["b07", "b17", "b18"]);
+        b.skeleton(1, &skeleton_of(2_040_000_000, &[]), &clock);
+        let out = b.skeleton(0, &skeleton_of(2_033_000_000, &[]), &clock);
+        assert!(out.tracked.unwrap().ids.is_empty());
+        // /tf only: the bodies' frames, none for an empty skeleton
+        b.subscribed = Subscribed {
+            tf: true,
+            ..Subscribed::default()
+        };
+        let out = b.skeleton(0, &skeleton_of(2_066_000_000, &[7]), &clock);
+        assert!(out.tracked.is_none());
+        let frames: Vec<(String, String)> = out
+            .tf
+            .unwrap()
+            .transforms
+            .into_iter()
+            .map(|t| (t.header.frame_id, t.child_frame_id))
+            .collect();
+        assert_eq!(
+            frames,
+            [
+                (BASE_FRAME.to_string(), "body_b07".to_string()),
+                ("body_b07".to_string(), "head_b07".to_string())
+            ]
+        );
+        assert!(b
+            .skeleton(0, &skeleton_of(2_100_000_000, &[]), &clock)
+            .tf
+            .is_none());
+        assert_eq!((b.counts.humans, b.counts.bodies_tf), (4, 1));
     }
 
     #[test]

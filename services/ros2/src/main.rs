@@ -1,7 +1,8 @@
 //! `phri-ros2`: the cell on ROS 2's wire. Reads `robot/state`,
 //! `control/status`, `collab/state`, `dynamics/residual`,
-//! `perception/repulsion` and `perception/depth` and publishes them as ROS
-//! 2 topics over DDS ([`phri_ros2`]'s table); takes `/phri/request` into
+//! `perception/repulsion`, `perception/depth` and every camera's
+//! `perception/skeleton` and publishes them as ROS 2 topics over DDS
+//! ([`phri_ros2`]'s table; the people as ROS4HRI does); takes `/phri/request` into
 //! `hri/request` when `[ros2] accept_requests` is set, stops first and each
 //! peer within its rate. ROS 2's domain: `ROS_DOMAIN_ID` (default 0). This
 //! host only unless `[ros2] discovery = "subnet"`: every DDS socket bound to
@@ -23,12 +24,12 @@ use phri_ipc::{
 };
 use phri_ros2::gate::{shown, RefusalLog};
 use phri_ros2::msgs::{self, RosType};
-use phri_ros2::{discovery, Bridge, Clock, RefusalKind, RequestSample, Subscribed};
+use phri_ros2::participant::{domain_id, participant, realtime_ns};
+use phri_ros2::{Bridge, Clock, RefusalKind, RequestSample, Subscribed};
 use phri_runtime::{now_ns, ServiceContext};
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{
     qos::{History, WhenFull},
-    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile,
+    MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile,
 };
 use serde::Serialize;
 
@@ -79,20 +80,6 @@ fn main() -> ExitCode {
     phri_runtime::service::run("phri-ros2", body)
 }
 
-/// ROS 2's domain from `ROS_DOMAIN_ID` (unset or empty: 0).
-fn domain_id() -> Result<u16, String> {
-    match std::env::var("ROS_DOMAIN_ID") {
-        Err(_) => Ok(0),
-        Ok(s) if s.trim().is_empty() => Ok(0),
-        Ok(s) => s
-            .trim()
-            .parse::<u16>()
-            .ok()
-            .filter(|d| *d <= 232)
-            .ok_or_else(|| format!("ROS_DOMAIN_ID: '{s}' is not a domain id (0-232)")),
-    }
-}
-
 fn publisher<M: RosType + Serialize>(
     node: &mut Node,
     topic: &str,
@@ -120,81 +107,24 @@ fn send<M: Serialize>(p: &Publisher<M>, m: M, failed: &mut u64) {
     }
 }
 
-/// The local addresses of this process's UDP sockets (`/proc/self/fd`,
-/// `/proc/self/net/udp`).
-fn own_udp_sockets() -> Result<Vec<std::net::SocketAddrV4>, String> {
-    let mut inodes = Vec::new();
-    let fds = std::fs::read_dir("/proc/self/fd").map_err(|e| format!("/proc/self/fd: {e}"))?;
-    for fd in fds.flatten() {
-        if let Ok(link) = std::fs::read_link(fd.path()) {
-            let link = link.to_string_lossy();
-            if let Some(inode) = link
-                .strip_prefix("socket:[")
-                .and_then(|s| s.strip_suffix(']'))
-                .and_then(|s| s.parse::<u64>().ok())
-            {
-                inodes.push(inode);
-            }
-        }
-    }
-    let table = std::fs::read_to_string("/proc/self/net/udp")
-        .map_err(|e| format!("/proc/self/net/udp: {e}"))?;
-    Ok(discovery::udp_local_addresses(&table, &inodes))
-}
-
-/// CLOCK_REALTIME [ns].
-fn realtime_ns() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos() as u64)
-        .unwrap_or(0)
-}
-
 fn body() -> Result<(), Box<dyn Error>> {
     let (ctx, phri_runtime::cli::NoExtra {}) = ServiceContext::from_cli(
         "phri-ros2",
         "ros2",
-        "The cell as ROS 2 topics over DDS (/joint_states, /tf, /phri/*) and /phri/request into hri/request",
+        "The cell as ROS 2 topics over DDS (/joint_states, /tf, /phri/*, /humans/bodies/tracked) and /phri/request into hri/request",
     )?;
     let mut bridge = Bridge::new(ctx.config(), ctx.robot_model()?)?;
     let domain = domain_id()?;
-    let env = |name: &str| std::env::var(name).ok();
-    let (reach, decided_by) = discovery::resolve(
-        ctx.config().ros2.discovery,
-        env(discovery::RANGE_VAR).as_deref(),
-        env(discovery::LOCALHOST_ONLY_VAR).as_deref(),
-    )?;
+    let (reach, decided_by) = phri_ros2::participant::reach(ctx.config())?;
     let local = reach == Ros2Discovery::Localhost;
     if ctx.checking() {
         return Ok(());
     }
     phri_viz::cpu::keep_off_the_loop(ctx.config());
-    // DDS's own threads start here, under the normal scheduler, off the loop's CPUs
-    let mut participant = DomainParticipantBuilder::new(domain);
-    if local {
-        // RustDDS (patches/rustdds) binds every socket to 127.0.0.1 then: the
-        // kernel neither delivers to it nor lets it send on another interface
-        participant = participant.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
-    }
-    let dds = participant
-        .build()
-        .map_err(|e| format!("DDS domain {domain}: {e:?}"))
-        .and_then(|p| {
-            Context::from_domain_participant(p).map_err(|e| format!("DDS domain {domain}: {e:?}"))
-        })?;
-    if local {
-        // the kernel's word, not the DDS library's: every socket on 127.0.0.1
-        // (a RustDDS without patches/rustdds binds 0.0.0.0)
-        let sockets = own_udp_sockets()?;
-        if let Some(a) = sockets.iter().find(|a| !a.ip().is_loopback()) {
-            return Err(format!(
-                "ros2.discovery = localhost, but a DDS socket is bound to {a}: not started \
-                 (RustDDS must be patches/rustdds)"
-            )
-            .into());
-        }
-        tracing::debug!("DDS sockets: {sockets:?}");
-    }
+    // DDS's own threads start here, under the normal scheduler, off the
+    // loop's CPUs; with `localhost` RustDDS (patches/rustdds) binds every
+    // socket to 127.0.0.1, which the kernel's table confirms
+    let dds = participant(domain, local)?;
     let mut ros = dds
         .new_node(
             NodeName::new("/", "phri").map_err(|e| format!("ROS 2 node name: {e}"))?,
@@ -208,6 +138,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let repulsion = publisher::<msgs::MarkerArray>(&mut ros, "/phri/repulsion", SENSOR)?;
     let depth = publisher::<msgs::Image>(&mut ros, "/phri/depth", IMAGE)?;
     let points = publisher::<msgs::PointCloud2>(&mut ros, "/phri/points", IMAGE)?;
+    let humans = publisher::<msgs::IdsList>(&mut ros, phri_ros2::humans::TRACKED_TOPIC, RELIABLE)?;
     let request_topic = ros
         .create_topic(
             &Name::new("/phri", "request").map_err(|e| format!("ROS 2 topic: {e}"))?,
@@ -221,16 +152,7 @@ fn body() -> Result<(), Box<dyn Error>> {
 
     // ROS 2's discovery (matched subscribers, ros_discovery_info) runs on a
     // thread of its own
-    let spinner = ros
-        .spinner()
-        .map_err(|e| format!("ROS 2 node's discovery: {e:?}"))?;
-    std::thread::Builder::new()
-        .name("ros2-discovery".into())
-        .spawn(move || {
-            if let Err(e) = futures::executor::block_on(spinner.spin()) {
-                tracing::warn!("ROS 2 discovery stopped: {e:?}");
-            }
-        })?;
+    phri_ros2::participant::spin_discovery(&mut ros)?;
 
     ctx.start_deadman()?;
     let node = ctx.node()?;
@@ -240,15 +162,20 @@ fn body() -> Result<(), Box<dyn Error>> {
     let residual = DYNAMICS_RESIDUAL.subscriber(&node, Queue::Latest)?;
     let results = PERCEPTION_REPULSION.subscriber(&node, Queue::Drain)?;
     let frames = PERCEPTION_DEPTH.frame_subscriber(&node, Queue::Latest)?;
+    let skeletons = phri_ipc::cameras(ctx.config().cameras.len())
+        .iter()
+        .map(|c| c.skeleton.subscriber(&node, Queue::Drain))
+        .collect::<Result<Vec<_>, _>>()?;
     let requests_out = HRI_REQUEST.publisher(&node)?;
     let requests_audit = ROS2_REQUESTS.publisher(&node)?;
     let mut audited_at = std::time::Instant::now();
     let mut beat = ctx.beat(&node)?;
     tracing::info!(
-        "on ROS 2 domain {domain}, {} ({}): /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points; /phri/request {}",
+        "on ROS 2 domain {domain}, {} ({}): /joint_states ({} joints), /tf, /phri/status, /phri/contact_force, /phri/repulsion, /phri/depth, /phri/points, /humans/bodies/tracked ({} camera(s)); /phri/request {}",
         if local { "this host only (every DDS socket on 127.0.0.1)" } else { "every interface (subnet)" },
         decided_by.name(),
         bridge.joint_names().len(),
+        skeletons.len(),
         if ctx.config().ros2.accept_requests {
             format!(
                 "taken into hri/request, stops first, {} per s and {} at once per peer",
@@ -278,6 +205,7 @@ fn body() -> Result<(), Box<dyn Error>> {
                 repulsion: repulsion.get_subscription_count(&ros) > 0,
                 depth: depth.get_subscription_count(&ros) > 0,
                 points: points.get_subscription_count(&ros) > 0,
+                humans: humans.get_subscription_count(&ros) > 0,
             };
             if bridge.subscribed != was {
                 tracing::info!("subscribed on ROS 2: {:?}", bridge.subscribed);
@@ -338,6 +266,17 @@ fn body() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
+        for (camera, skeleton) in skeletons.iter().enumerate() {
+            skeleton.drain(|s| {
+                let out = bridge.skeleton(camera, s, &clock);
+                if let Some(m) = out.tracked {
+                    send(&humans, m, &mut failed);
+                }
+                if let Some(t) = out.tf {
+                    send(&tf, t, &mut failed);
+                }
+            })?;
+        }
         // /phri/request: every sample waiting (up to a bound), stops first
         batch.clear();
         let now = now_ns();
@@ -382,8 +321,8 @@ fn body() -> Result<(), Box<dyn Error>> {
     requests_audit.publish(&bridge.requests_message(now_ns(), requests_out.undelivered()))?;
     let c = &bridge.counts;
     tracing::info!(
-        "published /joint_states {}, /tf {}, /phri/status {}, /phri/contact_force {}, /phri/repulsion {}, /phri/depth {}, /phri/points {}; {failed} not sent",
-        c.joint_states, c.tf, c.status, c.contact_force, c.repulsion, c.depth, c.points
+        "published /joint_states {}, /tf {} (bodies {}), /phri/status {}, /phri/contact_force {}, /phri/repulsion {}, /phri/depth {}, /phri/points {}, /humans/bodies/tracked {}; {failed} not sent",
+        c.joint_states, c.tf, c.bodies_tf, c.status, c.contact_force, c.repulsion, c.depth, c.points, c.humans
     );
     tracing::info!(
         "/phri/request: passed {} (stops {}), refused {}, dropped {} (over the rate limit), malformed {}",

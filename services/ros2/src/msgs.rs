@@ -2,7 +2,7 @@
 //! is the `.msg` definitions' (CDR encodes fields in declaration order, with
 //! no names): `builtin_interfaces`, `std_msgs`, `sensor_msgs`,
 //! `geometry_msgs`, `tf2_msgs`, `diagnostic_msgs` and `visualization_msgs`
-//! of ROS 2 Humble and later. Each type names its ROS package and type
+//! of ROS 2 Humble and later, and ROS4HRI's `hri_msgs` (REP 155). Each type names its ROS package and type
 //! ([`RosType`]); on the wire the DDS type is
 //! `<package>::msg::dds_::<Type>_`. Units and frames follow REP 103/105:
 //! SI units, right-handed frames, `base_link` the robot's base.
@@ -352,6 +352,15 @@ pub struct MarkerArray {
     pub markers: Vec<Marker>,
 }
 ros_type!(MarkerArray, "visualization_msgs", "MarkerArray");
+
+/// `hri_msgs/IdsList` (ROS4HRI, REP 155): the ids of the faces, bodies,
+/// voices or persons tracked now (`/humans/bodies/tracked`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct IdsList {
+    pub header: Header,
+    pub ids: Vec<String>,
+}
+ros_type!(IdsList, "hri_msgs", "IdsList");
 
 #[cfg(test)]
 mod tests {

@@ -7,7 +7,7 @@
 //! cameras that answered that point within the staleness bound gives it
 //! (the controller's fusion, `phri_control::RepulsionInputs::fuse`).
 
-use phri_ipc::{FrameHeader, RepulsionResult};
+use phri_ipc::{CameraStatus, FrameHeader, RepulsionResult};
 use serde::Serialize;
 
 use crate::report::{Percentiles, PerceptionReport};
@@ -46,14 +46,43 @@ pub struct CameraEval {
     points: Vec<(f64, u64)>,
     /// fusion decisions this camera won
     gave: u64,
+    /// capture → publication on its channel [ms]
+    arrival_ms: Vec<f64>,
+    /// the first frame seen of its process (number, capture [ns,
+    /// CLOCK_MONOTONIC]) and the last: frames published in between are
+    /// counted by their numbers (this reader may miss some)
+    first_frame: Option<(u64, u64)>,
+    last_frame: (u64, u64),
+    /// frames published and the time they spanned, of the processes before [ns]
+    rate_before: (u64, u64),
+    /// the intrinsics of its last frame
+    intrinsics: Option<IntrinsicsReport>,
+    /// its process's newest status and the counts of the processes before
+    /// it (a restarted camera counts from 0 again)
+    status: CameraStatus,
+    before: DropCauses,
+    before_frames: u64,
+    /// its recent frames: number and publication [ns, CLOCK_MONOTONIC]
+    recent: [(u64, u64); RECENT_FRAMES],
+    /// its skeletons: the frame's publication (its arrival at the
+    /// tracker) → the skeleton's [ms]
+    skeleton_ms: Vec<f64>,
+    last_skeleton_seq: Option<u64>,
+    /// skeleton messages seen, and those with someone in them
+    skeletons: u64,
+    skeletons_with_people: u64,
 }
+
+/// Frames a camera's skeleton is looked up among.
+const RECENT_FRAMES: usize = 16;
 
 /// `perception.cameras[i]` in the report.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CameraReport {
     /// the camera's index in `[[camera]]`
     pub camera: usize,
-    /// frames seen on its channel (`camera/depth`, `camera/I/depth`)
+    /// frames published on its channel (`camera/depth`, `camera/I/depth`):
+    /// as its processes counted them, or as seen there when more
     pub frames: u64,
     /// frames that never got a result from every repulsion worker
     pub dropped_frames: u64,
@@ -66,6 +95,90 @@ pub struct CameraReport {
     /// share of the fusion's decisions (a point, each time a worker
     /// answers it) this camera's distance won: 1 with one camera
     pub fused_share: f64,
+    /// where its frames came from: `sim`, `freenect`, `ros2`, `replay`
+    pub source: String,
+    /// frames its process dropped before its channel, by cause
+    pub drop_causes: DropCauses,
+    /// frames per second on its channel (first to last capture)
+    pub rate_hz: f64,
+    /// capture → the frame's arrival on its channel (its publication) [ms]
+    pub capture_to_arrival_ms: Percentiles,
+    /// the intrinsics of its frames as used on the 640×480 channel (null:
+    /// no frame)
+    pub intrinsics: Option<IntrinsicsReport>,
+    /// where its skeletons came from: `sim` (the simulation's truth) or
+    /// `depth` (phri-tracker on its frames)
+    pub skeleton_source: String,
+    /// the frame's arrival on its channel → its skeleton on
+    /// `perception/skeleton` [ms] (frames whose skeleton was seen)
+    pub arrival_to_skeleton_ms: Percentiles,
+    /// its skeleton messages seen on `perception/skeleton`, and those with
+    /// at least one person
+    pub skeletons: u64,
+    pub skeletons_with_people: u64,
+}
+
+/// A camera's dropped frames by cause (`camera/status`), summed over its
+/// process's restarts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DropCauses {
+    /// captured longer ago than `[camera] max_age_s` when they arrived
+    pub too_old: u64,
+    /// stamped in the future
+    pub future: u64,
+    /// malformed: wrong size or step, an encoding refused, a file unreadable
+    pub malformed: u64,
+    /// no usable intrinsics yet (a ROS 2 image before its CameraInfo)
+    pub no_camera_info: u64,
+    /// the source ran behind its rate
+    pub behind: u64,
+}
+
+impl DropCauses {
+    fn of(s: &CameraStatus) -> DropCauses {
+        DropCauses {
+            too_old: s.dropped_old,
+            future: s.dropped_future,
+            malformed: s.dropped_malformed,
+            no_camera_info: s.dropped_no_info,
+            behind: s.dropped_behind,
+        }
+    }
+
+    fn plus(self, o: DropCauses) -> DropCauses {
+        DropCauses {
+            too_old: self.too_old + o.too_old,
+            future: self.future + o.future,
+            malformed: self.malformed + o.malformed,
+            no_camera_info: self.no_camera_info + o.no_camera_info,
+            behind: self.behind + o.behind,
+        }
+    }
+}
+
+/// Pinhole intrinsics [px].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct IntrinsicsReport {
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl CameraEval {
+    /// Frames per second its processes published, from the frame numbers
+    /// and capture times this reader saw.
+    fn rate_hz(&self) -> f64 {
+        let (mut frames, mut span) = self.rate_before;
+        if let Some((seq, t)) = self.first_frame {
+            frames += self.last_frame.0.saturating_sub(seq);
+            span += self.last_frame.1.saturating_sub(t);
+        }
+        match span {
+            0 => 0.0,
+            s => frames as f64 / (s as f64 * 1e-9),
+        }
+    }
 }
 
 /// Every camera's figures.
@@ -75,6 +188,10 @@ pub struct CamerasEval {
     /// a camera's answer older than this takes no part in a decision [ns]
     max_age_ns: u64,
     decisions: u64,
+    /// each camera's source, by index (`sim` past the list)
+    sources: Vec<String>,
+    /// where each camera's skeletons come from, by index (`sim` past the list)
+    skeleton_sources: Vec<String>,
 }
 
 impl CamerasEval {
@@ -84,7 +201,56 @@ impl CamerasEval {
             cameras: Vec::new(),
             max_age_ns,
             decisions: 0,
+            sources: Vec::new(),
+            skeleton_sources: Vec::new(),
         }
+    }
+
+    /// Each camera's source, by index, as configured.
+    pub fn set_sources(&mut self, sources: Vec<String>) {
+        self.sources = sources;
+    }
+
+    /// Where each camera's skeletons come from, by index, as configured.
+    pub fn set_skeleton_sources(&mut self, sources: Vec<String>) {
+        self.skeleton_sources = sources;
+    }
+
+    /// Camera `camera`'s body tracker published the people of a frame: its
+    /// latency from the frame's arrival, when that frame was seen.
+    pub fn on_skeleton(&mut self, camera: usize, m: &phri_ipc::Skeleton) {
+        if camera >= phri_ipc::MAX_CAMERAS {
+            return;
+        }
+        let c = self.camera(camera);
+        if c.last_skeleton_seq == Some(m.seq) {
+            return;
+        }
+        c.last_skeleton_seq = Some(m.seq);
+        c.skeletons += 1;
+        c.skeletons_with_people += u64::from(m.n_people > 0);
+        let frame = c.recent.iter().find(|(seq, _)| *seq == m.seq && *seq > 0);
+        if let Some(&(_, published)) = frame {
+            if m.published_ns >= published && published > 0 {
+                c.skeleton_ms
+                    .push((m.published_ns - published) as f64 * 1e-6);
+            }
+        }
+    }
+
+    /// A camera's process said what it did (`camera/status`).
+    pub fn on_status(&mut self, m: &CameraStatus) {
+        let camera = m.camera as usize;
+        if camera >= phri_ipc::MAX_CAMERAS {
+            return;
+        }
+        let c = self.camera(camera);
+        // a new process counts from 0 again: keep its predecessor's
+        if m.frames < c.status.frames || m.seq < c.status.seq {
+            c.before = c.before.plus(DropCauses::of(&c.status));
+            c.before_frames += c.status.frames;
+        }
+        c.status = *m;
     }
 
     fn camera(&mut self, camera: usize) -> &mut CameraEval {
@@ -100,6 +266,26 @@ impl CamerasEval {
         if c.last_frame_seq != Some(h.seq) {
             c.frames_seen += 1;
             c.last_frame_seq = Some(h.seq);
+            c.recent[(c.frames_seen as usize) % RECENT_FRAMES] = (h.seq, h.published_ns);
+            if h.published_ns >= h.capture_wall_ns && h.capture_wall_ns > 0 {
+                c.arrival_ms
+                    .push((h.published_ns - h.capture_wall_ns) as f64 * 1e-6);
+            }
+            // a restarted camera numbers its frames from 1 again
+            if h.seq < c.last_frame.0 {
+                if let Some(first) = c.first_frame.take() {
+                    c.rate_before.0 += c.last_frame.0 - first.0;
+                    c.rate_before.1 += c.last_frame.1.saturating_sub(first.1);
+                }
+            }
+            c.first_frame.get_or_insert((h.seq, h.capture_wall_ns));
+            c.last_frame = (h.seq, h.capture_wall_ns);
+            c.intrinsics = Some(IntrinsicsReport {
+                fx: h.fx,
+                fy: h.fy,
+                cx: h.cx,
+                cy: h.cy,
+            });
         }
     }
 
@@ -209,22 +395,27 @@ impl CamerasEval {
             return None;
         }
         let mut pooled = PerceptionReport::default();
-        let mut all: [Vec<f64>; 4] = Default::default();
+        let mut all: [Vec<f64>; 5] = Default::default();
         for (i, c) in self.cameras.iter().enumerate() {
             // the frame in flight at the end is not dropped
             let dropped = c
                 .frames_seen
                 .saturating_sub(c.complete_frames)
                 .saturating_sub(2);
-            pooled.frames += c.frames_seen;
             pooled.dropped_frames += dropped;
             all[0].extend_from_slice(&c.frame_latency_ms);
             all[1].extend_from_slice(&c.arrival_latency_ms);
             all[2].extend_from_slice(&c.ingest_ms);
             all[3].extend_from_slice(&c.compute_ms);
+            all[4].extend_from_slice(&c.skeleton_ms);
+            // what its processes published, when they said (this reader,
+            // at normal priority, may miss frames on a busy machine)
+            let published = c.before_frames + c.status.frames;
+            let frames = c.frames_seen.max(published);
+            pooled.frames += frames;
             pooled.cameras.push(CameraReport {
                 camera: i,
-                frames: c.frames_seen,
+                frames,
                 dropped_frames: dropped,
                 frame_to_repulsion_ms: percentiles(&c.frame_latency_ms),
                 arrival_to_repulsion_ms: percentiles(&c.arrival_latency_ms),
@@ -233,12 +424,26 @@ impl CamerasEval {
                     0 => 0.0,
                     d => c.gave as f64 / d as f64,
                 },
+                source: self.sources.get(i).cloned().unwrap_or_else(|| "sim".into()),
+                drop_causes: c.before.plus(DropCauses::of(&c.status)),
+                rate_hz: c.rate_hz(),
+                capture_to_arrival_ms: percentiles(&c.arrival_ms),
+                intrinsics: c.intrinsics,
+                skeleton_source: self
+                    .skeleton_sources
+                    .get(i)
+                    .cloned()
+                    .unwrap_or_else(|| "sim".into()),
+                arrival_to_skeleton_ms: percentiles(&c.skeleton_ms),
+                skeletons: c.skeletons,
+                skeletons_with_people: c.skeletons_with_people,
             });
         }
         pooled.frame_to_repulsion_ms = percentiles(&all[0]);
         pooled.arrival_to_repulsion_ms = percentiles(&all[1]);
         pooled.ingest_ms = percentiles(&all[2]);
         pooled.repulsion_compute_ms = percentiles(&all[3]);
+        pooled.arrival_to_skeleton_ms = percentiles(&all[4]);
         Some(pooled)
     }
 }
@@ -313,5 +518,43 @@ mod tests {
             (cams[0].fused_share - 22.0 / 60.0).abs() < 1e-12,
             "{cams:?}"
         );
+    }
+
+    #[test]
+    fn a_camera_s_source_rate_latency_and_drops_survive_missed_frames_and_restarts() {
+        let mut e = CamerasEval::new(100 * MS);
+        e.set_sources(vec!["replay".into()]);
+        let mut h = FrameHeader::zeroed();
+        h.fx = 580.0;
+        // 30 Hz for 1 s, this reader seeing every third frame, 2 ms each to the channel
+        for seq in (1..=31u64).step_by(3) {
+            h.seq = seq;
+            h.capture_wall_ns = 1_000 * MS + (seq - 1) * 33_333_333;
+            h.published_ns = h.capture_wall_ns + 2 * MS;
+            e.on_frame(0, &h);
+        }
+        let st = |seq, frames, malformed| CameraStatus {
+            seq,
+            frames,
+            dropped_malformed: malformed,
+            dropped_old: 1,
+            ..CameraStatus::default()
+        };
+        e.on_status(&st(1, 10, 2));
+        e.on_status(&st(2, 30, 3));
+        // restarted: numbers from 1 again, counts from 0
+        e.on_status(&st(1, 5, 1));
+        for seq in 1..=4u64 {
+            h.seq = seq;
+            h.capture_wall_ns = 3_000 * MS + (seq - 1) * 33_333_333;
+            h.published_ns = h.capture_wall_ns + 2 * MS;
+            e.on_frame(0, &h);
+        }
+        let c = &e.report().unwrap().cameras[0];
+        assert_eq!(c.source, "replay");
+        assert!((c.rate_hz - 30.0).abs() < 0.01, "{}", c.rate_hz);
+        assert!((c.capture_to_arrival_ms.p99 - 2.0).abs() < 1e-9);
+        assert_eq!((c.drop_causes.malformed, c.drop_causes.too_old), (4, 2));
+        assert_eq!(c.intrinsics.map(|k| k.fx), Some(580.0));
     }
 }

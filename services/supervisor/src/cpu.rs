@@ -21,11 +21,65 @@ pub const STARVING_SHARE: f64 = 0.9;
 /// Samples spanning less than this are no judgement [ns].
 const MIN_SPAN_NS: u64 = 50_000_000;
 
-/// Recent CPU-time samples of every supervised service (roster indices).
+/// Recent CPU-time samples of every supervised service (roster indices),
+/// and what each used over the whole run.
 #[derive(Clone, Debug)]
 pub struct CpuUse {
     /// per service: (time [ns], CPU time so far [ns]) over the last window
     samples: Vec<VecDeque<(u64, u64)>>,
+    /// per service: its processes' CPU time and running time before the
+    /// current process [ns], and the current one's first and newest sample
+    totals: Vec<Total>,
+}
+
+/// A process's start-up (loading its configuration, model, files) is left
+/// out of the share judged against its budget [ns].
+pub const STARTUP_NS: u64 = 1_000_000_000;
+
+/// One service's CPU time over the run [ns]: all of it, and past each
+/// process's start-up ([`STARTUP_NS`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Total {
+    cpu_ns: u64,
+    ran_ns: u64,
+    steady_cpu_ns: u64,
+    steady_ran_ns: u64,
+    current: Option<Process>,
+}
+
+/// The current process's samples: (time, CPU time since it started) [ns].
+#[derive(Clone, Copy, Debug)]
+struct Process {
+    first: (u64, u64),
+    /// the first sample past its start-up
+    settled: Option<(u64, u64)>,
+    last: (u64, u64),
+}
+
+impl Total {
+    /// The current process ended (or was replaced): its use counts.
+    fn fold(&mut self) {
+        if let Some(p) = self.current.take() {
+            self.cpu_ns += p.last.1;
+            self.ran_ns += p.last.0.saturating_sub(p.first.0);
+            if let Some(s) = p.settled {
+                self.steady_cpu_ns += p.last.1.saturating_sub(s.1);
+                self.steady_ran_ns += p.last.0.saturating_sub(s.0);
+            }
+        }
+    }
+}
+
+/// One service's CPU use over the run (`cpu` in the report).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CpuReport {
+    /// CPU time its processes used [s]
+    pub cpu_s: f64,
+    /// of one core, over the time they ran past their start-up (their
+    /// first second; over all of it for a process that ran no longer)
+    pub share: f64,
+    /// `[services.NAME] cpu_budget` (null: not judged)
+    pub budget: Option<f64>,
 }
 
 impl CpuUse {
@@ -33,12 +87,68 @@ impl CpuUse {
     pub fn new(services: usize) -> CpuUse {
         CpuUse {
             samples: vec![VecDeque::new(); services],
+            totals: vec![Total::default(); services],
+        }
+    }
+
+    /// What service `index` used over the run so far, with its `budget`.
+    /// `None` before two samples of a process of it.
+    pub fn over_the_run(&self, index: usize, budget: Option<f64>) -> Option<CpuReport> {
+        let mut t = *self.totals.get(index)?;
+        t.fold();
+        if t.ran_ns == 0 {
+            return None;
+        }
+        let share = match t.steady_ran_ns {
+            0 => t.cpu_ns as f64 / t.ran_ns as f64,
+            ran => t.steady_cpu_ns as f64 / ran as f64,
+        };
+        Some(CpuReport {
+            cpu_s: t.cpu_ns as f64 * 1e-9,
+            share,
+            budget,
+        })
+    }
+
+    /// Every service of `roster` with what it used over the run, against
+    /// its `cpu_budget` (`cpu` in the report); services never sampled are
+    /// left out.
+    pub fn report(&self, roster: &Roster) -> std::collections::BTreeMap<String, CpuReport> {
+        roster
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| Some((s.name.clone(), self.over_the_run(i, s.spec.cpu_budget)?)))
+            .collect()
+    }
+
+    fn total(&mut self, index: usize, now_ns: u64, cpu_ns: Option<u64>) {
+        let Some(t) = self.totals.get_mut(index) else {
+            return;
+        };
+        match (cpu_ns, t.current.as_mut()) {
+            (None, _) => t.fold(),
+            (Some(c), Some(p)) if c >= p.last.1 => {
+                p.last = (now_ns, c);
+                if p.settled.is_none() && now_ns.saturating_sub(p.first.0) >= STARTUP_NS {
+                    p.settled = Some(p.last);
+                }
+            }
+            (Some(c), _) => {
+                // a new process (a restart): the one before counts
+                t.fold();
+                t.current = Some(Process {
+                    first: (now_ns, c),
+                    settled: None,
+                    last: (now_ns, c),
+                });
+            }
         }
     }
 
     /// Service `index` had used `cpu_ns` of CPU time at `now_ns` (`None`: it
     /// is not running; its history is dropped).
     pub fn record(&mut self, index: usize, now_ns: u64, cpu_ns: Option<u64>) {
+        self.total(index, now_ns, cpu_ns);
         let Some(s) = self.samples.get_mut(index) else {
             return;
         };
@@ -65,6 +175,9 @@ impl CpuUse {
         if let Some(s) = self.samples.get_mut(index) {
             s.clear();
         }
+        if let Some(t) = self.totals.get_mut(index) {
+            t.fold();
+        }
     }
 
     /// Share of one CPU service `index` used over the last `window_ns` of
@@ -82,6 +195,30 @@ impl CpuUse {
         }
         Some(c1.saturating_sub(c0) as f64 / span as f64)
     }
+}
+
+/// The services that used more than their CPU budget, as (a `degraded`
+/// line, its words in the summary), by name.
+pub fn over_budget(cpu: &std::collections::BTreeMap<String, CpuReport>) -> Vec<(String, String)> {
+    let over: Vec<(&String, &CpuReport, f64)> = cpu
+        .iter()
+        .filter_map(|(n, c)| Some((n, c, c.budget?)))
+        .filter(|(_, c, b)| c.share > *b)
+        .collect();
+    if over.is_empty() {
+        return Vec::new();
+    }
+    let each: Vec<String> = over
+        .iter()
+        .map(|(n, c, b)| format!("{n} {:.0} % of {:.0} %", 100.0 * c.share, 100.0 * b))
+        .collect();
+    vec![(
+        format!(
+            "CPU over budget (share of one core over the time each ran, against [services.NAME] cpu_budget): {}",
+            each.join(", ")
+        ),
+        format!("CPU over budget: {}", each.join(", ")),
+    )]
 }
 
 /// Two CPU sets overlap (an empty set is any CPU).
@@ -210,6 +347,74 @@ mod tests {
         assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS / 5).map(|c| c.0), Some(2));
         // the simulator shares no CPU with it: its own silence is its own
         assert_eq!(culprit(&r, &cpu, 0, WINDOW_NS), None);
+    }
+
+    #[test]
+    fn each_service_s_cpu_over_the_run_adds_its_processes_and_is_judged_against_its_budget() {
+        let mut cpu = CpuUse::new(2);
+        assert_eq!(cpu.over_the_run(0, None), None);
+        // 20 % of a core for 2 s, killed, restarted: 40 % for 2 s; the
+        // share judged leaves each process's first second out
+        for t in (0..=2000).step_by(50) {
+            cpu.record(0, t * MS, Some(t * MS / 5));
+        }
+        cpu.record(0, 2050 * MS, None);
+        for t in (2100..=4100).step_by(50) {
+            cpu.record(0, t * MS, Some((t - 2100) * MS * 2 / 5));
+        }
+        let c = cpu.over_the_run(0, Some(0.25)).unwrap();
+        assert!((c.cpu_s - 1.2).abs() < 1e-9, "{c:?}");
+        assert!((c.share - 0.3).abs() < 1e-9, "{c:?}");
+        // a restart seen only as CPU time going back counts the same
+        let mut again = CpuUse::new(1);
+        for t in (0..=2000).step_by(50) {
+            again.record(0, t * MS, Some(t * MS / 5));
+        }
+        for t in (2100..=4100).step_by(50) {
+            again.record(0, t * MS, Some((t - 2100) * MS * 2 / 5));
+        }
+        assert_eq!(again.over_the_run(0, Some(0.25)), Some(c));
+        // a process shorter than its start-up: judged over all of it
+        let mut short = CpuUse::new(1);
+        for t in (0..=500).step_by(50) {
+            short.record(0, t * MS, Some(t * MS / 2));
+        }
+        let s = short.over_the_run(0, None).unwrap();
+        assert!((s.share - 0.5).abs() < 1e-9, "{s:?}");
+        let mut report = std::collections::BTreeMap::new();
+        report.insert("sim".to_string(), c);
+        let under = CpuReport {
+            budget: Some(0.35),
+            ..c
+        };
+        report.insert("camera".to_string(), under);
+        report.insert("free".to_string(), CpuReport { budget: None, ..c });
+        let f = over_budget(&report);
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].1, "CPU over budget: sim 30 % of 25 %");
+        report.remove("sim");
+        assert!(over_budget(&report).is_empty());
+    }
+
+    #[test]
+    fn the_report_names_each_sampled_service_with_its_budget() {
+        let r = roster();
+        let mut cpu = CpuUse::new(3);
+        // the spinner idle, then stopped: its run still counts
+        sample(&mut cpu, 0, 2000, &[0.3, 0.1, 0.0]);
+        cpu.record(2, 2050 * MS, None);
+        let report = cpu.report(&r);
+        let camera = r.get(1).spec.cpu_budget;
+        assert_eq!(
+            report.keys().map(String::as_str).collect::<Vec<_>>(),
+            ["camera", "sim", "spinner"]
+        );
+        assert_eq!(report["camera"].budget, camera);
+        assert!((report["sim"].share - 0.3).abs() < 1e-6, "{report:?}");
+        assert!((report["camera"].share - 0.1).abs() < 1e-6, "{report:?}");
+        assert_eq!(report["spinner"].share, 0.0);
+        // a service never sampled is left out
+        assert!(CpuUse::new(3).report(&r).is_empty());
     }
 
     #[test]

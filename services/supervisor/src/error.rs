@@ -66,8 +66,8 @@ pub enum SupervisorError {
     SharedMemory(#[from] crate::shm::ShmError),
     /// `--require-rt` (or `supervisor.require_rt`) and real-time scheduling
     /// is refused here
-    #[error("--require-rt: {0}; nothing was started (README: Real-time scheduling)")]
-    RealtimeRequired(String),
+    #[error("--require-rt: {0}; nothing was started (docs/safety.md: Real-time scheduling)")]
+    RealtimeRequired(#[source] crate::realtime::Refused),
     /// the cell did not start whole: everything started was stopped
     #[error("start-up failed: {0}; everything started was stopped")]
     StartFailed(String),

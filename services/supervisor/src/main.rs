@@ -69,6 +69,12 @@ struct Cli {
     /// `--set robot.ip=ADDRESS`)
     #[arg(long, value_name = "ADDRESS")]
     robot_ip: Option<String>,
+    /// Where the camera's frames come from: sim (the simulated camera, the
+    /// default), freenect (a Kinect v1), ros2 (a ROS 2 depth camera, [camera]
+    /// image_topic and info_topic), replay (recorded frames, [camera]
+    /// replay_dir); the same as `--set camera.source=SOURCE`
+    #[arg(long, value_name = "SOURCE", value_parser = ["sim", "freenect", "ros2", "replay"])]
+    camera: Option<String>,
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -86,13 +92,19 @@ struct Cli {
     completions: Option<phri_runtime::cli::CompletionsCmd>,
 }
 
-/// `--robot NAME` and `--robot-ip ADDRESS` as the first `--set`s (a later
-/// `--set robot.name` or `robot.ip` wins).
-fn robot_and_sets(robot: Option<&str>, ip: Option<&str>, sets: &[String]) -> Vec<String> {
+/// `--robot NAME`, `--robot-ip ADDRESS` and `--camera SOURCE` as the first
+/// `--set`s (a later `--set robot.name`, `robot.ip` or `camera.source` wins).
+fn robot_and_sets(
+    robot: Option<&str>,
+    ip: Option<&str>,
+    camera: Option<&str>,
+    sets: &[String],
+) -> Vec<String> {
     robot
         .map(|r| format!("robot.name={r}"))
         .into_iter()
         .chain(ip.map(|a| format!("robot.ip={a}")))
+        .chain(camera.map(|c| format!("camera.source=\"{c}\"")))
         .chain(sets.iter().cloned())
         .collect()
 }
@@ -117,6 +129,7 @@ fn main() -> ExitCode {
 /// The supervisor's ports on the cell's channels.
 struct Ports {
     health: Publisher<Health>,
+    health_more: Publisher<Health>,
     stats: Subscriber<phri_ipc::RobotStats>,
     truth: Subscriber<phri_ipc::Truth>,
     contacts: Subscriber<phri_ipc::ContactEvent>,
@@ -126,11 +139,16 @@ struct Ports {
     frames: Vec<FrameSubscriber>,
     filtered: Vec<FrameSubscriber>,
     repulsion: Vec<Subscriber<phri_ipc::RepulsionResult>>,
+    /// per camera: its skeletons (their latency from the frame's arrival)
+    skeletons: Vec<Subscriber<phri_ipc::Skeleton>>,
     collab: Subscriber<phri_ipc::CollabState>,
     ssm: Subscriber<phri_ipc::SsmStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
     /// what the ROS 2 bridge did with `/phri/request`
     bridge_requests: Subscriber<phri_ipc::BridgeRequests>,
+    /// what each camera's and the microphone's process did
+    camera_status: Subscriber<phri_ipc::CameraStatus>,
+    mic_status: Subscriber<phri_ipc::MicStatus>,
     utterances: Subscriber<phri_ipc::Utterance>,
     audits: Subscriber<phri_ipc::InputAudit>,
     boxes: Subscriber<phri_ipc::BoxStatus>,
@@ -147,6 +165,7 @@ impl Ports {
         let cameras = phri_ipc::cameras(cameras);
         Ok(Ports {
             health: SUPERVISOR_HEALTH.publisher(node)?,
+            health_more: phri_ipc::SUPERVISOR_HEALTH_MORE.publisher(node)?,
             stats: ROBOT_STATS.subscriber(node, Queue::Drain)?,
             truth: SIM_TRUTH.subscriber(node, Queue::Drain)?,
             contacts: SIM_CONTACTS.subscriber(node, Queue::Drain)?,
@@ -164,10 +183,16 @@ impl Ports {
                 .iter()
                 .map(|c| c.repulsion.subscriber(node, Queue::Drain))
                 .collect::<Result<_, _>>()?,
+            skeletons: cameras
+                .iter()
+                .map(|c| c.skeleton.subscriber(node, Queue::Drain))
+                .collect::<Result<_, _>>()?,
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
             ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             bridge_requests: phri_ipc::ROS2_REQUESTS.subscriber(node, Queue::Drain)?,
+            camera_status: phri_ipc::CAMERA_STATUS.subscriber(node, Queue::Drain)?,
+            mic_status: phri_ipc::AUDIO_MIC_STATUS.subscriber(node, Queue::Drain)?,
             utterances: phri_ipc::VOICE_UTTERANCE.subscriber(node, Queue::Drain)?,
             audits: phri_ipc::INPUT_AUDIT.subscriber(node, Queue::Drain)?,
             boxes: phri_ipc::ROBOT_BOX.subscriber(node, Queue::Drain)?,
@@ -177,9 +202,15 @@ impl Ports {
         })
     }
 
-    /// Publish `health` and beat with it (the services wake for it).
-    fn publish_health(&mut self, health: &Health, now_ns: u64) {
-        let _ = self.health.publish(health);
+    /// Publish the roster's health (`supervisor/health`, and
+    /// `supervisor/health/more` past its first page) and beat with it (the
+    /// services wake for it).
+    fn publish_health(&mut self, roster: &Roster, pages: &mut [Health; 2], now_ns: u64) {
+        roster.fill_health(&mut pages[0], now_ns);
+        if roster.fill_health_more(&mut pages[1], now_ns) {
+            let _ = self.health_more.publish(&pages[1]);
+        }
+        let _ = self.health.publish(&pages[0]);
         self.beat.now(now_ns);
     }
 }
@@ -345,28 +376,30 @@ impl Cell {
 /// (re)start: it opens its ports before it asks for SCHED_FIFO [ns].
 const RT_SETTLE_NS: u64 = 200_000_000;
 
-/// The publishers' pids of owned channel `name` (`None`: no such channel yet).
-fn owned_publishers(ipc_node: &IpcNode, name: &str) -> Result<Option<Vec<i32>>, IpcError> {
+/// A watch over each owned channel (the further cameras' too) that the
+/// supervisor reads for strangers.
+fn owned_watches(n_cameras: usize) -> Vec<phri_ipc::PublisherWatch> {
     use phri_ipc::*;
-    match name {
-        n if n == ROBOT_STATE.name => ROBOT_STATE.publisher_pids(ipc_node),
-        n if n == DYNAMICS_RESIDUAL.name => DYNAMICS_RESIDUAL.publisher_pids(ipc_node),
-        n if n == PERCEPTION_REPULSION.name => PERCEPTION_REPULSION.publisher_pids(ipc_node),
-        n if n == PERCEPTION_SKELETON.name => PERCEPTION_SKELETON.publisher_pids(ipc_node),
-        n if n == PERCEPTION_HAND.name => PERCEPTION_HAND.publisher_pids(ipc_node),
-        n if n == HRI_REQUEST.name => HRI_REQUEST.publisher_pids(ipc_node),
-        n if n == AUDIO_MIC.name => AUDIO_MIC.publisher_pids(ipc_node),
-        // a further camera's
-        n => match CAMERAS
-            .iter()
-            .find(|c| [c.repulsion.name, c.skeleton.name, c.hand.name].contains(&n))
-        {
-            Some(c) if c.repulsion.name == n => c.repulsion.publisher_pids(ipc_node),
-            Some(c) if c.skeleton.name == n => c.skeleton.publisher_pids(ipc_node),
-            Some(c) => c.hand.publisher_pids(ipc_node),
-            None => Ok(None),
-        },
+    let mut watches = Vec::new();
+    for (name, _) in owners::PUBLISHERS {
+        let watch = match *name {
+            n if n == ROBOT_STATE.name => ROBOT_STATE.publisher_watch(),
+            n if n == DYNAMICS_RESIDUAL.name => DYNAMICS_RESIDUAL.publisher_watch(),
+            n if n == PERCEPTION_REPULSION.name => PERCEPTION_REPULSION.publisher_watch(),
+            n if n == PERCEPTION_SKELETON.name => PERCEPTION_SKELETON.publisher_watch(),
+            n if n == PERCEPTION_HAND.name => PERCEPTION_HAND.publisher_watch(),
+            n if n == HRI_REQUEST.name => HRI_REQUEST.publisher_watch(),
+            n if n == AUDIO_MIC.name => AUDIO_MIC.publisher_watch(),
+            _ => continue,
+        };
+        watches.push(watch);
     }
+    for c in CAMERAS.iter().take(n_cameras).skip(1) {
+        watches.push(c.repulsion.publisher_watch());
+        watches.push(c.skeleton.publisher_watch());
+        watches.push(c.hand.publisher_watch());
+    }
+    watches
 }
 
 /// A channel the supervisor's watch could not read: logged (the first and
@@ -542,10 +575,15 @@ fn body() -> Result<(), SupervisorError> {
     let plan = Plan::load(
         &args.config,
         args.scenario.as_deref(),
-        &robot_and_sets(args.robot.as_deref(), args.robot_ip.as_deref(), &args.set)
-            .iter()
-            .map(String::as_str)
-            .collect::<Vec<_>>(),
+        &robot_and_sets(
+            args.robot.as_deref(),
+            args.robot_ip.as_deref(),
+            args.camera.as_deref(),
+            &args.set,
+        )
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>(),
         args.duration,
     )?;
     let bin_dir = std::env::current_exe()
@@ -563,17 +601,18 @@ fn body() -> Result<(), SupervisorError> {
         .map(|(name, spec)| (name.clone(), wanted_of(spec)))
         .collect();
     realtime::role_ranked(&mut wanted);
-    let rt_refusal =
+    let mut rt_refusal =
         realtime::probe_services(wanted.iter().map(|(n, w)| (n.as_str(), w)), online).err();
-    if let Some(why) = &rt_refusal {
+    if let Some(why) = rt_refusal {
         if require_rt {
-            return Err(SupervisorError::RealtimeRequired(why.clone()));
+            return Err(SupervisorError::RealtimeRequired(why));
         }
         tracing::warn!(
-            "real-time scheduling refused ({why}): the cell runs under the normal scheduler and the run will be reported degraded; README \"Real-time scheduling\" says how to grant it, --require-rt refuses instead"
+            "real-time scheduling refused ({why}): the cell runs under the normal scheduler and the run will be reported degraded; docs/safety.md \"Real-time scheduling\" says how to grant it, --require-rt refuses instead"
         );
+        rt_refusal = Some(why);
     }
-    let mut rt_watch = RealtimeWatch::new(rt_refusal);
+    let mut rt_watch = RealtimeWatch::new(rt_refusal.map(|e| e.to_string()));
     // one namespace by default (PHRI_PREFIX, else phri_): tools in another
     // terminal find the cell without flags; a second cell there is refused
     let prefix = phri_runtime::prefix_or_default(args.prefix.as_deref().filter(|p| !p.is_empty()));
@@ -680,7 +719,7 @@ fn body() -> Result<(), SupervisorError> {
         procs: Vec::with_capacity(plan.services.len()),
         launch,
     };
-    let mut health = Health::zeroed();
+    let mut health = [Health::zeroed(); 2];
     // every watched service's liveness exists before it starts
     let watch = match Watch::open(&node, &cell.roster) {
         Ok(w) => w,
@@ -728,8 +767,7 @@ fn body() -> Result<(), SupervisorError> {
         cell.write_state();
         // the services' dead-man hears a supervisor from their start
         let now = now_ns();
-        cell.roster.fill_health(&mut health, now);
-        ports.publish_health(&health, now);
+        ports.publish_health(&cell.roster, &mut health, now);
         let delay = cell.roster.get(i).spec.start_delay_ms;
         if delay > 0 {
             std::thread::sleep(Duration::from_millis(delay));
@@ -777,6 +815,23 @@ fn body() -> Result<(), SupervisorError> {
     let waitset = liveness::waitset()?;
     let vigil = liveness::Vigil::new(&waitset, &watch.watched, Duration::from_nanos(TICK_NS))?;
     let mut woke: Vec<Wake> = Vec::with_capacity(watch.watched.len() + 1);
+    // the watch loop outranks the services it must be able to blame (one
+    // spinning at real-time priority would otherwise starve it too)
+    let watchdog_priority = plan.loaded.config.supervisor.rt_priority;
+    if rt_watch.permitted() && watchdog_priority > 0 {
+        if let Err(e) = phri_runtime::rt::make_watchdog(watchdog_priority) {
+            tracing::warn!(
+                "supervisor.rt_priority: {e}; the supervisor runs under the normal scheduler"
+            );
+        }
+    }
+    // who publishes on the robot's command channels and on the owned ones:
+    // each service opened once, then only its publisher list read
+    let mut command_watches = [
+        ROBOT_COMMAND.publisher_watch(),
+        ROBOT_COMMAND_STANDBY.publisher_watch(),
+    ];
+    let mut owned = owned_watches(ports.frames.len());
     let mut last_round = now_ns();
     while start_error.is_none()
         && stop_reason.is_none()
@@ -839,6 +894,8 @@ fn body() -> Result<(), SupervisorError> {
             collab_eval.on_request(m);
         })?;
         ports.bridge_requests.drain(|m| collab_eval.on_bridge(m))?;
+        ports.camera_status.drain(|m| eval.on_camera_status(m))?;
+        ports.mic_status.drain(|m| eval.on_mic_status(m))?;
         ports.audits.drain(|m| audits.on_audit(m))?;
         ports.boxes.drain(|m| box_eval.on_box(m))?;
         if resume && roster.resume(now) {
@@ -878,6 +935,9 @@ fn body() -> Result<(), SupervisorError> {
                 eval.on_filtered(camera, f.user_header());
             }
             results.drain(|m| eval.on_repulsion(camera, m))?;
+            if let Some(skeletons) = ports.skeletons.get(camera) {
+                skeletons.drain(|m| eval.on_skeleton(camera, m))?;
+            }
         }
         if stalled_ns > STALL_NS {
             tracing::warn!(
@@ -903,7 +963,7 @@ fn body() -> Result<(), SupervisorError> {
             // a channel that cannot be read now (being removed as its last
             // user exits) is read again at the next watch
             let mut intruder = None;
-            for channel in [ROBOT_COMMAND, ROBOT_COMMAND_STANDBY] {
+            for channel in command_watches.iter_mut() {
                 let pid = channel
                     .publisher_pids(&node)
                     .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
@@ -911,7 +971,7 @@ fn body() -> Result<(), SupervisorError> {
                     .into_iter()
                     .find(|&p| p > 0 && !roster.runs(p as u32) && alive(p));
                 if let Some(pid) = pid {
-                    intruder.get_or_insert((pid, channel.name));
+                    intruder.get_or_insert((pid, channel.name()));
                 }
             }
             if let Some((pid, channel)) = intruder {
@@ -928,12 +988,10 @@ fn body() -> Result<(), SupervisorError> {
             }
             // the owned channels: a stranger's messages are refused by their
             // readers; it is reported here, once per channel and process
-            let further = phri_ipc::CAMERAS[1..ports.frames.len()]
-                .iter()
-                .flat_map(|c| [c.repulsion.name, c.skeleton.name, c.hand.name]);
-            let owned = phri_ipc::owners::PUBLISHERS.iter().map(|(c, _)| *c);
-            for channel in owned.chain(further) {
-                let pids = owned_publishers(&node, channel)
+            for watch in owned.iter_mut() {
+                let channel = watch.name();
+                let pids = watch
+                    .publisher_pids(&node)
                     .unwrap_or_else(|e| watch_error(e, &mut watch_errors))
                     .unwrap_or_default();
                 for pid in owned::strangers(channel, &pids, roster, me as i32) {
@@ -1154,8 +1212,7 @@ fn body() -> Result<(), SupervisorError> {
         if changed {
             cell.write_state();
             // the services learn the new pids (the owners of their inputs) at once
-            cell.roster.fill_health(&mut health, now);
-            ports.publish_health(&health, now);
+            ports.publish_health(&cell.roster, &mut health, now);
             // a restart opened a node: the node counter must still be ours alone
             if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &prefix) {
                 let reason = e.to_string();
@@ -1166,11 +1223,14 @@ fn body() -> Result<(), SupervisorError> {
         }
         if now >= next_health || now < fast_health_until {
             next_health = now + health_period;
-            cell.roster.fill_health(&mut health, now);
-            ports.publish_health(&health, now);
+            ports.publish_health(&cell.roster, &mut health, now);
         }
     }
 
+    // stopping and reporting wait on others: not at real-time priority
+    phri_runtime::rt::make_normal();
+    drop(command_watches);
+    drop(owned);
     // the liveness services go with the cell's other ports
     drop(vigil);
     drop(waitset);
@@ -1190,6 +1250,8 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.ssm.drain(|m| eval.on_ssm(m));
     let _ = ports.requests.drain(|m| collab_eval.on_request(m));
     let _ = ports.bridge_requests.drain(|m| collab_eval.on_bridge(m));
+    let _ = ports.camera_status.drain(|m| eval.on_camera_status(m));
+    let _ = ports.mic_status.drain(|m| eval.on_mic_status(m));
     let _ = ports.utterances.drain(|m| collab_eval.on_utterance(m));
     let _ = ports.truth.drain(|m| {
         eval.on_truth(m);
@@ -1198,6 +1260,12 @@ fn body() -> Result<(), SupervisorError> {
     let _ = ports.residual.drain(|m| eval.on_residual(m));
     let _ = ports.status.drain(|m| eval.on_status(m, reaction));
     let _ = ports.stats.drain(|m| eval.on_stats(m));
+    // each service's CPU over the run, sampled once more before the stop
+    let now = now_ns();
+    for i in 0..cell.roster.len() {
+        cpu_use.record(i, now, cell.roster.get(i).pid.and_then(cpu_time_ns));
+    }
+    let cpu_report = cpu_use.report(&cell.roster);
     cell.stop();
     let _ = ports.commanders.drain(|m| {
         standby_eval.on_commanders(m, eval.time_s(m.stamp_ns));
@@ -1214,6 +1282,7 @@ fn body() -> Result<(), SupervisorError> {
     }
     let mut report = eval.report(end, plan.scenario_name(), services_report);
     report.inputs = inputs;
+    report.cpu = cpu_report;
     report.control = standby_eval.report();
     report.dynamics = residual_pair.report();
     report.robot = plan.robot_report();

@@ -135,6 +135,15 @@ impl Plan {
         crate::collab_report::CollabEvaluator::new(t0_ns, waves, period_ns)
     }
 
+    /// The microphone's source and device as the report names them.
+    fn mic_names(&self) -> (&'static str, &str) {
+        let mic = &self.loaded.config.mic;
+        match mic.source {
+            phri_config::MicSource::Sim => ("sim", "sim"),
+            phri_config::MicSource::Alsa => ("alsa", mic.device.as_str()),
+        }
+    }
+
     pub fn evaluator(&self, t0_ns: u64) -> Evaluator {
         // the controller's perception comes from the repulsion workers
         let perception = self
@@ -148,6 +157,18 @@ impl Plan {
             ))
             .with_robot_service(&self.robot_report().kind)
             .with_period(self.loaded.config.sim.dt_s)
+            .with_sensors(
+                self.loaded
+                    .config
+                    .cameras
+                    .iter()
+                    .map(|c| c.source.name().to_string())
+                    .collect(),
+                (0..self.loaded.config.cameras.len())
+                    .map(|i| self.loaded.config.skeleton_source(i).name().to_string())
+                    .collect(),
+                self.mic_names(),
+            )
     }
 
     /// Every service's binary is an executable file in `bin_dir`.

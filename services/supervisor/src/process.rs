@@ -63,37 +63,7 @@ fn contains_words(line: &str, needle: &str) -> bool {
     })
 }
 
-/// CPU time `pid` has used so far, all its threads [ns]: from each thread's
-/// `schedstat` (nanoseconds), else from `stat`'s utime + stime (clock ticks).
-pub fn cpu_time_ns(pid: u32) -> Option<u64> {
-    if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
-        let mut total = 0u64;
-        let mut any = false;
-        for t in tasks.flatten() {
-            let Ok(text) = std::fs::read_to_string(t.path().join("schedstat")) else {
-                continue;
-            };
-            if let Some(ns) = text
-                .split_whitespace()
-                .next()
-                .and_then(|f| f.parse::<u64>().ok())
-            {
-                total = total.saturating_add(ns);
-                any = true;
-            }
-        }
-        if any {
-            return Some(total);
-        }
-    }
-    let f = stat_fields(pid)?;
-    // fields 14 and 15 of stat(5) (utime, stime): 12 and 13 after the name
-    let utime: u64 = f.get(11)?.parse().ok()?;
-    let stime: u64 = f.get(12)?.parse().ok()?;
-    // SAFETY: sysconf has no preconditions
-    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as u64;
-    Some((utime + stime).saturating_mul(1_000_000_000 / hz))
-}
+pub use phri_runtime::cputime::cpu_time_ns;
 
 /// Why a service binary cannot be run.
 #[derive(Debug, thiserror::Error)]

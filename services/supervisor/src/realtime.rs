@@ -222,6 +222,11 @@ impl RealtimeWatch {
         }
     }
 
+    /// SCHED_FIFO was permitted when the run started.
+    pub fn permitted(&self) -> bool {
+        self.report.permitted
+    }
+
     /// Process `pid` of service `name` is not judged yet.
     pub fn due(&self, name: &str, pid: u32) -> bool {
         self.judged.get(name) != Some(&pid)
@@ -286,9 +291,58 @@ pub fn role_ranked(wanted: &mut [(String, Wanted)]) {
     }
 }
 
+/// Why SCHED_FIFO at a priority would not be granted.
+#[derive(Debug, thiserror::Error)]
+pub enum ProbeError {
+    /// the kernel refused it (no CAP_SYS_NICE, an rtprio limit)
+    #[error("SCHED_FIFO {priority} refused: {source}")]
+    Refused {
+        priority: i32,
+        source: std::io::Error,
+    },
+    /// the scratch thread that asked did not come back
+    #[error("SCHED_FIFO {priority}: the probe failed")]
+    Failed { priority: i32 },
+}
+
+/// What the services of a run ask for that this machine refuses.
+#[derive(Debug, thiserror::Error)]
+#[error("{}", self.describe())]
+pub struct Refused {
+    /// the highest priority asked for, refused, and the service asking
+    pub scheduler: Option<(ProbeError, String)>,
+    /// services pinned to CPUs this process may not use: (service, CPUs)
+    pub pinning: Vec<(String, Vec<usize>)>,
+    /// the CPUs this process may run on
+    pub allowed: Vec<usize>,
+}
+
+impl Refused {
+    /// One line: the refused scheduler, then the refused pinning.
+    fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some((e, name)) = &self.scheduler {
+            parts.push(format!("{e} ({name})"));
+        }
+        if !self.pinning.is_empty() {
+            let each: Vec<String> = self
+                .pinning
+                .iter()
+                .map(|(name, cpus)| format!("{name} on CPU {}", cpu_list(cpus)))
+                .collect();
+            parts.push(format!(
+                "pinning refused: {} (this process may run on CPUs {})",
+                each.join(", "),
+                cpu_list(&self.allowed)
+            ));
+        }
+        parts.join("; ")
+    }
+}
+
 /// Try SCHED_FIFO at `priority` on a scratch thread (then back to the
 /// normal scheduler): would a service be granted it? `Err` says why not.
-pub fn probe(priority: i32) -> Result<(), String> {
+pub fn probe(priority: i32) -> Result<(), ProbeError> {
     if priority <= 0 {
         return Ok(());
     }
@@ -309,8 +363,8 @@ pub fn probe(priority: i32) -> Result<(), String> {
     });
     match probe.join() {
         Ok(Ok(())) => Ok(()),
-        Ok(Err(e)) => Err(format!("SCHED_FIFO {priority} refused: {e}")),
-        Err(_) => Err(format!("SCHED_FIFO {priority}: the probe failed")),
+        Ok(Err(source)) => Err(ProbeError::Refused { priority, source }),
+        Err(_) => Err(ProbeError::Failed { priority }),
     }
 }
 
@@ -370,13 +424,13 @@ pub fn observe(pid: u32) -> Option<Observed> {
 /// Before the start: is what `services` ask for permitted here? The
 /// highest configured priority is probed, and every configured CPU must be
 /// online and in this process's own affinity (a container's cpuset). `Err`
-/// says what is refused, in one line.
+/// says what is refused (in one line, displayed).
 pub fn probe_services<'a>(
     services: impl Iterator<Item = (&'a str, &'a Wanted)>,
     online: usize,
-) -> Result<(), String> {
+) -> Result<(), Refused> {
     let mut highest: Option<(i32, &str)> = None;
-    let mut missing: Vec<String> = Vec::new();
+    let mut missing: Vec<(String, Vec<usize>)> = Vec::new();
     let allowed = own_cpus();
     for (name, w) in services.filter(|(_, w)| w.priority > 0) {
         if highest.is_none_or(|(p, _)| w.priority > p) {
@@ -389,27 +443,18 @@ pub fn probe_services<'a>(
             .filter(|&c| c >= online || !allowed.contains(&c))
             .collect();
         if !absent.is_empty() {
-            missing.push(format!("{name} on CPU {}", cpu_list(&absent)));
+            missing.push((name.to_string(), absent));
         }
     }
-    let mut refused = Vec::new();
-    if let Some((p, name)) = highest {
-        if let Err(e) = probe(p) {
-            refused.push(format!("{e} ({name})"));
-        }
+    let scheduler = highest.and_then(|(p, name)| Some((probe(p).err()?, name.to_string())));
+    if scheduler.is_none() && missing.is_empty() {
+        return Ok(());
     }
-    if !missing.is_empty() {
-        refused.push(format!(
-            "pinning refused: {} (this process may run on CPUs {})",
-            missing.join(", "),
-            cpu_list(&allowed)
-        ));
-    }
-    if refused.is_empty() {
-        Ok(())
-    } else {
-        Err(refused.join("; "))
-    }
+    Err(Refused {
+        scheduler,
+        pinning: missing,
+        allowed,
+    })
 }
 
 #[cfg(test)]

@@ -27,8 +27,14 @@ pub struct TorqueLoop {
     pub missed_deadlines: u64,
     /// state published → command received [µs]
     pub latency_us: Percentiles,
+    /// periods run with the brakes engaged (start-up's wait included)
     pub braked_cycles: u64,
+    /// periods the robot's own loop woke more than half a period late
     pub overruns: u64,
+    /// the cycles the run's time held, those the loop did not run, and
+    /// start-up's braked wait
+    #[serde(flatten)]
+    pub pace: crate::robot_pace::PaceReport,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -108,7 +114,7 @@ pub struct TaskReport {
 /// `perception` in the report.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct PerceptionReport {
-    /// camera frames seen
+    /// camera frames published, every camera's (`cameras[i].frames`)
     pub frames: u64,
     /// frames that never got a result from every repulsion worker
     pub dropped_frames: u64,
@@ -123,6 +129,9 @@ pub struct PerceptionReport {
     /// the distance computation of a frame: the sum over every worker of its
     /// compute time [ms] (complete frames)
     pub repulsion_compute_ms: Percentiles,
+    /// the frame's arrival → its skeleton on `perception/skeleton` [ms]
+    /// (every camera's frames whose skeleton was seen)
+    pub arrival_to_skeleton_ms: Percentiles,
     /// each camera's own figures (the keys above pool every camera's frames)
     pub cameras: Vec<crate::camera_report::CameraReport>,
 }
@@ -191,8 +200,13 @@ pub struct Report {
     pub sim_restarts: Vec<SimRestart>,
     /// null when the cell ran without perception
     pub perception: Option<PerceptionReport>,
+    /// per service, the CPU its processes used over the run against its
+    /// budget (set by the supervisor)
+    pub cpu: BTreeMap<String, crate::cpu::CpuReport>,
     /// the collaboration layer (empty lists when nothing happened)
     pub collaboration: crate::collab_report::CollabReport,
+    /// the voice layer's microphone
+    pub voice: crate::mic_report::VoiceReport,
     /// ISO/TS 15066: every contact against its body region's force limit
     /// (Annex A): region, transient or quasi-static, limit and margin
     pub iso_ts_15066: IsoSection,
@@ -392,6 +406,8 @@ struct Restartable<T> {
 
 /// Builds the [`Report`].
 pub struct Evaluator {
+    /// the microphone's figures
+    mic: crate::mic_report::MicEval,
     t0_ns: u64,
     det: DetectorInfo,
     /// the residual an exact model would read, from the true τ_ext
@@ -469,6 +485,8 @@ pub struct Evaluator {
     ssm_last: (u64, u64),
     /// the control period [s]
     period_s: f64,
+    /// the robot loop's pace (`robot/stats`)
+    pace: crate::robot_pace::RobotPace,
 }
 
 /// `n` and `what`, in the plural unless `n` is 1.
@@ -533,6 +551,7 @@ impl Evaluator {
             state_seq: 0,
             state_q: Vec::new(),
             cameras: crate::camera_report::CamerasEval::new(DEFAULT_PERCEPTION_MAX_AGE_NS),
+            mic: crate::mic_report::MicEval::default(),
             degraded: Vec::new(),
             robot_to_mono_ns: 0,
             truth_lost: 0,
@@ -549,6 +568,7 @@ impl Evaluator {
             ssm_standard: (0, 0),
             ssm_last: (0, 0),
             period_s: 0.001,
+            pace: crate::robot_pace::RobotPace::new(0.001),
         }
     }
 
@@ -556,6 +576,7 @@ impl Evaluator {
     pub fn with_period(mut self, period_s: f64) -> Evaluator {
         if period_s > 0.0 && period_s.is_finite() {
             self.period_s = period_s;
+            self.pace = crate::robot_pace::RobotPace::new(period_s);
         }
         self
     }
@@ -602,6 +623,30 @@ impl Evaluator {
     pub fn with_robot_service(mut self, service: &str) -> Evaluator {
         self.robot_service = service.to_string();
         self
+    }
+
+    /// The sensors as configured: each camera's source by index, the
+    /// microphone's source and device.
+    pub fn with_sensors(
+        mut self,
+        cameras: Vec<String>,
+        skeletons: Vec<String>,
+        mic: (&str, &str),
+    ) -> Evaluator {
+        self.cameras.set_sources(cameras);
+        self.cameras.set_skeleton_sources(skeletons);
+        self.mic = crate::mic_report::MicEval::new(mic.0, mic.1);
+        self
+    }
+
+    /// A camera's process said what it did (`camera/status`).
+    pub fn on_camera_status(&mut self, m: &phri_ipc::CameraStatus) {
+        self.cameras.on_status(m);
+    }
+
+    /// The microphone said what it did (`audio/mic/status`).
+    pub fn on_mic_status(&mut self, m: &phri_ipc::MicStatus) {
+        self.mic.on_status(m);
     }
 
     /// Real-time scheduling as the services got it (the run is degraded
@@ -959,6 +1004,7 @@ impl Evaluator {
     }
 
     pub fn on_stats(&mut self, m: &RobotStats) {
+        self.pace.on_stats(m);
         let t = self.t(m.stamp_ns);
         let now = (
             m.cycles,
@@ -1025,6 +1071,11 @@ impl Evaluator {
         self.cameras.on_repulsion(camera, m);
     }
 
+    /// Camera `camera`'s body tracker published the people of a frame.
+    pub fn on_skeleton(&mut self, camera: usize, m: &phri_ipc::Skeleton) {
+        self.cameras.on_skeleton(camera, m);
+    }
+
     fn perception(&self) -> Option<PerceptionReport> {
         self.cameras.report()
     }
@@ -1070,6 +1121,13 @@ impl Evaluator {
             let w = plural(missed_deadlines, "missed deadline");
             lines.push(format!("torque loop: {w}"));
             words.push(w);
+        }
+        let tl = &r.torque_loop;
+        for (line, word) in
+            crate::robot_pace::finding(tl.cycles, tl.overruns, tl.braked_cycles, &tl.pace)
+        {
+            lines.push(line);
+            words.push(word);
         }
         let by_service: Vec<(&String, &u64)> = self
             .stop_causes
@@ -1133,6 +1191,10 @@ impl Evaluator {
                 "{} lost",
                 plural(self.truth_lost, "ground-truth sample")
             ));
+        }
+        for (line, word) in crate::cpu::over_budget(&r.cpu) {
+            lines.push(line);
+            words.push(word);
         }
         for (line, word) in Self::safety_findings(r, self.has_perception()) {
             lines.push(line);
@@ -1353,6 +1415,7 @@ impl Evaluator {
                 },
                 braked_cycles: s.2 + b.2,
                 overruns: s.4 + b.4,
+                pace: self.pace.report(),
             },
             services,
             contacts,
@@ -1368,6 +1431,8 @@ impl Evaluator {
             resyncs: self.resyncs.iter().map(|(r, _, _)| r.clone()).collect(),
             sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
+            cpu: BTreeMap::new(),
+            voice: self.mic.report(),
             collaboration: Default::default(),
             iso_ts_15066,
         };
@@ -1983,6 +2048,52 @@ mod tests {
         // concluding again judges afresh, nothing counted twice
         e.conclude(&mut r);
         assert_eq!(r.degraded.len(), 1, "{:?}", r.degraded);
+    }
+
+    /// The robot's own loop falling behind is a slip the summary names
+    /// with its counts; start-up's braked wait for the first command is
+    /// reported apart and is none.
+    #[test]
+    fn a_robot_loop_that_fell_behind_or_braked_after_start_up_degrades_the_run() {
+        let services = |_: u32| BTreeMap::<String, ServiceReport>::new();
+        let stats = |seq: u64, t_ms: u64, cycles: u64, braked: u64, overruns: u64| {
+            let mut s = RobotStats::zeroed();
+            (s.seq, s.stamp_ns, s.cycles) = (seq, t_ms * 1_000_000, cycles);
+            (s.braked_cycles, s.overruns) = (braked, overruns);
+            s
+        };
+        // 200 braked periods before the first command, then on time
+        let mut e = eval();
+        e.on_stats(&stats(1, 100, 100, 100, 0));
+        e.on_stats(&stats(2, 300, 300, 200, 0));
+        e.on_stats(&stats(3, 10_000, 10_000, 200, 0));
+        let r = e.report(10_000_000_000, "x", services(0));
+        assert!(r.clean, "{:?}", r.degraded);
+        assert_eq!(r.torque_loop.pace.startup_braked_cycles, 200);
+        assert_eq!(r.torque_loop.pace.cycles_short, 0);
+        // the loop woke late 1 500 times and ran 1 000 periods short
+        e.on_stats(&stats(4, 20_000, 19_000, 200, 1_500));
+        let r = e.report(20_000_000_000, "x", services(0));
+        assert_eq!(
+            r.summary,
+            "degraded (robot loop behind: 1 500 overruns, 8 % of periods)"
+        );
+        assert_eq!(r.torque_loop.pace.cycles_short, 1_000);
+        assert!(
+            r.degraded[0].contains("1 000 cycles short"),
+            "{:?}",
+            r.degraded
+        );
+        // braked again in mid-run
+        let mut e = eval();
+        e.on_stats(&stats(1, 100, 100, 100, 0));
+        e.on_stats(&stats(2, 300, 300, 200, 0));
+        e.on_stats(&stats(3, 400, 400, 230, 0));
+        let r = e.report(1_000_000_000, "x", services(0));
+        assert_eq!(r.summary, "degraded (30 braked cycles)");
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["torque_loop"]["startup_braked_cycles"], 200);
+        assert_eq!(json["torque_loop"]["cycles_expected"], 300);
     }
 
     /// A protective stop a service caused (its input went stale) degrades

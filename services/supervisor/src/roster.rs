@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 
 use phri_config::{ServiceSpec, SupervisorConfig};
-use phri_ipc::Health;
+use phri_ipc::{Health, Zeroed};
 
 use crate::report::ServiceReport;
 use crate::restart::RestartPolicy;
@@ -398,10 +398,30 @@ impl Roster {
     /// number, and per service (as many as the message holds) its name, pid
     /// (0: down), whether it runs, restarts and last start.
     pub fn fill_health(&self, health: &mut Health, now_ns: u64) {
+        self.fill_health_from(health, now_ns, 0);
+    }
+
+    /// Fill `health` as `supervisor/health/more`: the services past the
+    /// first [`phri_ipc::MAX_SERVICES`]. False (nothing to publish) when
+    /// the roster holds no more.
+    pub fn fill_health_more(&self, health: &mut Health, now_ns: u64) -> bool {
+        if self.services.len() <= phri_ipc::MAX_SERVICES {
+            return false;
+        }
+        self.fill_health_from(health, now_ns, phri_ipc::MAX_SERVICES);
+        true
+    }
+
+    /// `health` listing the services from number `first` on.
+    fn fill_health_from(&self, health: &mut Health, now_ns: u64, first: usize) {
         health.seq += 1;
         health.stamp_ns = now_ns;
         health.count = self.services.len() as u32;
-        for (h, s) in health.services.iter_mut().zip(&self.services) {
+        let listed = self.services.get(first..).unwrap_or(&[]);
+        for h in health.services.iter_mut().skip(listed.len()) {
+            *h = phri_ipc::ServiceHealth::zeroed();
+        }
+        for (h, s) in health.services.iter_mut().zip(listed) {
             h.name = phri_ipc::json::to_c_str(&s.name);
             h.pid = s.pid.map_or(0, |p| p as i32);
             h.alive = s.pid.is_some() as u32;
@@ -707,6 +727,34 @@ mod tests {
         assert!(r.unheard().is_empty());
         assert!(r.runs(100) && !r.runs(300));
         assert_eq!(r.index_of("worker"), Some(2));
+    }
+
+    /// A roster past the first health message's [`phri_ipc::MAX_SERVICES`]
+    /// lists the rest on `supervisor/health/more`: every service's pid
+    /// reaches the services (the owners of their inputs).
+    #[test]
+    fn services_past_the_first_health_message_are_listed_on_the_second() {
+        let r = roster();
+        let mut h = Health::zeroed();
+        assert!(!r.fill_health_more(&mut h, 0), "4 services fit one message");
+        let config = phri_config::Config::defaults();
+        let specs: Vec<(String, ServiceSpec)> = (0..phri_ipc::MAX_SERVICES + 3)
+            .map(|i| (format!("s{i}"), config.services["sim"].clone()))
+            .collect();
+        let mut r = Roster::new(config.supervisor.clone(), specs);
+        for i in 0..r.len() {
+            r.started(i, 0, 1000 + i as u32);
+        }
+        let (mut first, mut more) = (Health::zeroed(), Health::zeroed());
+        r.fill_health(&mut first, 5);
+        assert!(r.fill_health_more(&mut more, 5));
+        let n = phri_ipc::MAX_SERVICES;
+        assert_eq!((first.count, more.count), (n as u32 + 3, n as u32 + 3));
+        assert_eq!(first.services[n - 1].pid, 1000 + n as i32 - 1);
+        assert_eq!(more.services[0].name_str(), format!("s{n}"));
+        assert_eq!(more.services[2].pid, 1000 + n as i32 + 2);
+        assert_eq!(more.services[3].pid, 0);
+        assert_eq!(more.services[3].name_str(), "");
     }
 
     #[test]

@@ -14,10 +14,12 @@
 //! complements and never replaces the robot's emergency stop.
 
 pub mod bursts;
+pub mod capture;
 pub mod error;
 pub mod ffi;
 pub mod mic;
 pub mod recognizer;
+pub mod resample;
 pub mod segment;
 pub mod voicing;
 pub mod wav;

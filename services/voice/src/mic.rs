@@ -2,8 +2,11 @@
 //! background noise (seeded) with recordings mixed in where a schedule puts
 //! them. `phri-mic` cuts it into `audio/mic` chunks, paced by the simulated
 //! clock (a scenario's `[[voice]]` lines) or the wall clock (a WAV directory).
+//! Also `phri-mic`'s flags and its `audio/mic/status` figures (whatever the
+//! source; a real microphone is [`crate::capture`]).
 
-use phri_ipc::AUDIO_RATE_HZ;
+use phri_config::{Invalid, MicConfig, MicSource};
+use phri_ipc::{MicStatus, Zeroed, AUDIO_RATE_HZ};
 
 /// Duration of one `audio/mic` chunk [ns].
 pub const CHUNK_NS: u64 =
@@ -18,6 +21,88 @@ pub fn due(next: Option<u64>, now_ns: u64, max_burst: u64) -> std::ops::Range<u6
     match next {
         Some(k) if captured.saturating_sub(k) <= max_burst => k..captured.max(k),
         _ => captured..captured,
+    }
+}
+
+/// `--source`'s values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceFlag {
+    /// the stand-in of `[audio]` (the simulated room, or recordings)
+    Sim,
+    /// a real microphone through ALSA
+    Alsa,
+}
+
+/// `phri-mic`'s own flags: they override `[mic]`.
+#[derive(clap::Args, Debug, Clone, Default, PartialEq)]
+pub struct MicFlags {
+    /// Where the sound comes from (overrides [mic] source): sim, the stand-in
+    /// of [audio]; alsa, a real microphone (mono, resampled to 16 kHz)
+    #[arg(long, value_enum, value_name = "SOURCE")]
+    pub source: Option<SourceFlag>,
+    /// The ALSA capture device with --source alsa (overrides [mic] device;
+    /// `arecord -L` lists them: "default", "hw:1,0", "plughw:1,0")
+    #[arg(long, value_name = "NAME")]
+    pub device: Option<String>,
+}
+
+impl MicFlags {
+    /// `[mic]` with the flags applied, checked.
+    pub fn apply(&self, mic: &MicConfig) -> Result<MicConfig, Invalid> {
+        let mut m = mic.clone();
+        match self.source {
+            Some(SourceFlag::Sim) => m.source = MicSource::Sim,
+            Some(SourceFlag::Alsa) => m.source = MicSource::Alsa,
+            None => {}
+        }
+        if let Some(d) = &self.device {
+            m.device = d.clone();
+        }
+        m.validate().map_err(|e| match self.device {
+            Some(_) => Invalid::new("--device", e.reason),
+            None => e,
+        })?;
+        Ok(m)
+    }
+}
+
+/// `audio/mic/status`: the microphone's figures, 2 Hz and at exit.
+#[derive(Clone, Debug)]
+pub struct MicStats {
+    pub status: MicStatus,
+    next_ns: u64,
+}
+
+/// Between two `audio/mic/status` messages [ns].
+pub const STATUS_PERIOD_NS: u64 = 500_000_000;
+
+impl MicStats {
+    pub fn new(source: MicSource, device_rate_hz: u32) -> MicStats {
+        let mut status = MicStatus::zeroed();
+        status.source = match source {
+            MicSource::Sim => 0,
+            MicSource::Alsa => 1,
+        };
+        status.device_rate_hz = device_rate_hz;
+        MicStats { status, next_ns: 0 }
+    }
+
+    /// The message to publish at `now_ns`, if one is due (the first at once).
+    pub fn due(&mut self, now_ns: u64, chunks: u64, overruns: u64) -> Option<MicStatus> {
+        if now_ns < self.next_ns {
+            return None;
+        }
+        self.next_ns = now_ns + STATUS_PERIOD_NS;
+        Some(self.now(now_ns, chunks, overruns))
+    }
+
+    /// The message at `now_ns` whatever the period (at exit).
+    pub fn now(&mut self, now_ns: u64, chunks: u64, overruns: u64) -> MicStatus {
+        self.status.seq += 1;
+        self.status.stamp_ns = now_ns;
+        self.status.chunks = chunks;
+        self.status.overruns = overruns;
+        self.status
     }
 }
 
@@ -151,6 +236,34 @@ mod tests {
         assert_eq!(due(Some(4), 100_000_000, 100), 4..5);
         assert_eq!(due(Some(4), 10 * 1_000_000_000, 100), 500..500);
         assert_eq!(due(Some(9), 100_000_000, 100), 9..9);
+    }
+
+    #[test]
+    fn the_flags_override_mic_and_status_is_2hz() {
+        let cfg = phri_config::Config::defaults().mic;
+        let f = MicFlags {
+            source: Some(SourceFlag::Alsa),
+            device: Some("hw:1,0".into()),
+        };
+        let m = f.apply(&cfg).unwrap();
+        assert_eq!((m.source, m.device.as_str()), (MicSource::Alsa, "hw:1,0"));
+        assert_eq!(MicFlags::default().apply(&cfg).unwrap(), cfg);
+        let bad = MicFlags {
+            source: None,
+            device: Some(String::new()),
+        };
+        assert!(bad
+            .apply(&cfg)
+            .unwrap_err()
+            .to_string()
+            .contains("--device"));
+        let mut s = MicStats::new(MicSource::Alsa, 44_100);
+        let a = s.due(1_000, 0, 0).unwrap();
+        assert_eq!((a.seq, a.source, a.device_rate_hz), (1, 1, 44_100));
+        assert!(s.due(400_000_000, 5, 0).is_none());
+        let b = s.due(500_001_000, 25, 1).unwrap();
+        assert_eq!((b.seq, b.chunks, b.overruns), (2, 25, 1));
+        assert_eq!(s.now(600_000_000, 30, 1).seq, 3);
     }
 
     #[test]

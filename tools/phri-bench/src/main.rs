@@ -6,14 +6,23 @@
 //! state published → residual published → controller woke → command
 //! published → command received by the robot.
 //!
+//! `phri-bench cell [--scenario NAME] [--duration S] [--set K=V]... [--json]`:
+//! one run of the cell with the machine's floor measured beside it (a
+//! thread at the torque loop's priority on its CPU, as `cyclictest`): each
+//! service's CPU share against its budget, the torque loop's pace and
+//! latency beside the floor's, perception's latency. `deploy/bench` runs it
+//! over the scenarios.
+//!
 //! `phri-bench completions bash|zsh|fish`: a shell completion script.
 
+mod cell;
+mod floor;
 mod transport;
 
 use std::collections::VecDeque;
 use std::error::Error;
 use std::path::PathBuf;
-use std::process::{Command, ExitCode, Stdio};
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
@@ -50,6 +59,30 @@ enum Cmd {
         /// Cell configuration (TOML) [default: deploy/phri.toml of the build's checkout]
         #[arg(long, value_name = "FILE")]
         config: Option<PathBuf>,
+    },
+    /// Run the cell once with the machine's floor measured beside it: CPU per service, the torque loop's pace and latency against the floor's, perception's latency
+    Cell {
+        /// Length of the run [s] (the floor is measured after its first 1.5 s)
+        #[arg(long, value_name = "SECONDS", default_value_t = 60.0, allow_negative_numbers = true, value_parser = positive)]
+        duration: f64,
+        /// Scenario the cell runs
+        #[arg(long, value_name = "NAME", default_value = "free-motion")]
+        scenario: String,
+        /// Cell configuration (TOML) [default: deploy/phri.toml of the build's checkout]
+        #[arg(long, value_name = "FILE")]
+        config: Option<PathBuf>,
+        /// A configuration value for the run (`section.key=value`, as the supervisor's --set)
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// The floor thread's CPU (the torque loop's, deploy/phri.toml: 1)
+        #[arg(long, value_name = "CPU", default_value_t = 1)]
+        floor_cpu: usize,
+        /// The floor thread's SCHED_FIFO priority (the simulated robot's, deploy/phri.toml: 78; 0: normal scheduler)
+        #[arg(long, value_name = "PRIORITY", default_value_t = 78)]
+        floor_priority: i32,
+        /// Print JSON instead of a table
+        #[arg(long)]
+        json: bool,
     },
     /// Hand-off time of one payload between two processes: iceoryx2 zero-copy against a Unix socket [µs]
     Transport {
@@ -99,6 +132,33 @@ fn percentiles(mut v: Vec<f64>) -> serde_json::Value {
     json!({"n": v.len(), "p50": at(0.5), "p99": at(0.99), "p999": at(0.999), "max": v[v.len() - 1]})
 }
 
+/// `phri-bench cell`: the run, the floor beside it, the figures.
+fn cell_run(
+    scenario: &str,
+    duration: f64,
+    config: Option<&std::path::Path>,
+    sets: &[String],
+    floor_at: (usize, i32),
+    as_json: bool,
+) -> Result<(), Box<dyn Error>> {
+    let run = cell::BenchCell::start(config, scenario, duration, sets)?;
+    let from = now_ns() + 1_500_000_000;
+    let until = now_ns() + (duration * 1e9) as u64;
+    let floor = std::thread::spawn(move || {
+        floor::measure(Some(floor_at.0), floor_at.1, 1_000_000, from, until)
+    })
+    .join()
+    .map_err(|_| "the floor thread panicked")?;
+    let report = run.finish()?;
+    let f = cell::figures(scenario, &report, &floor.to_json());
+    if as_json {
+        println!("{}", serde_json::to_string_pretty(&f)?);
+    } else {
+        print!("{}", cell::table(&f));
+    }
+    Ok(())
+}
+
 fn body(command: Cmd) -> Result<(), Box<dyn Error>> {
     let (duration, scenario, config) = match command {
         Cmd::Loop {
@@ -112,33 +172,28 @@ fn body(command: Cmd) -> Result<(), Box<dyn Error>> {
             return Ok(());
         }
         Cmd::TransportPeer { prefix, socket } => return Ok(transport::peer(&prefix, &socket)?),
+        Cmd::Cell {
+            duration,
+            scenario,
+            config,
+            sets,
+            floor_cpu,
+            floor_priority,
+            json,
+        } => {
+            return cell_run(
+                &scenario,
+                duration,
+                config.as_deref(),
+                &sets,
+                (floor_cpu, floor_priority),
+                json,
+            )
+        }
         Cmd::Completions { .. } => return Ok(()),
     };
-    let exe_dir = std::env::current_exe()?
-        .parent()
-        .map(PathBuf::from)
-        .unwrap_or_default();
-    let repo = exe_dir.join("../..");
-    let config = config.unwrap_or_else(|| repo.join("deploy/phri.toml"));
-    let prefix = format!("bench{}_", std::process::id());
-    let report = std::env::temp_dir().join(format!("phri-bench-{prefix}.json"));
-    let mut sup = Command::new(exe_dir.join("phri-supervisor"))
-        .arg("--config")
-        .arg(&config)
-        .arg("--scenario")
-        .arg(&scenario)
-        .arg("--duration")
-        .arg((duration + 1.0).to_string())
-        .arg("--prefix")
-        .arg(&prefix)
-        .arg("--report")
-        .arg(&report)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .map_err(|e| format!("cannot start phri-supervisor: {e}"))?;
-
-    let node = node("bench", &prefix)?;
+    let sup = cell::BenchCell::start(config.as_deref(), &scenario, duration + 1.0, &[])?;
+    let node = node("bench", &sup.prefix)?;
     let states = ROBOT_STATE.subscriber(&node, Queue::Drain)?;
     let residuals = DYNAMICS_RESIDUAL.subscriber(&node, Queue::Drain)?;
     let commands = ROBOT_COMMAND.subscriber(&node, Queue::Drain)?;
@@ -184,19 +239,7 @@ fn body(command: Cmd) -> Result<(), Box<dyn Error>> {
     }
     drop((states, residuals, commands, status));
     drop(node);
-    let st = sup.wait()?;
-    if let Err(alive) = phri_ipc::remove_leftovers(&prefix) {
-        eprintln!(
-            "phri-bench: {alive} node(s) of {prefix} still attached: their shared memory stays"
-        );
-    }
-    if !st.success() {
-        return Err(format!("phri-supervisor failed: {st}").into());
-    }
-    let r: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(&report).map_err(|e| format!("{}: {e}", report.display()))?,
-    )?;
-    let _ = std::fs::remove_file(&report);
+    let r = sup.finish()?;
     let out = json!({
         "duration_s": duration,
         "scenario": scenario,

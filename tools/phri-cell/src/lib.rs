@@ -398,7 +398,7 @@ impl Cell {
             let ready_ns = now + p.latency_ns;
             let mut skeleton = *p
                 .cameras
-                .capture(&p.world, now, p.period_ns as f64 * 1e-9)
+                .capture(&p.world, now, p.period_ns as f64 * 1e-9, &p.history)
                 .map_err(|e| step_err(e.service())(&e))?;
             skeleton.published_ns = ready_ns;
             let mut request = None;

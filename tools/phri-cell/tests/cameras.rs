@@ -102,3 +102,76 @@ fn the_crossing_hand_holds_the_approach_and_never_strikes_the_arm() {
         );
     }
 }
+
+/// The mirrored collaboration on the depth trackers' skeletons (each
+/// camera's tracker on its rendered frames, not the truth): as on the
+/// truth's, the paper's one camera never starts it, and the mirrored pair
+/// does, with the left hand, on two arms: the wave, the approach within
+/// 0.5 s of the truth's, the contact phase, the left hand touched where the
+/// truth's run touches it, the push on the wrist ends it. The camera
+/// beside the person's right sees their left hand's place only as the
+/// hip's edge: the other camera's view of the left side is taken.
+#[test]
+fn the_mirrored_wave_on_the_depth_trackers_is_seen_by_two_cameras_and_not_by_one() {
+    let depth = ["skeleton.source=\"depth\""];
+    let one = Loaded::load(&common::deploy(), Some("collaboration-mirrored"), &depth).unwrap();
+    let mut c = common::cell_of(&one, &CellOptions::default());
+    for _ in 0..8_000 {
+        c.tick().unwrap();
+    }
+    let s = c.summary();
+    assert!(
+        s.gesture_requests.is_empty(),
+        "one camera saw the left hand wave"
+    );
+    let file = common::deploy().with_file_name("two-cameras.toml");
+    let run = |sets: &[&str]| {
+        let l = Loaded::load(&file, Some("collaboration-mirrored"), sets).unwrap();
+        let mut c = common::cell_of(&l, &CellOptions::default());
+        for _ in 0..20_000 {
+            c.tick().unwrap();
+        }
+        c.summary()
+    };
+    let approach = |s: &phri_cell::CellSummary| {
+        s.modes
+            .iter()
+            .find(|(_, m)| m == "approach")
+            .map(|(t, _)| *t)
+    };
+    for robot in ["lwr4", "fr3"] {
+        let arm = format!("robot.name=\"{robot}\"");
+        let truth = run(&[arm.as_str()]);
+        let s = run(&[arm.as_str(), depth[0]]);
+        eprintln!(
+            "{robot}: depth {:?} {:?}; truth {:?} {:?}",
+            s.gesture_requests, s.modes, truth.gesture_requests, truth.modes
+        );
+        let waves: Vec<&str> = s.gesture_requests.iter().map(|g| g.part.as_str()).collect();
+        assert_eq!(waves, ["left_hand"], "{robot}");
+        let late = approach(&s).expect("an approach") - approach(&truth).expect("an approach");
+        eprintln!("{robot}: the approach {late:+.2} s from the truth's");
+        assert!(late.abs() <= 0.5, "{robot}: {late:.2} s");
+        let modes: Vec<&str> = s.modes.iter().map(|m| m.1.as_str()).collect();
+        assert!(modes.contains(&"contact"), "{robot}: {modes:?}");
+        assert!(
+            !modes.contains(&"reaction") && !modes.contains(&"protective_stop"),
+            "{robot}: {modes:?}"
+        );
+        // the left hand touched where the truth's run touches it (the
+        // FR3's contact phase holds short of it on either)
+        let touched = |s: &phri_cell::CellSummary| {
+            s.contacts
+                .iter()
+                .any(|k| k.intended && k.part == "hand_left")
+        };
+        assert!(
+            touched(&s) || !touched(&truth),
+            "{robot}: the left hand was never touched: {:?}",
+            s.contacts
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        // the push on the wrist ends it: the task again
+        assert!(modes.ends_with(&["recover", "task"]), "{robot}: {modes:?}");
+    }
+}

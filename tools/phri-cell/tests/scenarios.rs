@@ -165,7 +165,20 @@ fn collaborate(
     Option<(f64, phri_ipc::CollabReason)>,
     f64,
 ) {
-    let mut c = common::cell(scenario, &CellOptions::default(), &[]);
+    collaborate_with(scenario, seconds, &[])
+}
+
+/// [`collaborate`] with configuration overrides.
+fn collaborate_with(
+    scenario: &str,
+    seconds: f64,
+    sets: &[&str],
+) -> (
+    phri_cell::CellSummary,
+    Option<(f64, phri_ipc::CollabReason)>,
+    f64,
+) {
+    let mut c = common::cell(scenario, &CellOptions::default(), sets);
     // the smallest distance perception saw (the masked hand excluded) at 8-9.6 s
     let mut seen = f64::INFINITY;
     let (s, ended_by) = run_collab(&mut c, seconds, |c| {
@@ -237,6 +250,69 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
         peak > 0.0 && peak <= 50.0,
         "the follow's new touch: {peak:.1} N"
     );
+}
+
+/// The person tracker on depth instead of the simulation's truth: the same
+/// rules (wave, hand to follow, masking) on its skeletons of the rendered
+/// frames. The wave is recognised as the right hand's, the arm approaches
+/// and touches that hand with its end effector, follows it when it moves
+/// away and touches it again, the wrist push ends it, and nothing else is
+/// touched, in both collaboration scenarios.
+#[test]
+fn collaborations_on_the_depth_trackers_skeletons_reach_the_truths_phases() {
+    for scenario in ["collaboration", "safe-collaboration"] {
+        let (truth, _, _) = collaborate(scenario, 11.0);
+        let (s, ended_by, _) = collaborate_with(scenario, 17.0, &["skeleton.source=\"depth\""]);
+        eprintln!(
+            "{scenario}: depth {:?} {:?} ended by {ended_by:?}; truth {:?}",
+            s.gesture_requests, s.modes, truth.gesture_requests
+        );
+        assert_eq!(
+            s.gesture_requests.len(),
+            1,
+            "{scenario}: {:?}",
+            s.gesture_requests
+        );
+        assert_eq!(s.gesture_requests[0].part, "right_hand", "{scenario}");
+        let approach = |s: &phri_cell::CellSummary| {
+            s.modes
+                .iter()
+                .find(|(_, m)| m == "approach")
+                .map(|(t, _)| *t)
+                .expect("an approach")
+        };
+        let late = approach(&s) - approach(&truth);
+        eprintln!("{scenario}: the approach {late:+.2} s from the truth's");
+        assert!(late.abs() <= 0.5, "{scenario}: {late:.2} s");
+        // approach → contact → follow → contact again, as from the truth
+        let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
+        let first =
+            |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
+        let a = first("approach", 0).expect("an approach");
+        let c1 = first("contact", a).expect("a first contact");
+        let f = first("follow", c1).expect("a follow");
+        assert!(first("contact", f).is_some(), "{scenario}: {order:?}");
+        assert!(!order.contains(&"reaction"), "{scenario}: {order:?}");
+        assert!(!order.contains(&"protective_stop"), "{scenario}: {order:?}");
+        let (t_end, why) = ended_by.expect("the collaboration ended");
+        assert_eq!(why, phri_ipc::CollabReason::WristPush, "{scenario}");
+        assert!(
+            (15.5..16.2).contains(&t_end),
+            "{scenario}: ended at {t_end:.2} s"
+        );
+        assert_eq!(s.unintended_contacts, 0, "{scenario}: {:?}", s.contacts);
+        let hand: Vec<_> = s
+            .contacts
+            .iter()
+            .filter(|c| c.part == "hand_right")
+            .collect();
+        assert!(
+            hand.iter().all(|c| c.link == "lwr_link_7" && c.intended)
+                && hand.iter().any(|c| c.t_start_s < 11.0)
+                && hand.iter().any(|c| c.t_start_s > 12.0),
+            "{scenario}: {hand:?}"
+        );
+    }
 }
 
 /// The robot following a hand that moved away touches it again at about

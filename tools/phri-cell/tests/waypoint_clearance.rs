@@ -181,7 +181,7 @@ impl Perceiver {
             .map(|c| Capsule::new(Point3::from(c.a), Point3::from(c.b), c.radius))
             .collect();
         self.perception
-            .capture(&self.world, now, self.frame_period_s)
+            .capture(&self.world, now, self.frame_period_s, &self.history)
             .unwrap();
         self.perception.perceive(&self.history, None, now).unwrap();
         let n = self.radii.len();

@@ -30,7 +30,7 @@ use phri_runtime::Shutdown;
 use serde_json::{json, Value};
 
 use probe::{last, Probe};
-use top::{ChannelRow, KeyOutcome, ServiceRow, Snapshot, TopState, View};
+use top::{ChannelRow, CpuMeter, KeyOutcome, ServiceRow, Snapshot, TopState, View};
 
 type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
 
@@ -466,13 +466,35 @@ struct Sampler {
     i_status: usize,
     i_res: usize,
     i_health: usize,
+    i_health_more: usize,
     i_collab: usize,
     /// each stream's mean interval when last measured [ms]
     known_mean_ms: HashMap<&'static str, f64>,
+    /// each service's CPU use
+    cpu: CpuMeter,
+    /// `[services.NAME] cpu_budget` of the run's configuration
+    budgets: HashMap<String, f64>,
+}
+
+/// The services' CPU budgets in the configuration the cell with `prefix`
+/// runs (its run directory's `config.toml`; none when it is not there).
+fn cpu_budgets(prefix: &str) -> HashMap<String, f64> {
+    let Ok(dir) = phri_runtime::rundir::default_run_dir(prefix) else {
+        return HashMap::new();
+    };
+    let Ok(loaded) = phri_config::Loaded::load(&dir.join("config.toml"), None, &[]) else {
+        return HashMap::new();
+    };
+    loaded
+        .config
+        .services
+        .iter()
+        .filter_map(|(n, s)| Some((n.clone(), s.cpu_budget?)))
+        .collect()
 }
 
 impl Sampler {
-    fn open(node: &IpcNode) -> Result<Sampler> {
+    fn open(node: &IpcNode, prefix: &str) -> Result<Sampler> {
         let probes = probe::open_all(node)?;
         let idx = |name: &str| {
             probes
@@ -485,8 +507,11 @@ impl Sampler {
             i_status: idx(CONTROL_STATUS.name)?,
             i_res: idx(DYNAMICS_RESIDUAL.name)?,
             i_health: idx(SUPERVISOR_HEALTH.name)?,
+            i_health_more: idx(SUPERVISOR_HEALTH_MORE.name)?,
             i_collab: idx(COLLAB_STATE.name)?,
             known_mean_ms: HashMap::new(),
+            cpu: CpuMeter::default(),
+            budgets: cpu_budgets(prefix),
             probes,
         })
     }
@@ -526,19 +551,38 @@ impl Sampler {
             braking: state.is_some_and(|s| s.status & robot_status::BRAKING != 0),
             health_seen: health.is_some(),
         };
-        st.services = health
-            .map(|h| {
-                h.services[..(h.count as usize).min(MAX_SERVICES)]
-                    .iter()
-                    .map(|s| ServiceRow {
-                        name: s.name_str().to_string(),
-                        pid: s.pid,
-                        alive: s.alive != 0,
-                        restarts: s.restarts,
-                    })
-                    .collect()
+        let more: Option<Health> = last(self.probes[self.i_health_more].as_ref());
+        let listed = |h: &Health, first: usize| {
+            let n = (h.count as usize).saturating_sub(first).min(MAX_SERVICES);
+            h.services[..n].to_vec()
+        };
+        let mut services = health.map(|h| listed(&h, 0)).unwrap_or_default();
+        if let (Some(h), Some(m)) = (health, more) {
+            if h.count as usize > MAX_SERVICES {
+                services.extend(listed(&m, MAX_SERVICES));
+            }
+        }
+        st.services = services
+            .iter()
+            .map(|s| {
+                let name = s.name_str().to_string();
+                let cpu_ns = u32::try_from(s.pid)
+                    .ok()
+                    .filter(|_| s.alive != 0)
+                    .and_then(phri_runtime::cputime::cpu_time_ns);
+                let cpu_share = cpu_ns.and_then(|c| self.cpu.share(s.pid, t_s, c));
+                ServiceRow {
+                    cpu_budget: self.budgets.get(&name).copied(),
+                    name,
+                    pid: s.pid,
+                    alive: s.alive != 0,
+                    restarts: s.restarts,
+                    cpu_share,
+                }
             })
-            .unwrap_or_default();
+            .collect();
+        let listed: Vec<i32> = st.services.iter().map(|s| s.pid).collect();
+        self.cpu.keep_only(&listed);
         let channels = channels_json(node, &self.probes)?;
         st.channels = self
             .probes
@@ -602,7 +646,10 @@ fn top_json(
     let services: Vec<Value> = st
         .services
         .iter()
-        .map(|s| json!({"name": s.name, "pid": s.pid, "alive": s.alive, "restarts": s.restarts}))
+        .map(|s| {
+            json!({"name": s.name, "pid": s.pid, "alive": s.alive, "restarts": s.restarts,
+                   "cpu_share": s.cpu_share, "cpu_budget": s.cpu_budget})
+        })
         .collect();
     json!({"prefix": prefix, "t_s": t_s,
            "mode": s.mode, "min_distance": s.min_distance, "residual_norm": s.residual_norm,
@@ -620,7 +667,7 @@ fn top_lines(
     once: bool,
     sd: &Shutdown,
 ) -> Result {
-    let mut sampler = Sampler::open(node)?;
+    let mut sampler = Sampler::open(node, prefix)?;
     let mut st = TopState::new(prefix);
     let t_start = Instant::now();
     let ended = |t: Duration| end.is_some_and(|e| t >= e);
@@ -674,7 +721,7 @@ impl Drop for RestoreTerminal {
 /// key and resize; keys as [`top::on_key`].
 fn top_dashboard(node: &IpcNode, prefix: &str, end: Option<Duration>, sd: &Shutdown) -> Result {
     use ratatui::crossterm::event::{self, Event};
-    let mut sampler = Sampler::open(node)?;
+    let mut sampler = Sampler::open(node, prefix)?;
     let mut st = TopState::new(prefix);
     let mut term =
         ratatui::try_init().map_err(|e| format!("top: cannot set up the terminal: {e}"))?;

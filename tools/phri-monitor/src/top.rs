@@ -153,13 +153,53 @@ impl ChannelRow {
     }
 }
 
-/// One service as the supervisor's health reports it.
+/// One service as the supervisor's health reports it, with its CPU use.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ServiceRow {
     pub name: String,
     pub pid: i32,
     pub alive: bool,
     pub restarts: u32,
+    /// share of one core over the last seconds (`None`: not measured yet)
+    pub cpu_share: Option<f64>,
+    /// its `[services.NAME] cpu_budget` in the run's configuration
+    pub cpu_budget: Option<f64>,
+}
+
+impl ServiceRow {
+    /// It uses more of a core than its budget.
+    pub fn over_budget(&self) -> bool {
+        matches!((self.cpu_share, self.cpu_budget), (Some(s), Some(b)) if s > b)
+    }
+}
+
+/// Processes' shares of one core from their CPU time, smoothed over about a
+/// second of refreshes.
+#[derive(Clone, Debug, Default)]
+pub struct CpuMeter {
+    /// per pid: (when [s], its CPU time then [ns], its smoothed share)
+    seen: std::collections::HashMap<i32, (f64, u64, Option<f64>)>,
+}
+
+impl CpuMeter {
+    /// Process `pid` had used `cpu_ns` at `t_s`: its share of one core
+    /// (`None` until two samples 0.2 s or more apart).
+    pub fn share(&mut self, pid: i32, t_s: f64, cpu_ns: u64) -> Option<f64> {
+        let entry = self.seen.entry(pid).or_insert((t_s, cpu_ns, None));
+        let (t0, c0, smoothed) = *entry;
+        if t_s - t0 < 0.2 {
+            return smoothed;
+        }
+        let share = cpu_ns.saturating_sub(c0) as f64 * 1e-9 / (t_s - t0);
+        let s = smoothed.map_or(share, |old| old + 0.3 * (share - old));
+        *entry = (t_s, cpu_ns, Some(s));
+        Some(s)
+    }
+
+    /// Forget the processes not in `pids` (gone, restarted under another pid).
+    pub fn keep_only(&mut self, pids: &[i32]) {
+        self.seen.retain(|pid, _| pids.contains(pid));
+    }
 }
 
 /// The cell's newest values (`None`: no message yet).
@@ -543,6 +583,11 @@ fn render_header(st: &TopState, area: Rect, buf: &mut Buffer) {
     Paragraph::new(vec![title, values, alarm_line]).render(area, buf);
 }
 
+/// A share as a percentage (`–`: none).
+fn percent(x: Option<f64>) -> String {
+    x.map_or("–".to_string(), |v| format!("{:.1}%", 100.0 * v))
+}
+
 fn opt(x: Option<f64>, digits: usize) -> String {
     x.map_or("-".into(), |x| format!("{x:.digits$}"))
 }
@@ -650,6 +695,8 @@ fn render_services(st: &TopState, area: Rect, buf: &mut Buffer) {
                 "NO",
                 Style::default().fg(Color::Red).add_modifier(Modifier::BOLD),
             )
+        } else if s.over_budget() {
+            ("yes", Style::default().fg(Color::Red))
         } else if s.restarts > 0 {
             ("yes", Style::default().fg(Color::Yellow))
         } else {
@@ -660,6 +707,8 @@ fn render_services(st: &TopState, area: Rect, buf: &mut Buffer) {
             Cell::from(format!("{:>7}", s.pid)),
             Cell::from(alive),
             Cell::from(format!("{:>8}", s.restarts)),
+            Cell::from(format!("{:>6}", percent(s.cpu_share))),
+            Cell::from(format!("{:>6}", percent(s.cpu_budget))),
         ])
         .style(style)
     });
@@ -688,11 +737,15 @@ fn render_services(st: &TopState, area: Rect, buf: &mut Buffer) {
             Constraint::Length(7),
             Constraint::Length(5),
             Constraint::Length(8),
+            Constraint::Length(6),
+            Constraint::Length(6),
         ],
     )
     .header(
-        Row::new(["service", "    pid", "alive", "restarts"])
-            .style(Style::default().add_modifier(Modifier::BOLD | Modifier::UNDERLINED)),
+        Row::new([
+            "service", "    pid", "alive", "restarts", "   CPU", "budget",
+        ])
+        .style(Style::default().add_modifier(Modifier::BOLD | Modifier::UNDERLINED)),
     )
     .block(Block::default().borders(Borders::ALL).title(title));
     Widget::render(table, area, buf);
@@ -853,12 +906,16 @@ mod tests {
                 pid: 4242,
                 alive: true,
                 restarts: 0,
+                cpu_share: Some(0.131),
+                cpu_budget: Some(0.3),
             },
             ServiceRow {
                 name: "camera".into(),
                 pid: 4243,
                 alive: false,
                 restarts: 2,
+                cpu_share: None,
+                cpu_budget: Some(0.2),
             },
         ];
         // 30 s at 4 Hz up to now
@@ -913,6 +970,9 @@ mod tests {
             "sim",
             "4242",
             "NO",
+            "13.1%",
+            "30.0%",
+            "budget",
             "min distance [m]",
             "residual ‖r‖ [Nm]",
             "joint torque τ [Nm]",
@@ -1125,6 +1185,22 @@ mod tests {
             .all(|&(t, x)| t >= t_last - HISTORY_S && x.is_finite()));
         assert_eq!(s.0.len(), 120, "30 s at 4 Hz, one gap: {}", s.0.len());
         assert_eq!(s.bounds(), Some([s.0[0].1, 199.0]));
+    }
+
+    #[test]
+    fn a_process_s_cpu_share_is_its_cpu_time_over_the_wall_clock_smoothed() {
+        let mut m = CpuMeter::default();
+        assert_eq!(m.share(7, 0.0, 0), None);
+        // too soon after the first sample: nothing yet
+        assert_eq!(m.share(7, 0.1, 50_000_000), None);
+        // 25 % of a core over 0.25 s
+        let s = m.share(7, 0.25, 62_500_000).unwrap();
+        assert!((s - 0.25).abs() < 1e-9, "{s}");
+        // then 125 %: the smoothed share moves 30 % of the way
+        let s = m.share(7, 0.5, 375_000_000).unwrap();
+        assert!((s - 0.55).abs() < 1e-9, "{s}");
+        m.keep_only(&[8]);
+        assert_eq!(m.share(7, 0.6, 400_000_000), None);
     }
 
     #[test]

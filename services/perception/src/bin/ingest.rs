@@ -1,6 +1,6 @@
-//! `phri-perception`: depth ingestion. Takes frames from `camera/depth` (or a
-//! directory of 16-bit PNG depth images replayed at their rate), validates
-//! them, removes the robot's own pixels at the joint state nearest the
+//! `phri-perception`: depth ingestion. Takes frames from `camera/depth`
+//! (whatever its source: simulated, a Kinect, a ROS 2 camera, a replay),
+//! validates them, removes the robot's own pixels at the joint state nearest the
 //! capture time ([`Ingest`]), and publishes `perception/depth` (a loaned
 //! `[u16]` slice with a header: sequence, capture time, intrinsics, camera
 //! pose, joint state used). While a collaboration is on (`collab/state`) it
@@ -17,15 +17,14 @@ use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use phri_config::{CollaborationConfig, DepthSource};
+use phri_config::CollaborationConfig;
 use phri_ipc::{
-    merge_newest, CollabState, FrameHeader, FramePublisher, FrameSubscriber, HandObservation,
-    IpcError, LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS,
-    ROBOT_STATE,
+    merge_newest, CollabState, FrameHeader, FramePublisher, HandObservation, IpcError,
+    LatestReader, Publisher, Queue, Skeleton, Zeroed, COLLAB_STATE, FRAME_PIXELS, ROBOT_STATE,
 };
 use phri_perception::mask::{hand_observation, MaskHold};
-use phri_perception::{CameraFlag, Ingest, PngReplay, RateLimited, StateHistory, Ticks};
-use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
+use phri_perception::{CameraFlag, Ingest, StateHistory};
+use phri_runtime::{now_ns, ServiceContext};
 
 /// A camera's skeleton older than this is left out of the merge [ns]
 /// (six frames at 30 Hz).
@@ -33,16 +32,6 @@ const SKELETON_MAX_AGE_NS: u64 = 200_000_000;
 
 fn main() -> ExitCode {
     phri_runtime::service::run("phri-perception", body)
-}
-
-#[allow(clippy::large_enum_variant)] // one value per process, never moved in a loop
-enum Source {
-    Camera(FrameSubscriber),
-    Png {
-        replay: PngReplay,
-        ticks: Ticks,
-        unreadable: RateLimited,
-    },
 }
 
 /// Ingestion and what it publishes to.
@@ -134,20 +123,10 @@ fn body() -> Result<(), Box<dyn Error>> {
     )?;
     let cfg = &ctx.config().perception;
     let (camera_cfg, channels) = flag.resolve(ctx.config())?;
-    if flag.camera > 0 && matches!(cfg.source, DepthSource::Png) {
-        return Err(format!(
-            "--camera {}: perception.source = \"png\" replays the first camera only",
-            flag.camera
-        )
-        .into());
-    }
     let model = ctx.robot_model()?;
     let n = model.nv();
     let ingest = Ingest::new(model, cfg)?;
     if ctx.checking() {
-        if matches!(cfg.source, DepthSource::Png) {
-            PngReplay::open(cfg, camera_cfg, &ctx.loaded.origin)?;
-        }
         return Ok(());
     }
     let node = ctx.node()?;
@@ -173,66 +152,23 @@ fn body() -> Result<(), Box<dyn Error>> {
             false => None,
         },
     };
-    let mut source = match cfg.source {
-        DepthSource::Camera => Source::Camera(
-            channels
-                .depth
-                .waking_frame_subscriber(&node, Queue::Latest)?,
-        ),
-        DepthSource::Png => {
-            let replay = PngReplay::open(cfg, camera_cfg, &ctx.loaded.origin)?;
-            Source::Png {
-                ticks: Ticks::new(now_ns(), replay.period_ns()),
-                replay,
-                unreadable: RateLimited::new(RateLimited::SECOND_NS),
-            }
-        }
-    };
+    let frames = channels
+        .depth
+        .waking_frame_subscriber(&node, Queue::Latest)?;
     ctx.start_deadman()?;
     let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
     while !ctx.shutdown.requested() {
         // wait for the next frame (a wake-up without one just loops)
-        match &mut source {
-            Source::Camera(frames) => {
-                let _ = frames.wait(Duration::from_millis(50));
-            }
-            Source::Png { ticks, .. } => sleep_until_ns(ticks.deadline_ns()),
-        }
+        let _ = frames.wait(Duration::from_millis(50));
         beat.beat(now_ns());
-        let woke_ns = now_ns();
         states.drain(|s| {
             out.history.push_state(s);
         })?;
-        match &mut source {
-            Source::Camera(frames) => {
-                while let Some(frame) = frames.receive()? {
-                    let arrived = now_ns();
-                    let mut header = *frame.user_header();
-                    out.handle(&mut header, frame.payload(), arrived)?;
-                }
-            }
-            Source::Png {
-                replay,
-                ticks,
-                unreadable,
-            } => {
-                let mut header = FrameHeader::default();
-                match replay.next_frame(out.history.newest_ns(), now_ns(), &mut header) {
-                    None => {}
-                    Some(Ok(depths)) => out.handle(&mut header, &depths, woke_ns)?,
-                    Some(Err(e)) => {
-                        out.refused += 1;
-                        if let Some(n) = unreadable.hit(now_ns()) {
-                            tracing::warn!(
-                                "refused {e} ({n} unreadable files since the last line)"
-                            );
-                        }
-                    }
-                }
-                // a late tick drops the ones it overran: never frames back to back
-                ticks.done(woke_ns, now_ns());
-            }
+        while let Some(frame) = frames.receive()? {
+            let arrived = now_ns();
+            let mut header = *frame.user_header();
+            out.handle(&mut header, frame.payload(), arrived)?;
         }
     }
     Ok(())

@@ -1,8 +1,9 @@
-//! The PNG source of the real `phri-perception` process, at the highest rate
-//! the configuration allows (1000 Hz): a 128 MB file, or files that take
-//! longer to decode than a period, no longer make ingestion spin (it read and
-//! decoded back to back, taking CPU 0 from the camera), and a bad file is
-//! one line a second on stderr, not one per tick.
+//! The replay camera (`phri-camera`, `[camera] source = "replay"`) at the
+//! highest rate the configuration allows (1000 Hz): a 128 MB file, or files
+//! that take longer to decode than a period, never make it spin (reading
+//! and decoding back to back would take CPU 0 from perception), and a bad
+//! file is one line a second on stderr, not one per tick. The older keys
+//! (`[perception] source = "png"`) still configure it.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -18,18 +19,18 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
-/// `phri-perception` replaying `png_dir` at `rate_hz`, under its own prefix.
-fn start(png_dir: &Path, rate_hz: f64, prefix: &str) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_phri-perception"))
+/// `phri-camera` replaying `dir` at `rate_hz`, under its own prefix.
+fn start(dir: &Path, rate_hz: f64, prefix: &str) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_phri-camera"))
         .current_dir(repo())
         .arg("--config")
         .arg(repo().join("deploy/phri.toml"))
         .args(["--prefix", prefix])
-        .args(["--set", "perception.source=\"png\""])
+        .args(["--set", "camera.source=\"replay\""])
         .arg("--set")
-        .arg(format!("perception.png_dir=\"{}\"", png_dir.display()))
+        .arg(format!("camera.replay_dir=\"{}\"", dir.display()))
         .arg("--set")
-        .arg(format!("perception.png_rate_hz={rate_hz}"))
+        .arg(format!("camera.rate_hz={rate_hz}"))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -66,7 +67,7 @@ fn measure(mut child: Child, seconds: f64, prefix: &str) -> (f64, Vec<String>) {
     std::thread::sleep(Duration::from_millis(500));
     assert!(
         child.try_wait().unwrap().is_none(),
-        "phri-perception exited early"
+        "phri-camera exited early"
     );
     let (c0, t0) = (cpu_s(pid), Instant::now());
     std::thread::sleep(Duration::from_secs_f64(seconds));
@@ -164,7 +165,22 @@ fn files_slower_than_the_period_never_run_back_to_back() {
 fn an_unbounded_rate_is_refused_naming_the_key() {
     let d = dir("rate");
     let prefix = format!("pngrate{}_", std::process::id());
-    let out = start(&d, 1e12, &prefix).wait_with_output().unwrap();
+    // the older keys, as a configuration of before the replay camera gives them
+    let out = Command::new(env!("CARGO_BIN_EXE_phri-camera"))
+        .current_dir(repo())
+        .arg("--config")
+        .arg(repo().join("deploy/phri.toml"))
+        .args(["--prefix", &prefix])
+        .args(["--set", "perception.source=\"png\""])
+        .arg("--set")
+        .arg(format!("perception.png_dir=\"{}\"", d.display()))
+        .args(["--set", "perception.png_rate_hz=1e12"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+        .wait_with_output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("perception.png_rate_hz"), "{err}");

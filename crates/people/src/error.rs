@@ -1,0 +1,45 @@
+//! Typed errors of the tracker: bad configuration or per-call input.
+
+/// What the tracker rejects; it never panics on any frame.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrackError {
+    /// zero, negative or non-finite intrinsics, or an unusable image size
+    #[error("camera intrinsics: {0}")]
+    Intrinsics(String),
+    /// a configuration value out of its range
+    #[error("tracker configuration: {0}")]
+    Config(String),
+    /// a per-frame buffer of the wrong length
+    #[error("{what}: {got} pixels, the {width}x{height} camera needs {expected}")]
+    FrameSize {
+        what: &'static str,
+        width: u32,
+        height: u32,
+        expected: usize,
+        got: usize,
+    },
+    /// a time step that is negative or not finite
+    #[error("time step {0} s must be finite and >= 0")]
+    TimeStep(f64),
+}
+
+/// Checks a per-frame buffer's length against the camera's pixel count.
+pub(crate) fn check_len(
+    what: &'static str,
+    width: u32,
+    height: u32,
+    got: usize,
+) -> Result<(), TrackError> {
+    let expected = width as usize * height as usize;
+    if got == expected {
+        Ok(())
+    } else {
+        Err(TrackError::FrameSize {
+            what,
+            width,
+            height,
+            expected,
+            got,
+        })
+    }
+}

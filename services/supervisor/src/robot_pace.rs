@@ -1,0 +1,253 @@
+//! Did the robot's own loop keep its pace? From `robot/stats` (cumulative
+//! counts since the robot process started, about every 100 periods, stamped
+//! on CLOCK_MONOTONIC): the cycles it ran against the cycles the time it ran
+//! held, its overruns, and its braked cycles apart from start-up's braked
+//! wait for the first command. A robot that slips is a robot whose control
+//! box stops it: any of these makes the run degraded.
+
+use phri_ipc::RobotStats;
+use serde::Serialize;
+
+/// The robot loop's pace in the report (`torque_loop`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PaceReport {
+    /// periods the time between the robot's first and last statistics held
+    /// (every robot process's own span, added up)
+    pub cycles_expected: u64,
+    /// of them, periods the robot's loop did not run (it woke too late and
+    /// its schedule slipped)
+    pub cycles_short: u64,
+    /// braked periods before the first robot process first ran unbraked:
+    /// the wait for the first command, not a slip (to the statistics'
+    /// resolution, 100 periods)
+    pub startup_braked_cycles: u64,
+}
+
+/// One robot process's statistics: the first and the newest (stamp [ns],
+/// cycles).
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    first: (u64, u64),
+    last: (u64, u64),
+}
+
+impl Span {
+    fn expected(&self, period_ns: u64) -> u64 {
+        self.last.0.saturating_sub(self.first.0) / period_ns.max(1)
+    }
+
+    fn ran(&self) -> u64 {
+        self.last.1.saturating_sub(self.first.1)
+    }
+}
+
+/// The running account. Allocates nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct RobotPace {
+    period_ns: u64,
+    /// the current robot process's span, its statistics' last seq
+    span: Option<Span>,
+    last_seq: u64,
+    /// the spans of the robot processes before it: expected, ran
+    before: (u64, u64),
+    /// start-up's braked wait, once the loop first ran unbraked
+    startup_braked: Option<u64>,
+    /// braked cycles so far (the first process's, until it ran unbraked)
+    braked_so_far: u64,
+}
+
+impl RobotPace {
+    /// For a robot whose loop runs every `period_s` [s].
+    pub fn new(period_s: f64) -> RobotPace {
+        RobotPace {
+            period_ns: (period_s * 1e9).round().max(1.0) as u64,
+            span: None,
+            last_seq: 0,
+            before: (0, 0),
+            startup_braked: None,
+            braked_so_far: 0,
+        }
+    }
+
+    /// A `robot/stats` message.
+    pub fn on_stats(&mut self, m: &RobotStats) {
+        if m.seq < self.last_seq {
+            // a restarted robot counts from 0
+            if let Some(s) = self.span.take() {
+                self.before.0 += s.expected(self.period_ns);
+                self.before.1 += s.ran();
+            }
+            // a restart is no start-up: its braked wait is the restart's
+            self.startup_braked.get_or_insert(self.braked_so_far);
+        }
+        self.last_seq = m.seq;
+        let now = (m.stamp_ns, m.cycles);
+        match self.span.as_mut() {
+            Some(s) => s.last = now,
+            None => {
+                self.span = Some(Span {
+                    first: now,
+                    last: now,
+                })
+            }
+        }
+        if self.startup_braked.is_none() {
+            self.braked_so_far = m.braked_cycles;
+            if m.cycles > m.braked_cycles {
+                self.startup_braked = Some(m.braked_cycles);
+            }
+        }
+    }
+
+    /// The pace so far.
+    pub fn report(&self) -> PaceReport {
+        let (mut expected, mut ran) = self.before;
+        if let Some(s) = &self.span {
+            expected += s.expected(self.period_ns);
+            ran += s.ran();
+        }
+        PaceReport {
+            cycles_expected: expected,
+            cycles_short: expected.saturating_sub(ran),
+            startup_braked_cycles: self.startup_braked.unwrap_or(self.braked_so_far),
+        }
+    }
+}
+
+/// `n` with its thousands apart (`4 621`).
+pub fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `n` `what`s, grouped (`1 overrun`, `4 621 overruns`).
+fn counted(n: u64, what: &str) -> String {
+    match n {
+        1 => format!("1 {what}"),
+        n => format!("{} {what}s", grouped(n)),
+    }
+}
+
+/// What the robot's loop did wrong, as (a `degraded` line, its words in the
+/// summary): overruns (woke more than half a period late) with their share
+/// of the periods run and the cycles short of the run's length; braked
+/// cycles after start-up's wait. Empty when it kept its pace.
+pub fn finding(
+    cycles: u64,
+    overruns: u64,
+    braked_cycles: u64,
+    pace: &PaceReport,
+) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    if overruns > 0 || pace.cycles_short > 0 {
+        let share = 100.0 * overruns as f64 / cycles.max(1) as f64;
+        let short = 100.0 * pace.cycles_short as f64 / pace.cycles_expected.max(1) as f64;
+        let over = counted(overruns, "overrun");
+        out.push((
+            format!(
+                "robot loop behind: {over} ({share:.1} % of periods), {} cycles short of the run's {} ({short:.1} %)",
+                grouped(pace.cycles_short),
+                grouped(pace.cycles_expected)
+            ),
+            format!("robot loop behind: {over}, {share:.0} % of periods"),
+        ));
+    }
+    let braked = braked_cycles.saturating_sub(pace.startup_braked_cycles);
+    if braked > 0 {
+        let w = counted(braked, "braked cycle");
+        out.push((format!("robot braked: {w} after start-up"), w));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phri_ipc::Zeroed;
+
+    const MS: u64 = 1_000_000;
+
+    fn stats(seq: u64, stamp_ms: u64, cycles: u64, braked: u64) -> RobotStats {
+        let mut m = RobotStats::zeroed();
+        m.seq = seq;
+        m.stamp_ns = stamp_ms * MS;
+        m.cycles = cycles;
+        m.braked_cycles = braked;
+        m
+    }
+
+    #[test]
+    fn a_loop_that_slipped_runs_fewer_cycles_than_its_time_held() {
+        let mut p = RobotPace::new(0.001);
+        // 300 braked periods waiting for the first command, then on time
+        p.on_stats(&stats(1, 1_100, 100, 100));
+        p.on_stats(&stats(2, 1_200, 200, 200));
+        p.on_stats(&stats(3, 1_300, 300, 300));
+        p.on_stats(&stats(4, 1_400, 400, 300));
+        p.on_stats(&stats(5, 61_000, 60_000, 300));
+        let r = p.report();
+        assert_eq!(r.cycles_expected, 59_900);
+        assert_eq!(r.cycles_short, 0);
+        assert_eq!(r.startup_braked_cycles, 300);
+        assert!(finding(60_000, 0, 300, &r).is_empty());
+        // the same minute with 6 900 periods lost to late wake-ups
+        let mut p = RobotPace::new(0.001);
+        p.on_stats(&stats(1, 1_100, 100, 100));
+        p.on_stats(&stats(2, 1_400, 400, 300));
+        p.on_stats(&stats(3, 61_000, 53_100, 300));
+        let r = p.report();
+        assert_eq!((r.cycles_expected, r.cycles_short), (59_900, 6_900));
+        let f = finding(53_100, 4_621, 300, &r);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert_eq!(f[0].1, "robot loop behind: 4 621 overruns, 9 % of periods");
+        assert!(
+            f[0].0
+                .contains("6 900 cycles short of the run's 59 900 (11.5 %)"),
+            "{}",
+            f[0].0
+        );
+    }
+
+    #[test]
+    fn braked_cycles_after_start_up_are_a_finding_start_up_s_wait_is_not() {
+        let mut p = RobotPace::new(0.001);
+        p.on_stats(&stats(1, 100, 100, 100));
+        p.on_stats(&stats(2, 200, 200, 150));
+        // 25 braked periods in mid-run
+        p.on_stats(&stats(3, 300, 300, 175));
+        let r = p.report();
+        assert_eq!(r.startup_braked_cycles, 150);
+        let f = finding(300, 0, 175, &r);
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].1, "25 braked cycles");
+    }
+
+    #[test]
+    fn a_restarted_robot_adds_its_own_span() {
+        let mut p = RobotPace::new(0.001);
+        p.on_stats(&stats(5, 1_000, 1_000, 100));
+        p.on_stats(&stats(6, 2_000, 2_000, 100));
+        // restarted 0.5 s later: its own count from 0; its braked wait is the restart's
+        p.on_stats(&stats(1, 2_600, 100, 100));
+        p.on_stats(&stats(2, 3_600, 1_000, 100));
+        let r = p.report();
+        assert_eq!(r.cycles_expected, 1_000 + 1_000);
+        assert_eq!(r.cycles_short, 100);
+        assert_eq!(r.startup_braked_cycles, 100);
+    }
+
+    #[test]
+    fn thousands_are_grouped() {
+        assert_eq!(grouped(0), "0");
+        assert_eq!(grouped(999), "999");
+        assert_eq!(grouped(4_621), "4 621");
+        assert_eq!(grouped(1_234_567), "1 234 567");
+    }
+}
