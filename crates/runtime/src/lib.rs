@@ -1,11 +1,14 @@
 //! What every phri process needs: a monotonic clock and absolute-deadline
-//! sleep, real-time scheduling, shutdown on signals, and the service context
-//! (arguments, configuration through `phri-config`, the node).
+//! sleep, real-time scheduling (and, for the processes off the torque loop,
+//! the CPUs and scheduler that keep them off it: [`placement`]), shutdown on
+//! signals, and the service context (arguments, configuration through
+//! `phri-config`, the node).
 
 pub mod cli;
 pub mod clock;
 pub mod cputime;
 pub mod log;
+pub mod placement;
 pub mod rt;
 pub mod rundir;
 pub mod service;

@@ -24,20 +24,17 @@ use phri_config::ros2::Ros2Discovery;
 use phri_config::{CameraConfig, CameraSource};
 use phri_depth::ros_image::{self, ImageView, Resampler};
 use phri_depth::Intrinsics;
-use phri_ipc::{CameraChannels, IpcError};
+use phri_ipc::{CameraChannels, CameraStatus, IpcError};
 use phri_perception::{CameraOut, CameraStamps, DropCause, RateLimited};
 use phri_runtime::{now_ns, ServiceContext};
-use ros2_client::dds::rustdds::mio1;
-use ros2_client::{
-    qos::History, MessageTypeName, Name, Node, NodeName, NodeOptions, QosProfile, Subscription,
-};
+use ros2_client::{qos::History, MessageTypeName, Name, Node, QosProfile, Subscription};
 use serde::{Deserialize, Serialize};
 
 use crate::msgs::{Header, Image, RosType};
 use crate::participant::{domain_id, participant, reach, realtime_ns};
 
-/// The log filter when `RUST_LOG` is unset (phri-ros2's).
-pub const LOG_FILTER: &str = "info,rustdds=error,ros2_client=warn,ros2_client::node=off";
+mod dds;
+use dds::Inputs;
 
 /// Images as read: best effort (matches a reliable or a best-effort
 /// writer), the newest two.
@@ -295,14 +292,7 @@ pub fn run(
     index: usize,
     channels: &CameraChannels,
 ) -> Result<(), Box<dyn Error>> {
-    if cfg.source != CameraSource::Ros2 {
-        return Err(format!(
-            "camera {index}: source = \"{}\", not \"ros2\" (its binary is {})",
-            cfg.source.name(),
-            cfg.source.binary()
-        )
-        .into());
-    }
+    ros2_source(cfg, index)?;
     let domain = domain_id()?;
     let (reach, decided_by) = reach(ctx.config())?;
     let local = reach == Ros2Discovery::Localhost;
@@ -310,24 +300,9 @@ pub fn run(
     if ctx.checking() {
         return Ok(());
     }
-    phri_viz::cpu::keep_off_the_loop(ctx.config());
+    phri_runtime::placement::keep_off_the_loop(ctx.config());
     let dds = participant(domain, local)?;
-    let mut ros = dds
-        .new_node(
-            NodeName::new("/", &format!("phri_camera_{index}"))
-                .map_err(|e| format!("ROS 2 node name: {e}"))?,
-            NodeOptions::new().enable_rosout(false),
-        )
-        .map_err(|e| format!("ROS 2 node: {e:?}"))?;
-    let mut images = subscription::<Image>(&mut ros, &cfg.image_topic, IMAGE_QOS)?;
-    let mut infos = subscription::<CameraInfo>(&mut ros, &cfg.info_topic, INFO_QOS)?;
-    crate::participant::spin_discovery(&mut ros)?;
-    let mut poll = mio1::Poll::new()?;
-    let mut events = mio1::Events::with_capacity(8);
-    poll.registry()
-        .register(&mut images, mio1::Token(0), mio1::Interest::READABLE)?;
-    poll.registry()
-        .register(&mut infos, mio1::Token(1), mio1::Interest::READABLE)?;
+    let mut inputs = Inputs::open(&dds, index, cfg)?;
 
     ctx.start_deadman()?;
     let node = ctx.node()?;
@@ -339,48 +314,21 @@ pub fn run(
     let mut camera = RosCamera::new(cfg);
     tracing::info!(
         "camera {index} from ROS 2 domain {domain}, {} ({}): {} (sensor_msgs/Image 16UC1/mono16/32FC1) with {} (sensor_msgs/CameraInfo) on {}",
-        if local { "this host only (every DDS socket on 127.0.0.1)" } else { "every interface (subnet)" },
+        crate::report::reach(local),
         decided_by.name(),
         cfg.image_topic,
         cfg.info_topic,
         channels.depth.name,
     );
-    let mut newest: Option<Image> = None;
     while !ctx.shutdown.requested() {
-        // a signal ends the wait early (EINTR): the loop's check follows
-        let _ = poll.poll(&mut events, Some(WAIT));
+        inputs.wait();
         let now = now_ns();
         beat.beat(now);
-        loop {
-            match infos.take() {
-                Ok(Some((m, _))) => camera.info(&m, now),
-                Ok(None) => break,
-                Err(e) => {
-                    camera.infos_refused += 1;
-                    tracing::debug!("{}: undecodable camera info: {e:?}", cfg.info_topic);
-                    break;
-                }
-            }
-        }
+        inputs.take_infos(&mut camera, &cfg.info_topic, now);
         // every image waiting: the newest is published, the ones it
         // replaced are counted as behind
         let taken_ns = now_ns();
-        loop {
-            match images.take() {
-                Ok(Some((m, _))) => {
-                    if newest.replace(m).is_some() {
-                        out.stamps().count(DropCause::Behind);
-                    }
-                }
-                Ok(None) => break,
-                Err(e) => {
-                    let why = format!("not a sensor_msgs/Image ({e:?})");
-                    camera.undecodable(&mut out, crate::gate::shown(&why).as_str(), now);
-                    break;
-                }
-            }
-        }
-        if let Some(m) = newest.take() {
+        if let Some(m) = inputs.take_newest_image(&mut camera, &mut out, now) {
             if camera
                 .image(&mut out, &m, now_ns(), realtime_ns())?
                 .is_none()
@@ -393,7 +341,30 @@ pub fn run(
     }
     out.status_tick(now_ns(), true)?;
     let c = *out.stamps().counts();
-    tracing::info!(
+    tracing::info!("{}", counts_line(&camera, &c));
+    if let Some(line) = work_line(&camera, &c) {
+        tracing::info!("{line}");
+    }
+    Ok(())
+}
+
+/// Camera `index`'s source must be ROS 2 (`cfg.source`): otherwise the
+/// error names the binary that serves it.
+fn ros2_source(cfg: &CameraConfig, index: usize) -> Result<(), String> {
+    if cfg.source == CameraSource::Ros2 {
+        return Ok(());
+    }
+    Err(format!(
+        "camera {index}: source = \"{}\", not \"ros2\" (its binary is {})",
+        cfg.source.name(),
+        cfg.source.binary()
+    ))
+}
+
+/// The last line's counts: images received, published and dropped (`c`,
+/// per cause), camera infos refused.
+fn counts_line(camera: &RosCamera, c: &CameraStatus) -> String {
+    format!(
         "{} images: published {}, dropped old {}, future {}, malformed {}, no_info {}, behind {}; {} camera infos refused",
         camera.images,
         c.frames,
@@ -403,15 +374,19 @@ pub fn run(
         c.dropped_no_info,
         c.dropped_behind,
         camera.infos_refused
-    );
-    if c.frames > 0 {
-        tracing::info!(
+    )
+}
+
+/// This process's time per published image [ms], mean and largest: `None`
+/// before one was published.
+fn work_line(camera: &RosCamera, c: &CameraStatus) -> Option<String> {
+    (c.frames > 0).then(|| {
+        format!(
             "per published image, from its take out of DDS to camera/depth: mean {:.2} ms, max {:.2} ms",
             camera.work_ns.0 as f64 * 1e-6 / c.frames as f64,
             camera.work_ns.1 as f64 * 1e-6
-        );
-    }
-    Ok(())
+        )
+    })
 }
 
 #[cfg(test)]
@@ -444,6 +419,39 @@ mod tests {
         assert_eq!(keys.len(), 11);
         assert_eq!(json["k"].as_array().unwrap().len(), 9);
         assert_eq!(json["p"].as_array().unwrap().len(), 12);
+    }
+
+    #[test]
+    fn only_a_ros2_camera_is_served() {
+        let mut cfg = phri_config::Config::defaults().camera;
+        cfg.source = CameraSource::Ros2;
+        assert!(ros2_source(&cfg, 1).is_ok());
+        cfg.source = CameraSource::Freenect;
+        let e = ros2_source(&cfg, 1).unwrap_err();
+        assert!(
+            e.starts_with("camera 1: source = \"freenect\", not \"ros2\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_last_lines_count_images_and_time_them() {
+        use phri_ipc::Zeroed;
+        let cfg = phri_config::Config::defaults().camera;
+        let mut camera = RosCamera::new(&cfg);
+        (camera.images, camera.infos_refused) = (9, 2);
+        let mut c = CameraStatus::zeroed();
+        assert_eq!(work_line(&camera, &c), None, "nothing published: no time");
+        (c.frames, c.dropped_old, c.dropped_behind) = (4, 1, 3);
+        camera.work_ns = (8_000_000, 3_500_000);
+        assert_eq!(
+            counts_line(&camera, &c),
+            "9 images: published 4, dropped old 1, future 0, malformed 0, no_info 0, behind 3; 2 camera infos refused"
+        );
+        assert_eq!(
+            work_line(&camera, &c).unwrap(),
+            "per published image, from its take out of DDS to camera/depth: mean 2.00 ms, max 3.50 ms"
+        );
     }
 
     #[test]

@@ -18,7 +18,7 @@ pub const BASE_FRAME: &str = "base_link";
 /// The first depth camera's optical frame.
 pub const CAMERA_FRAME: &str = "camera_depth_optical_frame";
 /// Bytes per point of `/phri/points`: x, y, z as little-endian f32 [m].
-pub const POINT_STEP: usize = phri_viz::depth::POINT_STRIDE;
+pub const POINT_STEP: usize = phri_view::depth::POINT_STRIDE;
 
 /// phri's clock (CLOCK_MONOTONIC) to ROS time (the system clock): the
 /// offset between the two, read when the bridge samples them.
@@ -98,7 +98,7 @@ pub fn transform(stamp: Time, parent: &str, child: &str, p: &Placement) -> Trans
 /// The camera's optical frame in [`BASE_FRAME`], from a frame's header
 /// (its pose: rotation row-major, translation [m]).
 pub fn camera_transform(stamp: Time, h: &FrameHeader) -> TransformStamped {
-    let (r, p) = phri_viz::depth::camera_pose(h);
+    let (r, p) = phri_view::depth::camera_pose(h);
     transform(stamp, BASE_FRAME, CAMERA_FRAME, &Placement { r, p })
 }
 
@@ -130,7 +130,7 @@ pub fn contact_wrench(c: &CollabState, stamp: Time) -> WrenchStamped {
 /// endian, 0: no reading) in [`CAMERA_FRAME`], at full resolution, into
 /// `out` (its buffer reused). `false` when the payload is short.
 pub fn depth_image(h: &FrameHeader, depth: &[u16], stamp: Time, out: &mut Image) -> bool {
-    if !phri_viz::depth::complete(h, depth) {
+    if !phri_view::depth::complete(h, depth) {
         return false;
     }
     let (w, ht) = (h.width as usize, h.height as usize);
@@ -168,7 +168,7 @@ pub fn points(
     out: &mut PointCloud2,
 ) -> bool {
     out.data.clear();
-    if !phri_viz::depth::optical_points(h, depth, k, &mut out.data) {
+    if !phri_view::depth::optical_points(h, depth, k, &mut out.data) {
         return false;
     }
     let n = out.data.len() / POINT_STEP;

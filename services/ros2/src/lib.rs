@@ -4,9 +4,10 @@
 //! [`Bridge`] is the pure part: it turns the cell's messages into ROS 2
 //! messages ([`msgs`], [`convert`]) at the configured rates (`[ros2]`) and
 //! `/phri/request` texts into `hri/request` requests ([`request`]), stops
-//! first and each peer rate-limited ([`gate`]); the binary wires iceoryx2
-//! and DDS to it, on the loopback only unless `[ros2] discovery = "subnet"`
-//! ([`discovery`]). Topics, types and QoS:
+//! first and each peer rate-limited ([`gate`], [`intake`]); [`service`]'s
+//! loop wires iceoryx2 and DDS ([`topics`]) to it, on the loopback only
+//! unless `[ros2] discovery = "subnet"` ([`discovery`]); the binary only
+//! opens both sides and runs it. Topics, types and QoS:
 //!
 //! | topic | type | QoS |
 //! | --- | --- | --- |
@@ -26,7 +27,7 @@
 //! `body_<id>` per body and one per joint seen (`head_<id>`,
 //! `l_wrist_<id>`, ...).
 //!
-//! A topic nobody subscribes to costs nothing: the binary tells the bridge
+//! A topic nobody subscribes to costs nothing: the loop tells the bridge
 //! which topics DDS has matched readers for ([`Subscribed`]), and the bridge
 //! converts only those (ROS 2's "lazy publisher"; the cell's CPU is not
 //! spent on images nobody looks at).
@@ -36,17 +37,20 @@ pub mod convert;
 pub mod discovery;
 pub mod gate;
 pub mod humans;
+pub mod intake;
 pub mod msgs;
 pub mod participant;
+pub mod report;
 pub mod request;
+pub mod service;
+pub mod topics;
 
 use phri_config::{Config, Ros2Config};
 use phri_ipc::{
     CollabState, ControlStatus, FrameHeader, HriRequest, RepulsionResult, RequestKind, Residual,
     Skeleton,
 };
-use phri_viz::status::{Status, Thresholds};
-use phri_viz::RobotView;
+use phri_view::{RobotView, Status, Thresholds};
 
 pub use convert::{Clock, BASE_FRAME, CAMERA_FRAME};
 pub use gate::{PeerId, RefusalKind};
@@ -445,7 +449,7 @@ impl Bridge {
     /// with each; each only when subscribed.
     pub fn frame(&mut self, h: &FrameHeader, depth: &[u16], clock: &Clock) -> FrameOut<'_> {
         self.frames += 1;
-        let stamp = clock.ros(phri_viz::depth::stamp(h));
+        let stamp = clock.ros(phri_view::depth::stamp(h));
         let image = self.subscribed.depth
             && self.frames.is_multiple_of(u64::from(self.cfg.depth_every))
             && convert::depth_image(h, depth, stamp, &mut self.image);

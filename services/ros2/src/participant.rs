@@ -11,6 +11,13 @@ use ros2_client::Context;
 
 use crate::discovery::{self, DecidedBy};
 
+/// The log filter of phri's ROS 2 processes when `RUST_LOG` is unset: the
+/// services' own, with RustDDS from `error` up (restricted to the loopback,
+/// it warns at every send that its own builtin readers have no other
+/// locators), and ros2-client's node silent (it logs an error each time a
+/// publisher not yet matched is asked for its subscribers).
+pub const LOG_FILTER: &str = "info,rustdds=error,ros2_client=warn,ros2_client::node=off";
+
 /// ROS 2's domain from `ROS_DOMAIN_ID` (unset or empty: 0).
 pub fn domain_id() -> Result<u16, String> {
     match std::env::var("ROS_DOMAIN_ID") {

@@ -1,61 +1,19 @@
 //! A depth frame as Foxglove shows it: a `foxglove.PointCloud` in the base
 //! frame (the camera's points, posed by the camera's pose in the frame
 //! header) and a `foxglove.RawImage` (`16UC1`, millimetres), both downsampled
-//! by `k` per axis (the top-left pixel of each block).
+//! by `k` per axis (the top-left pixel of each block). The back-projection
+//! itself is `phri-view`'s (`phri_view::depth`), shared with phri-ros2.
 
 use foxglove::bytes::Bytes;
 use foxglove::messages::{
     packed_element_field::NumericType, PackedElementField, PointCloud, RawImage,
 };
-use nalgebra::{Matrix3, Vector3};
 use phri_ipc::FrameHeader;
 
 use crate::geometry::{pose, rotation, timestamp};
 use crate::{BASE_FRAME, CAMERA_FRAME};
 
-/// Bytes per point: x, y, z as little-endian f32 [m], camera optical frame.
-pub const POINT_STRIDE: usize = 12;
-
-/// Whether the payload holds the `width × height` depths the header announces.
-pub fn complete(h: &FrameHeader, depth: &[u16]) -> bool {
-    let n = (h.width as usize).checked_mul(h.height as usize);
-    n.is_some_and(|n| n > 0 && depth.len() >= n)
-}
-
-/// The frame's valid depths (non-zero), every `k`-th pixel per axis,
-/// back-projected through the header's intrinsics and appended to `out` as
-/// packed points ([`POINT_STRIDE`] bytes: x, y, z little-endian f32 [m],
-/// the camera's optical frame). `false` (nothing appended) when the payload
-/// is short, `k` is 0 or the intrinsics are unusable.
-pub fn optical_points(h: &FrameHeader, depth: &[u16], k: usize, out: &mut Vec<u8>) -> bool {
-    if k == 0 || !complete(h, depth) || !(h.fx > 0.0 && h.fy > 0.0 && h.depth_scale > 0.0) {
-        return false;
-    }
-    let (w, ht) = (h.width as usize, h.height as usize);
-    for v in (0..ht).step_by(k) {
-        for u in (0..w).step_by(k) {
-            let d = depth[v * w + u];
-            if d == 0 {
-                continue;
-            }
-            let z = f64::from(d) * h.depth_scale;
-            let x = (u as f64 - h.cx) * z / h.fx;
-            let y = (v as f64 - h.cy) * z / h.fy;
-            for c in [x, y, z] {
-                out.extend_from_slice(&(c as f32).to_le_bytes());
-            }
-        }
-    }
-    true
-}
-
-/// The camera's pose in the base frame from a frame header: rotation (row-major) and translation [m].
-pub fn camera_pose(h: &FrameHeader) -> (Matrix3<f64>, Vector3<f64>) {
-    (
-        Matrix3::from_row_slice(&h.pose_r),
-        Vector3::new(h.pose_t[0], h.pose_t[1], h.pose_t[2]),
-    )
-}
+use phri_view::depth::{camera_pose, complete, optical_points, stamp, POINT_STRIDE};
 
 /// The frame's valid depths (non-zero) as points, every `k`-th pixel per
 /// axis; the cloud's pose is the camera's, so the points stay in the optical
@@ -107,15 +65,6 @@ pub fn image(h: &FrameHeader, depth: &[u16], k: usize) -> Option<RawImage> {
         step: (dw * 2) as u32,
         data: Bytes::from(data),
     })
-}
-
-/// The frame's time on phri's clock: its capture time, else its publish time [ns].
-pub fn stamp(h: &FrameHeader) -> u64 {
-    if h.capture_wall_ns > 0 {
-        h.capture_wall_ns
-    } else {
-        h.published_ns
-    }
 }
 
 #[cfg(test)]

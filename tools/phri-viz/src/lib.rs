@@ -16,12 +16,10 @@
 //! the same 3-D scene. Frames: `base` is the robot's base frame (the cell's
 //! world, z up, [m]); the camera's optical frame is `camera`.
 
-pub mod cpu;
 pub mod depth;
 pub mod geometry;
 pub mod peer;
 pub mod pipeline;
-pub mod robot;
 pub mod scene;
 #[cfg(feature = "server")]
 pub mod server;
@@ -30,8 +28,8 @@ pub mod topics;
 
 /// The Foxglove SDK this crate builds on (its message types, `Encode`, `Decode`).
 pub use foxglove;
+pub use phri_view::RobotView;
 pub use pipeline::{Output, Pipeline, Rates, VizMessage};
-pub use robot::RobotView;
 pub use topics::{Topic, ALL as TOPICS};
 
 /// The robot's base frame: every scene entity is posed in it [m, z up].

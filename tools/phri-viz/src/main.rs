@@ -26,7 +26,7 @@ use phri_ipc::*;
 use phri_runtime::cli::CompletionsCmd;
 use phri_runtime::{now_ns, Shutdown};
 use phri_viz::server::{Limits, Server};
-use phri_viz::{cpu, topics, Output, Pipeline, Rates};
+use phri_viz::{topics, Output, Pipeline, Rates};
 
 const BIN: &str = "phri-viz";
 /// Time between two polls of the channels.
@@ -214,7 +214,7 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let mut pipeline = Pipeline::from_config(&loaded, rates)
         .map_err(|e| format!("--config {}: {e}", cli.config.display()))?
         .with_stale_after(Some(Duration::from_millis(u64::from(cli.stale_after))));
-    cpu::keep_off_the_loop(&loaded.config);
+    phri_runtime::placement::keep_off_the_loop(&loaded.config);
 
     let shutdown = Shutdown::install()?;
     let limits = Limits {

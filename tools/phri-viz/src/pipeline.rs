@@ -25,9 +25,9 @@ use phri_ipc::{
 };
 
 use crate::geometry::timestamp;
-use crate::robot::RobotView;
-use crate::status::{Status, Thresholds};
+use crate::status::{Status, StatusMessage, Thresholds};
 use crate::{depth, scene, topics, VizError};
+use phri_view::RobotView;
 
 /// How often each kind of output is made.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,7 +81,7 @@ impl VizMessage {
             VizMessage::Cloud(m) => m.encode(buf).map_err(pb),
             VizMessage::Image(m) => m.encode(buf).map_err(pb),
             VizMessage::Joints(m) => m.encode(buf).map_err(pb),
-            VizMessage::Status(m) => m.encode(buf).map_err(EncodeError::Json),
+            VizMessage::Status(m) => StatusMessage(m).encode(buf).map_err(EncodeError::Json),
         }
     }
 }
@@ -457,7 +457,7 @@ impl Pipeline {
         let Some(h) = self.frame.take() else {
             return;
         };
-        let t = depth::stamp(&h);
+        let t = phri_view::depth::stamp(&h);
         if wanted(topics::POINTS) {
             if let Some(c) = depth::point_cloud(&h, &self.depths, self.rates.cloud_downsample) {
                 out.push(Output {

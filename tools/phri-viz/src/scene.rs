@@ -14,8 +14,8 @@ use phri_ipc::{
 };
 
 use crate::geometry::{arrow, capsule, rgba, rotation, segments, sphere, timestamp, vec3};
-use crate::robot::RobotView;
 use crate::{BASE_FRAME, CAMERA_FRAME};
+use phri_view::RobotView;
 
 /// Robot links.
 pub const ROBOT_COLOR: Color = rgba(0.55, 0.6, 0.7, 0.9);
@@ -260,7 +260,7 @@ pub fn transforms(view: &RobotView, camera: Option<&FrameHeader>, t: u64) -> Fra
         }
     }
     if let Some(h) = camera {
-        let (r, p) = crate::depth::camera_pose(h);
+        let (r, p) = phri_view::depth::camera_pose(h);
         if r.iter().chain(p.iter()).all(|x| x.is_finite()) {
             transforms.push(tf(CAMERA_FRAME, &r, &p));
         }

@@ -4,7 +4,7 @@
 use foxglove::messages::{FrameTransforms, JointStates, PointCloud, RawImage, SceneUpdate};
 use foxglove::{Encode, Schema};
 
-use crate::status::Status;
+use crate::status::StatusMessage;
 
 /// `foxglove.SceneUpdate`: the robot's link capsules, posed from `robot/state`.
 pub const ROBOT: &str = "/viz/robot";
@@ -24,7 +24,7 @@ pub const POINTS: &str = "/viz/depth/points";
 pub const IMAGE: &str = "/viz/depth/image";
 /// `foxglove.JointStates`: position [rad] and applied torque [Nm] of every joint (`robot/state`).
 pub const JOINTS: &str = "/viz/joints";
-/// `phri.viz.Status` (JSON): mode, phase, residual and thresholds ([`Status`]).
+/// `phri.viz.Status` (JSON): mode, phase, residual and thresholds ([`crate::status::Status`]).
 pub const STATUS: &str = "/viz/status";
 
 /// One topic: its name, schema and message encoding.
@@ -32,7 +32,7 @@ pub const STATUS: &str = "/viz/status";
 pub struct Topic {
     pub name: &'static str,
     pub schema: Schema,
-    /// `protobuf` (Foxglove's schemas) or `json` ([`Status`])
+    /// `protobuf` (Foxglove's schemas) or `json` ([`crate::status::Status`])
     pub encoding: String,
 }
 
@@ -61,7 +61,7 @@ pub fn all() -> Vec<Topic> {
             POINTS => topic::<PointCloud>(name),
             IMAGE => topic::<RawImage>(name),
             JOINTS => topic::<JointStates>(name),
-            STATUS => topic::<Status>(name),
+            STATUS => topic::<StatusMessage<'static>>(name),
             _ => topic::<SceneUpdate>(name),
         })
         .collect()

@@ -12,7 +12,7 @@ use phri_runtime::ServiceContext;
 fn main() -> ExitCode {
     if std::env::var("RUST_LOG").map_or(true, |f| f.trim().is_empty()) {
         // before any thread starts (edition 2021: safe to call here)
-        std::env::set_var("RUST_LOG", phri_ros2::camera::LOG_FILTER);
+        std::env::set_var("RUST_LOG", phri_ros2::participant::LOG_FILTER);
     }
     phri_runtime::service::run("phri-camera-ros2", body)
 }

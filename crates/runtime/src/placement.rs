@@ -1,7 +1,8 @@
-//! Keeping a viewer off the torque loop: the normal scheduler, and the CPUs
-//! the 1 kHz services are not pinned to (`[services.*] cpus` of the
-//! configuration). Threads started afterwards (the WebSocket server's)
-//! inherit both.
+//! Keeping a process that is not part of the torque loop (a viewer, a
+//! bridge: phri-viz, phri-ros2, phri-camera-ros2) off it: the normal
+//! scheduler, and the CPUs the 1 kHz services are not pinned to
+//! (`[services.*] cpus` of the configuration). Threads started afterwards
+//! (a WebSocket server's, DDS's) inherit both.
 
 use std::collections::BTreeSet;
 
@@ -31,7 +32,7 @@ pub fn allowed(usable: &[usize], avoid: &BTreeSet<usize>) -> Option<Vec<usize>> 
     (!keep.is_empty()).then_some(keep)
 }
 
-/// The CPUs this thread may run on now.
+/// The CPUs this thread may run on now (their indices).
 pub fn usable_cpus() -> std::io::Result<Vec<usize>> {
     // SAFETY: a zeroed cpu_set_t is a valid empty set; sched_getaffinity
     // writes at most size_of::<cpu_set_t>() bytes into it.
@@ -78,8 +79,9 @@ pub fn normal_scheduler() -> std::io::Result<()> {
 }
 
 /// Keep off the torque loop's CPUs, under the normal scheduler; before any
-/// thread starts, so that the server's threads inherit it.
-pub fn keep_off_the_loop(config: &phri_config::Config) {
+/// thread starts, so that the process's later threads inherit it. What
+/// cannot be done is logged (a warning), never fatal.
+pub fn keep_off_the_loop(config: &Config) {
     if let Err(e) = normal_scheduler() {
         tracing::warn!("cannot switch to the normal scheduler: {e}");
     }

@@ -1,7 +1,7 @@
-//! The robot as the scene shows it: its collision capsules and link frames
-//! posed by forward kinematics from a joint state, with the same
-//! shape-to-capsule rule as the simulator's contacts and the camera
-//! ([`phri_model::Shape::capsule`]).
+//! The robot as viewers show it: its collision capsules and link frames
+//! posed by forward kinematics from a joint state, in the robot's base frame
+//! [m], with the same shape-to-capsule rule as the simulator's contacts and
+//! the camera ([`phri_model::Shape::capsule`]).
 
 use nalgebra::Vector3;
 use phri_model::{forward_kinematics, Data, Model, ModelError, Placement};
@@ -9,8 +9,11 @@ use phri_model::{forward_kinematics, Data, Model, ModelError, Placement};
 /// One capsule: segment `a`–`b` swept by `radius` [m], base frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Capsule {
+    /// one end of the segment [m], base frame
     pub a: Vector3<f64>,
+    /// the other end [m], base frame
     pub b: Vector3<f64>,
+    /// the radius swept around the segment [m]
     pub radius: f64,
 }
 
@@ -23,6 +26,7 @@ pub struct RobotView {
 }
 
 impl RobotView {
+    /// A view of `model`, not yet posed ([`RobotView::is_posed`] is false).
     pub fn new(model: Model) -> RobotView {
         let data = Data::new(&model);
         let names = model.joint_names().iter().map(|s| s.to_string()).collect();
@@ -65,7 +69,8 @@ impl RobotView {
         })
     }
 
-    /// Each moving link's frame in the base frame at the last pose: `(link, placement)`.
+    /// Each moving link's frame in the base frame at the last pose: `(link,
+    /// placement)` (rotation base ← link, the link's origin [m]).
     pub fn link_frames(&self) -> impl Iterator<Item = (&str, Placement)> + '_ {
         self.model
             .joints
