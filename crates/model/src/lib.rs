@@ -40,6 +40,7 @@ pub mod geometry;
 pub mod kinematics;
 pub mod model;
 pub mod spatial;
+mod urdf;
 mod xml_depth;
 
 pub use cholesky::{cholesky_factor, cholesky_solve, NotPositiveDefinite};

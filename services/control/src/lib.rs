@@ -22,6 +22,8 @@
 //!
 //! [`inputs`] and [`outputs`] are the one conversion between the cell's
 //! messages and the step, for `main.rs` and the lock-step cell.
+//! [`service`] is the controller in the cell: its channels, one period's
+//! inputs gathered from them, the step and the messages published.
 //! [`snapshot`] carries the behaviour state from one controller to another
 //! (a hot standby adopting the primary's every period).
 
@@ -42,6 +44,7 @@ pub mod reference;
 pub mod requests;
 pub mod resolve;
 pub mod safety;
+pub mod service;
 pub mod snapshot;
 pub mod sns;
 pub mod ssm;

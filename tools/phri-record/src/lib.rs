@@ -1,11 +1,16 @@
 //! Shared parts of `phri-record`, `phri-replay` and `phri-plot`: message ↔ JSON
-//! conversion, the MCAP conventions of a recording, and a tiny line plotter.
+//! conversion, the MCAP conventions of a recording, a tiny line plotter, and
+//! what `phri-plot` reads of a recording ([`series`]) and draws ([`figures`]),
+//! and `phri-record`'s recorders, file and loop ([`recorder`]).
 
 pub mod config;
+pub mod figures;
 pub mod foxglove;
 pub mod json;
 pub mod plot;
 pub mod progress;
+pub mod recorder;
+pub mod series;
 pub mod svg;
 pub mod text;
 

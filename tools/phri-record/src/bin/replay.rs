@@ -149,6 +149,9 @@ fn out_for(node: &IpcNode, prefix: &str, name: &str) -> Result<Box<dyn Out>, Box
     }
 }
 
+/// One recorded message to replay: (log time [ns], channel, JSON bytes).
+type Recorded = (u64, &'static str, Vec<u8>);
+
 fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     // clap requires --file unless a subcommand is given
     let Some(file) = cli.file.as_deref() else {
@@ -156,66 +159,9 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     };
     let prefix = &phri_runtime::prefix_or_default(cli.prefix.as_deref().filter(|p| !p.is_empty()));
     let speed = cli.speed;
-    let requested: Option<Vec<String>> = cli.channels.as_deref().map(|s| {
-        s.split(',')
-            .map(|c| c.trim().to_string())
-            .filter(|c| !c.is_empty())
-            .collect()
-    });
-    if let Some(req) = &requested {
-        for c in req {
-            if c == ROBOT_COMMAND.name {
-                return Err(format!(
-                    "refusing to publish '{}': replay never commands the robot",
-                    ROBOT_COMMAND.name
-                )
-                .into());
-            }
-            if is_frame_channel(c) {
-                return Err(format!("cannot replay '{c}': frames are recorded downsampled").into());
-            }
-            if !REPLAYABLE.contains(&c.as_str()) {
-                return Err(format!(
-                    "cannot replay '{c}'; replayable channels: {}",
-                    REPLAYABLE.join(", ")
-                )
-                .into());
-            }
-        }
-    }
-
+    let requested = requested_channels(cli.channels.as_deref())?;
     let buf = read_file(file)?;
-    // messages of the chosen channels: (log time, channel, JSON bytes)
-    let mut msgs: Vec<(u64, &'static str, Vec<u8>)> = Vec::new();
-    let mut in_file: BTreeMap<String, u64> = BTreeMap::new();
-    for m in mcap::MessageStream::new(&buf).map_err(ReadError::mcap(file))? {
-        let m = m.map_err(ReadError::mcap(file))?;
-        let topic = m.channel.topic.as_str();
-        *in_file.entry(topic.to_string()).or_default() += 1;
-        let Some(&name) = REPLAYABLE.iter().find(|c| **c == topic) else {
-            continue;
-        };
-        if requested
-            .as_ref()
-            .is_none_or(|r| r.iter().any(|c| c == name))
-        {
-            msgs.push((m.log_time, name, m.data.into_owned()));
-        }
-    }
-    msgs.sort_by_key(|m| m.0);
-    let mut chosen: Vec<&'static str> = msgs.iter().map(|m| m.1).collect();
-    chosen.sort();
-    chosen.dedup();
-    if let Some(req) = &requested {
-        for c in req {
-            if !chosen.contains(&c.as_str()) {
-                return Err(format!("{file} holds no '{c}' messages").into());
-            }
-        }
-    }
-    if msgs.is_empty() {
-        return Err(format!("{file}: nothing to replay").into());
-    }
+    let (msgs, chosen, in_file) = recorded(&buf, file, requested.as_deref())?;
     let skipped: Vec<&String> = in_file
         .keys()
         .filter(|k| !chosen.contains(&k.as_str()))
@@ -234,28 +180,119 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
     let shutdown = Shutdown::install()?;
     let node = node(&format!("replay{}", std::process::id()), prefix)?;
     if chosen.contains(&PERCEPTION_REPULSION.name) {
-        // recorded obstacles would steer a live controller's avoidance
-        let commanded = ROBOT_COMMAND
-            .ports(&node)?
-            .is_some_and(|(publishers, _)| publishers > 0);
-        if commanded {
-            return Err(format!(
-                "refusing to replay '{}' into prefix '{prefix}': a controller publishes '{}' there and would avoid recorded obstacles (leave it out with --channels)",
-                PERCEPTION_REPULSION.name, ROBOT_COMMAND.name
-            )
-            .into());
-        }
+        refuse_if_commanded(&node, prefix)?;
     }
     let mut outs: BTreeMap<&'static str, Box<dyn Out>> = BTreeMap::new();
     for c in &chosen {
         outs.insert(c, out_for(&node, prefix, c)?);
     }
-    let mut counts: BTreeMap<&'static str, u64> = chosen.iter().map(|c| (*c, 0)).collect();
+    let counts: BTreeMap<&'static str, u64> = chosen.iter().map(|c| (*c, 0)).collect();
+    play(&msgs, &mut outs, counts, &shutdown, speed, file)?;
+    drop(outs);
+    drop(node);
+    let _ = remove_leftovers(prefix);
+    Ok(())
+}
+
+/// The channels `--channels` names (none: every replayable one in the
+/// file), refusing `robot/command`, frames and the unreplayable.
+fn requested_channels(channels: Option<&str>) -> Result<Option<Vec<String>>, Box<dyn Error>> {
+    let requested: Option<Vec<String>> = channels.map(|s| {
+        s.split(',')
+            .map(|c| c.trim().to_string())
+            .filter(|c| !c.is_empty())
+            .collect()
+    });
+    for c in requested.iter().flatten() {
+        if c == ROBOT_COMMAND.name {
+            return Err(format!(
+                "refusing to publish '{}': replay never commands the robot",
+                ROBOT_COMMAND.name
+            )
+            .into());
+        }
+        if is_frame_channel(c) {
+            return Err(format!("cannot replay '{c}': frames are recorded downsampled").into());
+        }
+        if !REPLAYABLE.contains(&c.as_str()) {
+            return Err(format!(
+                "cannot replay '{c}'; replayable channels: {}",
+                REPLAYABLE.join(", ")
+            )
+            .into());
+        }
+    }
+    Ok(requested)
+}
+
+/// The messages of the recording `buf` (read from `file`) to replay, in
+/// time order: those of the `requested` channels, else of every replayable
+/// one; the channels they are on; the messages per topic in the file.
+#[allow(clippy::type_complexity)]
+fn recorded(
+    buf: &[u8],
+    file: &str,
+    requested: Option<&[String]>,
+) -> Result<(Vec<Recorded>, Vec<&'static str>, BTreeMap<String, u64>), Box<dyn Error>> {
+    let mut msgs: Vec<Recorded> = Vec::new();
+    let mut in_file: BTreeMap<String, u64> = BTreeMap::new();
+    for m in mcap::MessageStream::new(buf).map_err(ReadError::mcap(file))? {
+        let m = m.map_err(ReadError::mcap(file))?;
+        let topic = m.channel.topic.as_str();
+        *in_file.entry(topic.to_string()).or_default() += 1;
+        let Some(&name) = REPLAYABLE.iter().find(|c| **c == topic) else {
+            continue;
+        };
+        if requested.is_none_or(|r| r.iter().any(|c| c == name)) {
+            msgs.push((m.log_time, name, m.data.into_owned()));
+        }
+    }
+    msgs.sort_by_key(|m| m.0);
+    let mut chosen: Vec<&'static str> = msgs.iter().map(|m| m.1).collect();
+    chosen.sort();
+    chosen.dedup();
+    for c in requested.into_iter().flatten() {
+        if !chosen.contains(&c.as_str()) {
+            return Err(format!("{file} holds no '{c}' messages").into());
+        }
+    }
+    if msgs.is_empty() {
+        return Err(format!("{file}: nothing to replay").into());
+    }
+    Ok((msgs, chosen, in_file))
+}
+
+/// Refuses repulsion results into a cell whose robot is commanded: recorded
+/// obstacles would steer a live controller's avoidance.
+fn refuse_if_commanded(node: &IpcNode, prefix: &str) -> Result<(), Box<dyn Error>> {
+    let commanded = ROBOT_COMMAND
+        .ports(node)?
+        .is_some_and(|(publishers, _)| publishers > 0);
+    if commanded {
+        return Err(format!(
+            "refusing to replay '{}' into prefix '{prefix}': a controller publishes '{}' there and would avoid recorded obstacles (leave it out with --channels)",
+            PERCEPTION_REPULSION.name, ROBOT_COMMAND.name
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// Publishes `msgs` through `outs` at their recorded timing scaled by
+/// `speed`, until the end or `shutdown`; `counts` per channel, reported.
+fn play(
+    msgs: &[Recorded],
+    outs: &mut BTreeMap<&'static str, Box<dyn Out>>,
+    mut counts: BTreeMap<&'static str, u64>,
+    shutdown: &Shutdown,
+    speed: f64,
+    file: &str,
+) -> Result<(), Box<dyn Error>> {
     let t_first = msgs[0].0;
     let t0 = Instant::now();
     let mut next_report = t0 + Duration::from_secs(1);
     let bar = Progress::new(BIN, Some(msgs.len() as u64), "messages");
-    for (t, name, data) in &msgs {
+    for (t, name, data) in msgs {
         if shutdown.requested() {
             break;
         }
@@ -288,9 +325,6 @@ fn body(cli: Cli) -> Result<(), Box<dyn Error>> {
         t0.elapsed().as_secs_f64(),
         progress(&counts)
     );
-    drop(outs);
-    drop(node);
-    let _ = remove_leftovers(prefix);
     Ok(())
 }
 
