@@ -16,6 +16,9 @@ pub mod json;
 pub mod liveness;
 pub mod messages;
 pub mod owners;
+pub mod ports;
+#[cfg(test)]
+mod ports_in_code;
 pub mod qos;
 pub mod views;
 

@@ -1309,20 +1309,9 @@ impl Evaluator {
         r.summary = summary;
     }
 
-    /// The report at the end of the run.
-    pub fn report(
-        &self,
-        end_ns: u64,
-        scenario: &str,
-        services: BTreeMap<String, ServiceReport>,
-    ) -> Report {
-        let (s, b) = (self.stats.last, self.stats.base);
-        let hist: Vec<u64> = self
-            .hist_base
-            .iter()
-            .zip(&self.hist_last)
-            .map(|(a, b)| a + b)
-            .collect();
+    /// The run's contacts, each with its detection delays against the
+    /// detector's bound.
+    fn contacts(&self) -> Vec<ContactReport> {
         // a force of twice the threshold: the residual's step response
         // reaches one half (first order alone: ln 2 / K_I), plus 2 ms
         let bound_ms = self
@@ -1332,8 +1321,7 @@ impl Evaluator {
             .unwrap_or(f64::INFINITY)
             * 1000.0
             + 2.0;
-        let contacts: Vec<ContactReport> = self
-            .episodes
+        self.episodes
             .iter()
             .map(|e| {
                 let ms = |x: Option<f64>, from: f64| {
@@ -1361,9 +1349,12 @@ impl Evaluator {
                     model_peak_over_threshold: (e.model_peak * 1000.0).round() / 1000.0,
                 }
             })
-            .collect();
-        let false_detections = self
-            .collision_edges
+            .collect()
+    }
+
+    /// Detections outside every contact episode (and its grace).
+    fn false_detections(&self) -> u64 {
+        self.collision_edges
             .iter()
             .filter(|&&t| {
                 !self
@@ -1371,7 +1362,25 @@ impl Evaluator {
                     .iter()
                     .any(|e| t >= e.t_start && t <= e.t_last + DETECTION_GRACE_S)
             })
-            .count() as u64;
+            .count() as u64
+    }
+
+    /// The report at the end of the run.
+    pub fn report(
+        &self,
+        end_ns: u64,
+        scenario: &str,
+        services: BTreeMap<String, ServiceReport>,
+    ) -> Report {
+        let (s, b) = (self.stats.last, self.stats.base);
+        let hist: Vec<u64> = self
+            .hist_base
+            .iter()
+            .zip(&self.hist_last)
+            .map(|(a, b)| a + b)
+            .collect();
+        let contacts = self.contacts();
+        let false_detections = self.false_detections();
         let st = (
             self.status.base.0 + self.status.last.0,
             self.status.base.1 + self.status.last.1,

@@ -1,0 +1,90 @@
+//! The end of a run: a start that failed stops what it started; otherwise
+//! what arrived last is read, the services are stopped in order, the report
+//! is built, written and summed up in one line.
+
+use phri_runtime::now_ns;
+
+use super::driver::Driver;
+use super::ipc;
+use super::report_file::ReportFile;
+use crate::process::cpu_time_ns;
+use crate::report::Report;
+use crate::supervision::{Ending, Event, Supervision};
+use crate::{Plan, SupervisorError};
+
+/// End the run `sup` supervised through `driver`: stop the cell, clean up,
+/// write the report (to `report_file`); the error says why the run failed
+/// or was degraded.
+pub fn finish(
+    driver: Driver,
+    sup: &mut Supervision,
+    plan: &Plan,
+    mut report_file: Option<ReportFile>,
+) -> Result<(), SupervisorError> {
+    let Driver {
+        node,
+        mut ports,
+        mut cell,
+        mut evaluation,
+        publishers,
+        prefix,
+        ..
+    } = driver;
+    drop(publishers);
+    let stop_reason = match sup.ending() {
+        Ending::StartFailed(reason) => {
+            tracing::warn!("{reason}: stopping everything started");
+            cell.stop(sup.roster());
+            ipc::close(node, Some(ports), &prefix);
+            cell.remove_state();
+            return Err(SupervisorError::StartFailed(reason));
+        }
+        Ending::Stopped(reason) => reason,
+    };
+    let end = now_ns();
+    let services = sup.roster().reports();
+    // drain what arrived in the last period before stopping anything
+    ports.read_last(&mut evaluation);
+    // each service's CPU over the run, sampled once more before the stop
+    let now = now_ns();
+    let mut none = Vec::new();
+    for index in 0..sup.roster().len() {
+        let cpu_ns = sup.roster().get(index).pid.and_then(cpu_time_ns);
+        sup.step(now, Event::CpuTime { index, cpu_ns }, &mut none);
+    }
+    let cpu = sup.cpu().report(sup.roster());
+    cell.stop(sup.roster());
+    ports.read_after_stop(&mut evaluation);
+    let report = evaluation.report(plan, end, services, cpu, sup.realtime().report());
+    ipc::close(node, Some(ports), &prefix);
+    cell.remove_state();
+    if let Some(file) = report_file.as_mut() {
+        let json = serde_json::to_string_pretty(&report).map_err(|e| SupervisorError::Report {
+            path: file.path().to_path_buf(),
+            source: std::io::Error::other(e),
+        })?;
+        file.write(&json)?;
+    }
+    summary(&report);
+    match stop_reason {
+        Some(reason) => Err(SupervisorError::Degraded(reason)),
+        None => Ok(()),
+    }
+}
+
+/// The run in one line.
+fn summary(report: &Report) {
+    let intended = report.contacts.iter().filter(|c| c.intended).count();
+    tracing::info!(
+        "{} done after {:.1} s: {} cycles, {} missed deadlines, latency p99 {:.0} µs, {} unintended contacts, {} intended touches, {} false detections; {}",
+        report.scenario,
+        report.duration_s,
+        report.torque_loop.cycles,
+        report.torque_loop.missed_deadlines,
+        report.torque_loop.latency_us.p99,
+        report.contacts.len() - intended,
+        report.collaboration.contacts_intended,
+        report.false_detections,
+        report.summary
+    );
+}
