@@ -6,7 +6,7 @@ one JSON object of what it received: per topic the count, the rate over the
 span it received them, the latency from the message's header stamp to its
 arrival (both ROS time, this host's clock), and samples of the content.
 
-  peer.py --duration S [--request T:TEXT ...] [--positions FILE] [--domain D]
+  peer.py --duration S [--request T:TEXT ...] [--request-after PHASE+S:TEXT ...] [--linger S] [--positions FILE] [--domain D]
 
 --positions writes every /joint_states' positions, one line each (Python's
 repr of each float: the exact double), for comparison with robot/state.
@@ -226,6 +226,10 @@ def main():
     ap.add_argument("--duration", type=float, required=True, help="seconds to listen")
     ap.add_argument("--request", action="append", default=[], metavar="T:TEXT",
                     help="publish TEXT on /phri/request T s after the start")
+    ap.add_argument("--request-after", action="append", default=[], metavar="PHASE+S:TEXT",
+                    help="publish TEXT on /phri/request S s after /phri/status first showed PHASE")
+    ap.add_argument("--linger", type=float, default=None, metavar="S",
+                    help="stop S s after the last request was sent (before --duration)")
     ap.add_argument("--positions", help="write every /joint_states' positions here")
     ap.add_argument("--domain", type=int, default=0)
     ap.add_argument("--topics", default="joint_states,tf,status,contact_force,depth",
@@ -239,6 +243,15 @@ def main():
         except ValueError:
             sys.exit(f"peer.py: --request {r!r}: not T:TEXT")
     requests.sort()
+    after = []
+    for r in a.request_after:
+        cond, _, text = r.partition(":")
+        phase, _, delay = cond.partition("+")
+        try:
+            after.append((phase, float(delay or 0), text))
+        except ValueError:
+            sys.exit(f"peer.py: --request-after {r!r}: not PHASE+S:TEXT")
+    phase_seen = {}
 
     dp = DomainParticipant(a.domain)
     readers = {
@@ -264,10 +277,19 @@ def main():
     t0 = time.monotonic()
     while time.monotonic() - t0 < a.duration:
         t = time.monotonic() - t0
+        if a.linger is not None and sent and not requests and not after \
+                and t > sent[-1]["t_s"] + a.linger:
+            break
         while requests and requests[0][0] <= t:
             _, text = requests.pop(0)
             writer.write(String(data=text))
             sent.append({"t_s": round(t, 3), "text": text})
+        for item in list(after):
+            phase, delay, text = item
+            if phase in phase_seen and t >= phase_seen[phase] + delay:
+                after.remove(item)
+                writer.write(String(data=text))
+                sent.append({"t_s": round(t, 3), "text": text})
         got = 0
         for m in take(readers["joint_states"], 4000) if "joint_states" in readers else []:
             got += 1
@@ -297,6 +319,8 @@ def main():
                 p = status_last.get("phase")
                 if p and (not phases or phases[-1] != p):
                     phases.append(p)
+                if p:
+                    phase_seen.setdefault(p, time.monotonic() - t0)
         for m in take(readers["contact_force"], 1000) if "contact_force" in readers else []:
             got += 1
             seen["contact_force"].add(m.header)

@@ -77,11 +77,13 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
         .args(["--net", "--", "sh", "-c", NETNS_SETUP])
         .arg(&python)
         .arg(repo().join("deploy/ros2/peer.py"))
-        .args(["--duration", "19"])
-        // the end 1.5 s before the hand is lowered (17 s of the robot's
-        // clock): a robot loop that slipped (3-15 % of periods on a loaded
-        // virtual machine) reaches the hand later on the wall clock
-        .args(["--request", "7.5:follow left_hand", "--request", "16:end"])
+        // the end 2 s after the touch began, as the peer saw it on
+        // /phri/status: the person and the arm move on the robot's clock,
+        // which a loaded machine's wall clock sees slower (the cell's run
+        // goes on by as much); the peer stops 1 s after it, or at 26 s
+        .args(["--duration", "26", "--linger", "1"])
+        .args(["--request", "7.5:follow left_hand"])
+        .args(["--request-after", "contact+2:end"])
         .arg("--positions")
         .arg(&positions)
         .stdout(Stdio::piped())
@@ -205,6 +207,13 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
             .unwrap_or_else(|| panic!("no {kind} from ros2: {requests:?}"))
     };
     assert_eq!(from_ros("follow")["accepted"], true, "{requests:?}");
+    // ... and the peer's end, sent once it saw the touch, ended it
+    assert_eq!(from_ros("end")["accepted"], true, "{requests:?}");
+    assert_eq!(
+        r["collaboration"]["ended_by"], "request",
+        "{}",
+        r["collaboration"]
+    );
     assert!(
         r["collaboration"]["contacts_intended"]
             .as_u64()

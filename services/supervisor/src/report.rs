@@ -1003,6 +1003,13 @@ impl Evaluator {
         self.status.last = now;
     }
 
+    /// How far the robot's loop is behind the wall clock [ns]: the periods
+    /// it did not run ([`crate::robot_pace::PaceReport::cycles_short`]).
+    pub fn robot_behind_ns(&self) -> u64 {
+        let period_ns = (self.period_s * 1e9).round() as u64;
+        self.pace.report().cycles_short.saturating_mul(period_ns)
+    }
+
     pub fn on_stats(&mut self, m: &RobotStats) {
         self.pace.on_stats(m);
         let t = self.t(m.stamp_ns);

@@ -210,6 +210,8 @@ impl Driver {
             self.feed(sup, now_ns, Event::Resume)?;
         }
         self.ports.read_rest(&mut self.evaluation)?;
+        let behind = self.evaluation.eval.robot_behind_ns();
+        self.feed(sup, now_ns, Event::RobotBehind(behind))?;
         Ok(())
     }
 

@@ -101,6 +101,7 @@ pub fn run(plan: Plan, opts: Options) -> Result<(), SupervisorError> {
         require_rt,
         t0_ns: t0,
         duration_s: plan.duration_s,
+        robot_clock: plan.loaded.config.robot.ip.is_empty(),
     });
     // every watched service's liveness exists before it starts
     let liveness = match Liveness::open(&node, sup.roster()) {

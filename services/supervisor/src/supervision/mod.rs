@@ -65,6 +65,11 @@ pub struct Setup {
     pub t0_ns: u64,
     /// the run's length [s] (`None`: until a signal)
     pub duration_s: Option<f64>,
+    /// the run's length is counted on the simulated robot's clock: a run
+    /// whose robot loop fell behind (a loaded machine) goes on by as long
+    /// as it fell behind, up to its length again, so that the scenario is
+    /// played to its end ([`Event::RobotBehind`]); false for a real arm
+    pub robot_clock: bool,
 }
 
 /// Where the machine is in a sequence of steps.
@@ -109,8 +114,13 @@ pub struct Supervision {
     require_rt: bool,
     /// the dead-man's time [ns]
     deadman_ns: u64,
-    /// the run's end [ns]
+    /// the run's end [ns] on the wall clock
     end_ns: Option<u64>,
+    /// how much later the run may end when its robot fell behind [ns]
+    /// (0: a real arm's run ends on the wall clock)
+    max_extension_ns: u64,
+    /// how far the simulated robot is behind the wall clock [ns]
+    robot_behind_ns: u64,
     stage: Stage,
     timers: Timers,
     /// a service was taken over from a supervisor that died
@@ -144,6 +154,11 @@ impl Supervision {
             require_rt: setup.require_rt,
             deadman_ns,
             end_ns: setup.duration_s.map(|d| setup.t0_ns + (d * 1e9) as u64),
+            max_extension_ns: match (setup.robot_clock, setup.duration_s) {
+                (true, Some(d)) => (d * 1e9) as u64,
+                _ => 0,
+            },
+            robot_behind_ns: 0,
             stage: Stage::Idle,
             timers: Timers::default(),
             adopted_any: false,
@@ -199,6 +214,7 @@ impl Supervision {
                 self.stop(reason, out);
             }
             Event::Signal => self.signalled = true,
+            Event::RobotBehind(ns) => self.robot_behind_ns = ns,
         }
     }
 
@@ -225,7 +241,15 @@ impl Supervision {
         self.start_error.is_none()
             && self.stop_reason.is_none()
             && !self.signalled
-            && self.end_ns.is_none_or(|e| now_ns < e)
+            && self.end_ns().is_none_or(|e| now_ns < e)
+    }
+
+    /// When the run's length is reached [ns]: its end on the wall clock,
+    /// later by as much as the simulated robot fell behind (at most the
+    /// length again).
+    pub fn end_ns(&self) -> Option<u64> {
+        self.end_ns
+            .map(|e| e + self.robot_behind_ns.min(self.max_extension_ns))
     }
 
     /// Exits are still taken in this round ([`Action::Reap`]).

@@ -44,6 +44,7 @@ fn setup() -> Setup {
         require_rt: false,
         t0_ns: 0,
         duration_s: None,
+        robot_clock: true,
     }
 }
 
@@ -699,4 +700,27 @@ fn each_real_time_service_is_observed_once_per_process_after_it_settled() {
     // judged once per process
     let out = c.rounds(S + 260 * MS, S + 300 * MS, &[]);
     assert!(observe(&out).is_empty());
+}
+
+#[test]
+fn a_run_whose_simulated_robot_fell_behind_goes_on_by_as_much_up_to_its_length_again() {
+    let s = |robot_clock| Setup {
+        duration_s: Some(10.0),
+        robot_clock,
+        ..setup()
+    };
+    let mut sim = Supervision::new(s(true));
+    let mut out = Vec::new();
+    assert!(sim.running(9_999_000_000) && !sim.running(10_000_000_000));
+    // 3 s of periods not run: 3 s more
+    sim.step(1, Event::RobotBehind(3_000_000_000), &mut out);
+    assert!(out.is_empty());
+    assert!(sim.running(12_999_000_000) && !sim.running(13_000_000_000));
+    // never more than the length again
+    sim.step(2, Event::RobotBehind(30_000_000_000), &mut out);
+    assert!(sim.running(19_999_000_000) && !sim.running(20_000_000_000));
+    // a real arm's run ends on the wall clock
+    let mut real = Supervision::new(s(false));
+    real.step(1, Event::RobotBehind(3_000_000_000), &mut out);
+    assert!(!real.running(10_000_000_000));
 }
