@@ -667,8 +667,11 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
         Some(20.0),
         &["supervisor.restart_backoff_min_ms=400"],
     );
-    // the person's hand is in the end effector's path from t = 10 s
-    wait(13.0);
+    // the person's hand is in the end effector's path from t = 10 s (the
+    // robot's clock)
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(13.0);
+    drop(clock);
     cell.kill("perception", libc::SIGKILL);
     cell.kill("repulsion1", libc::SIGKILL);
     let r = cell.finish();
@@ -713,8 +716,11 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         Some(22.0),
         &["supervisor.restart_backoff_min_ms=400"],
     );
-    // the person's hand is in the end effector's path from t = 10 s
-    wait(11.0);
+    // the person's hand is in the end effector's path from t = 10 s (the
+    // robot's clock)
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(11.0);
+    drop(clock);
     cell.kill("camera-1", libc::SIGKILL);
     wait(3.0);
     cell.kill("perception", libc::SIGKILL);
@@ -802,8 +808,11 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
             String::from_utf8_lossy(&out.stderr)
         );
     };
-    // the person's hand is in the end effector's path from t = 11 s
-    wait(12.5);
+    // the person's hand is in the end effector's path from t = 11 s (the
+    // robot's clock)
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(12.5);
+    drop(clock);
     fault(&["corrupt", "size", "--frames", "30"]);
     wait(3.0);
     fault(&["corrupt", "stale", "--frames", "30"]);
@@ -841,8 +850,11 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
 fn a_restarted_simulator_continues_the_scenario() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("simkill", "coexistence", Some(16.0), &[]);
-    // the person's hand is in the end effector's path from t = 11 s
-    wait(12.5);
+    // the person's hand is in the end effector's path from t = 11 s (the
+    // robot's clock)
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(12.5);
+    drop(clock);
     cell.kill("sim", libc::SIGKILL);
     wait(1.5);
     let out = Command::new(bin("phri-monitor"))
@@ -1212,7 +1224,9 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
     // the robot must not keep approaching a hand it no longer sees
     let cell = Cell::start("collabkill", "collaboration", Some(14.0), &[]);
     cell.pid_of("perception");
-    wait(6.5);
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(6.5);
+    drop(clock);
     cell.kill("perception", libc::SIGKILL);
     let r = cell.finish();
     let c = &r["collaboration"];
@@ -1544,7 +1558,9 @@ fn killing_the_voice_recogniser_mid_collaboration_costs_the_torque_loop_nothing(
     // collaboration" at 14.5 s
     let cell = Cell::start("voicekill", "voice-collaboration", None, &[]);
     cell.pid_of("voice");
-    wait(12.0);
+    let clock = support::RobotClock::watch(&cell.prefix);
+    clock.wait_until(12.0);
+    drop(clock);
     cell.kill("voice", libc::SIGKILL);
     let r = cell.finish();
     let c = &r["collaboration"];

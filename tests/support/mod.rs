@@ -101,3 +101,52 @@ impl Charge {
         }
     }
 }
+
+/// The simulated robot's clock, read from its newest state: the scenario's
+/// time (the person, the microphone and the contacts follow it), which a
+/// loaded machine's wall clock sees run slower. Opened once, early (see
+/// [`Charge`]); dropped before the cell finishes (the last one out of the
+/// prefix cleans up).
+#[allow(dead_code)] // not every test file waits on the robot
+pub struct RobotClock {
+    _node: phri_ipc::IpcNode,
+    states: phri_ipc::Subscriber<phri_ipc::JointState>,
+}
+
+#[allow(dead_code)]
+impl RobotClock {
+    /// The robot's clock of the cell of `prefix`.
+    pub fn watch(prefix: &str) -> RobotClock {
+        let node = phri_ipc::node("test-robot-clock", prefix).unwrap();
+        let states = phri_ipc::ROBOT_STATE
+            .subscriber(&node, phri_ipc::Queue::Latest)
+            .unwrap();
+        RobotClock {
+            _node: node,
+            states,
+        }
+    }
+
+    /// Wait until the robot has run `t_s` seconds of its 1 kHz periods (its
+    /// state's sequence number) since it started; at most `t_s` + 30 s of
+    /// the wall clock.
+    pub fn wait_until(&self, t_s: f64) {
+        use std::time::{Duration, Instant};
+        let deadline = Instant::now() + Duration::from_secs_f64(t_s + 30.0);
+        let mut seq = 0u64;
+        loop {
+            if let Some(s) = self.states.latest().unwrap() {
+                seq = s.seq;
+            }
+            if seq as f64 * 1e-3 >= t_s {
+                return;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "the robot's clock at {} s, not {t_s} s",
+                seq as f64 * 1e-3
+            );
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
