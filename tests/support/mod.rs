@@ -63,50 +63,12 @@ impl RunPlace {
     }
 }
 
-/// Who commands the robot, read from its newest state through one node and
-/// subscriber opened before the faults: a node and subscriber created
-/// mid-run make the robot's publisher connect them in its 1 kHz loop, and
-/// the test should not be what costs a deadline.
-#[allow(dead_code)] // not every test file kills a controller
-pub struct Charge {
-    _node: phri_ipc::IpcNode,
-    states: phri_ipc::Subscriber<phri_ipc::JointState>,
-}
-
-#[allow(dead_code)]
-impl Charge {
-    pub fn watch(prefix: &str) -> Charge {
-        let node = phri_ipc::node("test-in-charge", prefix).unwrap();
-        let states = phri_ipc::ROBOT_STATE
-            .subscriber(&node, phri_ipc::Queue::Latest)
-            .unwrap();
-        Charge {
-            _node: node,
-            states,
-        }
-    }
-
-    /// The controller in charge now (`control` or `control_standby`).
-    pub fn now(&self) -> &'static str {
-        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
-        loop {
-            if let Some(s) = self.states.latest().unwrap() {
-                return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
-                    0 => "control",
-                    _ => "control_standby",
-                };
-            }
-            assert!(std::time::Instant::now() < deadline, "no robot/state");
-            std::thread::sleep(std::time::Duration::from_millis(10));
-        }
-    }
-}
-
-/// The simulated robot's clock, read from its newest state: the scenario's
-/// time (the person, the microphone and the contacts follow it), which a
-/// loaded machine's wall clock sees run slower. Opened once, early (see
-/// [`Charge`]); dropped before the cell finishes (the last one out of the
-/// prefix cleans up).
+/// The robot's newest state, through one node and subscriber: its clock
+/// (the scenario's time, which the person, the microphone and the contacts
+/// follow and a loaded machine's wall clock sees run slower) and who
+/// commands it. Opened once, early (a subscriber created mid-run makes the
+/// robot's publisher connect it in its 1 kHz loop); dropped before the cell
+/// finishes (the last one out of the prefix cleans up).
 #[allow(dead_code)] // not every test file waits on the robot
 pub struct RobotClock {
     _node: phri_ipc::IpcNode,
@@ -124,6 +86,21 @@ impl RobotClock {
         RobotClock {
             _node: node,
             states,
+        }
+    }
+
+    /// The controller in charge now (`control` or `control_standby`).
+    pub fn now(&self) -> &'static str {
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
+        loop {
+            if let Some(s) = self.states.latest().unwrap() {
+                return match s.status & phri_ipc::robot_status::STANDBY_IN_CHARGE {
+                    0 => "control",
+                    _ => "control_standby",
+                };
+            }
+            assert!(std::time::Instant::now() < deadline, "no robot/state");
+            std::thread::sleep(std::time::Duration::from_millis(10));
         }
     }
 
@@ -150,3 +127,10 @@ impl RobotClock {
         }
     }
 }
+
+/// Who commands the robot, read from its newest state through one node and
+/// subscriber opened before the faults: a node and subscriber created
+/// mid-run make the robot's publisher connect them in its 1 kHz loop, and
+/// the test should not be what costs a deadline ([`RobotClock::now`]).
+#[allow(dead_code)] // not every test file kills a controller
+pub type Charge = RobotClock;
