@@ -1050,6 +1050,12 @@ fn run_with_a_spinner(
                 &prio,
                 "--set",
                 &args,
+                // the supervisor's own liveness deadline for the camera
+                // (deploy/phri.toml gives a camera 1.5 s on loaded machines):
+                // a 0.4 s starvation is then a frozen camera, whose culprit
+                // the watchdog must find
+                "--set",
+                "services.camera.heartbeat_timeout_ms=200",
             ],
         ),
         &p,

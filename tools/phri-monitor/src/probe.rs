@@ -21,8 +21,7 @@ pub enum ProbeError {
 /// One received sample, as the statistics need it.
 #[derive(Clone, Copy)]
 struct Event {
-    recv_ns: u64,
-    /// publish time when known, else receive time
+    /// publish time when known, else receive time [ns, CLOCK_MONOTONIC]
     t_ns: u64,
     bytes: usize,
     drops: u64,
@@ -74,7 +73,6 @@ impl Stats {
         self.total_samples += 1;
         self.total_drops += drops;
         self.events.push_back(Event {
-            recv_ns: now,
             t_ns: pub_ns.unwrap_or(now),
             bytes,
             drops,
@@ -95,13 +93,14 @@ impl Stats {
         self.window_end_ns = Some(now_ns());
     }
 
-    /// Keep only the last `window_ns` (rolling window).
+    /// Keep only the last `window_ns` (rolling window), by publish time
+    /// where the message carries one: samples that waited in the queue
+    /// while this process was not running (a loaded machine) and were
+    /// published before the window belong to the window before.
     pub fn trim(&mut self, window_ns: u64) {
         let now = now_ns();
         let cut = now.saturating_sub(window_ns);
-        while self.events.front().is_some_and(|e| e.recv_ns < cut) {
-            self.events.pop_front();
-        }
+        self.events.retain(|e| e.t_ns >= cut);
         self.window_start_ns = self.window_start_ns.max(cut);
         self.window_end_ns = None;
     }
@@ -117,10 +116,15 @@ impl Stats {
     pub fn summary(&self) -> Value {
         let now = self.window_end_ns.unwrap_or_else(now_ns);
         let span_s = (now.saturating_sub(self.window_start_ns) as f64 * 1e-9).max(1e-9);
-        let n = self.events.len();
+        // the window's samples: published in it (received in it when the
+        // message carries no publish time); a sample read late from the
+        // queue but published before the window began is not counted
+        let start = self.window_start_ns;
+        let in_window = || self.events.iter().filter(move |e| e.t_ns >= start);
+        let n = in_window().count();
         let (mut sum, mut max, mut k) = (0u64, 0u64, 0u64);
         let mut prev: Option<u64> = None;
-        for e in &self.events {
+        for e in in_window() {
             if let Some(p) = prev {
                 let d = e.t_ns.saturating_sub(p);
                 sum += d;
@@ -129,8 +133,8 @@ impl Stats {
             }
             prev = Some(e.t_ns);
         }
-        let bytes: usize = self.events.iter().map(|e| e.bytes).sum();
-        let drops: u64 = self.events.iter().map(|e| e.drops).sum();
+        let bytes: usize = in_window().map(|e| e.bytes).sum();
+        let drops: u64 = in_window().map(|e| e.drops).sum();
         let ms = |ns: u64| (ns as f64 * 1e-6 * 1000.0).round() / 1000.0;
         json!({
             "rate_hz": (n as f64 / span_s * 100.0).round() / 100.0,

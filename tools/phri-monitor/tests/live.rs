@@ -35,6 +35,8 @@ fn within(x: f64, nominal: f64, tol: f64) -> bool {
 /// mean interval. The rate counts samples over the window, the mean interval
 /// spans first to last sample: they differ by the window's edges, up to a
 /// sample period at either end (two of 62 frames in a 2 s window: 3 %).
+/// The cell's own pace is its report's matter: under a full test suite on
+/// 2 vCPUs a robot loop fell 20-30 % behind, so `slack` is wide here.
 fn rate_ok(c: &serde_json::Value, nominal: f64, slack: f64) -> bool {
     let rate = c["rate_hz"].as_f64().unwrap_or(0.0);
     let samples = c["samples"].as_f64().unwrap_or(0.0).max(1.0);
@@ -160,12 +162,12 @@ fn list_hz_and_top_on_a_live_cell() {
     );
     let ch = &list["channels"];
     assert!(
-        rate_ok(&ch["robot/state"], 1000.0, 0.2),
+        rate_ok(&ch["robot/state"], 1000.0, 0.5),
         "robot/state {}",
         ch["robot/state"]
     );
     assert!(
-        rate_ok(&ch["camera/depth"], 30.0, 0.2),
+        rate_ok(&ch["camera/depth"], 30.0, 0.5),
         "camera/depth {}",
         ch["camera/depth"]
     );
@@ -210,7 +212,7 @@ fn list_hz_and_top_on_a_live_cell() {
     ]));
     eprintln!("hz: {hz}");
     assert_eq!(hz["channel"], "robot/state");
-    assert!(rate_ok(&hz, 1000.0, 0.2), "{hz}");
+    assert!(rate_ok(&hz, 1000.0, 0.5), "{hz}");
     assert_eq!(hz["publishers"], 1, "{hz}");
     let mean = hz["mean_interval_ms"].as_f64().expect("mean interval");
     assert!(hz["max_interval_ms"].as_f64().expect("max interval") >= mean);
@@ -242,7 +244,7 @@ fn list_hz_and_top_on_a_live_cell() {
         phri_ipc::ALL.len()
     );
     assert!(
-        rate_ok(&top["channels"]["robot/state"], 1000.0, 0.2),
+        rate_ok(&top["channels"]["robot/state"], 1000.0, 0.5),
         "{top}"
     );
     // top --once: the dashboard as text, without a terminal
