@@ -840,6 +840,88 @@ pub fn find_scenario(name: &str, config_path: &Path) -> Result<PathBuf, ConfigEr
     })
 }
 
+/// The overlay of scenario `name` (found beside `path`): its `[config]`
+/// and its `[scenario] name` and `file`; the scenario and its file.
+fn scenario_overlay(
+    name: &str,
+    path: &Path,
+) -> Result<(Table, Option<Scenario>, Option<PathBuf>), ConfigError> {
+    let file = find_scenario(name, path)?;
+    let abs = std::fs::canonicalize(&file).unwrap_or(file);
+    let s = Scenario::from_file(&abs)?;
+    let mut over = Table::new();
+    merge(&mut over, &s.config);
+    let mut sect = Table::new();
+    sect.insert("name".into(), Value::String(s.name.clone()));
+    sect.insert("file".into(), Value::String(abs.display().to_string()));
+    over.insert("scenario".into(), Value::Table(sect));
+    Ok((over, Some(s), Some(abs)))
+}
+
+/// An error about a key of the merged table, named by what gave the key
+/// (`blame`). A missing key that no file `given` is the robot file's of arm
+/// `name` (at `robot_origin`): the defaults leave the arm's keys to it.
+fn reblame(
+    e: ConfigError,
+    blame: &dyn Fn(&str) -> String,
+    given: impl Fn(&str) -> bool,
+    (robot_origin, name): (&str, &str),
+) -> ConfigError {
+    match e {
+        ConfigError::Key { key, message, .. }
+            if message.starts_with("missing field") && !given(&key) =>
+        {
+            ConfigError::Key {
+                origin: robot_origin.to_string(),
+                key,
+                message: format!(
+                    "{message} (the robot file of arm '{name}' must give it: is it complete?)"
+                ),
+            }
+        }
+        ConfigError::Key { key, message, .. } => ConfigError::Key {
+            origin: blame(&key),
+            key,
+            message,
+        },
+        ConfigError::UnknownSection { section, known, .. } => ConfigError::UnknownSection {
+            origin: blame(&section),
+            section,
+            known,
+        },
+        e => e,
+    }
+}
+
+/// The run's scenario: the one named (`scen`), else the file's own
+/// `[scenario] file` (its `[config]` merged already), else free motion;
+/// the recordings it pulls in checked (read only if no one else could
+/// write them) and its person's links named after the configuration's.
+fn resolved_scenario(scen: Option<Scenario>, config: &Config) -> Result<Scenario, ConfigError> {
+    let mut scenario = match scen {
+        Some(s) => s,
+        None if !config.scenario.file.is_empty() => {
+            let mut s = Scenario::from_file(&config.scenario.file)?;
+            s.config = Table::new(); // merged already
+            s
+        }
+        None => Scenario::free_motion(),
+    };
+    if !config.scenario.file.is_empty() {
+        let scenario_file = PathBuf::from(&config.scenario.file);
+        for v in &scenario.voice {
+            let wav = v.path(&scenario_file);
+            if wav.exists() {
+                crate::trust::check_file(&wav)?;
+            }
+        }
+    }
+    if let Some(h) = scenario.human.as_mut() {
+        h.name_link_roles(&config.collaboration.wrist_link, &config.control.ee_link);
+    }
+    Ok(scenario)
+}
+
 impl Loaded {
     /// Load `path` over the defaults; then `scenario` (a file or a name in
     /// `scenarios/` beside `path`: its `[config]` merges over the file); then
@@ -861,22 +943,9 @@ impl Loaded {
         let origin = path.display().to_string();
         let file = parse_table(text, &origin)?;
         // over the file: the scenario's [config], its name and file, --set
-        let mut over = Table::new();
-        let mut scenario_origin = None;
-        let scen = match scenario {
-            Some(name) => {
-                let file = find_scenario(name, path)?;
-                let abs = std::fs::canonicalize(&file).unwrap_or(file);
-                let s = Scenario::from_file(&abs)?;
-                merge(&mut over, &s.config);
-                let mut sect = Table::new();
-                sect.insert("name".into(), Value::String(s.name.clone()));
-                sect.insert("file".into(), Value::String(abs.display().to_string()));
-                over.insert("scenario".into(), Value::Table(sect));
-                scenario_origin = Some(abs);
-                Some(s)
-            }
-            None => None,
+        let (mut over, scen, scenario_origin) = match scenario {
+            Some(name) => scenario_overlay(name, path)?,
+            None => (Table::new(), None, None),
         };
         let scenario_keys = over.clone();
         for s in sets {
@@ -936,61 +1005,18 @@ impl Loaded {
             origin: blame("robot.ip"),
             invalid,
         })?;
-        let config = Config::from_table(&table, &origin).map_err(|e| match e {
+        let config = Config::from_table(&table, &origin).map_err(|e| {
             // a key no one gave: the defaults leave the arm's keys to its
             // robot file, so that file lacks it (cut short, or incomplete)
             // unless the key is in an entry of a list another file gave
-            ConfigError::Key { key, message, .. }
-                if message.starts_with("missing field")
-                    && !(key.contains('[') && (gives(&file, &key) || gives(&over, &key))) =>
-            {
-                ConfigError::Key {
-                    origin: robot_origin.clone(),
-                    key,
-                    message: format!(
-                        "{message} (the robot file of arm '{name}' must give it: is it complete?)"
-                    ),
-                }
-            }
-            ConfigError::Key { key, message, .. } => ConfigError::Key {
-                origin: blame(&key),
-                key,
-                message,
-            },
-            ConfigError::UnknownSection { section, known, .. } => ConfigError::UnknownSection {
-                origin: blame(&section),
-                section,
-                known,
-            },
-            e => e,
+            let given = |key: &str| key.contains('[') && (gives(&file, key) || gives(&over, key));
+            reblame(e, &blame, given, (robot_origin.as_str(), name.as_str()))
         })?;
         config.validate().map_err(|invalid| ConfigError::Invalid {
             origin: blame(&invalid.key),
             invalid,
         })?;
-        let scenario = match scen {
-            Some(s) => s,
-            None if !config.scenario.file.is_empty() => {
-                let mut s = Scenario::from_file(&config.scenario.file)?;
-                s.config = Table::new(); // merged already
-                s
-            }
-            None => Scenario::free_motion(),
-        };
-        let mut scenario = scenario;
-        // the recordings a scenario pulls in are read only if no one else could write them
-        if !config.scenario.file.is_empty() {
-            let scenario_file = PathBuf::from(&config.scenario.file);
-            for v in &scenario.voice {
-                let wav = v.path(&scenario_file);
-                if wav.exists() {
-                    crate::trust::check_file(&wav)?;
-                }
-            }
-        }
-        if let Some(h) = scenario.human.as_mut() {
-            h.name_link_roles(&config.collaboration.wrist_link, &config.control.ee_link);
-        }
+        let scenario = resolved_scenario(scen, &config)?;
         let file_keys = file;
         Ok(Loaded {
             config,

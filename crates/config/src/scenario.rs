@@ -284,103 +284,11 @@ impl Scenario {
         let (human, collaborative_parts) = match raw.human {
             None => (None, Vec::new()),
             Some(h) => {
-                let mut parts = Vec::with_capacity(h.collaborative_parts.len());
-                for (i, name) in h.collaborative_parts.iter().enumerate() {
-                    let part = BodyPart::from_name(name).map_err(|e| {
-                        invalid(
-                            format!("human.collaborative_parts[{i}]"),
-                            format!("unknown body part '{name}' (known: {})", e.expected),
-                        )
-                    })?;
-                    if !parts.contains(&part) {
-                        parts.push(part);
-                    }
-                }
-                let mut keyframes = Vec::with_capacity(h.keyframe.len());
-                for (i, k) in h.keyframe.into_iter().enumerate() {
-                    let wave = match k.wave {
-                        None => None,
-                        Some(w) => Some(Wave {
-                            hand: wave_hand(&w.hand).ok_or_else(|| {
-                                invalid(
-                                    format!("human.keyframe[{i}].wave.hand"),
-                                    format!("'{}' is not \"right\" or \"left\"", w.hand),
-                                )
-                            })?,
-                            frequency_hz: w.frequency_hz,
-                            amplitude_m: w.amplitude_m,
-                        }),
-                    };
-                    let push = match k.push {
-                        None => None,
-                        Some(p) => {
-                            let hand = push_hand(&p.part).ok_or_else(|| {
-                                invalid(
-                                    format!("human.keyframe[{i}].push.part"),
-                                    format!("'{}' is not \"right_hand\" or \"left_hand\"", p.part),
-                                )
-                            })?;
-                            Some(Push {
-                                link: p.link,
-                                point: p.point,
-                                force_n: p.force_n,
-                                hand,
-                                intended: p.intended.unwrap_or(parts.contains(&hand.part())),
-                            })
-                        }
-                    };
-                    keyframes.push(Keyframe {
-                        t: k.t,
-                        base: k.base,
-                        right_hand: k.right_hand,
-                        left_hand: k.left_hand,
-                        right_foot: k.right_foot,
-                        left_foot: k.left_foot,
-                        wave,
-                        push,
-                    });
-                }
-                let script = HumanScript::new(h.floor_z, keyframes).map_err(|e| match e {
-                    ScriptError::FloorZ(v) => invalid("human.floor_z".into(), format!("{v} is not a finite number")),
-                    ScriptError::NoKeyframe => invalid("human.keyframe".into(), "a human needs at least one [[human.keyframe]]".into()),
-                    ScriptError::TooMany { count, max } => invalid("human.keyframe".into(), format!("{count} keyframes, more than the {max} a script may have")),
-                    ScriptError::NotFinite { index, field } => invalid(format!("human.keyframe[{index}].{field}"), "not a finite number".into()),
-                    ScriptError::Unsorted { index, t, previous } => {
-                        invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))
-                    }
-                    ScriptError::Repeat { .. } => invalid("human.repeat_s".into(), e.to_string()),
-                    ScriptError::Invalid { index, field, reason } => invalid(format!("human.keyframe[{index}].{field}"), reason),
-                })?;
-                let script = match h.repeat_s {
-                    None => script,
-                    Some(r) => script
-                        .repeating(r)
-                        .map_err(|e| invalid("human.repeat_s".into(), e.to_string()))?,
-                };
+                let (script, parts) = human_script(h, &invalid)?;
                 (Some(script), parts)
             }
         };
-        let mut voice = Vec::with_capacity(raw.voice.len());
-        for (i, v) in raw.voice.into_iter().enumerate() {
-            if !(v.t.is_finite() && v.t >= 0.0) {
-                return Err(invalid(
-                    format!("voice[{i}].t"),
-                    format!("{} is not a time ≥ 0 s", v.t),
-                ));
-            }
-            if let Some(prev) = voice.last().map(|p: &VoiceLine| p.t) {
-                if v.t < prev {
-                    return Err(invalid(
-                        format!("voice[{i}].t"),
-                        format!("{} s is before the previous line's {prev} s (lines must be in time order)", v.t),
-                    ));
-                }
-            }
-            if v.wav.trim().is_empty() {
-                return Err(invalid(format!("voice[{i}].wav"), "no file named".into()));
-            }
-            voice.push(VoiceLine { t: v.t, wav: v.wav });
-        }
+        let voice = voice_lines(raw.voice, &invalid)?;
         Ok(Scenario {
             voice,
             name: raw.name,
@@ -391,6 +299,130 @@ impl Scenario {
             config: raw.config,
         })
     }
+}
+
+/// The scenario's error about `field` for `reason`, named by its origin.
+type Invalid<'a> = dyn Fn(String, String) -> ScenarioError + 'a;
+
+/// The person's script and collaborative parts from the file's `[human]`.
+fn human_script(
+    h: RawHuman,
+    invalid: &Invalid<'_>,
+) -> Result<(HumanScript, Vec<BodyPart>), ScenarioError> {
+    let mut parts = Vec::with_capacity(h.collaborative_parts.len());
+    for (i, name) in h.collaborative_parts.iter().enumerate() {
+        let part = BodyPart::from_name(name).map_err(|e| {
+            invalid(
+                format!("human.collaborative_parts[{i}]"),
+                format!("unknown body part '{name}' (known: {})", e.expected),
+            )
+        })?;
+        if !parts.contains(&part) {
+            parts.push(part);
+        }
+    }
+    let mut keyframes = Vec::with_capacity(h.keyframe.len());
+    for (i, k) in h.keyframe.into_iter().enumerate() {
+        keyframes.push(keyframe(i, k, &parts, invalid)?);
+    }
+    let script = HumanScript::new(h.floor_z, keyframes).map_err(|e| match e {
+        ScriptError::FloorZ(v) => invalid("human.floor_z".into(), format!("{v} is not a finite number")),
+        ScriptError::NoKeyframe => invalid("human.keyframe".into(), "a human needs at least one [[human.keyframe]]".into()),
+        ScriptError::TooMany { count, max } => invalid("human.keyframe".into(), format!("{count} keyframes, more than the {max} a script may have")),
+        ScriptError::NotFinite { index, field } => invalid(format!("human.keyframe[{index}].{field}"), "not a finite number".into()),
+        ScriptError::Unsorted { index, t, previous } => {
+            invalid(format!("human.keyframe[{index}].t"), format!("{t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)"))
+        }
+        ScriptError::Repeat { .. } => invalid("human.repeat_s".into(), e.to_string()),
+        ScriptError::Invalid { index, field, reason } => invalid(format!("human.keyframe[{index}].{field}"), reason),
+    })?;
+    let script = match h.repeat_s {
+        None => script,
+        Some(r) => script
+            .repeating(r)
+            .map_err(|e| invalid("human.repeat_s".into(), e.to_string()))?,
+    };
+    Ok((script, parts))
+}
+
+/// Keyframe `i` of the script, its wave and push checked (`parts`: the
+/// collaborative ones, which a push is meant to touch unless it says).
+fn keyframe(
+    i: usize,
+    k: RawKeyframe,
+    parts: &[BodyPart],
+    invalid: &Invalid<'_>,
+) -> Result<Keyframe, ScenarioError> {
+    let wave = match k.wave {
+        None => None,
+        Some(w) => Some(Wave {
+            hand: wave_hand(&w.hand).ok_or_else(|| {
+                invalid(
+                    format!("human.keyframe[{i}].wave.hand"),
+                    format!("'{}' is not \"right\" or \"left\"", w.hand),
+                )
+            })?,
+            frequency_hz: w.frequency_hz,
+            amplitude_m: w.amplitude_m,
+        }),
+    };
+    let push = match k.push {
+        None => None,
+        Some(p) => {
+            let hand = push_hand(&p.part).ok_or_else(|| {
+                invalid(
+                    format!("human.keyframe[{i}].push.part"),
+                    format!("'{}' is not \"right_hand\" or \"left_hand\"", p.part),
+                )
+            })?;
+            Some(Push {
+                link: p.link,
+                point: p.point,
+                force_n: p.force_n,
+                hand,
+                intended: p.intended.unwrap_or(parts.contains(&hand.part())),
+            })
+        }
+    };
+    Ok(Keyframe {
+        t: k.t,
+        base: k.base,
+        right_hand: k.right_hand,
+        left_hand: k.left_hand,
+        right_foot: k.right_foot,
+        left_foot: k.left_foot,
+        wave,
+        push,
+    })
+}
+
+/// The voice lines, each at a time ≥ 0 s, in time order, naming a file.
+fn voice_lines(raw: Vec<RawVoice>, invalid: &Invalid<'_>) -> Result<Vec<VoiceLine>, ScenarioError> {
+    let mut voice = Vec::with_capacity(raw.len());
+    for (i, v) in raw.into_iter().enumerate() {
+        if !(v.t.is_finite() && v.t >= 0.0) {
+            return Err(invalid(
+                format!("voice[{i}].t"),
+                format!("{} is not a time ≥ 0 s", v.t),
+            ));
+        }
+        if let Some(prev) = voice.last().map(|p: &VoiceLine| p.t) {
+            if v.t < prev {
+                return Err(invalid(
+                    format!("voice[{i}].t"),
+                    format!(
+                        "{} s is before the previous line's {prev} s (lines must be in time order)",
+                        v.t
+                    ),
+                ));
+            }
+        }
+        if v.wav.trim().is_empty() {
+            return Err(invalid(format!("voice[{i}].wav"), "no file named".into()));
+        }
+        voice.push(VoiceLine { t: v.t, wav: v.wav });
+    }
+    Ok(voice)
 }
 
 /// 1-based line of byte `offset` in `text` and the dotted field there, such as

@@ -117,7 +117,18 @@ impl Geodesic {
         self.adj.clear();
         self.extrema.clear();
         self.centre = NONE;
-        let comp = seg.components[person];
+        self.gather(grid, seg, person);
+        self.connect(grid, seg, rule);
+        self.bridge(grid, seg, person);
+        if self.cells.is_empty() {
+            return;
+        }
+        self.from_centre(seg.components[person].centroid);
+        self.find_extrema(k, min_m);
+    }
+
+    /// The cells of person `person`: its component's and its parts'.
+    fn gather(&mut self, grid: &Grid, seg: &Segmenter, person: usize) {
         for (m, part) in seg.components.iter().enumerate() {
             if seg.owner[m] != person as u32 {
                 continue;
@@ -128,6 +139,11 @@ impl Geodesic {
                 self.pts.push(grid.pts[c as usize]);
             }
         }
+    }
+
+    /// Edges between neighbouring cells of the same component that `rule`
+    /// joins (their depths continuous), weighted by their distance \[m\].
+    fn connect(&mut self, grid: &Grid, seg: &Segmenter, rule: &JoinRule) {
         let (gw, gh) = (grid.gw as isize, grid.gh as isize);
         for &c in &self.cells {
             let c = c as usize;
@@ -155,8 +171,13 @@ impl Geodesic {
             }
             self.adj.push(edges);
         }
-        // bridges: from each cell of a part to the nearest cell of another
-        // component of the group, within BRIDGE_CELLS
+    }
+
+    /// Bridges: from each cell of a part to the nearest cell of another
+    /// component of person `person`'s group, within [`BRIDGE_CELLS`].
+    fn bridge(&mut self, grid: &Grid, seg: &Segmenter, person: usize) {
+        let comp = seg.components[person];
+        let (gw, gh) = (grid.gw as isize, grid.gh as isize);
         for v in 0..self.cells.len() {
             let c = self.cells[v] as usize;
             let label = seg.labels[c];
@@ -201,16 +222,14 @@ impl Geodesic {
                 };
             }
         }
+    }
+
+    /// The centre (the node nearest `centroid`, camera frame \[m\]) and the
+    /// geodesic distances and paths from it ([`Geodesic::dist0`],
+    /// [`Geodesic::pred0`]).
+    fn from_centre(&mut self, centroid: [f64; 3]) {
         let n = self.cells.len();
-        if n == 0 {
-            return;
-        }
-        // the centre: the node nearest the centroid
-        let cen = [
-            comp.centroid[0] as f32,
-            comp.centroid[1] as f32,
-            comp.centroid[2] as f32,
-        ];
+        let cen = [centroid[0] as f32, centroid[1] as f32, centroid[2] as f32];
         let mut best = (f32::INFINITY, 0u32);
         for (k, &p) in self.pts.iter().enumerate() {
             let d = dist(p, cen);
@@ -231,6 +250,11 @@ impl Geodesic {
             self.centre,
             f32::INFINITY,
         );
+    }
+
+    /// Up to `k` extrema, each the node farthest from the centre and the
+    /// extrema before it, while at least `min_m` \[m\] away.
+    fn find_extrema(&mut self, k: usize, min_m: f32) {
         self.agex.clear();
         self.agex.extend_from_slice(&self.dist0);
         for _ in 0..k.min(MAX_EXTREMA) {

@@ -138,7 +138,11 @@ impl Body<'_> {
     }
 }
 
-/// Labels the extrema of `geo` (built for `body.comp`) as a skeleton.
+/// Labels the extrema of `geo` (built for `body.comp`) as a skeleton: the
+/// head first (the geodesic distances from it then find the rest), the
+/// neck and shoulders below it, the feet and hands among the extrema, the
+/// arms' elbows along the hands' paths, the torso, hips and knees by the
+/// body's proportions.
 pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
     let cfg = body.cfg;
     let (up, side) = (body.up, body.side);
@@ -166,10 +170,61 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
     ex[..n_ex].copy_from_slice(&geo.extrema[..n_ex]);
     let ex = &ex[..n_ex];
 
-    // --- head: above the centre, nearest the vertical axis, a protrusion ---
-    // candidates: the extrema and the body's highest point near its axis (the
-    // top of the head may be nearer the centre than the extrema of raised
-    // arms and of a body cut by the image's border)
+    let Some(head_node) = find_head(body, geo, ex) else {
+        return s;
+    };
+    geo.from_head(head_node);
+    let head_top_h = dot(geo.point(head_node), up);
+    let (head_mean, _) = geo.cap_mean(head_node, cfg.head_cap_m as f32);
+    s.joints[Joint::Head as usize] = inset(head_mean, cfg.head_inset_m);
+    s.confidence[Joint::Head as usize] =
+        if body.grid.on_border(geo.cells[head_node as usize] as usize) {
+            0.5
+        } else {
+            1.0
+        };
+
+    // --- neck: along the path from the head to the centre ---
+    let mut v = head_node;
+    while geo.pred0[v as usize] != NONE && geo.head[v as usize] < cfg.neck_from_head_m as f32 {
+        v = geo.pred0[v as usize];
+    }
+    let neck_surface = geo.point(v);
+    let neck = inset(neck_surface, cfg.body_inset_m);
+    s.joints[Joint::Neck as usize] = neck;
+    s.confidence[Joint::Neck as usize] = 0.8;
+
+    let shoulder_nodes = place_shoulders(body, geo, &mut s, neck_surface, head_top_h);
+    let feet = feet_among(body, geo, ex, head_node, head_top_h);
+    let hands = hands_among(cfg, geo, ex, head_node, &feet, head_top_h, up);
+    let (left, right) = left_and_right(geo, hands, neck_surface, side);
+    for (k, (hand, hj, ej, sj)) in [
+        (left, Joint::LeftHand, Joint::LeftElbow, Joint::LeftShoulder),
+        (
+            right,
+            Joint::RightHand,
+            Joint::RightElbow,
+            Joint::RightShoulder,
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        place_arm(body, geo, &mut s, hand, (hj, ej, sj), shoulder_nodes[k]);
+    }
+    let feet = left_and_right(geo, feet, neck_surface, side);
+    place_torso_and_legs(body, geo, &mut s, neck, feet);
+    s
+}
+
+/// The head among the extrema `ex` and the body's highest point near its
+/// axis (the top of the head may be nearer the centre than the extrema of
+/// raised arms and of a body cut by the image's border): above the centre,
+/// nearest the vertical axis, a protrusion.
+fn find_head(body: &Body, geo: &Geodesic, ex: &[Extremum]) -> Option<u32> {
+    let cfg = body.cfg;
+    let (up, side, c) = (body.up, body.side, body.comp.centroid);
+    let n_ex = ex.len();
     let mut cands = [NONE; MAX_EXTREMA + 1];
     for (k, e) in ex.iter().enumerate() {
         cands[k] = e.node;
@@ -184,7 +239,6 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
     }
     cands[n_ex] = top.1;
     let cands = &cands[..=n_ex];
-    let mut head: Option<(u32, f64)> = None;
     let mut tried = [false; MAX_EXTREMA + 1];
     loop {
         let mut best: Option<(usize, f64)> = None;
@@ -205,41 +259,28 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
                 best = Some((k, lateral));
             }
         }
-        let Some((k, lateral)) = best else {
-            break;
-        };
+        let (k, _) = best?;
         tried[k] = true;
         if is_protrusion(geo, cands[k], up, side) {
-            head = Some((cands[k], lateral));
-            break;
+            return Some(cands[k]);
         }
     }
-    let Some((head_node, _)) = head else {
-        return s;
-    };
-    geo.from_head(head_node);
-    let head_top = geo.point(head_node);
-    let head_top_h = dot(head_top, up);
-    let (head_mean, _) = geo.cap_mean(head_node, cfg.head_cap_m as f32);
-    s.joints[Joint::Head as usize] = inset(head_mean, cfg.head_inset_m);
-    s.confidence[Joint::Head as usize] =
-        if body.grid.on_border(geo.cells[head_node as usize] as usize) {
-            0.5
-        } else {
-            1.0
-        };
+}
 
-    // --- neck: along the path from the head to the centre ---
-    let mut v = head_node;
-    while geo.pred0[v as usize] != NONE && geo.head[v as usize] < cfg.neck_from_head_m as f32 {
-        v = geo.pred0[v as usize];
-    }
-    let neck_surface = geo.point(v);
-    let neck = inset(neck_surface, cfg.body_inset_m);
-    s.joints[Joint::Neck as usize] = neck;
-    s.confidence[Joint::Neck as usize] = 0.8;
-
-    // --- shoulders: the outermost surface points at the shoulders' height ---
+/// The shoulders into `s`: the outermost surface points at the shoulders'
+/// height (below the head's top at `head_top_h` \[m\] along up), either
+/// side of the neck's surface point; a side not found is guessed, with
+/// confidence 0. Their nodes (left, right; [`NONE`]: guessed).
+fn place_shoulders(
+    body: &Body,
+    geo: &Geodesic,
+    s: &mut RawSkeleton,
+    neck_surface: [f64; 3],
+    head_top_h: f64,
+) -> [u32; 2] {
+    let cfg = body.cfg;
+    let (up, side) = (body.up, body.side);
+    let neck = s.joints[Joint::Neck as usize];
     let cell_m = f64::from(body.grid.cell_m(neck_surface[2] as f32));
     let band = (1.5 * cell_m).max(0.03);
     let shoulder_h = head_top_h - cfg.shoulder_below_head_m;
@@ -282,17 +323,27 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
             }
         }
     }
+    shoulder_nodes
+}
 
-    // --- feet ---
+/// Up to two feet among the extrema `ex`: far enough below the head's top
+/// (at `head_top_h` \[m\] along up), near the body's bottom, not on the
+/// image's border ([`NONE`]: no foot).
+fn feet_among(
+    body: &Body,
+    geo: &Geodesic,
+    ex: &[Extremum],
+    head_node: u32,
+    head_top_h: f64,
+) -> [u32; 2] {
     let mut feet = [NONE; 2];
     let mut n_feet = 0;
     for e in ex {
         if e.node == head_node || n_feet == 2 {
             continue;
         }
-        let p = geo.point(e.node);
-        let h = dot(p, up);
-        if head_top_h - h >= cfg.foot_min_below_head_m
+        let h = dot(geo.point(e.node), body.up);
+        if head_top_h - h >= body.cfg.foot_min_below_head_m
             && h - body.comp.bottom_m <= 0.3
             && !body.grid.on_border(geo.cells[e.node as usize] as usize)
         {
@@ -300,8 +351,21 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
             n_feet += 1;
         }
     }
+    feet
+}
 
-    // --- hands ---
+/// Up to two hands among the extrema `ex` that are neither the head nor a
+/// foot: far enough from the head along the body, not too far below it,
+/// and not a second point of the first hand's arm ([`NONE`]: no hand).
+fn hands_among(
+    cfg: &TrackerConfig,
+    geo: &mut Geodesic,
+    ex: &[Extremum],
+    head_node: u32,
+    feet: &[u32; 2],
+    head_top_h: f64,
+    up: [f64; 3],
+) -> [u32; 2] {
     let mut hands = [NONE; 2];
     let mut n_hands = 0;
     for e in ex {
@@ -326,120 +390,120 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
         hands[n_hands] = e.node;
         n_hands += 1;
     }
-    // left = larger coordinate across (the person faces the camera)
-    let lat = |geo: &Geodesic, n: u32| dot(sub(geo.point(n), neck_surface), side);
-    let (mut left, mut right) = (NONE, NONE);
-    match n_hands {
-        2 => {
-            if lat(geo, hands[0]) >= lat(geo, hands[1]) {
-                (left, right) = (hands[0], hands[1]);
-            } else {
-                (left, right) = (hands[1], hands[0]);
-            }
-        }
-        1 => {
-            if lat(geo, hands[0]) >= 0.0 {
-                left = hands[0];
-            } else {
-                right = hands[0];
-            }
-        }
-        _ => {}
-    }
-    for (k, (hand, hj, ej, sj)) in [
-        (left, Joint::LeftHand, Joint::LeftElbow, Joint::LeftShoulder),
-        (
-            right,
-            Joint::RightHand,
-            Joint::RightElbow,
-            Joint::RightShoulder,
-        ),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let shoulder = s.joints[sj as usize];
-        if hand == NONE {
-            // hanging along the body, unseen
-            s.joints[ej as usize] = add(shoulder, down, 0.3);
-            s.joints[hj as usize] = add(shoulder, down, 0.6);
-            continue;
-        }
-        let (mean, _) = geo.cap_mean(hand, cfg.hand_cap_m as f32);
-        s.joints[hj as usize] = inset(mean, cfg.hand_inset_m);
-        s.confidence[hj as usize] = if body.grid.on_border(geo.cells[hand as usize] as usize) {
-            0.4
-        } else {
-            1.0
-        };
-        // elbow: where the path from the hand to the shoulder bends most
-        // (the farthest from the straight line between them); midway
-        // along the path when it hardly bends (a straight arm)
-        let shoulder_surface = if shoulder_nodes[k] != NONE {
-            geo.point(shoulder_nodes[k])
-        } else {
-            shoulder
-        };
-        let tip = geo.point(hand);
-        let d_hand = geo.dist0[hand as usize];
-        let mut stop = hand;
-        let (mut elbow, mut bend) = (NONE, 0.0);
-        while geo.pred0[stop as usize] != NONE {
-            let p = geo.point(stop);
-            // an elbow is on the arm: an upper arm from the shoulder, a
-            // forearm from the hand
-            let along = d_hand - geo.dist0[stop as usize];
-            let on_arm = norm(sub(p, shoulder_surface)) <= ELBOW_FROM_SHOULDER_M
-                && (MIN_FOREARM_M..=MAX_FOREARM_M).contains(&along);
-            let off = segment_dist(p, tip, shoulder_surface);
-            if on_arm && off > bend {
-                (elbow, bend) = (stop, off);
-            }
-            if norm(sub(p, shoulder_surface)) < 0.08 {
-                break;
-            }
-            stop = geo.pred0[stop as usize];
-        }
-        let path = d_hand - geo.dist0[stop as usize];
-        let bent = bend >= STRAIGHT_ARM_M;
-        if !bent {
-            let half = 0.5 * path;
-            elbow = hand;
-            while geo.pred0[elbow as usize] != NONE && d_hand - geo.dist0[elbow as usize] < half {
-                elbow = geo.pred0[elbow as usize];
-            }
-        }
-        s.joints[ej as usize] = inset(geo.point(elbow), cfg.body_inset_m);
-        s.confidence[ej as usize] = if path > MIN_ARM_PATH_M || bent {
-            0.6
-        } else {
-            0.2
-        };
-    }
+    hands
+}
 
-    // --- torso, hips, knees, feet by the body's proportions ---
+/// The person's own (left, right) of two nodes (either [`NONE`]): left is
+/// the larger coordinate across from the neck's surface point (the person
+/// faces the camera); a single node goes to the side it lies on.
+fn left_and_right(
+    geo: &Geodesic,
+    nodes: [u32; 2],
+    neck_surface: [f64; 3],
+    side: [f64; 3],
+) -> (u32, u32) {
+    let lat = |n: u32| dot(sub(geo.point(n), neck_surface), side);
+    match nodes {
+        [NONE, _] => (NONE, NONE),
+        [a, NONE] if lat(a) >= 0.0 => (a, NONE),
+        [a, NONE] => (NONE, a),
+        [a, b] if lat(a) >= lat(b) => (a, b),
+        [a, b] => (b, a),
+    }
+}
+
+/// One arm into `s`: its hand at `hand` ([`NONE`]: unseen, hanging along
+/// the body), its elbow where the path from the hand to the shoulder
+/// (surface node `shoulder_node`, [`NONE`]: guessed) bends most, or midway
+/// along it when it hardly bends (a straight arm). `(hj, ej, sj)`: the
+/// hand's, the elbow's and the shoulder's joints.
+fn place_arm(
+    body: &Body,
+    geo: &mut Geodesic,
+    s: &mut RawSkeleton,
+    hand: u32,
+    (hj, ej, sj): (Joint, Joint, Joint),
+    shoulder_node: u32,
+) {
+    let cfg = body.cfg;
+    let up = body.up;
+    let down = [-up[0], -up[1], -up[2]];
+    let shoulder = s.joints[sj as usize];
+    if hand == NONE {
+        // hanging along the body, unseen
+        s.joints[ej as usize] = add(shoulder, down, 0.3);
+        s.joints[hj as usize] = add(shoulder, down, 0.6);
+        return;
+    }
+    let (mean, _) = geo.cap_mean(hand, cfg.hand_cap_m as f32);
+    s.joints[hj as usize] = inset(mean, cfg.hand_inset_m);
+    s.confidence[hj as usize] = if body.grid.on_border(geo.cells[hand as usize] as usize) {
+        0.4
+    } else {
+        1.0
+    };
+    // elbow: where the path from the hand to the shoulder bends most
+    // (the farthest from the straight line between them); midway
+    // along the path when it hardly bends (a straight arm)
+    let shoulder_surface = if shoulder_node != NONE {
+        geo.point(shoulder_node)
+    } else {
+        shoulder
+    };
+    let tip = geo.point(hand);
+    let d_hand = geo.dist0[hand as usize];
+    let mut stop = hand;
+    let (mut elbow, mut bend) = (NONE, 0.0);
+    while geo.pred0[stop as usize] != NONE {
+        let p = geo.point(stop);
+        // an elbow is on the arm: an upper arm from the shoulder, a
+        // forearm from the hand
+        let along = d_hand - geo.dist0[stop as usize];
+        let on_arm = norm(sub(p, shoulder_surface)) <= ELBOW_FROM_SHOULDER_M
+            && (MIN_FOREARM_M..=MAX_FOREARM_M).contains(&along);
+        let off = segment_dist(p, tip, shoulder_surface);
+        if on_arm && off > bend {
+            (elbow, bend) = (stop, off);
+        }
+        if norm(sub(p, shoulder_surface)) < 0.08 {
+            break;
+        }
+        stop = geo.pred0[stop as usize];
+    }
+    let path = d_hand - geo.dist0[stop as usize];
+    let bent = bend >= STRAIGHT_ARM_M;
+    if !bent {
+        let half = 0.5 * path;
+        elbow = hand;
+        while geo.pred0[elbow as usize] != NONE && d_hand - geo.dist0[elbow as usize] < half {
+            elbow = geo.pred0[elbow as usize];
+        }
+    }
+    s.joints[ej as usize] = inset(geo.point(elbow), cfg.body_inset_m);
+    s.confidence[ej as usize] = if path > MIN_ARM_PATH_M || bent {
+        0.6
+    } else {
+        0.2
+    };
+}
+
+/// The torso, hips, knees and feet into `s` by the body's proportions below
+/// the neck at `neck` \[m, camera frame\]; a foot seen (`feet`: the
+/// person's left and right nodes, [`NONE`]: unseen) places its knee midway.
+fn place_torso_and_legs(
+    body: &Body,
+    geo: &mut Geodesic,
+    s: &mut RawSkeleton,
+    neck: [f64; 3],
+    (foot_l, foot_r): (u32, u32),
+) {
+    let cfg = body.cfg;
+    let (up, side) = (body.up, body.side);
+    let down = [-up[0], -up[1], -up[2]];
     let torso = add(neck, down, NECK_TO_TORSO_M);
     s.joints[Joint::Torso as usize] = torso;
     s.confidence[Joint::Torso as usize] = body.seen(torso, 0.8).max(0.3);
     let hip_mid = add(neck, down, NECK_TO_HIP_M);
-    let (mut foot_l, mut foot_r) = (NONE, NONE);
-    match n_feet {
-        2 => {
-            if lat(geo, feet[0]) >= lat(geo, feet[1]) {
-                (foot_l, foot_r) = (feet[0], feet[1]);
-            } else {
-                (foot_l, foot_r) = (feet[1], feet[0]);
-            }
-        }
-        1 => {
-            if lat(geo, feet[0]) >= 0.0 {
-                foot_l = feet[0];
-            } else {
-                foot_r = feet[0];
-            }
-        }
-        _ => {}
-    }
     for (sign, foot, hj, kj, fj) in [
         (
             1.0,
@@ -475,7 +539,6 @@ pub fn label(body: &Body, geo: &mut Geodesic) -> RawSkeleton {
             s.confidence[fj as usize] = 0.0;
         }
     }
-    s
 }
 
 /// Lateral band beside a head's top where the shoulders are \[m\] ...

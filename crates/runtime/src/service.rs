@@ -311,12 +311,11 @@ impl ServiceContext {
                 }
             };
             let mut last = crate::now_ns();
-            let mut trusted: Option<i32> = None;
+            let mut supervisor = Trusted::default();
             // the first health before the service's loop starts: its inputs'
             // owners are known from its first sample on
             let first_by = last + FIRST_HEALTH_MS * 1_000_000;
             let mut first = true;
-            let mut refused_pid = 0;
             let mut told_dead = false;
             let mut report = phri_ipc::InputAudit::zeroed();
             report.service = phri_ipc::json::to_c_str(&service);
@@ -326,15 +325,7 @@ impl ServiceContext {
                     std::thread::sleep(std::time::Duration::from_millis(1));
                 } else {
                     let timeout = if first { 1 } else { tick_ms };
-                    let mut dead = false;
-                    let _ = vigil.wait(std::time::Duration::from_millis(timeout), |w| {
-                        if let phri_ipc::liveness::Wake::Pulse(0) = w {
-                            let _ = watched[0].take(|p| {
-                                dead |= p != phri_ipc::liveness::Pulse::Beat;
-                            });
-                        }
-                    });
-                    if dead && !told_dead {
+                    if supervisor_gone(&vigil, &watched, timeout) && !told_dead {
                         told_dead = true;
                         tracing::warn!(
                             "the supervisor's node is gone (iceoryx2): the dead-man stops this service in {:.1} s unless another supervisor takes the cell over",
@@ -343,31 +334,7 @@ impl ServiceContext {
                     }
                 }
                 let now = crate::now_ns();
-                // the newest of each page: the first services, and those past them
-                let mut newest: [Option<phri_ipc::Health>; 2] = [None, None];
-                for (page, sub) in newest.iter_mut().zip(&health) {
-                    let _ = sub.drain_from(|pid, h| {
-                        if trusted == Some(pid) || is_supervisor(pid, &prefix) {
-                            trusted = Some(pid);
-                            *page = Some(*h);
-                        } else if refused_pid != pid {
-                            refused_pid = pid;
-                            tracing::warn!(
-                                "supervisor/health from pid {pid}, not this cell's supervisor: ignored"
-                            );
-                        }
-                    });
-                }
-                for (k, h) in newest.iter().enumerate() {
-                    let Some(h) = h else { continue };
-                    let listed = (h.count as usize)
-                        .saturating_sub(k * phri_ipc::MAX_SERVICES)
-                        .min(h.services.len());
-                    for s in &h.services[..listed] {
-                        owners.set_pid(s.name_str(), if s.alive != 0 { s.pid } else { 0 });
-                    }
-                }
-                let newest = newest[0];
+                let newest = read_health(&health, &mut supervisor, &prefix, &owners);
                 if newest.is_some() {
                     last = now;
                     told_dead = false;
@@ -390,15 +357,7 @@ impl ServiceContext {
                 if let Some(p) = &audits {
                     if now >= next_audit {
                         next_audit = now + AUDIT_PERIOD_MS * 1_000_000;
-                        report.seq += 1;
-                        report.stamp_ns = now;
-                        for (k, (name, _)) in phri_ipc::owners::PUBLISHERS.iter().enumerate() {
-                            if let Some(c) = phri_ipc::Owned::of(name) {
-                                let (counts, pid) = owners.refused(c);
-                                report.refused[k] = counts;
-                                report.stranger_pid[k] = pid;
-                            }
-                        }
+                        fill_audit(&mut report, &owners, now);
                         let _ = p.publish(&report);
                     }
                 }
@@ -503,6 +462,82 @@ pub fn run<E: std::fmt::Display>(
             let line = e.to_string().replace('\n', " ");
             eprintln!("{name}: {line}");
             ExitCode::from(2)
+        }
+    }
+}
+
+/// The supervisor whose `supervisor/health` a service trusts: the first
+/// sender that is this cell's supervisor; the last sender refused (one
+/// warning per stranger).
+#[derive(Default)]
+struct Trusted {
+    pid: Option<i32>,
+    refused_pid: i32,
+}
+
+/// Waits up to `timeout_ms` for the supervisor's liveness pulses (the
+/// first of `watched`): whether one said its node is gone.
+fn supervisor_gone(
+    vigil: &phri_ipc::liveness::Vigil<'_>,
+    watched: &[phri_ipc::liveness::Watched],
+    timeout_ms: u64,
+) -> bool {
+    let mut dead = false;
+    let _ = vigil.wait(std::time::Duration::from_millis(timeout_ms), |w| {
+        if let phri_ipc::liveness::Wake::Pulse(0) = w {
+            let _ = watched[0].take(|p| {
+                dead |= p != phri_ipc::liveness::Pulse::Beat;
+            });
+        }
+    });
+    dead
+}
+
+/// The newest `supervisor/health` of the trusted supervisor of the cell of
+/// `prefix`, read into `owners` (every service's pid, 0 when dead) from
+/// both pages (the first services, and those past them); the first page's.
+fn read_health(
+    pages: &[phri_ipc::Subscriber<phri_ipc::Health>; 2],
+    trusted: &mut Trusted,
+    prefix: &str,
+    owners: &phri_ipc::OwnerTable,
+) -> Option<phri_ipc::Health> {
+    let mut newest: [Option<phri_ipc::Health>; 2] = [None, None];
+    for (page, sub) in newest.iter_mut().zip(pages) {
+        let _ = sub.drain_from(|pid, h| {
+            if trusted.pid == Some(pid) || is_supervisor(pid, prefix) {
+                trusted.pid = Some(pid);
+                *page = Some(*h);
+            } else if trusted.refused_pid != pid {
+                trusted.refused_pid = pid;
+                tracing::warn!(
+                    "supervisor/health from pid {pid}, not this cell's supervisor: ignored"
+                );
+            }
+        });
+    }
+    for (k, h) in newest.iter().enumerate() {
+        let Some(h) = h else { continue };
+        let listed = (h.count as usize)
+            .saturating_sub(k * phri_ipc::MAX_SERVICES)
+            .min(h.services.len());
+        for s in &h.services[..listed] {
+            owners.set_pid(s.name_str(), if s.alive != 0 { s.pid } else { 0 });
+        }
+    }
+    newest[0]
+}
+
+/// `audit/inputs`' next report at `now` \[ns\]: what each owned channel
+/// refused, and the last stranger's pid.
+fn fill_audit(report: &mut phri_ipc::InputAudit, owners: &phri_ipc::OwnerTable, now: u64) {
+    report.seq += 1;
+    report.stamp_ns = now;
+    for (k, (name, _)) in phri_ipc::owners::PUBLISHERS.iter().enumerate() {
+        if let Some(c) = phri_ipc::Owned::of(name) {
+            let (counts, pid) = owners.refused(c);
+            report.refused[k] = counts;
+            report.stranger_pid[k] = pid;
         }
     }
 }

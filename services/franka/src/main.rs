@@ -243,17 +243,10 @@ fn serve(
     Ok(())
 }
 
-fn main() -> ExitCode {
-    phri_runtime::service::run("phri-franka", body)
-}
-
-fn body() -> Result<(), Box<dyn Error>> {
-    let (ctx, RobotAddress { robot_ip }) = ServiceContext::from_cli(
-        "phri-franka",
-        "robot",
-        "A Franka arm over FCI behind robot/state and robot/command (torques sent without gravity: the box adds it)",
-    )?;
-    let address = match robot_ip {
+/// The control box's address: `--robot-ip`, else the configuration's
+/// `robot.ip`; neither, or an empty flag, is an error naming them.
+fn address(ctx: &ServiceContext, robot_ip: Option<String>) -> Result<String, Box<dyn Error>> {
+    Ok(match robot_ip {
         Some(ip) if ip.trim().is_empty() => return Err(FciError::EmptyAddress.into()),
         Some(ip) => ip,
         None => Some(ctx.config().robot.ip.clone())
@@ -261,16 +254,18 @@ fn body() -> Result<(), Box<dyn Error>> {
             .ok_or(
                 "--robot-ip: the control box's address is required (or robot.ip in the configuration)",
             )?,
-    };
-    let model = ctx.robot_model()?;
-    let guard = StateGuard::for_model(&model, FCI_PERIOD_S);
-    // 7 joints, a positive period: refused here, before any connection
-    let mut cycle = FciCycle::new(model, FCI_PERIOD_S)?;
-    if ctx.checking() {
-        return Ok(());
-    }
-    let (robot, urdf) = connect(&address)?;
-    // FCI v10 (FR3) serves the arm's URDF; v5 (Panda/FER) serves none
+    })
+}
+
+/// [`connect`] to the box at `address`, then compare the arm it serves with
+/// the configured model of `cycle` (FCI v10, the FR3, serves its URDF; v5,
+/// the Panda/FER, none: then the configuration is taken unchecked).
+fn connect_checked(
+    ctx: &ServiceContext,
+    address: &str,
+    cycle: &FciCycle,
+) -> Result<franka::Robot, Box<dyn Error>> {
+    let (robot, urdf) = connect(address)?;
     if let Some(urdf) = urdf {
         // the arm's joints to lock may be missing from another arm's URDF:
         // then the comparison below names the difference
@@ -287,6 +282,50 @@ fn body() -> Result<(), Box<dyn Error>> {
             robot.server_version()
         );
     }
+    Ok(robot)
+}
+
+/// The box ended the motion with `e` (a reflex, a joint limit, commands
+/// lost): said on `robot/box`, then the box's own error recovery, after
+/// which torque control may start again; a recovery that failed ends the
+/// adapter (its error names the box at `address`).
+fn recover(
+    robot: &franka::Robot,
+    e: &franka::ControlException,
+    boxed: &mut BoxChannel,
+    gate: &Gate<'_>,
+    address: &str,
+) -> Result<(), Box<dyn Error>> {
+    let error = BoxError::new(&e.last_motion_errors.names(), &e.message);
+    boxed.error(&error)?;
+    tracing::warn!("{error}; automatic error recovery");
+    if let Err(e) = robot.automatic_error_recovery() {
+        let _ = boxed.publish(&gate.refused());
+        return Err(FciError::from_franka(address, "automatic error recovery", e).into());
+    }
+    boxed.log.on_recovery();
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    phri_runtime::service::run("phri-franka", body)
+}
+
+fn body() -> Result<(), Box<dyn Error>> {
+    let (ctx, RobotAddress { robot_ip }) = ServiceContext::from_cli(
+        "phri-franka",
+        "robot",
+        "A Franka arm over FCI behind robot/state and robot/command (torques sent without gravity: the box adds it)",
+    )?;
+    let address = address(&ctx, robot_ip)?;
+    let model = ctx.robot_model()?;
+    let guard = StateGuard::for_model(&model, FCI_PERIOD_S);
+    // 7 joints, a positive period: refused here, before any connection
+    let mut cycle = FciCycle::new(model, FCI_PERIOD_S)?;
+    if ctx.checking() {
+        return Ok(());
+    }
+    let robot = connect_checked(&ctx, &address, &cycle)?;
 
     let node = ctx.node()?;
     let state_pub = ROBOT_STATE.publisher(&node)?;
@@ -369,18 +408,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             Ok(()) => {}
             // the box ended the motion (a reflex, a joint limit, commands
             // lost): its own error recovery, then torque control again
-            Err(Served::Box(e)) => {
-                let error = BoxError::new(&e.last_motion_errors.names(), &e.message);
-                boxed.error(&error)?;
-                tracing::warn!("{error}; automatic error recovery");
-                if let Err(e) = robot.automatic_error_recovery() {
-                    let _ = boxed.publish(&gate.refused());
-                    return Err(
-                        FciError::from_franka(&address, "automatic error recovery", e).into(),
-                    );
-                }
-                boxed.log.on_recovery();
-            }
+            Err(Served::Box(e)) => recover(&robot, &e, &mut boxed, &gate, &address)?,
             Err(Served::Fatal(e)) => {
                 // the FCI client's errors named by what happened at the box
                 let e = match e.downcast::<franka::FrankaError>() {

@@ -92,6 +92,83 @@ impl Track {
         self.n = 0;
         self.confidence = 1.0;
     }
+
+    /// The hand's smoothed lateral position moved to `x` \[m\] at `t` \[ns\]:
+    /// follow the swing to its extreme; a turn back by a swing long enough
+    /// counts a reversal (one too soon or too late after the previous starts
+    /// the count over); reversals older than the window are forgotten.
+    fn swing_to(&mut self, x: f64, t: u64, r: &SwingRules) {
+        match self.dir {
+            0 => {
+                if (x - self.start).abs() >= r.swing_m * 0.5 {
+                    self.dir = if x > self.start { 1 } else { -1 };
+                    self.extreme = x;
+                    self.extreme_ns = t;
+                }
+            }
+            d => {
+                let further = if d > 0 {
+                    x > self.extreme
+                } else {
+                    x < self.extreme
+                };
+                if further {
+                    self.extreme = x;
+                    self.extreme_ns = t;
+                } else if (self.extreme - x).abs() >= r.swing_m
+                    && (self.extreme - self.start).abs() >= r.swing_m * 0.5
+                {
+                    // a reversal at the extreme, after a swing long enough;
+                    // one too soon or too late after the previous starts a new count
+                    if self.n > 0 {
+                        let gap = self.extreme_ns.saturating_sub(self.reversals[self.n - 1]);
+                        if gap < r.half_min_ns || gap > r.half_max_ns {
+                            self.n = 0;
+                            self.confidence = 1.0;
+                        }
+                    }
+                    if self.n == MAX_REVERSALS {
+                        self.reversals.copy_within(1.., 0);
+                        self.n -= 1;
+                    }
+                    self.reversals[self.n] = self.extreme_ns;
+                    self.n += 1;
+                    self.start = self.extreme;
+                    self.dir = -d;
+                    self.extreme = x;
+                    self.extreme_ns = t;
+                }
+            }
+        }
+        // reversals older than the window are forgotten
+        let keep_from = self.reversals[..self.n]
+            .iter()
+            .position(|&rv| t.saturating_sub(rv) <= r.window_ns)
+            .unwrap_or(self.n);
+        self.reversals.copy_within(keep_from..self.n, 0);
+        self.n -= keep_from;
+    }
+}
+
+/// What counts as a wave's swing, from the configuration: a swing's
+/// least length, the half period's bounds and the window, in the track's
+/// units \[m, ns\].
+struct SwingRules {
+    swing_m: f64,
+    half_min_ns: u64,
+    half_max_ns: u64,
+    window_ns: u64,
+}
+
+impl SwingRules {
+    fn of(cfg: &GestureConfig) -> SwingRules {
+        SwingRules {
+            swing_m: cfg.min_swing_m,
+            half_min_ns: (cfg.min_half_period_s * 1e9) as u64,
+            half_max_ns: (cfg.max_half_period_s * 1e9) as u64,
+            window_ns: (cfg.window_s * 1e9) as u64,
+        }
+    }
 }
 
 /// The detector: one track per (person, hand), preallocated.
@@ -201,13 +278,8 @@ impl WaveDetector {
                     && h[2] - e[2] >= self.cfg.hand_above_elbow_m
                     && h.iter().chain(e.iter()).all(|x| x.is_finite());
                 let raw = ((h[0] - e[0]) * lx + (h[1] - e[1]) * ly) / norm.max(1e-9);
-                let (swing, window, wanted) = (
-                    self.cfg.min_swing_m,
-                    (self.cfg.window_s * 1e9) as u64,
-                    self.cfg.reversals as usize,
-                );
-                let half_min = (self.cfg.min_half_period_s * 1e9) as u64;
-                let half_max = (self.cfg.max_half_period_s * 1e9) as u64;
+                let wanted = self.cfg.reversals as usize;
+                let rules = SwingRules::of(&self.cfg);
                 let k = self.track(p.id, part);
                 if !ok {
                     k.restart(raw, t);
@@ -224,52 +296,7 @@ impl WaveDetector {
                 k.x += (raw - k.x) * alpha;
                 k.last_ns = t;
                 k.confidence = k.confidence.min(hc).min(ec);
-                let x = k.x;
-                match k.dir {
-                    0 => {
-                        if (x - k.start).abs() >= swing * 0.5 {
-                            k.dir = if x > k.start { 1 } else { -1 };
-                            k.extreme = x;
-                            k.extreme_ns = t;
-                        }
-                    }
-                    d => {
-                        let further = if d > 0 { x > k.extreme } else { x < k.extreme };
-                        if further {
-                            k.extreme = x;
-                            k.extreme_ns = t;
-                        } else if (k.extreme - x).abs() >= swing
-                            && (k.extreme - k.start).abs() >= swing * 0.5
-                        {
-                            // a reversal at the extreme, after a swing long enough;
-                            // one too soon or too late after the previous starts a new count
-                            if k.n > 0 {
-                                let gap = k.extreme_ns.saturating_sub(k.reversals[k.n - 1]);
-                                if gap < half_min || gap > half_max {
-                                    k.n = 0;
-                                    k.confidence = 1.0;
-                                }
-                            }
-                            if k.n == MAX_REVERSALS {
-                                k.reversals.copy_within(1.., 0);
-                                k.n -= 1;
-                            }
-                            k.reversals[k.n] = k.extreme_ns;
-                            k.n += 1;
-                            k.start = k.extreme;
-                            k.dir = -d;
-                            k.extreme = x;
-                            k.extreme_ns = t;
-                        }
-                    }
-                }
-                // reversals older than the window are forgotten
-                let keep_from = k.reversals[..k.n]
-                    .iter()
-                    .position(|&r| t.saturating_sub(r) <= window)
-                    .unwrap_or(k.n);
-                k.reversals.copy_within(keep_from..k.n, 0);
-                k.n -= keep_from;
+                k.swing_to(k.x, t, &rules);
                 if k.n >= wanted && out.is_none() {
                     let wave = Wave {
                         person: p.id,

@@ -22,10 +22,13 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use phri_ipc::liveness::Beat;
 use phri_ipc::{
-    IpcError, JointState, Queue, Truth, WorldState, Zeroed, ROBOT_COMMAND, ROBOT_COMMANDERS,
+    CommanderStats, ContactEvent, IpcError, IpcNode, JointState, Publisher, Queue, RobotStats,
+    Subscriber, TorqueCommand, Truth, WorldState, Zeroed, ROBOT_COMMAND, ROBOT_COMMANDERS,
     ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
 };
+use phri_runtime::log::Deferred;
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
 use phri_sim::link::{CommandGate, GRACE_POLL_NS};
 use phri_sim::snapshot::{self, SharedArm};
@@ -66,7 +69,7 @@ fn body() -> Result<(), Box<dyn Error>> {
     let cfg = ctx.config().sim.clone();
     let period_ns = (cfg.dt_s * 1e9).round() as u64;
     let mut sim = Simulator::from_scenario(model, cfg, ctx.scenario(), None)?;
-    let mut link = RobotLink::new(n, period_ns)?;
+    let link = RobotLink::new(n, period_ns)?;
     if ctx.checking() {
         return Ok(());
     }
@@ -82,23 +85,93 @@ fn body() -> Result<(), Box<dyn Error>> {
         }
     }
 
+    serve_robot(&ctx, sim, link, period_ns, snapshot_path)
+}
+
+/// What the simulated robot publishes and the two command slots it reads.
+struct RobotPorts {
+    state: Publisher<JointState>,
+    truth: Publisher<Truth>,
+    stats: Publisher<RobotStats>,
+    world: Publisher<WorldState>,
+    contacts: Publisher<ContactEvent>,
+    commanders: Publisher<CommanderStats>,
+    /// the controller in charge's commands (slot 0)
+    commands: Subscriber<TorqueCommand>,
+    /// the hot standby's (slot 1): applied when the controller in charge misses
+    standby: Subscriber<TorqueCommand>,
+}
+
+impl RobotPorts {
+    fn open(node: &IpcNode) -> Result<RobotPorts, IpcError> {
+        Ok(RobotPorts {
+            state: ROBOT_STATE.publisher(node)?,
+            truth: SIM_TRUTH.publisher(node)?,
+            stats: ROBOT_STATS.publisher(node)?,
+            world: SIM_WORLD.publisher(node)?,
+            contacts: SIM_CONTACTS.publisher(node)?,
+            commands: ROBOT_COMMAND.subscriber(node, Queue::Latest)?,
+            standby: ROBOT_COMMAND_STANDBY.subscriber(node, Queue::Latest)?,
+            commanders: ROBOT_COMMANDERS.publisher(node)?,
+        })
+    }
+}
+
+/// One period's outgoing messages, preallocated: the state, its truth and
+/// its world, the contacts that began or ended, and the arm's positions for
+/// a successor.
+struct Outbox {
+    state: JointState,
+    truth: Truth,
+    world: WorldState,
+    contact_log: ContactLog,
+    shared_arm: Arc<SharedArm>,
+}
+
+impl Outbox {
+    /// Publish state `seq` (stamped `stamp_ns` on the robot's clock), its
+    /// truth and its world; returns when the state was published \[ns\].
+    fn publish(
+        &mut self,
+        ports: &RobotPorts,
+        sim: &Simulator,
+        out: &phri_sim::LinkOutput,
+        seq: u64,
+        stamp_ns: u64,
+    ) -> Result<u64, IpcError> {
+        let published = now_ns();
+        fill_state(sim, out, seq, stamp_ns, published, &mut self.state);
+        ports.state.publish(&self.state)?;
+        self.shared_arm.store(&sim.truth().q, published);
+        fill_truth(sim, seq, stamp_ns, &mut self.truth);
+        ports.truth.publish(&self.truth)?;
+        for e in self.contact_log.step(stamp_ns, &sim.truth().contacts) {
+            ports.contacts.publish(e)?;
+        }
+        fill_world(sim, seq, stamp_ns, &mut self.world);
+        ports.world.publish(&self.world)?;
+        Ok(published)
+    }
+}
+
+/// The simulated robot behind `robot/state`: its ports, its helper threads
+/// (command arrivals, the successor's snapshot), then [`robot_loop`] under
+/// real-time scheduling until shutdown, then the last statistics.
+fn serve_robot(
+    ctx: &ServiceContext,
+    mut sim: Simulator,
+    mut link: RobotLink,
+    period_ns: u64,
+    snapshot_path: Option<PathBuf>,
+) -> Result<(), Box<dyn Error>> {
     let node = ctx.node()?;
-    let state_pub = ROBOT_STATE.publisher(&node)?;
-    let truth_pub = SIM_TRUTH.publisher(&node)?;
-    let stats_pub = ROBOT_STATS.publisher(&node)?;
-    let world_pub = SIM_WORLD.publisher(&node)?;
-    let contacts_pub = SIM_CONTACTS.publisher(&node)?;
-    let mut contact_log = ContactLog::new();
-    let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
-    // the hot standby's (slot 1): applied when the controller in charge misses
-    let standby = ROBOT_COMMAND_STANDBY.subscriber(&node, Queue::Latest)?;
-    let commanders_pub = ROBOT_COMMANDERS.publisher(&node)?;
+    let ports = RobotPorts::open(&node)?;
     // commands only from the controllers the supervisor started (every
     // sender without a supervisor); the owners follow supervisor/health
     link.set_gate(CommandGate::new(ctx.watch_inputs()));
     // the arm's positions for a successor, saved by a thread at normal
     // priority (started before this one turns real-time)
-    let shared_arm = Arc::new(SharedArm::new(n));
+    let shared_arm = Arc::new(SharedArm::new(sim.model().nv()));
     let saver_thread =
         snapshot_path.map(|path| spawn_saver(path, Arc::clone(&shared_arm), ctx.shutdown.clone()));
     ctx.start_deadman()?;
@@ -109,86 +182,29 @@ fn body() -> Result<(), Box<dyn Error>> {
     // notes when command events arrive, so that latency is measured at
     // receipt, not at the next tick
     let last_command_event = Arc::new(AtomicU64::new(0));
-    let listener_thread = spawn_listener(&ctx, Arc::clone(&last_command_event));
-
-    let mut state = JointState::zeroed();
-    let mut truth = Truth::zeroed();
-    let mut world = WorldState::zeroed();
-    // publish state `seq` (stamped `stamp_ns` on the robot's clock), its truth
-    // and its world; returns when the state was published
-    let mut publish = |sim: &Simulator, out: &phri_sim::LinkOutput, seq: u64, stamp_ns: u64| {
-        let published = now_ns();
-        fill_state(sim, out, seq, stamp_ns, published, &mut state);
-        state_pub.publish(&state)?;
-        shared_arm.store(&sim.truth().q, published);
-        fill_truth(sim, seq, stamp_ns, &mut truth);
-        truth_pub.publish(&truth)?;
-        for e in contact_log.step(stamp_ns, &sim.truth().contacts) {
-            contacts_pub.publish(e)?;
-        }
-        fill_world(sim, seq, stamp_ns, &mut world);
-        world_pub.publish(&world)?;
-        Ok::<u64, IpcError>(published)
+    let listener_thread = spawn_listener(ctx, Arc::clone(&last_command_event));
+    let mut outbox = Outbox {
+        state: JointState::zeroed(),
+        truth: Truth::zeroed(),
+        world: WorldState::zeroed(),
+        contact_log: ContactLog::new(),
+        shared_arm,
     };
-
-    let mut run = || -> Result<(), Box<dyn Error>> {
-        // the initial state: the arm at rest, brakes on
-        let mut seq = 1u64;
-        let first = *link.output();
-        sim.step(first.torque(), first.brake);
-        let mut tick = now_ns();
-        let epoch = tick;
-        let mut state_published_ns = publish(&sim, &first, seq, epoch)?;
-        while !ctx.shutdown.requested() {
-            tick += period_ns;
-            sleep_until_ns(tick);
-            beat.beat(now_ns());
-            let wake = link.wake(tick, now_ns());
-            tick = wake.deadline_ns;
-            let mut newest = [None, None];
-            link.poll([&commands, &standby], &mut newest, seq)?;
-            if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
-                // the machine stalled us and maybe the controller too: in
-                // simulated time the cycle is not over yet
-                while now_ns() < until {
-                    sleep_until_ns(now_ns() + GRACE_POLL_NS);
-                    if link.poll([&commands, &standby], &mut newest, seq)? {
-                        break;
-                    }
-                }
-            }
-            let timing = CycleTiming {
-                state_published_ns,
-                command_event_ns: last_command_event.load(Ordering::Acquire),
-                now_ns: now_ns(),
-                behind_schedule_ns: wake.behind_schedule_ns(),
-            };
-            let out = link.cycle_slots(newest.each_ref().map(Option::as_ref), seq, &timing);
-            if let Some(run) = out.miss_run {
-                log.post(LinkEvent::Missed(run));
-            }
-            if out.brake_engaged {
-                log.post(LinkEvent::Brakes { missed: out.missed });
-            }
-            sim.step(out.torque(), out.brake);
-            seq += 1;
-            state_published_ns = publish(&sim, &out, seq, link.state_stamp_ns(epoch, seq))?;
-            if out.publish_stats {
-                stats_pub.publish(link.stats_message(now_ns()))?;
-            }
-            if out.publish_stats || out.takeover || out.refused {
-                commanders_pub.publish(link.commanders_message(now_ns()))?;
-            }
-        }
-        Ok(())
-    };
-    let result = run();
-    for e in contact_log.finish() {
-        let _ = contacts_pub.publish(e);
+    let result = robot_loop(
+        ctx,
+        (&mut sim, &mut link),
+        (&ports, &mut outbox),
+        &mut beat,
+        &log,
+        &last_command_event,
+        period_ns,
+    );
+    for e in outbox.contact_log.finish() {
+        let _ = ports.contacts.publish(e);
     }
     // last word on the statistics
-    let _ = stats_pub.publish(link.stats_message(now_ns()));
-    let _ = commanders_pub.publish(link.commanders_message(now_ns()));
+    let _ = ports.stats.publish(link.stats_message(now_ns()));
+    let _ = ports.commanders.publish(link.commanders_message(now_ns()));
     ctx.shutdown.request();
     let _ = listener_thread.join();
     if let Some(t) = saver_thread {
@@ -198,6 +214,73 @@ fn body() -> Result<(), Box<dyn Error>> {
         tracing::warn!("{run}");
     }
     result
+}
+
+/// The 1 kHz loop until shutdown: wait for the tick (absolute deadlines),
+/// take the newest command of either slot (with a grace when the machine
+/// stalled this process), step the arm, publish.
+fn robot_loop(
+    ctx: &ServiceContext,
+    (sim, link): (&mut Simulator, &mut RobotLink),
+    (ports, outbox): (&RobotPorts, &mut Outbox),
+    beat: &mut Beat,
+    log: &Deferred<LinkEvent>,
+    last_command_event: &AtomicU64,
+    period_ns: u64,
+) -> Result<(), Box<dyn Error>> {
+    // the initial state: the arm at rest, brakes on
+    let mut seq = 1u64;
+    let first = *link.output();
+    sim.step(first.torque(), first.brake);
+    let mut tick = now_ns();
+    let epoch = tick;
+    let mut state_published_ns = outbox.publish(ports, sim, &first, seq, epoch)?;
+    let slots = [&ports.commands, &ports.standby];
+    while !ctx.shutdown.requested() {
+        tick += period_ns;
+        sleep_until_ns(tick);
+        beat.beat(now_ns());
+        let wake = link.wake(tick, now_ns());
+        tick = wake.deadline_ns;
+        let mut newest = [None, None];
+        link.poll(slots, &mut newest, seq)?;
+        if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
+            // the machine stalled us and maybe the controller too: in
+            // simulated time the cycle is not over yet
+            while now_ns() < until {
+                sleep_until_ns(now_ns() + GRACE_POLL_NS);
+                if link.poll(slots, &mut newest, seq)? {
+                    break;
+                }
+            }
+        }
+        let timing = CycleTiming {
+            state_published_ns,
+            command_event_ns: last_command_event.load(Ordering::Acquire),
+            now_ns: now_ns(),
+            behind_schedule_ns: wake.behind_schedule_ns(),
+        };
+        let out = link.cycle_slots(newest.each_ref().map(Option::as_ref), seq, &timing);
+        if let Some(run) = out.miss_run {
+            log.post(LinkEvent::Missed(run));
+        }
+        if out.brake_engaged {
+            log.post(LinkEvent::Brakes { missed: out.missed });
+        }
+        sim.step(out.torque(), out.brake);
+        seq += 1;
+        state_published_ns =
+            outbox.publish(ports, sim, &out, seq, link.state_stamp_ns(epoch, seq))?;
+        if out.publish_stats {
+            ports.stats.publish(link.stats_message(now_ns()))?;
+        }
+        if out.publish_stats || out.takeover || out.refused {
+            ports
+                .commanders
+                .publish(link.commanders_message(now_ns()))?;
+        }
+    }
+    Ok(())
 }
 
 /// The hybrid cell: the arm behind `robot/state` is a robot outside; every

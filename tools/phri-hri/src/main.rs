@@ -304,137 +304,165 @@ fn run(args: Args) -> Result<ExitCode, String> {
             person,
             text,
             wait_s,
-        } => {
-            let states = COLLAB_STATE
-                .subscriber_if_exists(&node, Queue::Latest)
-                .map_err(|e| e.to_string())?;
-            let Some(states) = states else {
+        } => send(
+            &node,
+            &args.prefix,
+            args.json,
+            request(kind, part, person, &text),
+            wait_s,
+        ),
+        Command::Resume { wait_s } => resume(&node, &args.prefix, wait_s),
+        Command::Watch { once, seconds } => watch(&node, &args.prefix, args.json, once, seconds),
+    }
+}
+
+/// Send request `r` on hri/request and wait up to `wait_s` \[s\] for the
+/// controller's answer on collab/state: exit 0 accepted, 3 refused.
+fn send(
+    node: &IpcNode,
+    prefix: &str,
+    json: bool,
+    r: HriRequest,
+    wait_s: f64,
+) -> Result<ExitCode, String> {
+    let states = COLLAB_STATE
+        .subscriber_if_exists(node, Queue::Latest)
+        .map_err(|e| e.to_string())?;
+    let Some(states) = states else {
+        return Err(format!(
+            "{}: not sent: {} does not exist, no controller would answer (is the cell of prefix {} running?)",
+            HRI_REQUEST.name, COLLAB_STATE.name, prefix
+        ));
+    };
+    let publisher = HRI_REQUEST.publisher(node).map_err(|e| e.to_string())?;
+    publisher.publish(&r).map_err(|e| e.to_string())?;
+    let t0 = Instant::now();
+    while t0.elapsed().as_secs_f64() < wait_s {
+        if let Some(s) = states.latest().map_err(|e| e.to_string())? {
+            if s.request_source == RequestSource::Cli as u32 && s.request_seq == r.seq {
+                print(&s, json);
+                return Ok(if s.request_accepted != 0 {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::from(3)
+                });
+            }
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Err(format!(
+        "{}: no answer to the request on {} within {wait_s} s",
+        HRI_REQUEST.name, COLLAB_STATE.name
+    ))
+}
+
+/// Ask the supervisor to resume the cell after a protective stop that
+/// needs it, and wait up to `wait_s` \[s\] for every service to run again.
+fn resume(node: &IpcNode, prefix: &str, wait_s: f64) -> Result<ExitCode, String> {
+    // the supervisor's channel, found within the wait (a supervisor
+    // just back from a stall may still be cleaning up its dead
+    // services: on a loaded machine that took over 2 s)
+    let t0 = Instant::now();
+    let health = loop {
+        let found = phri_ipc::SUPERVISOR_HEALTH.subscriber_if_exists(node, Queue::Latest);
+        match found {
+            Ok(Some(h)) => break h,
+            _ if t0.elapsed().as_secs_f64() < wait_s.min(5.0) => {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            Ok(None) => {
                 return Err(format!(
-                    "{}: not sent: {} does not exist, no controller would answer (is the cell of prefix {} running?)",
-                    HRI_REQUEST.name, COLLAB_STATE.name, args.prefix
-                ));
-            };
-            let publisher = HRI_REQUEST.publisher(&node).map_err(|e| e.to_string())?;
-            let r = request(kind, part, person, &text);
-            publisher.publish(&r).map_err(|e| e.to_string())?;
-            let t0 = Instant::now();
-            while t0.elapsed().as_secs_f64() < wait_s {
-                if let Some(s) = states.latest().map_err(|e| e.to_string())? {
-                    if s.request_source == RequestSource::Cli as u32 && s.request_seq == r.seq {
-                        print(&s, args.json);
-                        return Ok(if s.request_accepted != 0 {
-                            ExitCode::SUCCESS
-                        } else {
-                            ExitCode::from(3)
-                        });
-                    }
-                }
-                std::thread::sleep(Duration::from_millis(5));
-            }
-            Err(format!(
-                "{}: no answer to the request on {} within {wait_s} s",
-                HRI_REQUEST.name, COLLAB_STATE.name
-            ))
-        }
-        Command::Resume { wait_s } => {
-            // the supervisor's channel, found within the wait (a supervisor
-            // just back from a stall may still be cleaning up its dead
-            // services: on a loaded machine that took over 2 s)
-            let t0 = Instant::now();
-            let health = loop {
-                let found = phri_ipc::SUPERVISOR_HEALTH.subscriber_if_exists(&node, Queue::Latest);
-                match found {
-                    Ok(Some(h)) => break h,
-                    _ if t0.elapsed().as_secs_f64() < wait_s.min(5.0) => {
-                        std::thread::sleep(Duration::from_millis(50));
-                    }
-                    Ok(None) => {
-                        return Err(format!(
-                            "{}: not sent: no supervisor runs the cell of prefix {}",
-                            HRI_REQUEST.name, args.prefix
-                        ))
-                    }
-                    Err(e) => return Err(e.to_string()),
-                }
-            };
-            let publisher = HRI_REQUEST.publisher(&node).map_err(|e| e.to_string())?;
-            publisher
-                .publish(&request(
-                    RequestKind::Resume,
-                    CollabPart::None,
-                    u32::MAX,
-                    "resume",
+                    "{}: not sent: no supervisor runs the cell of prefix {}",
+                    HRI_REQUEST.name, prefix
                 ))
-                .map_err(|e| e.to_string())?;
-            let t0 = Instant::now();
-            while t0.elapsed().as_secs_f64() < wait_s {
-                if let Some(h) = health.latest().map_err(|e| e.to_string())? {
-                    let n = (h.count as usize).min(h.services.len());
-                    if n > 0 && h.services[..n].iter().all(|s| s.alive != 0) {
-                        println!("resumed: {n} services run");
-                        return Ok(ExitCode::SUCCESS);
-                    }
-                }
-                std::thread::sleep(Duration::from_millis(20));
             }
-            Err(format!(
-                "{}: the services did not all run again within {wait_s} s",
-                phri_ipc::SUPERVISOR_HEALTH.name
-            ))
+            Err(e) => return Err(e.to_string()),
         }
-        Command::Watch { once, seconds } => {
-            let t0 = Instant::now();
-            let over = |t0: Instant| seconds.is_some_and(|s| t0.elapsed().as_secs_f64() >= s);
-            // the controller may not have started yet
-            let states = loop {
-                if let Some(s) = COLLAB_STATE
-                    .subscriber_if_exists(&node, Queue::Latest)
-                    .map_err(|e| e.to_string())?
-                {
-                    break s;
-                }
-                if once || over(t0) {
-                    return Err(format!(
-                        "{} does not exist (is the cell of prefix {} running?)",
-                        COLLAB_STATE.name, args.prefix
-                    ));
-                }
-                std::thread::sleep(Duration::from_millis(100));
-            };
-            let mut last: Option<(u32, u32, u32, u64, bool)> = None;
-            let mut last_forces = Instant::now();
-            loop {
-                if let Some(s) = states.latest().map_err(|e| e.to_string())? {
-                    let key = (
-                        s.phase,
-                        s.reason,
-                        s.human_part,
-                        s.request_seq,
-                        s.request_accepted != 0,
-                    );
-                    // forces change every cycle: at most 5 lines a second for them
-                    let forces_due =
-                        s.n_forces > 0 && last_forces.elapsed() >= Duration::from_millis(200);
-                    if last != Some(key) || forces_due || once {
-                        print(&s, args.json);
-                        last = Some(key);
-                        last_forces = Instant::now();
-                    }
-                    if once {
-                        return Ok(ExitCode::SUCCESS);
-                    }
-                } else if once && t0.elapsed() > Duration::from_secs(1) {
-                    return Err(format!(
-                        "{}: no state within 1 s (is the controller running?)",
-                        COLLAB_STATE.name
-                    ));
-                }
-                if over(t0) {
-                    return Ok(ExitCode::SUCCESS);
-                }
-                std::thread::sleep(Duration::from_millis(10));
+    };
+    let publisher = HRI_REQUEST.publisher(node).map_err(|e| e.to_string())?;
+    publisher
+        .publish(&request(
+            RequestKind::Resume,
+            CollabPart::None,
+            u32::MAX,
+            "resume",
+        ))
+        .map_err(|e| e.to_string())?;
+    let t0 = Instant::now();
+    while t0.elapsed().as_secs_f64() < wait_s {
+        if let Some(h) = health.latest().map_err(|e| e.to_string())? {
+            let n = (h.count as usize).min(h.services.len());
+            if n > 0 && h.services[..n].iter().all(|s| s.alive != 0) {
+                println!("resumed: {n} services run");
+                return Ok(ExitCode::SUCCESS);
             }
         }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Err(format!(
+        "{}: the services did not all run again within {wait_s} s",
+        phri_ipc::SUPERVISOR_HEALTH.name
+    ))
+}
+
+/// Print collab/state's changes (forces at most 5 times a second) until
+/// `seconds` \[s\] passed (forever: `None`); `once`: the newest state only.
+fn watch(
+    node: &IpcNode,
+    prefix: &str,
+    json: bool,
+    once: bool,
+    seconds: Option<f64>,
+) -> Result<ExitCode, String> {
+    let t0 = Instant::now();
+    let over = |t0: Instant| seconds.is_some_and(|s| t0.elapsed().as_secs_f64() >= s);
+    // the controller may not have started yet
+    let states = loop {
+        if let Some(s) = COLLAB_STATE
+            .subscriber_if_exists(node, Queue::Latest)
+            .map_err(|e| e.to_string())?
+        {
+            break s;
+        }
+        if once || over(t0) {
+            return Err(format!(
+                "{} does not exist (is the cell of prefix {} running?)",
+                COLLAB_STATE.name, prefix
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut last: Option<(u32, u32, u32, u64, bool)> = None;
+    let mut last_forces = Instant::now();
+    loop {
+        if let Some(s) = states.latest().map_err(|e| e.to_string())? {
+            let key = (
+                s.phase,
+                s.reason,
+                s.human_part,
+                s.request_seq,
+                s.request_accepted != 0,
+            );
+            // forces change every cycle: at most 5 lines a second for them
+            let forces_due = s.n_forces > 0 && last_forces.elapsed() >= Duration::from_millis(200);
+            if last != Some(key) || forces_due || once {
+                print(&s, json);
+                last = Some(key);
+                last_forces = Instant::now();
+            }
+            if once {
+                return Ok(ExitCode::SUCCESS);
+            }
+        } else if once && t0.elapsed() > Duration::from_secs(1) {
+            return Err(format!(
+                "{}: no state within 1 s (is the controller running?)",
+                COLLAB_STATE.name
+            ));
+        }
+        if over(t0) {
+            return Ok(ExitCode::SUCCESS);
+        }
+        std::thread::sleep(Duration::from_millis(10));
     }
 }
 

@@ -506,12 +506,68 @@ impl Collaboration {
         let fresh_skeleton = input.skeleton.filter(|sk| {
             stamp_ns.saturating_sub(sk.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
         });
-        // 1. requests, stops first: a stop anywhere among them is acted on,
-        // and what follows it finds the robot stopped; the named hand's
-        // confidence in the newest skeleton
+        self.answer_requests(t, robot, input.requests, fresh_skeleton);
+        self.observe_hand(dt, stamp_ns, input.hand, fresh_skeleton);
+        self.observe_other_hand(fresh_skeleton);
+        let force_n = self.estimate_force(q, residual);
+        // the wrist push: a force through the wrist centre, a person seen in
+        // depth at the wrist's control point
+        let wrist_seen = self
+            .wrist_point
+            .and_then(|i| perception?.points.get(i))
+            .is_some_and(|p| p.active != 0 && p.min_distance <= WRIST_SEEN_M);
+        self.wrist_pattern = false;
+        let wrist_push =
+            self.machine.active() && self.wrist_push(t, q, residual, fresh_skeleton, wrist_seen);
+        // the gap and the phase
+        (self.gap, self.near_gap) = match self.hand {
+            Some(h) => {
+                let part = (h - self.robot_point).norm() - self.cfg.robot_radius_m;
+                let near = self.surface_distance(&h).min(part);
+                (part - self.cfg.hand_radius_m, near - self.cfg.hand_radius_m)
+            }
+            None => (f64::INFINITY, f64::INFINITY),
+        };
+        let origin = self.forces.frame_origin(self.contact.frame);
+        let backed_off = self
+            .back_off
+            .is_some_and(|b| (origin - b.from).dot(&b.dir) >= 0.9 * self.cfg.back_off_m);
+        let other_touch = self.other_touch(perception);
+        self.other_closing = self.other_closing(stamp_ns);
+        let was = self.machine.active();
+        let phase = self.machine.step(&Observation {
+            t,
+            hand_seen: self.hand_seen,
+            gap_m: self.near_gap,
+            force_n,
+            wrist_push,
+            collision: self.collision,
+            other_touch,
+            stale,
+            backed_off,
+        });
+        self.update_back_off(phase, origin);
+        if was && !self.machine.active() {
+            self.rearm = Some(None);
+            self.forget_hand();
+        }
+        self.update_rearm(t, residual);
+        phase
+    }
+
+    /// The period's requests, stops first: a stop anywhere among them is
+    /// acted on, and what follows it finds the robot stopped; each judged
+    /// with the named hand's confidence in the newest skeleton.
+    fn answer_requests(
+        &mut self,
+        t: f64,
+        robot: RobotState,
+        requests: &[HriRequest],
+        fresh_skeleton: Option<&Skeleton>,
+    ) {
         let is_stop = |r: &&HriRequest| r.kind == RequestKind::Stop as u32;
-        let stops = input.requests.iter().filter(is_stop);
-        let others = input.requests.iter().filter(|r| !is_stop(r));
+        let stops = requests.iter().filter(is_stop);
+        let others = requests.iter().filter(|r| !is_stop(r));
         let mut robot = robot;
         let mut stopped = None;
         for r in stops.chain(others) {
@@ -543,10 +599,21 @@ impl Collaboration {
         if let Some(a) = stopped {
             self.last_answer = Some(a);
         }
-        // 2. the collaborative hand
+    }
+
+    /// The collaborative hand while collaborating: its sighting (the
+    /// refined `hand`, else the skeleton's), velocity, low-pass and where it
+    /// is now ([`Collaboration::hand`]).
+    fn observe_hand(
+        &mut self,
+        dt: f64,
+        stamp_ns: u64,
+        hand: Option<&HandObservation>,
+        fresh_skeleton: Option<&Skeleton>,
+    ) {
         self.hand_seen = false;
         if self.machine.active() {
-            let refined = input.hand.filter(|h| {
+            let refined = hand.filter(|h| {
                 h.refined != 0
                     && h.part == self.machine.part() as u32
                     && stamp_ns.saturating_sub(h.capture_ns) as f64 * 1e-9 <= MAX_SKELETON_AGE_S
@@ -593,8 +660,11 @@ impl Collaboration {
                 });
             }
         }
-        // 2b. the other hand, tracked, and how fast it moves (after a gap
-        // longer than a skeleton's life, as if still)
+    }
+
+    /// The other hand while collaborating, tracked, and how fast it moves
+    /// (after a gap longer than a skeleton's life, as if still).
+    fn observe_other_hand(&mut self, fresh_skeleton: Option<&Skeleton>) {
         if self.machine.active() {
             let seen = fresh_skeleton.and_then(|sk| {
                 Self::find_hand(sk, other_hand(self.machine.part()), self.machine.person())
@@ -610,8 +680,12 @@ impl Collaboration {
                 self.other = Some(now);
             }
         }
-        // 3. the force at the robot point, what it leaves unexplained, the
-        // robot point: only while collaborating (idle, nothing reads them)
+    }
+
+    /// The force at the robot point from the residual, what it leaves
+    /// unexplained (a collision elsewhere), only while collaborating (idle,
+    /// nothing reads them): the force's magnitude \[N\] (0 without a residual).
+    fn estimate_force(&mut self, q: &[f64], residual: Option<&[f64]>) -> f64 {
         let zero = [0.0; MAX_DOF];
         let r = residual
             .filter(|r| r.len() == self.n)
@@ -638,32 +712,14 @@ impl Collaboration {
                     .zip(&self.collision_threshold)
                     .any(|(u, th)| u.abs() > *th)
             });
-        // 4. the wrist push: a force through the wrist centre, a person near the wrist
-        // a person seen in depth at the wrist's control point
-        let wrist_seen = self
-            .wrist_point
-            .and_then(|i| perception?.points.get(i))
-            .is_some_and(|p| p.active != 0 && p.min_distance <= WRIST_SEEN_M);
-        self.wrist_pattern = false;
-        let wrist_push =
-            self.machine.active() && self.wrist_push(t, q, residual, fresh_skeleton, wrist_seen);
-        // 5. the gap and the phase
-        (self.gap, self.near_gap) = match self.hand {
-            Some(h) => {
-                let part = (h - self.robot_point).norm() - self.cfg.robot_radius_m;
-                let near = self.surface_distance(&h).min(part);
-                (part - self.cfg.hand_radius_m, near - self.cfg.hand_radius_m)
-            }
-            None => (f64::INFINITY, f64::INFINITY),
-        };
-        let origin = self.forces.frame_origin(self.contact.frame);
-        let backed_off = self
-            .back_off
-            .is_some_and(|b| (origin - b.from).dot(&b.dir) >= 0.9 * self.cfg.back_off_m);
-        // another part of the person at the robot: a control point's obstacle
-        // (the collaborative hand is masked from depth) within `OTHER_TOUCH_M`
-        // and not at the hand (what the mask left of its edge)
-        let other_touch = perception.is_some_and(|v| {
+        force_n
+    }
+
+    /// Another part of the person at the robot: a control point's obstacle
+    /// (the collaborative hand is masked from depth) within `OTHER_TOUCH_M`
+    /// and not at the hand (what the mask left of its edge).
+    fn other_touch(&self, perception: Option<&PerceptionView<'_>>) -> bool {
+        perception.is_some_and(|v| {
             v.points.iter().any(|p| {
                 let o = Vector3::from(p.obstacle);
                 p.active != 0
@@ -671,20 +727,13 @@ impl Collaboration {
                     && o.iter().all(|x| x.is_finite())
                     && self.hand.is_none_or(|h| (o - h).norm() > AT_THE_HAND_M)
             })
-        });
-        self.other_closing = self.other_closing(stamp_ns);
-        let was = self.machine.active();
-        let phase = self.machine.step(&Observation {
-            t,
-            hand_seen: self.hand_seen,
-            gap_m: self.near_gap,
-            force_n,
-            wrist_push,
-            collision: self.collision,
-            other_touch,
-            stale,
-            backed_off,
-        });
+        })
+    }
+
+    /// Backing off (`phase`): its direction, set on entry (away from the
+    /// person: along the force they apply, else from their hand) and the
+    /// contact frame's `origin` \[m\] it starts from; otherwise none.
+    fn update_back_off(&mut self, phase: CollabPhase, origin: Vector3<f64>) {
         self.back_off = match phase {
             CollabPhase::BackOff => Some(self.back_off.unwrap_or_else(|| {
                 // the force the person applies points away from them
@@ -702,12 +751,6 @@ impl Collaboration {
             })),
             _ => None,
         };
-        if was && !self.machine.active() {
-            self.rearm = Some(None);
-            self.forget_hand();
-        }
-        self.update_rearm(t, residual);
-        phase
     }
 
     /// `h` \[m\] (base frame) in the robot part's link frame (`pose`: that
@@ -1014,7 +1057,6 @@ impl Collaboration {
     /// The end effector's Cartesian reference in the phase (`ee`: the
     /// measured end effector \[m\], `dt` \[s\], `speed_scale` of the safety judgement).
     pub fn reference(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> CartesianRef {
-        let c = &self.cfg;
         // the end effector's point relative to the collaborative robot point
         // (aiming the wrist instead when the hand is nearer it reached a hand
         // held out to the wrist, but pressed the wrist into a hand the end
@@ -1049,82 +1091,10 @@ impl Collaboration {
                 }
             }
             CollabPhase::Approach | CollabPhase::Follow => {
-                if let Some(h) = self.hand {
-                    let to = h - self.robot_point;
-                    if to.norm() > 1e-6 {
-                        let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
-                        let target = h - to.normalize() * reach + offset;
-                        let near = (gap.max(0.0) / c.slow_down_m).min(1.0);
-                        // within `slow_down_m`, the hand's own speed toward
-                        // the robot point is taken from the robot's, which
-                        // backs away from a hand coming faster, so that they
-                        // meet at `contact_speed` relative; the safety
-                        // judgement's scale slows the approach, never the
-                        // backing away
-                        let closing = -self.hand_velocity.dot(&(to / to.norm()));
-                        let closing = match closing > CLOSING_MIN && self.near_gap < c.slow_down_m {
-                            true => closing,
-                            false => 0.0,
-                        };
-                        let speed =
-                            c.contact_speed + (c.approach_speed - c.contact_speed) * near - closing;
-                        let speed = match speed >= 0.0 {
-                            true => {
-                                speed.min(c.approach_speed).min(self.hand_speed_limit)
-                                    * speed_scale.clamp(0.0, 1.0)
-                            }
-                            false => speed.max(-c.approach_speed.max(closing)),
-                        };
-                        let delta = target - self.x_d;
-                        let d = delta.norm();
-                        if d > 1e-9 {
-                            velocity = delta / d * speed;
-                            self.x_d += delta / d * (speed * dt).min(d);
-                        }
-                    }
-                }
+                velocity = self.toward_hand(offset, gap, dt, speed_scale);
             }
-            CollabPhase::Contact => {
-                // admittance: yield along the force the person applies,
-                // keep pressing the hand with `contact_hold_n`
-                if let Some(e) = self.estimate.as_ref().filter(|e| e.observable[0]) {
-                    // against the force where it is felt (its direction is the
-                    // contact's normal), toward the hand seen in depth before
-                    let f = e.forces[0];
-                    let to = match f.norm() >= 0.5 * c.contact_force_n {
-                        true => -f,
-                        false => self
-                            .hand
-                            .map_or(Vector3::zeros(), |h| h - self.contact_axis),
-                    };
-                    let hold = match to.norm() > 1e-6 {
-                        true => to / to.norm() * c.contact_hold_n,
-                        false => Vector3::zeros(),
-                    };
-                    // F̂ is where the hand is (the robot part or the wrist):
-                    // the end effector's translation moves either alike
-                    velocity = (e.forces[0] + hold) * c.admittance;
-                    let v = velocity.norm();
-                    if v > c.approach_speed {
-                        velocity *= c.approach_speed / v;
-                    }
-                    self.x_d += velocity * dt;
-                }
-            }
-            CollabPhase::BackOff => {
-                // away along the force, `back_off_m`, at the approach speed
-                if let Some(b) = self.back_off.as_mut() {
-                    let from = *b.ee.get_or_insert(ee);
-                    let target = from + b.dir * c.back_off_m;
-                    let delta = target - self.x_d;
-                    let d = delta.norm();
-                    let speed = c.approach_speed * speed_scale.clamp(0.0, 1.0);
-                    if d > 1e-9 {
-                        velocity = delta / d * speed;
-                        self.x_d += delta / d * (speed * dt).min(d);
-                    }
-                }
-            }
+            CollabPhase::Contact => velocity = self.admittance(dt),
+            CollabPhase::BackOff => velocity = self.backing_off(ee, dt, speed_scale),
             CollabPhase::Idle => self.x_d = ee,
         }
         // following, near the hand the lead shrinks with the gap: a
@@ -1136,7 +1106,7 @@ impl Collaboration {
         // the end effector through the body points' repulsion to the touch
         let max_lead = match phase {
             CollabPhase::Follow => {
-                let near = (gap.max(0.0) / c.slow_down_m).min(1.0);
+                let near = (gap.max(0.0) / self.cfg.slow_down_m).min(1.0);
                 MIN_NEAR_LEAD_M + (MAX_LEAD_M - MIN_NEAR_LEAD_M) * near
             }
             _ => MAX_LEAD_M,
@@ -1162,6 +1132,109 @@ impl Collaboration {
                 false => f64::INFINITY,
             },
         }
+    }
+
+    /// Approaching or following: the reference toward the hand, a reach
+    /// short of it (`offset`: the end effector from the robot point \[m\]), at
+    /// the approach speed far off and `contact_speed` relative to the hand
+    /// within `slow_down_m` of `gap` \[m\]; its velocity \[m/s\].
+    fn toward_hand(
+        &mut self,
+        offset: Vector3<f64>,
+        gap: f64,
+        dt: f64,
+        speed_scale: f64,
+    ) -> Vector3<f64> {
+        let c = &self.cfg;
+        let mut velocity = Vector3::zeros();
+        if let Some(h) = self.hand {
+            let to = h - self.robot_point;
+            if to.norm() > 1e-6 {
+                let reach = c.robot_radius_m + c.hand_radius_m - c.reach_into_m;
+                let target = h - to.normalize() * reach + offset;
+                let near = (gap.max(0.0) / c.slow_down_m).min(1.0);
+                // within `slow_down_m`, the hand's own speed toward
+                // the robot point is taken from the robot's, which
+                // backs away from a hand coming faster, so that they
+                // meet at `contact_speed` relative; the safety
+                // judgement's scale slows the approach, never the
+                // backing away
+                let closing = -self.hand_velocity.dot(&(to / to.norm()));
+                let closing = match closing > CLOSING_MIN && self.near_gap < c.slow_down_m {
+                    true => closing,
+                    false => 0.0,
+                };
+                let speed = c.contact_speed + (c.approach_speed - c.contact_speed) * near - closing;
+                let speed = match speed >= 0.0 {
+                    true => {
+                        speed.min(c.approach_speed).min(self.hand_speed_limit)
+                            * speed_scale.clamp(0.0, 1.0)
+                    }
+                    false => speed.max(-c.approach_speed.max(closing)),
+                };
+                let delta = target - self.x_d;
+                let d = delta.norm();
+                if d > 1e-9 {
+                    velocity = delta / d * speed;
+                    self.x_d += delta / d * (speed * dt).min(d);
+                }
+            }
+        }
+        velocity
+    }
+
+    /// In contact, the admittance: yield along the force the person
+    /// applies, keep pressing the hand with `contact_hold_n`; its velocity
+    /// \[m/s\] (none without an observable force).
+    fn admittance(&mut self, dt: f64) -> Vector3<f64> {
+        let c = &self.cfg;
+        let mut velocity = Vector3::zeros();
+        // admittance: yield along the force the person applies,
+        // keep pressing the hand with `contact_hold_n`
+        if let Some(e) = self.estimate.as_ref().filter(|e| e.observable[0]) {
+            // against the force where it is felt (its direction is the
+            // contact's normal), toward the hand seen in depth before
+            let f = e.forces[0];
+            let to = match f.norm() >= 0.5 * c.contact_force_n {
+                true => -f,
+                false => self
+                    .hand
+                    .map_or(Vector3::zeros(), |h| h - self.contact_axis),
+            };
+            let hold = match to.norm() > 1e-6 {
+                true => to / to.norm() * c.contact_hold_n,
+                false => Vector3::zeros(),
+            };
+            // F̂ is where the hand is (the robot part or the wrist):
+            // the end effector's translation moves either alike
+            velocity = (e.forces[0] + hold) * c.admittance;
+            let v = velocity.norm();
+            if v > c.approach_speed {
+                velocity *= c.approach_speed / v;
+            }
+            self.x_d += velocity * dt;
+        }
+        velocity
+    }
+
+    /// Backing off: away along the force, `back_off_m` from where the end
+    /// effector `ee` \[m\] was, at the approach speed; its velocity \[m/s\].
+    fn backing_off(&mut self, ee: Vector3<f64>, dt: f64, speed_scale: f64) -> Vector3<f64> {
+        let c = &self.cfg;
+        let mut velocity = Vector3::zeros();
+        // away along the force, `back_off_m`, at the approach speed
+        if let Some(b) = self.back_off.as_mut() {
+            let from = *b.ee.get_or_insert(ee);
+            let target = from + b.dir * c.back_off_m;
+            let delta = target - self.x_d;
+            let d = delta.norm();
+            let speed = c.approach_speed * speed_scale.clamp(0.0, 1.0);
+            if d > 1e-9 {
+                velocity = delta / d * speed;
+                self.x_d += delta / d * (speed * dt).min(d);
+            }
+        }
+        velocity
     }
 
     /// The wrist centre \[m\], base frame: the origin of `wrist_link`.
