@@ -37,6 +37,9 @@ pub struct Supervised {
     pub started_ns: u64,
     /// its heartbeat was heard since its last (re)start
     pub heard_since_start: bool,
+    /// the supervisor killed it as frozen since its last (re)start: its
+    /// exit is that verdict's, not a start that failed
+    pub killed_frozen: bool,
     /// when it exited, over the last `crash_loop_window_s` [ns]
     exits_ns: Vec<u64>,
 }
@@ -95,6 +98,7 @@ impl Roster {
                 missed: false,
                 started_ns: 0,
                 heard_since_start: false,
+                killed_frozen: false,
                 exits_ns: Vec::new(),
             })
             .collect();
@@ -174,6 +178,12 @@ impl Roster {
         s.last_heartbeat_ns = now_ns;
         s.missed = false;
         s.heard_since_start = false;
+        s.killed_frozen = false;
+    }
+
+    /// Service `index` is being killed as frozen.
+    pub fn killing_frozen(&mut self, index: usize) {
+        self.services[index].killed_frozen = true;
     }
 
     /// The index of service `name`.

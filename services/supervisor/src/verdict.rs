@@ -31,7 +31,8 @@ pub enum ExitVerdict {
 }
 
 /// Service `index` of `roster` ended at `now_ns` as `detail` says (its exit
-/// status in words); `starting`: the cell's start-up is not over;
+/// status in words); `starting`: the cell's start-up is not over (an exit
+/// then fails the start, unless the supervisor killed it as frozen);
 /// `deadman_s` and `crash_window_s` name the settings in the reasons.
 pub fn on_exit(
     roster: &mut Roster,
@@ -53,7 +54,10 @@ pub fn on_exit(
             sup.deadman_s
         )));
     }
-    if starting {
+    // killed frozen (starved on a loaded machine, or hung) in the
+    // start-up's window: restarted like any frozen service, not a start
+    // that failed (a service that ends by itself then is one)
+    if starting && !roster.get(index).killed_frozen {
         return ExitVerdict::StartFailed(format!("{name} {detail} during start-up"));
     }
     let at = roster.exited(index, now_ns);

@@ -52,6 +52,7 @@ impl Supervision {
             };
             if !killed.contains(&victim) {
                 killed.push(victim);
+                self.roster.killing_frozen(victim);
                 out.push(Action::Kill(victim));
             }
         }

@@ -331,6 +331,39 @@ fn an_exit_during_the_start_up_fails_the_start() {
 }
 
 #[test]
+fn a_service_killed_frozen_within_the_start_up_is_restarted_not_a_failed_start() {
+    // a start-up window longer than a service's grace (a slow last
+    // service on a loaded machine): control, silent past its grace in it,
+    // is killed as frozen; its exit is that verdict's, and it is restarted
+    let mut setup = setup();
+    setup.sup.startup_s = 10.0;
+    let mut c = Cell::new(setup);
+    c.start(S);
+    let t = 4 * S;
+    c.rounds(S, t, &[]);
+    let out = c.rounds(t, t + S, &[1]);
+    assert_eq!(kills(&out).first(), Some(&1), "{out:?}");
+    let now = t + S;
+    c.beat(now, &[1]);
+    let exit = c.round(now, &[Event::Gone(1)], &[(1, "killed by signal 9")]);
+    assert!(c.sup.running(now), "{:?}", c.sup.ending());
+    assert_eq!(records(&exit), [("exit", "control")]);
+    assert!(
+        warns(&exit)
+            .iter()
+            .any(|w| w.starts_with("control killed by signal 9; restarting in")),
+        "{exit:?}"
+    );
+    // an exit of its own in the window still fails the start
+    let later = now + 10 * MS;
+    c.round(later, &[Event::Gone(0)], &[(0, "exit status 2")]);
+    assert_eq!(
+        c.sup.ending(),
+        Ending::StartFailed("sim exit status 2 during start-up".into())
+    );
+}
+
+#[test]
 fn a_crash_is_restarted_after_its_back_off() {
     let mut c = running();
     let min_ms = c.sup.roster().config().restart_backoff_min_ms;
