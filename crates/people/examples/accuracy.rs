@@ -332,7 +332,6 @@ fn main() {
     let mut out = [Person::default(); MAX_PEOPLE];
     let mut depth = vec![0u16; K.pixel_count()];
     let mut rng = SmallRng::seed_from_u64(0xACC0);
-
     let yaws = [
         ("facing", FACING_CAMERA),
         ("+30°", FACING_CAMERA + 30f64.to_radians()),
@@ -376,58 +375,42 @@ fn main() {
                     let zbuf = r.exact_depth();
                     let truth_cam: Vec<Point3<f64>> =
                         body.joints.iter().map(|p| pose.to_camera(p)).collect();
-                    for (ji, js) in joints.iter_mut().enumerate() {
-                        let vis = visible(&pose, zbuf, &body.joints[ji], body.radii[ji]);
-                        let rep = m
-                            .filter(|&i| out[i].confidence[ji] > 0.0)
-                            .map(|i| out[i].joints[ji]);
-                        if !vis {
-                            if m.is_some() {
-                                js.hidden += 1;
-                                js.hidden_reported += usize::from(rep.is_some());
-                            }
-                            continue;
-                        }
-                        js.visible += 1;
-                        if ji == Joint::LeftHand as usize || ji == Joint::RightHand as usize {
-                            by_arms[ai].visible += 1;
-                        }
-                        let Some(rep) = rep else { continue };
-                        js.reported += 1;
-                        let e = dist(rep, &truth_cam[ji]);
-                        js.errors.push(e);
-                        let ray = truth_cam[ji].coords.normalize();
-                        let along = (Vector3::from(rep) - truth_cam[ji].coords).dot(&ray);
-                        js.along_ray.push(along);
-                        js.up
-                            .push(pose.to_base(&Point3::from(rep)).z - body.joints[ji].z);
-                        if ji == Joint::Head as usize {
-                            ds.head.push(e);
-                        }
-                        let other = if ji == Joint::LeftHand as usize {
-                            Some(Joint::RightHand as usize)
-                        } else if ji == Joint::RightHand as usize {
-                            Some(Joint::LeftHand as usize)
-                        } else {
-                            None
-                        };
-                        if let Some(o) = other {
-                            ds.hands.push(e);
-                            let pa = &mut by_arms[ai];
-                            pa.reported += 1;
-                            pa.errors.push(e);
-                            let apart = (truth_cam[ji] - truth_cam[o]).norm();
-                            if apart > 0.15 && dist(rep, &truth_cam[o]) < e {
-                                js.swaps += 1;
-                                pa.swaps += 1;
-                            }
-                        }
-                    }
+                    let case = Case {
+                        body: &body,
+                        truth_cam: &truth_cam,
+                        zbuf,
+                        pose: &pose,
+                        out: &out,
+                        matched: m,
+                    };
+                    account_joints(&case, &mut joints, ds, &mut by_arms[ai]);
                 }
             }
         }
     }
 
+    print_one_person(&yaws, &arms, &mut joints, &mut by_arms, &mut by_distance);
+    let mut scene = Scene {
+        pose,
+        r,
+        t,
+        out,
+        depth,
+        seed,
+    };
+    empty_rooms(&mut scene);
+    two_people(&mut scene);
+}
+
+/// The one-person study's tables: per joint, hands per arm pose, per
+/// distance (`yaws` and `arms`: the cases' turns and arm poses).
+fn print_one_person(
+    yaws: &[(&str, f64)],
+    arms: &[(Arm, Arm)],
+    joints: &mut [JointStats],
+    by_arms: &mut [JointStats],
+    by_distance: &mut [DistanceStats],
+) {
     let cases = DISTANCES.len() * yaws.len() * arms.len();
     println!(
         "## Per joint ({cases} cases × {FRAMES} frames: distances {DISTANCES:?} m, yaw 0/±30°, {} arm poses)\n",
@@ -494,8 +477,106 @@ fn main() {
             ds.frames_with_false,
         );
     }
+}
 
-    // empty rooms
+/// The renderer, the tracker and their buffers, shared by the studies.
+struct Scene {
+    pose: CameraPose,
+    r: Renderer,
+    t: Tracker,
+    out: [Person; MAX_PEOPLE],
+    depth: Vec<u16>,
+    /// the renderer's noise seed, one per frame
+    seed: u64,
+}
+
+/// One frame of one person: the truth, what the tracker reported, the
+/// exact depth (for visibility).
+struct Case<'a> {
+    body: &'a Body,
+    /// the truth's joints, camera frame \[m\]
+    truth_cam: &'a [Point3<f64>],
+    zbuf: &'a [f64],
+    pose: &'a CameraPose,
+    out: &'a [Person],
+    /// the reported person matched to the body
+    matched: Option<usize>,
+}
+
+/// Every joint of a frame into the per-joint, per-distance and per-arm-pose
+/// statistics: visible or hidden, reported or not, its error, L/R swaps.
+fn account_joints(
+    case: &Case<'_>,
+    joints: &mut [JointStats],
+    ds: &mut DistanceStats,
+    pa: &mut JointStats,
+) {
+    let Case {
+        body,
+        truth_cam,
+        zbuf,
+        pose,
+        out,
+        matched: m,
+    } = *case;
+    for (ji, js) in joints.iter_mut().enumerate() {
+        let vis = visible(&pose, zbuf, &body.joints[ji], body.radii[ji]);
+        let rep = m
+            .filter(|&i| out[i].confidence[ji] > 0.0)
+            .map(|i| out[i].joints[ji]);
+        if !vis {
+            if m.is_some() {
+                js.hidden += 1;
+                js.hidden_reported += usize::from(rep.is_some());
+            }
+            continue;
+        }
+        js.visible += 1;
+        if ji == Joint::LeftHand as usize || ji == Joint::RightHand as usize {
+            pa.visible += 1;
+        }
+        let Some(rep) = rep else { continue };
+        js.reported += 1;
+        let e = dist(rep, &truth_cam[ji]);
+        js.errors.push(e);
+        let ray = truth_cam[ji].coords.normalize();
+        let along = (Vector3::from(rep) - truth_cam[ji].coords).dot(&ray);
+        js.along_ray.push(along);
+        js.up
+            .push(pose.to_base(&Point3::from(rep)).z - body.joints[ji].z);
+        if ji == Joint::Head as usize {
+            ds.head.push(e);
+        }
+        let other = if ji == Joint::LeftHand as usize {
+            Some(Joint::RightHand as usize)
+        } else if ji == Joint::RightHand as usize {
+            Some(Joint::LeftHand as usize)
+        } else {
+            None
+        };
+        if let Some(o) = other {
+            ds.hands.push(e);
+            pa.reported += 1;
+            pa.errors.push(e);
+            let apart = (truth_cam[ji] - truth_cam[o]).norm();
+            if apart > 0.15 && dist(rep, &truth_cam[o]) < e {
+                js.swaps += 1;
+                pa.swaps += 1;
+            }
+        }
+    }
+}
+
+/// Empty rooms: people reported where there is none.
+fn empty_rooms(scene: &mut Scene) {
+    let Scene {
+        r,
+        t,
+        out,
+        depth,
+        seed,
+        ..
+    } = scene;
     println!();
     let table = [Aabb::new(
         Point3::new(2.0, -0.5, 0.0),
@@ -506,10 +587,10 @@ fn main() {
         let (mut frames_with, mut people) = (0, 0);
         let frames = 30;
         for _ in 0..frames {
-            seed += 1;
-            r.reseed(seed);
-            r.render(&[], boxes, Some(0.0), &mut depth).unwrap();
-            let n = t.step(&depth, DT, &mut out).unwrap();
+            *seed += 1;
+            r.reseed(*seed);
+            r.render(&[], boxes, Some(0.0), depth).unwrap();
+            let n = t.step(&depth, DT, out).unwrap();
             frames_with += usize::from(n > 0);
             people += n;
         }
@@ -517,8 +598,19 @@ fn main() {
             "Empty scene, {name}: {people} people reported; {frames_with} of {frames} frames reported someone."
         );
     }
+}
 
-    // two people: one walks across at 1 m/s (sideways to the camera), one stands still
+/// Two people: one walks across behind or in front of one standing still.
+fn two_people(scene: &mut Scene) {
+    let Scene {
+        pose,
+        r,
+        t,
+        out,
+        depth,
+        seed,
+    } = scene;
+    let pose = *pose;
     println!("\n## Two people (walker at 1 m/s across y = +1.6 … −1.6 m, 97 frames)\n");
     println!("| case | person | frames in view | detected (%) | ids | id switches | head median [cm] | false people |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|");
@@ -547,10 +639,10 @@ fn main() {
                 .chain(&walker.capsules)
                 .copied()
                 .collect();
-            seed += 1;
-            r.reseed(seed);
-            r.render(&caps, &[], Some(0.0), &mut depth).unwrap();
-            let n = t.step(&depth, DT, &mut out).unwrap();
+            *seed += 1;
+            r.reseed(*seed);
+            r.render(&caps, &[], Some(0.0), depth).unwrap();
+            let n = t.step(&depth, DT, out).unwrap();
             let bodies = [&still, &walker];
             let m = matches(&out[..n], &pose, &bodies);
             false_people += n - m.iter().flatten().count();

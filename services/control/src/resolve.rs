@@ -355,17 +355,12 @@ impl Resolver {
         let mut v_ee = Vector3::zeros();
         // the end effector's clearance to its obstacle [m] (∞: none seen)
         let mut ee_clearance = f64::INFINITY;
-        let alpha = if cfg.repulsion_filter_s > 0.0 {
-            1.0 - (-dt / cfg.repulsion_filter_s).exp()
-        } else {
-            1.0
+        // the repulsions' low-pass gain this period
+        let alpha = match cfg.repulsion_filter_s > 0.0 {
+            true => 1.0 - (-dt / cfg.repulsion_filter_s).exp(),
+            false => 1.0,
         };
-        let was_violating = self.ssm_was_violating;
-        let was_violating_standard = self.ssm_was_violating_standard;
-        self.ssm_period = SsmPeriod {
-            reaction_s: ssm.filter(|_| self.ssm.is_some()).unwrap_or(f64::NAN),
-            ..SsmPeriod::default()
-        };
+        let was_violating = self.begin_ssm_period(ssm);
         let period = &mut self.ssm_period;
         if let Some(v) = perception {
             if let Some(m) = self.ssm.as_mut() {
@@ -374,20 +369,7 @@ impl Resolver {
             let mut monitor = self.ssm.as_mut().zip(ssm);
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
-                let was_behind = self.behind_before.get(k).copied().unwrap_or(false);
-                let margin = match c.collab_touching {
-                    true => BEHIND_MARGIN_CONTACT_M,
-                    false => BEHIND_MARGIN_M,
-                };
-                let behind_the_hand = (k == 0 || k == c.collab_point)
-                    && c.collab_hand
-                        .is_some_and(|h| still_behind(&h, p, margin, was_behind));
-                if let Some(b) = self.behind_before.get_mut(k) {
-                    *b = behind_the_hand && p.active != 0;
-                }
-                // touching, what lies at the hand is the hand (for every point)
-                let behind_the_hand = behind_the_hand
-                    || (c.collab_touching && c.collab_hand.is_some_and(|h| at_the_hand(&h, p)));
+                let behind_the_hand = masked_by_hand(c, k, p, &mut self.behind_before);
                 let target = if p.active == 0 || behind_the_hand {
                     Vector3::zeros()
                 } else {
@@ -398,55 +380,34 @@ impl Resolver {
                 }
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
-                // approaching its obstacle inside S_p this period
-                let mut inside = false;
-                let mut inside_standard = false;
-                if let Some((m, t_r)) = monitor.as_mut().filter(|_| p.active != 0) {
-                    let t_r = *t_r;
-                    let allowed = m.allowed_speed(k, p.min_distance, t_r);
-                    period.human_speed_m_s =
-                        period.human_speed_m_s.max(m.human_speed(k, p.min_distance));
-                    let away = away_from_obstacle(p);
-                    if allowed < SSM_UNBOUNDED_M_S && away != Vector3::zeros() {
-                        let jac = match k {
-                            0 => Ok(&self.jac_ee),
-                            _ => phri_model::point_jacobian(
-                                model,
-                                data,
-                                frame,
-                                &xyz,
-                                &mut self.jac_point,
-                            )
-                            .map(|_| &self.jac_point),
-                        };
-                        match jac {
-                            Ok(j) => {
-                                // the point's speed toward its obstacle at last period's reference
-                                let v_r = -along(j, &away, &reference.qd_ref);
-                                let margin =
-                                    p.min_distance - m.separation(k, p.min_distance, v_r, t_r);
-                                period.min_margin_m = period.min_margin_m.min(margin);
-                                let moving = v_r > SSM_MOVING_M_S;
-                                inside = moving && margin < 0.0;
-                                let standard = m.separation_standard(p.min_distance, v_r, t_r);
-                                inside_standard = moving && p.min_distance < standard;
-                                period.stopping |= moving && allowed <= 0.0;
-                                match self.avoidance.limit_approach(j, &away, allowed) {
-                                    Ok(f) => period.limiting |= f > 0.0,
-                                    Err(_) => faults.avoidance += 1,
-                                }
+                let bound = monitor
+                    .as_mut()
+                    .filter(|_| p.active != 0)
+                    .and_then(|(m, t_r)| {
+                        approach_bound(m, k, p, *t_r, period).map(|b| (m, *t_r, b))
+                    });
+                let (inside, inside_standard) = match bound {
+                    None => (false, false),
+                    Some((m, t_r, bound)) => {
+                        let jacs = (&self.jac_ee, &mut self.jac_point);
+                        match point_jac((model, data), (k, frame, xyz), jacs) {
+                            Some(j) => {
+                                let qd_ref = &reference.qd_ref;
+                                let a = Approach { k, p, t_r, qd_ref };
+                                let limits = (&mut self.avoidance, &mut *period, &mut faults);
+                                separate(m, &a, j, bound, limits)
                             }
-                            Err(_) => faults.model += 1,
+                            None => {
+                                faults.model += 1;
+                                (false, false)
+                            }
                         }
                     }
-                }
+                };
                 // a violation: approaching inside S_p for longer than the
                 // stop takes (S_p grants it T_s)
                 if let Some((m, _)) = monitor.as_mut() {
-                    let for_s = m.approaching_inside(k, inside, dt);
-                    period.violating |= for_s > m.config().stop_time_s;
-                    let for_s = m.approaching_inside_standard(k, inside_standard, dt);
-                    period.violating_standard |= for_s > m.config().stop_time_s;
+                    time_inside(m, k, (inside, inside_standard), dt, period);
                 }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
                     break;
@@ -458,15 +419,32 @@ impl Resolver {
                 }
                 if k == 0 {
                     v_ee = v_call;
-                } else if phri_model::point_jacobian(model, data, frame, &xyz, &mut self.jac_point)
-                    .is_err()
-                {
-                    faults.model += 1;
-                } else if self.avoidance.add_point(&self.jac_point, v_call).is_err() {
-                    faults.avoidance += 1;
+                } else {
+                    let into = (&mut self.jac_point, &mut self.avoidance);
+                    add_body_point((model, data), (frame, xyz), v_call, into, &mut faults);
                 }
             }
         }
+        self.count_ssm_period(was_violating);
+        faults.avoidance += self.resolve_task(reference, c, cfg, (x, v_ee, ee_clearance), dt);
+        faults
+    }
+
+    /// A new period of speed and separation monitoring (`ssm`: the
+    /// results' age \[s\] when it applies); whether the period before was a
+    /// violation (phri's, the standard's).
+    fn begin_ssm_period(&mut self, ssm: Option<f64>) -> (bool, bool) {
+        self.ssm_period = SsmPeriod {
+            reaction_s: ssm.filter(|_| self.ssm.is_some()).unwrap_or(f64::NAN),
+            ..SsmPeriod::default()
+        };
+        (self.ssm_was_violating, self.ssm_was_violating_standard)
+    }
+
+    /// The period's speed and separation monitoring into the run's
+    /// counters (`was_violating`…: the period before's, so that a
+    /// violation counts once).
+    fn count_ssm_period(&mut self, (was_violating, was_violating_standard): (bool, bool)) {
         let period = self.ssm_period;
         self.ssm_counters.limited_periods += u64::from(period.limiting);
         self.ssm_counters.violation_periods += u64::from(period.violating);
@@ -475,6 +453,24 @@ impl Resolver {
         self.ssm_counters.violations_standard +=
             u64::from(period.violating_standard && !was_violating_standard);
         self.ssm_was_violating_standard = period.violating_standard;
+    }
+
+    /// The task resolved under the avoidance's bounds (SNS): the end
+    /// effector's task velocity (the path's, with position feedback capped
+    /// toward its obstacle and toward the collaborative hand) plus its
+    /// repulsion `v_ee` \[m/s\], at `x` \[m\] with `ee_clearance` \[m\] to its
+    /// obstacle; `qd_ref` slew-limited toward the solution, `q_ref`
+    /// integrated over `dt` \[s\]. The avoidance faults (1: SNS failed, the
+    /// reference braked).
+    fn resolve_task(
+        &mut self,
+        reference: &mut JointReference,
+        c: &CartesianRef,
+        cfg: &ControlConfig,
+        (x, v_ee, ee_clearance): (Vector3<f64>, Vector3<f64>, f64),
+        dt: f64,
+    ) -> u64 {
+        let mut failed = 0;
         // position feedback: toward the end effector's obstacle capped below
         // the repulsion's V_max; the task's elsewhere faster (to rejoin its
         // path), the collaboration's at the cautious cap everywhere (it
@@ -518,7 +514,7 @@ impl Resolver {
                 }
             }
             Err(_) => {
-                faults.avoidance += 1;
+                failed = 1;
                 self.task_scale = 0.0;
                 for r in reference.qd_ref.iter_mut() {
                     *r -= r.clamp(-dv, dv);
@@ -528,8 +524,142 @@ impl Resolver {
         for (q, v) in reference.q_ref.iter_mut().zip(&reference.qd_ref) {
             *q += v * dt;
         }
-        faults
+        failed
     }
+}
+
+/// Whether control point `k`'s obstacle (result `p`) is the collaborative
+/// hand of `c`: for the end effector and the collaboration's point, while
+/// it stays behind the hand (with hysteresis: `behind_before`); touching,
+/// for every point, what lies at the hand. Then the point repels nothing.
+fn masked_by_hand(
+    c: &CartesianRef,
+    k: usize,
+    p: &phri_ipc::PointRepulsion,
+    behind_before: &mut [bool],
+) -> bool {
+    let was_behind = behind_before.get(k).copied().unwrap_or(false);
+    let margin = match c.collab_touching {
+        true => BEHIND_MARGIN_CONTACT_M,
+        false => BEHIND_MARGIN_M,
+    };
+    let behind_the_hand = (k == 0 || k == c.collab_point)
+        && c.collab_hand
+            .is_some_and(|h| still_behind(&h, p, margin, was_behind));
+    if let Some(b) = behind_before.get_mut(k) {
+        *b = behind_the_hand && p.active != 0;
+    }
+    // touching, what lies at the hand is the hand (for every point)
+    behind_the_hand || (c.collab_touching && c.collab_hand.is_some_and(|h| at_the_hand(&h, p)))
+}
+
+/// A violation of the period: control point `k` approaching inside the
+/// protective separation (`inside`: phri's, the standard's) for longer
+/// than the stop takes (S_p grants it T_s) at this period of `dt` \[s\].
+fn time_inside(
+    m: &mut SsmMonitor,
+    k: usize,
+    (inside, inside_standard): (bool, bool),
+    dt: f64,
+    period: &mut SsmPeriod,
+) {
+    let for_s = m.approaching_inside(k, inside, dt);
+    period.violating |= for_s > m.config().stop_time_s;
+    let for_s = m.approaching_inside_standard(k, inside_standard, dt);
+    period.violating_standard |= for_s > m.config().stop_time_s;
+}
+
+/// Body point `xyz` \[m\] of link frame `frame` repelled at `v_call`
+/// \[m/s\]: its rows in the avoidance's joint velocity bounds (eq. 20),
+/// its Jacobian computed into `jac`; refusals counted in `faults`.
+fn add_body_point(
+    (model, data): (&Model, &mut Data),
+    (frame, xyz): (usize, Vector3<f64>),
+    v_call: Vector3<f64>,
+    (jac, avoidance): (&mut Matrix6xX<f64>, &mut Avoidance),
+    faults: &mut Faults,
+) {
+    if phri_model::point_jacobian(model, data, frame, &xyz, jac).is_err() {
+        faults.model += 1;
+    } else if avoidance.add_point(jac, v_call).is_err() {
+        faults.avoidance += 1;
+    }
+}
+
+/// Control point `k`'s Jacobian (at `xyz` \[m\] of link frame `frame`):
+/// the end effector's `jac_ee` for point 0, else computed into `jac_point`;
+/// none when the model refused it.
+fn point_jac<'j>(
+    (model, data): (&Model, &mut Data),
+    (k, frame, xyz): (usize, usize, Vector3<f64>),
+    (jac_ee, jac_point): (&'j Matrix6xX<f64>, &'j mut Matrix6xX<f64>),
+) -> Option<&'j Matrix6xX<f64>> {
+    match k {
+        0 => Some(jac_ee),
+        _ => match phri_model::point_jacobian(model, data, frame, &xyz, &mut *jac_point) {
+            Ok(_) => Some(jac_point),
+            Err(_) => None,
+        },
+    }
+}
+
+/// One control point's approach to its obstacle under speed and separation
+/// monitoring.
+struct Approach<'a> {
+    /// the point's index (0: the end effector)
+    k: usize,
+    /// its repulsion result: distance, direction, activity
+    p: &'a phri_ipc::PointRepulsion,
+    /// the results' age \[s\] (`T_r`: capture → this command)
+    t_r: f64,
+    /// the joint velocity reference of the last period \[rad/s\]
+    qd_ref: &'a [f64],
+}
+
+/// Speed and separation monitoring of control point `k` (repulsion
+/// result `p`, `t_r` \[s\] old): the human's speed into `period`; the
+/// speed the separation allows toward its obstacle \[m/s\] and the
+/// direction away from it, none when nothing bounds it.
+fn approach_bound(
+    m: &mut SsmMonitor,
+    k: usize,
+    p: &phri_ipc::PointRepulsion,
+    t_r: f64,
+    period: &mut SsmPeriod,
+) -> Option<(f64, Vector3<f64>)> {
+    let allowed = m.allowed_speed(k, p.min_distance, t_r);
+    period.human_speed_m_s = period.human_speed_m_s.max(m.human_speed(k, p.min_distance));
+    let away = away_from_obstacle(p);
+    (allowed < SSM_UNBOUNDED_M_S && away != Vector3::zeros()).then_some((allowed, away))
+}
+
+/// The approach of a bounded control point (`j`: its Jacobian, `allowed`
+/// \[m/s\] toward its obstacle, `away` from it) limited in the avoidance to
+/// what the separation allows, the period's margin and flags into
+/// `period`; whether it approaches inside the protective separation
+/// (phri's, and the standard's).
+fn separate(
+    m: &mut SsmMonitor,
+    a: &Approach<'_>,
+    j: &Matrix6xX<f64>,
+    (allowed, away): (f64, Vector3<f64>),
+    (avoidance, period, faults): (&mut Avoidance, &mut SsmPeriod, &mut Faults),
+) -> (bool, bool) {
+    let (k, p, t_r) = (a.k, a.p, a.t_r);
+    // the point's speed toward its obstacle at last period's reference
+    let v_r = -along(j, &away, a.qd_ref);
+    let margin = p.min_distance - m.separation(k, p.min_distance, v_r, t_r);
+    period.min_margin_m = period.min_margin_m.min(margin);
+    let moving = v_r > SSM_MOVING_M_S;
+    let inside = moving && margin < 0.0;
+    let standard = m.separation_standard(p.min_distance, v_r, t_r);
+    let inside_standard = moving && p.min_distance < standard;
+    period.stopping |= moving && allowed <= 0.0;
+    match avoidance.limit_approach(j, &away, allowed) {
+        Ok(f) => period.limiting |= f > 0.0,
+        Err(_) => faults.avoidance += 1,
+    }
+    (inside, inside_standard)
 }
 
 /// Power and force limiting: the end effector's velocity `task + v_ee`

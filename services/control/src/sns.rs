@@ -353,6 +353,58 @@ impl SnsSolver {
         damping: f64,
     ) -> Result<SnsResult<'_>, SnsError> {
         let n = self.n;
+        self.check_inputs(m, qd_min, qd_max, damping)?;
+        let lambda2 = damping * damping;
+        // scale of J for the relative rank test: the largest squared row norm
+        let jscale = (0..m)
+            .map(|r| {
+                self.j[r * n..(r + 1) * n]
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f64>()
+            })
+            .fold(0.0f64, f64::max);
+
+        // phase 1: greedy SNS
+        let greedy = self.greedy(m, qd_min, qd_max, lambda2, jscale);
+        let best = greedy.best;
+        let mut iterations = greedy.iterations;
+        let rank_limited = greedy.rank_limited;
+        let mut answer = if greedy.feasible {
+            Answer::Full(greedy.free)
+        } else {
+            Answer::Best
+        };
+        // phase 2: the linear programme, when the greedy scale may be improved
+        if !greedy.feasible && best.s < 1.0 {
+            let (vertex, pivots) = self.linear_programme(m, qd_min, qd_max, lambda2, &best);
+            iterations += pivots;
+            if let Some(s) = vertex {
+                answer = Answer::Vertex(s);
+            }
+        }
+        let (scale, saturated) = self.take_answer(answer, &best, qd_min, qd_max);
+        let clamp_correction = self.clamp_inside(qd_min, qd_max);
+        Ok(SnsResult {
+            qd: &self.qd,
+            scale,
+            saturated,
+            iterations,
+            rank_limited,
+            clamp_correction,
+        })
+    }
+
+    /// The task's Jacobian (its first `m` rows), the damping and the bounds
+    /// finite and consistent; each joint's tolerance of "inside" set.
+    fn check_inputs(
+        &mut self,
+        m: usize,
+        qd_min: &[f64],
+        qd_max: &[f64],
+        damping: f64,
+    ) -> Result<(), SnsError> {
+        let n = self.n;
         check_len("qd_min", n, qd_min.len())?;
         check_len("qd_max", n, qd_max.len())?;
         if self.j[..m * n].iter().any(|x| !x.is_finite()) {
@@ -377,71 +429,65 @@ impl SnsSolver {
                 .fold(0.0f64, |acc, x| acc.max(x.abs()));
             self.tol[k] = INSIDE_TOL * (1.0 + mag);
         }
-        let lambda2 = damping * damping;
-        // scale of J for the relative rank test: the largest squared row norm
-        let jscale = (0..m)
-            .map(|r| {
-                self.j[r * n..(r + 1) * n]
-                    .iter()
-                    .map(|x| x * x)
-                    .sum::<f64>()
-            })
-            .fold(0.0f64, f64::max);
+        Ok(())
+    }
 
-        let all: u32 = if n == 32 { u32::MAX } else { (1u32 << n) - 1 };
-
-        // phase 1: greedy SNS
-        let greedy = self.greedy(m, qd_min, qd_max, lambda2, jscale);
-        let best = greedy.best;
-        let mut iterations = greedy.iterations;
-        let rank_limited = greedy.rank_limited;
-        let mut answer = if greedy.feasible {
-            Answer::Full(greedy.free)
+    /// Phase 2: the linear programme's vertex, warm-started from the greedy
+    /// `best` without damping (`lambda2` = 0); its scale when it wins over
+    /// the greedy one, and the pivots it took.
+    fn linear_programme(
+        &mut self,
+        m: usize,
+        qd_min: &[f64],
+        qd_max: &[f64],
+        lambda2: f64,
+        best: &Best,
+    ) -> (Option<f64>, u32) {
+        let n = self.n;
+        // without damping the greedy solution is a feasible start
+        let start = if lambda2 == 0.0 && best.found {
+            for k in 0..n {
+                self.lp.z[k] = best.s * self.best_a[k] + self.best_b[k];
+            }
+            self.lp.z[n] = best.s;
+            LpStart::Warm
         } else {
-            Answer::Best
+            LpStart::Cold
         };
+        let lp = self
+            .lp
+            .solve(&self.j, &self.xd[..m], n, m, qd_min, qd_max, start);
+        let s = self.lp.z[n].clamp(0.0, 1.0);
+        // without damping the vertex is the optimum, computed with better
+        // conditioning than the greedy solution (an LU of the basis, not a
+        // Cholesky of the Gram matrix, whose round-off can put the greedy
+        // scale a little above the optimum): it wins. With damping the
+        // greedy solution meets the task only approximately, the vertex
+        // exactly: the larger scale wins.
+        let wins = if lambda2 == 0.0 {
+            lp.optimal || s >= best.s - SCALE_GAIN
+        } else {
+            s > best.s + SCALE_GAIN
+        };
+        let finite = self.lp.z[..n].iter().all(|v| v.is_finite());
+        let vertex = (lp.feasible && s > 0.0 && wins && finite).then_some(s);
+        (vertex, lp.pivots)
+    }
 
-        // phase 2: the linear programme, when the greedy scale may be improved
-        if !greedy.feasible && best.s < 1.0 {
-            // without damping the greedy solution is a feasible start
-            let start = if lambda2 == 0.0 && best.found {
-                for k in 0..n {
-                    self.lp.z[k] = best.s * self.best_a[k] + self.best_b[k];
-                }
-                self.lp.z[n] = best.s;
-                LpStart::Warm
-            } else {
-                LpStart::Cold
-            };
-            let lp = self
-                .lp
-                .solve(&self.j, &self.xd[..m], n, m, qd_min, qd_max, start);
-            iterations += lp.pivots;
-            let s = self.lp.z[n].clamp(0.0, 1.0);
-            // without damping the vertex is the optimum, computed with better
-            // conditioning than the greedy solution (an LU of the basis, not a
-            // Cholesky of the Gram matrix, whose round-off can put the greedy
-            // scale a little above the optimum): it wins. With damping the
-            // greedy solution meets the task only approximately, the vertex
-            // exactly: the larger scale wins.
-            let wins = if lambda2 == 0.0 {
-                lp.optimal || s >= best.s - SCALE_GAIN
-            } else {
-                s > best.s + SCALE_GAIN
-            };
-            let finite = self.lp.z[..n].iter().all(|v| v.is_finite());
-            if lp.feasible && s > 0.0 && wins && finite {
-                answer = Answer::Vertex(s);
-            }
-        }
-
-        let (scale, saturated);
+    /// The answer's solution into `self.qd`: its scale and the joints held
+    /// at a bound (a bit per joint).
+    fn take_answer(
+        &mut self,
+        answer: Answer,
+        best: &Best,
+        qd_min: &[f64],
+        qd_max: &[f64],
+    ) -> (f64, u32) {
+        let n = self.n;
+        let all: u32 = if n == 32 { u32::MAX } else { (1u32 << n) - 1 };
         match answer {
-            Answer::Full(free) => {
-                // self.qd holds the solution that fits at scale 1
-                scale = 1.0;
-                saturated = all & !free;
-            }
+            // self.qd holds the solution that fits at scale 1
+            Answer::Full(free) => (1.0, all & !free),
             Answer::Vertex(s) => {
                 let mut held = 0u32;
                 for k in 0..n {
@@ -451,8 +497,7 @@ impl SnsSolver {
                         held |= 1 << k;
                     }
                 }
-                scale = s;
-                saturated = held;
+                (s, held)
             }
             Answer::Best if best.found => {
                 // q̇ = q̇_N* + (JW*)^# (s* ẋ − J q̇_N*) = s* a* + b*, evaluated from the
@@ -461,8 +506,7 @@ impl SnsSolver {
                 for k in 0..n {
                     self.qd[k] = best.s * self.best_a[k] + self.best_b[k];
                 }
-                scale = best.s;
-                saturated = all & !best.free;
+                (best.s, all & !best.free)
             }
             Answer::Best => {
                 // nothing better than standing still: the box point nearest to 0
@@ -473,14 +517,17 @@ impl SnsSolver {
                         held |= 1 << k;
                     }
                 }
-                scale = 0.0;
-                saturated = held;
+                (0.0, held)
             }
         }
+    }
 
-        // safety net: the solution is inside by construction, up to round-off
+    /// The safety net: `self.qd` clamped into the bounds (inside by
+    /// construction, up to round-off); the largest correction \[rad/s\]
+    /// (∞: a joint was not finite, and stands still within its bounds).
+    fn clamp_inside(&mut self, qd_min: &[f64], qd_max: &[f64]) -> f64 {
         let mut clamp_correction = 0.0f64;
-        for k in 0..n {
+        for k in 0..self.n {
             let v = self.qd[k];
             if v.is_finite() {
                 let c = v.clamp(qd_min[k], qd_max[k]);
@@ -491,14 +538,80 @@ impl SnsSolver {
                 clamp_correction = f64::INFINITY;
             }
         }
-        Ok(SnsResult {
-            qd: &self.qd,
-            scale,
-            saturated,
-            iterations,
-            rank_limited,
-            clamp_correction,
-        })
+        clamp_correction
+    }
+
+    /// One greedy iteration's solution with the joints of `free` (the
+    /// others held at `qd_n`): `a` = (JW)^# ẋ and `qd` = q̇_N + (JW)^# (ẋ − J q̇_N)
+    /// (from the factorisation of [`SnsSolver::factor`]).
+    fn solve_free(&mut self, m: usize, free: u32) {
+        let n = self.n;
+        // y1 = A⁻¹ ẋ, y2 = A⁻¹ (ẋ − J q̇_N)
+        for r in 0..m {
+            let row = &self.j[r * n..(r + 1) * n];
+            let jqn: f64 = row.iter().zip(&self.qd_n).map(|(x, y)| x * y).sum();
+            self.y1[r] = self.xd[r];
+            self.r[r] = self.xd[r] - jqn;
+        }
+        Self::chol_solve(&self.chol, m, &mut self.y1);
+        self.y2[..m].copy_from_slice(&self.r[..m]);
+        Self::chol_solve(&self.chol, m, &mut self.y2);
+        for k in 0..n {
+            if free & (1 << k) != 0 {
+                let (mut ak, mut ck) = (0.0, 0.0);
+                for r in 0..m {
+                    ak += self.j[r * n + k] * self.y1[r];
+                    ck += self.j[r * n + k] * self.y2[r];
+                }
+                self.a[k] = ak;
+                self.qd[k] = self.qd_n[k] + ck;
+            } else {
+                // the column of JW is zero: so is this row of (JW)^#
+                self.a[k] = 0.0;
+                self.qd[k] = self.qd_n[k];
+            }
+        }
+    }
+
+    /// The admissible interval of the task's scale s from every joint's
+    /// q̇min ≤ s a + b ≤ q̇max: its lower and upper ends, each with the joint
+    /// that sets it.
+    #[allow(clippy::type_complexity)]
+    fn admissible_scale(
+        &self,
+        qd_min: &[f64],
+        qd_max: &[f64],
+    ) -> ((f64, Option<usize>), (f64, Option<usize>)) {
+        let n = self.n;
+        let (mut s_hi, mut crit_hi) = (f64::INFINITY, None);
+        let (mut s_lo, mut crit_lo) = (f64::NEG_INFINITY, None);
+        for k in 0..n {
+            let (a, b) = (self.a[k], self.qd[k] - self.a[k]);
+            let (lo, hi) = if a.abs() <= self.tol[k] {
+                // over s ∈ [0, 1] the joint moves by less than the tolerance
+                if b >= qd_min[k] - self.tol[k] && b <= qd_max[k] + self.tol[k] {
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                } else {
+                    (f64::INFINITY, f64::NEG_INFINITY)
+                }
+            } else {
+                let (t_min, t_max) = ((qd_min[k] - b) / a, (qd_max[k] - b) / a);
+                if a > 0.0 {
+                    (t_min, t_max)
+                } else {
+                    (t_max, t_min)
+                }
+            };
+            if hi < s_hi {
+                s_hi = hi;
+                crit_hi = Some(k);
+            }
+            if lo > s_lo {
+                s_lo = lo;
+                crit_lo = Some(k);
+            }
+        }
+        ((s_lo, crit_lo), (s_hi, crit_hi))
     }
 
     /// The greedy SNS loop (steps 1-6 of the module doc). The best scaled
@@ -529,31 +642,7 @@ impl SnsSolver {
                 rank_limited = true;
                 break;
             }
-            // y1 = A⁻¹ ẋ, y2 = A⁻¹ (ẋ − J q̇_N)
-            for r in 0..m {
-                let row = &self.j[r * n..(r + 1) * n];
-                let jqn: f64 = row.iter().zip(&self.qd_n).map(|(x, y)| x * y).sum();
-                self.y1[r] = self.xd[r];
-                self.r[r] = self.xd[r] - jqn;
-            }
-            Self::chol_solve(&self.chol, m, &mut self.y1);
-            self.y2[..m].copy_from_slice(&self.r[..m]);
-            Self::chol_solve(&self.chol, m, &mut self.y2);
-            for k in 0..n {
-                if free & (1 << k) != 0 {
-                    let (mut ak, mut ck) = (0.0, 0.0);
-                    for r in 0..m {
-                        ak += self.j[r * n + k] * self.y1[r];
-                        ck += self.j[r * n + k] * self.y2[r];
-                    }
-                    self.a[k] = ak;
-                    self.qd[k] = self.qd_n[k] + ck;
-                } else {
-                    // the column of JW is zero: so is this row of (JW)^#
-                    self.a[k] = 0.0;
-                    self.qd[k] = self.qd_n[k];
-                }
-            }
+            self.solve_free(m, free);
             if (0..n).all(|k| {
                 self.qd[k] >= qd_min[k] - self.tol[k] && self.qd[k] <= qd_max[k] + self.tol[k]
             }) {
@@ -561,35 +650,7 @@ impl SnsSolver {
                 break;
             }
 
-            // admissible interval of s per joint from q̇min ≤ s a + b ≤ q̇max
-            let (mut s_hi, mut crit_hi) = (f64::INFINITY, None);
-            let (mut s_lo, mut crit_lo) = (f64::NEG_INFINITY, None);
-            for k in 0..n {
-                let (a, b) = (self.a[k], self.qd[k] - self.a[k]);
-                let (lo, hi) = if a.abs() <= self.tol[k] {
-                    // over s ∈ [0, 1] the joint moves by less than the tolerance
-                    if b >= qd_min[k] - self.tol[k] && b <= qd_max[k] + self.tol[k] {
-                        (f64::NEG_INFINITY, f64::INFINITY)
-                    } else {
-                        (f64::INFINITY, f64::NEG_INFINITY)
-                    }
-                } else {
-                    let (t_min, t_max) = ((qd_min[k] - b) / a, (qd_max[k] - b) / a);
-                    if a > 0.0 {
-                        (t_min, t_max)
-                    } else {
-                        (t_max, t_min)
-                    }
-                };
-                if hi < s_hi {
-                    s_hi = hi;
-                    crit_hi = Some(k);
-                }
-                if lo > s_lo {
-                    s_lo = lo;
-                    crit_lo = Some(k);
-                }
-            }
+            let ((s_lo, crit_lo), (s_hi, crit_hi)) = self.admissible_scale(qd_min, qd_max);
             let s_cap = s_hi.min(1.0);
             let scale = if s_hi >= 0.0 && s_lo <= s_cap {
                 s_cap
@@ -988,38 +1049,14 @@ impl Lp {
             }
             lu_solve_t(lu, perm, y, tmp);
             // pricing
-            let mut enter: Option<(usize, f64)> = None;
-            let mut enter_d = 0.0f64;
-            for v in 0..nv {
-                if pos[v] != NONBASIC || lo[v] >= hi[v] {
-                    continue;
-                }
-                let (mut aty, mut mag) = (0.0, 0.0);
-                for (c, yr) in a[v * m..(v + 1) * m].iter().zip(y.iter()) {
-                    let t = c * yr;
-                    aty += t;
-                    mag += t.abs();
-                }
-                let c = Self::cost(n, v, phase1);
-                let d = c - aty;
-                let tol = COST_TOL * (c.abs() + mag);
-                let dir = if d > tol && z[v] < hi[v] {
-                    1.0
-                } else if d < -tol && z[v] > lo[v] {
-                    -1.0
-                } else {
-                    continue;
-                };
-                if degenerate {
-                    // Bland: the smallest index
-                    if enter.is_none() {
-                        enter = Some((v, dir));
-                    }
-                } else if d.abs() > enter_d {
-                    enter_d = d.abs();
-                    enter = Some((v, dir));
-                }
-            }
+            let enter = price(
+                Columns { a, m, n },
+                y,
+                (&*z, &*lo, &*hi),
+                pos,
+                phase1,
+                degenerate,
+            );
             let Some((e, dir)) = enter else {
                 // optimal (phase 2), or no feasible point (phase 1)
                 return end(!phase1, !phase1, pivots);
@@ -1032,85 +1069,16 @@ impl Lp {
             // direction: B α = A_e; z_B moves by −dir t α
             alpha.copy_from_slice(&a[e * m..(e + 1) * m]);
             lu_solve(lu, perm, alpha, tmp);
-            let amax = alpha.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
-            let ptol = PIVOT_TOL * amax;
-            let flip = if dir > 0.0 {
-                hi[e] - z[e]
-            } else {
-                z[e] - lo[e]
+            let Some(step) = ratio_step(
+                e,
+                dir,
+                alpha,
+                (&mut *z, &*lo, &*hi),
+                (&mut *basis, &mut *pos),
+                degenerate,
+            ) else {
+                return end(!phase1, false, pivots);
             };
-            // Harris pass 1: the step with the bounds relaxed by a slack
-            let mut t_relaxed = f64::INFINITY;
-            for r in 0..m {
-                let delta = -dir * alpha[r];
-                if delta.abs() <= ptol {
-                    continue;
-                }
-                let b = basis[r];
-                let lim = if delta > 0.0 {
-                    (hi[b] + RATIO_SLACK * (1.0 + hi[b].abs()) - z[b]) / delta
-                } else {
-                    (lo[b] - RATIO_SLACK * (1.0 + lo[b].abs()) - z[b]) / delta
-                };
-                t_relaxed = t_relaxed.min(lim.max(0.0));
-            }
-            let step;
-            if flip <= t_relaxed {
-                // the entering variable reaches its other bound first
-                step = flip;
-                if step.is_infinite() {
-                    // unbounded ray: only round-off can produce it (s ≤ 1)
-                    return end(!phase1, false, pivots);
-                }
-                for r in 0..m {
-                    z[basis[r]] -= dir * step * alpha[r];
-                }
-                z[e] = if dir > 0.0 { hi[e] } else { lo[e] };
-            } else {
-                // Harris pass 2: among the blocking rows, the largest pivot
-                let (mut leave, mut best_abs, mut t) = (usize::MAX, 0.0f64, 0.0f64);
-                for r in 0..m {
-                    let delta = -dir * alpha[r];
-                    if delta.abs() <= ptol {
-                        continue;
-                    }
-                    let b = basis[r];
-                    let lim = if delta > 0.0 {
-                        (hi[b] - z[b]) / delta
-                    } else {
-                        (lo[b] - z[b]) / delta
-                    };
-                    let lim = lim.max(0.0);
-                    let better = if degenerate {
-                        // Bland: the smallest index among the ties
-                        leave == usize::MAX || lim < t || (lim == t && b < basis[leave])
-                    } else {
-                        delta.abs() > best_abs
-                    };
-                    if lim <= t_relaxed && better {
-                        leave = r;
-                        best_abs = delta.abs();
-                        t = lim;
-                    }
-                }
-                if leave == usize::MAX {
-                    return end(!phase1, false, pivots);
-                }
-                step = t;
-                for r in 0..m {
-                    z[basis[r]] -= dir * step * alpha[r];
-                }
-                z[e] += dir * step;
-                let b = basis[leave];
-                z[b] = if -dir * alpha[leave] > 0.0 {
-                    hi[b]
-                } else {
-                    lo[b]
-                };
-                pos[b] = NONBASIC;
-                basis[leave] = e;
-                pos[e] = leave;
-            }
             degenerate = step == 0.0;
         }
     }
@@ -1271,6 +1239,160 @@ fn gram(j: &[f64], n: usize, m: usize, free: u32, out: &mut [f64]) {
             out[c * m + r] = s;
         }
     }
+}
+
+/// The simplex's constraint columns: `n + 1 + m` variables of `m` entries.
+#[derive(Clone, Copy)]
+struct Columns<'a> {
+    a: &'a [f64],
+    m: usize,
+    n: usize,
+}
+
+/// Pricing: the non-basic variable to enter, and the way it moves (+1 up,
+/// −1 down), from the multipliers `y`: the largest reduced cost, or the
+/// smallest index after a degenerate step (Bland); none at the optimum.
+fn price(
+    cols: Columns<'_>,
+    y: &[f64],
+    (z, lo, hi): (&[f64], &[f64], &[f64]),
+    pos: &[usize],
+    phase1: bool,
+    degenerate: bool,
+) -> Option<(usize, f64)> {
+    let Columns { a, m, n } = cols;
+    let nv = n + 1 + m;
+    let mut enter: Option<(usize, f64)> = None;
+    let mut enter_d = 0.0f64;
+    for v in 0..nv {
+        if pos[v] != NONBASIC || lo[v] >= hi[v] {
+            continue;
+        }
+        let (mut aty, mut mag) = (0.0, 0.0);
+        for (c, yr) in a[v * m..(v + 1) * m].iter().zip(y.iter()) {
+            let t = c * yr;
+            aty += t;
+            mag += t.abs();
+        }
+        let c = Lp::cost(n, v, phase1);
+        let d = c - aty;
+        let tol = COST_TOL * (c.abs() + mag);
+        let dir = if d > tol && z[v] < hi[v] {
+            1.0
+        } else if d < -tol && z[v] > lo[v] {
+            -1.0
+        } else {
+            continue;
+        };
+        if degenerate {
+            // Bland: the smallest index
+            if enter.is_none() {
+                enter = Some((v, dir));
+            }
+        } else if d.abs() > enter_d {
+            enter_d = d.abs();
+            enter = Some((v, dir));
+        }
+    }
+    enter
+}
+
+/// The step of entering variable `e` moving `dir` along `alpha` (the basic
+/// values move by −dir·t·α): to its other bound, or to where a basic
+/// variable leaves (Harris' two passes: the largest pivot among the rows
+/// that block within a relaxed step; Bland's smallest index after a
+/// degenerate step). Moves `z`, and the basis when a variable leaves; the
+/// step taken, none when the ray is unbounded or no row can leave (only
+/// round-off can make either: s ≤ 1).
+fn ratio_step(
+    e: usize,
+    dir: f64,
+    alpha: &[f64],
+    (z, lo, hi): (&mut [f64], &[f64], &[f64]),
+    (basis, pos): (&mut [usize], &mut [usize]),
+    degenerate: bool,
+) -> Option<f64> {
+    let m = basis.len();
+    let amax = alpha.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
+    let ptol = PIVOT_TOL * amax;
+    let flip = if dir > 0.0 {
+        hi[e] - z[e]
+    } else {
+        z[e] - lo[e]
+    };
+    // Harris pass 1: the step with the bounds relaxed by a slack
+    let mut t_relaxed = f64::INFINITY;
+    for r in 0..m {
+        let delta = -dir * alpha[r];
+        if delta.abs() <= ptol {
+            continue;
+        }
+        let b = basis[r];
+        let lim = if delta > 0.0 {
+            (hi[b] + RATIO_SLACK * (1.0 + hi[b].abs()) - z[b]) / delta
+        } else {
+            (lo[b] - RATIO_SLACK * (1.0 + lo[b].abs()) - z[b]) / delta
+        };
+        t_relaxed = t_relaxed.min(lim.max(0.0));
+    }
+    let step;
+    if flip <= t_relaxed {
+        // the entering variable reaches its other bound first
+        step = flip;
+        if step.is_infinite() {
+            // unbounded ray: only round-off can produce it (s ≤ 1)
+            return None;
+        }
+        for r in 0..m {
+            z[basis[r]] -= dir * step * alpha[r];
+        }
+        z[e] = if dir > 0.0 { hi[e] } else { lo[e] };
+    } else {
+        // Harris pass 2: among the blocking rows, the largest pivot
+        let (mut leave, mut best_abs, mut t) = (usize::MAX, 0.0f64, 0.0f64);
+        for r in 0..m {
+            let delta = -dir * alpha[r];
+            if delta.abs() <= ptol {
+                continue;
+            }
+            let b = basis[r];
+            let lim = if delta > 0.0 {
+                (hi[b] - z[b]) / delta
+            } else {
+                (lo[b] - z[b]) / delta
+            };
+            let lim = lim.max(0.0);
+            let better = if degenerate {
+                // Bland: the smallest index among the ties
+                leave == usize::MAX || lim < t || (lim == t && b < basis[leave])
+            } else {
+                delta.abs() > best_abs
+            };
+            if lim <= t_relaxed && better {
+                leave = r;
+                best_abs = delta.abs();
+                t = lim;
+            }
+        }
+        if leave == usize::MAX {
+            return None;
+        }
+        step = t;
+        for r in 0..m {
+            z[basis[r]] -= dir * step * alpha[r];
+        }
+        z[e] += dir * step;
+        let b = basis[leave];
+        z[b] = if -dir * alpha[leave] > 0.0 {
+            hi[b]
+        } else {
+            lo[b]
+        };
+        pos[b] = NONBASIC;
+        basis[leave] = e;
+        pos[e] = leave;
+    }
+    Some(step)
 }
 
 #[cfg(test)]

@@ -13,7 +13,8 @@ use phri_model::{forward_kinematics, frame_placement, CollisionObject, Data, Mod
 use super::truth::keep_deepest;
 use super::{ContactTruth, Simulator};
 use crate::contact::{capsule_distance, contact_force_magnitude, stiffness_n_per_m};
-use crate::human::{body, HumanCapsule, Reach};
+use crate::human::{body, Human, HumanCapsule, Reach};
+use phri_ipc::BodyPart;
 
 /// Human–robot capsule pairs whose bounding spheres are farther apart than
 /// this \[m\] are not measured in intermediate sub-steps: neither body moves
@@ -71,16 +72,8 @@ impl Simulator {
     /// skipped (they cannot touch within a sub-step); with `exact` every pair
     /// is measured, so `truth.min_distance` is exact.
     pub(super) fn update_contacts(&mut self, dt: Option<f64>, exact: bool) {
-        if forward_kinematics(&self.model, &mut self.data, &self.q).is_err() {
-            self.truth.faults += 1;
+        if !self.place_robot() {
             return;
-        }
-        for rc in self.robot.iter_mut() {
-            let pose = self.data.body_placement(rc.body).compose(&rc.placement);
-            let half = pose.r.column(2) * rc.half_length;
-            rc.a = pose.p - half;
-            rc.b = pose.p + half;
-            rc.centre = pose.p;
         }
         self.truth.tau_ext.fill(0.0);
         self.truth.contacts.clear();
@@ -100,12 +93,38 @@ impl Simulator {
                 push.force,
             );
         }
-        let Some(human) = self.human.as_mut() else {
+        // the person out of `self` while their contacts are computed
+        let Some(mut human) = self.human.take() else {
             return;
         };
         let t_human = self.t + self.human_time_offset;
-        // a scripted push: a contact of the hand on the link with the
-        // scripted force, the hand put there
+        let (pushing, reach) = self.scripted_push(&human, t_human);
+        let capsules: &[HumanCapsule] = human.pose_reaching(t_human, reach);
+        self.human_contacts(capsules, pushing, dt, exact);
+        self.human = Some(human);
+    }
+
+    /// The arm's kinematics at `q` and its capsules' poses; false (a fault
+    /// counted) when the model refused them.
+    fn place_robot(&mut self) -> bool {
+        if forward_kinematics(&self.model, &mut self.data, &self.q).is_err() {
+            self.truth.faults += 1;
+            return false;
+        }
+        for rc in self.robot.iter_mut() {
+            let pose = self.data.body_placement(rc.body).compose(&rc.placement);
+            let half = pose.r.column(2) * rc.half_length;
+            rc.a = pose.p - half;
+            rc.b = pose.p + half;
+            rc.centre = pose.p;
+        }
+        true
+    }
+
+    /// A scripted push at the person's time `t_human` \[s\]: a contact of the
+    /// hand on the link with the scripted force (the hand put there): the
+    /// pushing part, and where its hand reaches.
+    fn scripted_push(&mut self, human: &Human, t_human: f64) -> (Option<BodyPart>, Option<Reach>) {
         let mut pushing = None;
         let mut reach = None;
         let active = human
@@ -152,7 +171,20 @@ impl Simulator {
                 });
             }
         }
-        let capsules: &[HumanCapsule] = human.pose_reaching(t_human, reach);
+        (pushing, reach)
+    }
+
+    /// Every pair of the person's `capsules` and the arm's: distances, the
+    /// penetration rate over `dt` \[s\], contact forces into `tau_ext` (the
+    /// `pushing` part's contacts are its scripted push's); pairs far apart
+    /// culled unless `exact`.
+    fn human_contacts(
+        &mut self,
+        capsules: &[HumanCapsule],
+        pushing: Option<BodyPart>,
+        dt: Option<f64>,
+        exact: bool,
+    ) {
         let n_robot = self.robot.len();
         for (hi, hc) in capsules.iter().enumerate() {
             let k = stiffness_n_per_m(hc.part);
