@@ -823,7 +823,7 @@ impl FrameSample {
         unsafe { &*(self.0.user_header() as *const Opaque).cast::<FrameHeader>() }
     }
 
-    /// depths [mm], row-major
+    /// depths \[mm\], row-major
     pub fn payload(&self) -> &[u16] {
         let bytes = self.0.payload();
         // SAFETY: the payload is a slice of u16 (Layout::slice), aligned
@@ -847,7 +847,7 @@ impl FrameSampleMut {
         unsafe { &mut *(self.0.user_header_mut() as *mut Opaque).cast::<FrameHeader>() }
     }
 
-    /// depths [mm], row-major
+    /// depths \[mm\], row-major
     pub fn payload(&self) -> &[u16] {
         let bytes = self.0.payload();
         // SAFETY: as FrameSample::payload; zeroed at the loan

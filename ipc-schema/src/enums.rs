@@ -234,9 +234,9 @@ wire_enum! {
     VoiceIntent, "voice intent" {
         /// no command recognised
         None = 0 => "none",
-        /// "follow [the] right hand"
+        /// "follow \[the\] right hand"
         FollowRightHand = 1 => "follow_right_hand",
-        /// "follow [the] left hand"
+        /// "follow \[the\] left hand"
         FollowLeftHand = 2 => "follow_left_hand",
         /// "begin collaboration"
         Begin = 3 => "begin",

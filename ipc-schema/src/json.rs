@@ -98,7 +98,7 @@ pub mod flag {
     }
 }
 
-/// An age [ns] whose `u64::MAX` means "none": that is `null`.
+/// An age \[ns\] whose `u64::MAX` means "none": that is `null`.
 pub mod opt_ns {
     use super::*;
 

@@ -19,7 +19,7 @@ pub const SKELETON_JOINTS: usize = 15;
 pub const MAX_COLLAB_FORCES: usize = 2;
 /// Samples in one [`AudioChunk`]: 20 ms at [`AUDIO_RATE_HZ`].
 pub const AUDIO_CHUNK_SAMPLES: usize = 320;
-/// Sample rate of `audio/mic` [Hz] (mono, 16 bit).
+/// Sample rate of `audio/mic` \[Hz\] (mono, 16 bit).
 pub const AUDIO_RATE_HZ: u32 = 16_000;
 /// Bytes of the text of an [`HriRequest`] (UTF-8, zero padded).
 pub const REQUEST_TEXT: usize = 64;
@@ -51,7 +51,7 @@ pub mod robot_status {
 #[type_name("phri::JointState")]
 pub struct JointState {
     pub seq: u64,
-    /// measurement time [ns]: the robot's cycle clock (CLOCK_MONOTONIC at
+    /// measurement time \[ns\]: the robot's cycle clock (CLOCK_MONOTONIC at
     /// start, then exactly one period per state)
     pub stamp_ns: u64,
     /// when the robot published it [ns, CLOCK_MONOTONIC]
@@ -62,7 +62,7 @@ pub struct JointState {
     /// measured joint positions [rad or m] (encoders; no velocities)
     #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
-    /// joint torque applied in the last period [Nm] (command after limits, or brake torque)
+    /// joint torque applied in the last period \[Nm\] (command after limits, or brake torque)
     #[serde(with = "crate::json::finite_array")]
     pub tau: [f64; MAX_DOF],
     /// wrist force/torque [N, Nm]: force then moment, base frame, at the last link's origin
@@ -82,7 +82,7 @@ pub struct JointState {
 #[type_name("phri::TorqueCommand")]
 pub struct TorqueCommand {
     pub seq: u64,
-    /// publish time [ns]
+    /// publish time \[ns\]
     pub stamp_ns: u64,
     /// the state this command answers
     pub state_seq: u64,
@@ -91,7 +91,7 @@ pub struct TorqueCommand {
     /// [`crate::ControlMode`]
     #[serde(with = "crate::json::control_mode")]
     pub mode: u32,
-    /// motor torque [Nm], limits already enforced
+    /// motor torque \[Nm\], limits already enforced
     #[serde(with = "crate::json::finite_array")]
     pub tau: [f64; MAX_DOF],
 }
@@ -114,7 +114,7 @@ pub mod residual_flags {
 #[type_name("phri::Residual")]
 pub struct Residual {
     pub seq: u64,
-    /// publish time [ns]
+    /// publish time \[ns\]
     pub stamp_ns: u64,
     pub state_seq: u64,
     pub state_stamp_ns: u64,
@@ -126,16 +126,16 @@ pub struct Residual {
     pub isolated_joint: i32,
     #[serde(skip)]
     pub _pad: u32,
-    /// residual r ≈ τ_ext [Nm]
+    /// residual r ≈ τ_ext \[Nm\]
     #[serde(with = "crate::json::finite_array")]
     pub r: [f64; MAX_DOF],
     /// joint velocity estimated from positions [rad/s]
     #[serde(with = "crate::json::finite_array")]
     pub qd: [f64; MAX_DOF],
-    /// ‖r‖ [Nm]
+    /// ‖r‖ \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub norm: f64,
-    /// time spent computing [ns]
+    /// time spent computing \[ns\]
     pub compute_ns: u64,
 }
 
@@ -160,23 +160,23 @@ pub struct ControlStatus {
     pub detections: u64,
     pub protective_stops: u64,
     pub resumes: u64,
-    /// age of the residual used [ns] (u64::MAX: none)
+    /// age of the residual used \[ns\] (u64::MAX: none)
     #[serde(with = "crate::json::opt_ns")]
     pub residual_age_ns: u64,
-    /// joint reference [rad]
+    /// joint reference \[rad\]
     #[serde(with = "crate::json::finite_array")]
     pub q_ref: [f64; MAX_DOF],
-    /// end-effector position [m], base frame
+    /// end-effector position \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub ee: [f64; 3],
-    /// time spent computing [ns]
+    /// time spent computing \[ns\]
     pub compute_ns: u64,
-    /// state published → this controller woke [ns]
+    /// state published → this controller woke \[ns\]
     pub wake_latency_ns: u64,
-    /// age of the perception results used [ns] (u64::MAX: none)
+    /// age of the perception results used \[ns\] (u64::MAX: none)
     #[serde(with = "crate::json::opt_ns")]
     pub perception_age_ns: u64,
-    /// smallest obstacle distance of the control points last seen [m]
+    /// smallest obstacle distance of the control points last seen \[m\]
     #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
     /// largest repulsion risk ‖V_Call‖/V_max over the control points [0, 1]
@@ -204,13 +204,13 @@ pub struct ContactTruth {
     pub intended: u32,
     #[serde(skip)]
     pub _pad: u32,
-    /// force on the robot [N], base frame
+    /// force on the robot \[N\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub force: [f64; 3],
-    /// contact point [m], base frame
+    /// contact point \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub point: [f64; 3],
-    /// penetration [m]
+    /// penetration \[m\]
     #[serde(with = "crate::json::finite")]
     pub depth: f64,
 }
@@ -226,14 +226,14 @@ pub struct Truth {
     pub state_seq: u64,
     pub n_contacts: u32,
     pub dof: u32,
-    /// true external joint torque [Nm]
+    /// true external joint torque \[Nm\]
     #[serde(with = "crate::json::finite_array")]
     pub tau_ext: [f64; MAX_DOF],
     #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
     #[serde(with = "crate::json::finite_array")]
     pub qd: [f64; MAX_DOF],
-    /// human-robot surface distance [m] (negative: penetration; +inf: no human)
+    /// human-robot surface distance \[m\] (negative: penetration; +inf: no human)
     #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
     pub contacts: [ContactTruth; MAX_CONTACTS],
@@ -256,7 +256,7 @@ pub struct RobotStats {
     pub brake_events: u64,
     /// periods where the robot's own loop woke late by more than half a period
     pub overruns: u64,
-    /// largest state-published → command-received latency [ns]
+    /// largest state-published → command-received latency \[ns\]
     pub latency_max_ns: u64,
     /// latency histogram, 1 µs bins; the last bin holds everything above
     #[serde(with = "crate::json::latency_hist")]
@@ -278,7 +278,7 @@ pub struct ServiceHealth {
     pub restarts: u32,
     #[serde(skip)]
     pub _pad: u32,
-    /// last start [ns]
+    /// last start \[ns\]
     pub started_ns: u64,
 }
 
@@ -401,7 +401,7 @@ pub struct MicStatus {
     pub stamp_ns: u64,
     /// where the sound comes from: 0 the stand-in (`[audio]`), 1 ALSA
     pub source: u32,
-    /// the capture device's own rate [Hz] (16 000 for the stand-in)
+    /// the capture device's own rate \[Hz\] (16 000 for the stand-in)
     pub device_rate_hz: u32,
     /// `audio/mic` chunks published
     pub chunks: u64,
@@ -448,11 +448,11 @@ pub struct BoxStatus {
     pub dof: u32,
     #[serde(skip)]
     pub _pad: u32,
-    /// the box's own joint torques of its newest state [Nm] (FCI's `tau_J`,
+    /// the box's own joint torques of its newest state \[Nm\] (FCI's `tau_J`,
     /// its torque sensors), for comparison with phri's applied torque
     #[serde(with = "crate::json::finite_array")]
     pub tau_j: [f64; MAX_DOF],
-    /// the box's own external torque estimate of its newest state [Nm]
+    /// the box's own external torque estimate of its newest state \[Nm\]
     /// (FCI's `tau_ext_hat_filtered`), for comparison with phri's residual
     #[serde(with = "crate::json::finite_array")]
     pub tau_ext_hat: [f64; MAX_DOF],
@@ -494,7 +494,7 @@ impl Zeroed for Health {}
 impl Zeroed for InputAudit {}
 impl Zeroed for BoxStatus {}
 
-/// One capsule of the simulated world: segment `a`–`b` swept by `radius` [m], base frame.
+/// One capsule of the simulated world: segment `a`–`b` swept by `radius` \[m\], base frame.
 #[derive(Debug, Clone, Copy, Default, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 #[type_name("phri::WorldCapsule")]
@@ -522,7 +522,7 @@ pub struct WorldState {
     pub stamp_ns: u64,
     pub dof: u32,
     pub n_human: u32,
-    /// true joint positions [rad]
+    /// true joint positions \[rad\]
     #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
     pub human: [WorldCapsule; MAX_HUMAN_CAPSULES],
@@ -544,7 +544,7 @@ pub struct FrameHeader {
     pub published_ns: u64,
     pub width: u32,
     pub height: u32,
-    /// pinhole intrinsics [px]
+    /// pinhole intrinsics \[px\]
     #[serde(with = "crate::json::finite")]
     pub fx: f64,
     #[serde(with = "crate::json::finite")]
@@ -557,7 +557,7 @@ pub struct FrameHeader {
     #[serde(with = "crate::json::finite")]
     pub depth_scale: f64,
     /// camera pose in the base frame: rotation (row-major 3×3, camera axes:
-    /// x right, y down, z forward) then translation [m]
+    /// x right, y down, z forward) then translation \[m\]
     #[serde(with = "crate::json::finite_array")]
     pub pose_r: [f64; 9],
     #[serde(with = "crate::json::finite_array")]
@@ -572,7 +572,7 @@ pub struct FrameHeader {
     pub removed_pixels: u32,
     /// valid pixels left
     pub valid_pixels: u32,
-    /// the frame's arrival at ingestion → this publication [ns], saturating
+    /// the frame's arrival at ingestion → this publication \[ns\], saturating
     /// (perception/depth only; 0 on camera/depth). Was padding: the layout
     /// and size are unchanged.
     pub ingest_ns: u32,
@@ -591,13 +591,13 @@ pub struct PointRepulsion {
     /// repulsive velocity V_Call [m/s], base frame (eqs. 16-18)
     #[serde(with = "crate::json::finite_array")]
     pub v_call: [f64; 3],
-    /// minimum distance to an obstacle pixel [m] (ρ when none)
+    /// minimum distance to an obstacle pixel \[m\] (ρ when none)
     #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
-    /// the closest obstacle point [m], base frame
+    /// the closest obstacle point \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub obstacle: [f64; 3],
-    /// the control point at the frame's joint state [m], base frame
+    /// the control point at the frame's joint state \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub position: [f64; 3],
 }
@@ -620,10 +620,10 @@ pub struct RepulsionResult {
     /// workers in the configuration
     pub workers: u32,
     pub n_points: u32,
-    /// the frame's arrival at ingestion → this result's publication [ns],
+    /// the frame's arrival at ingestion → this result's publication \[ns\],
     /// saturating (0: unknown). Was padding: the layout and size are unchanged.
     pub since_arrival_ns: u32,
-    /// processing time [ns]
+    /// processing time \[ns\]
     pub compute_ns: u64,
     pub points: [PointRepulsion; MAX_POINTS_PER_WORKER],
 }
@@ -647,7 +647,7 @@ pub struct DepthFault {
     pub kind: u32,
     /// corruptions: how many consecutive frames
     pub frames: u32,
-    /// [`crate::DepthFaultKind::Delay`]: extra capture → publish delay [ms]
+    /// [`crate::DepthFaultKind::Delay`]: extra capture → publish delay \[ms\]
     #[serde(with = "crate::json::finite")]
     pub delay_ms: f64,
     /// [`crate::DepthFaultKind::Delay`]: how long \[s\]
@@ -683,13 +683,13 @@ pub struct ContactEvent {
     /// 1 when the part is designated collaborative (an intended contact)
     #[serde(with = "crate::json::flag")]
     pub intended: u32,
-    /// force on the robot now [N], base frame (zero at the end)
+    /// force on the robot now \[N\], base frame (zero at the end)
     #[serde(with = "crate::json::finite_array")]
     pub force: [f64; 3],
-    /// largest force magnitude so far [N]
+    /// largest force magnitude so far \[N\]
     #[serde(with = "crate::json::finite")]
     pub peak_force_n: f64,
-    /// contact point [m], base frame
+    /// contact point \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub point: [f64; 3],
 }
@@ -706,7 +706,7 @@ pub struct TrackedPerson {
     /// 1 while the person is tracked
     #[serde(with = "crate::json::flag")]
     pub tracked: u32,
-    /// joint positions [m], robot base frame, in [`crate::SkeletonJoint`] order
+    /// joint positions \[m\], robot base frame, in [`crate::SkeletonJoint`] order
     pub joints: [[f64; 3]; SKELETON_JOINTS],
     /// confidence of each joint [0, 1]; 0: occluded or not found (its position is then the last guess)
     pub confidence: [f64; SKELETON_JOINTS],
@@ -784,7 +784,7 @@ pub struct AudioChunk {
     pub capture_ns: u64,
     /// when this was published [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
-    /// sample rate [Hz]
+    /// sample rate \[Hz\]
     pub rate_hz: u32,
     /// valid samples in `pcm` (≤ [`AUDIO_CHUNK_SAMPLES`])
     pub samples: u32,
@@ -808,7 +808,7 @@ pub struct Utterance {
     pub end_ns: u64,
     /// when the verdict was reached [ns, CLOCK_MONOTONIC]
     pub decoded_ns: u64,
-    /// decoding time [ms]
+    /// decoding time \[ms\]
     #[serde(with = "crate::json::finite")]
     pub decode_ms: f64,
     /// the recogniser's score: acoustic log-likelihood per 10 ms frame of the
@@ -854,10 +854,10 @@ pub struct HandObservation {
     pub refined: u32,
     /// depth pixels removed around the hand (the mask)
     pub masked_pixels: u32,
-    /// the hand's position [m], base frame: the centre of the depth points around the tracked hand
+    /// the hand's position \[m\], base frame: the centre of the depth points around the tracked hand
     #[serde(with = "crate::json::finite_array")]
     pub position: [f64; 3],
-    /// the tracker's hand position [m], base frame
+    /// the tracker's hand position \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub tracked: [f64; 3],
     /// the tracker's confidence of the hand [0, 1]
@@ -872,10 +872,10 @@ impl Zeroed for HandObservation {}
 #[repr(C)]
 #[type_name("phri::ContactForce")]
 pub struct ContactForce {
-    /// the contact point [m], base frame
+    /// the contact point \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub point: [f64; 3],
-    /// force applied by the human on the robot [N], base frame
+    /// force applied by the human on the robot \[N\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub force: [f64; 3],
     /// the robot link it acts on (index of the model's frames; −1: none)
@@ -922,13 +922,13 @@ pub struct CollabState {
     /// the last request answered: its sequence number (per source) and when it was made [ns, CLOCK_MONOTONIC]
     pub request_seq: u64,
     pub request_stamp_ns: u64,
-    /// the collaborative hand the controller uses [m], base frame
+    /// the collaborative hand the controller uses \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub hand: [f64; 3],
-    /// age of that hand observation [ns] (u64::MAX: none)
+    /// age of that hand observation \[ns\] (u64::MAX: none)
     #[serde(with = "crate::json::opt_ns")]
     pub hand_age_ns: u64,
-    /// ‖r − Σ J_kᵀ F̂_k‖: the residual the intended contacts do not explain [Nm]
+    /// ‖r − Σ J_kᵀ F̂_k‖: the residual the intended contacts do not explain \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub unexplained_norm: f64,
     pub n_forces: u32,
@@ -974,13 +974,13 @@ pub struct SsmStatus {
     pub violation_periods: u64,
     /// violations: runs of such periods
     pub violations: u64,
-    /// the smallest clearance less the protective separation distance over the control points [m] (null: none monitored)
+    /// the smallest clearance less the protective separation distance over the control points \[m\] (null: none monitored)
     #[serde(with = "crate::json::distance")]
     pub min_margin_m: f64,
     /// the largest person's speed toward a control point used [m/s]
     #[serde(with = "crate::json::finite")]
     pub human_speed_m_s: f64,
-    /// T_r: the age of the perception acted on [s] (null: not monitoring)
+    /// T_r: the age of the perception acted on \[s\] (null: not monitoring)
     #[serde(with = "crate::json::finite")]
     pub reaction_s: f64,
     /// violations of the standard's own protective separation distance:
@@ -1048,18 +1048,18 @@ pub struct CommanderStats {
     pub last_takeover_to: u32,
     /// the yardstick of a takeover's difference: the largest joint change
     /// of the applied command from one period to the next without a
-    /// takeover, both periods fresh and the brakes off [Nm]. Was padding:
+    /// takeover, both periods fresh and the brakes off \[Nm\]. Was padding:
     /// the layout and size are unchanged.
     pub max_step_nm: f32,
     /// largest joint difference between the command taking over and the
-    /// last command applied before [Nm]
+    /// last command applied before \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub last_takeover_diff_nm: f64,
-    /// the largest such difference so far [Nm]
+    /// the largest such difference so far \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub max_takeover_diff_nm: f64,
     /// the largest joint difference between the two slots' answers to the
-    /// same state, while both answered and the brakes were off [Nm]
+    /// same state, while both answered and the brakes were off \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub max_answer_diff_nm: f64,
     /// commands refused per slot because their sender is not the controller

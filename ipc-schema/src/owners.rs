@@ -113,7 +113,7 @@ pub enum Refusal {
 pub const REFUSALS: usize = 4;
 
 /// A stamp may be this much later than the reader's present (clocks of
-/// the same machine: the order of wake-ups) [ns].
+/// the same machine: the order of wake-ups) \[ns\].
 pub const FUTURE_MARGIN_NS: u64 = 5_000_000;
 
 /// A stamp later than `now_ns` plus [`FUTURE_MARGIN_NS`] (a forged or

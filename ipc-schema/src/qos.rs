@@ -132,7 +132,7 @@ const CONNECTION_NAME: usize = 2 * ID_DIGITS + 1;
 const SOCKET_PATH_MAX: usize = 107;
 
 /// The longest prefix whose resources iceoryx2 can create under `config`
-/// [characters]. Two of its limits bind: a listener's Unix socket
+/// \[characters\]. Two of its limits bind: a listener's Unix socket
 /// `<root><prefix><id>.event` must fit `sun_path` (with the default root
 /// `/tmp/iceoryx2/`: 48 characters), and every shared-memory path
 /// `<root><prefix><type hash>_<name><suffix>` iceoryx2's path capacity (255).

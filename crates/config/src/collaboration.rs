@@ -29,10 +29,10 @@ pub struct SkeletonConfig {
     /// `phri_people::TrackerConfig`)
     #[serde(default)]
     pub tracker: phri_people::TrackerConfig,
-    /// standard deviation of the joint position jitter [m], per axis, white from frame to frame
+    /// standard deviation of the joint position jitter \[m\], per axis, white from frame to frame
     pub noise_m: f64,
-    /// standard deviation of each joint's slowly drifting offset [m], per
-    /// axis (a tracker's bias), and how fast it drifts: its correlation time [s]
+    /// standard deviation of each joint's slowly drifting offset \[m\], per
+    /// axis (a tracker's bias), and how fast it drifts: its correlation time \[s\]
     pub bias_m: f64,
     pub bias_time_s: f64,
     /// frames of latency: a frame's skeleton is computed from the world this many frames earlier
@@ -40,7 +40,7 @@ pub struct SkeletonConfig {
     /// probability that a frame loses the person altogether (tracking dropout)
     pub dropout: f64,
     /// a joint whose pixel shows something this much nearer than the joint
-    /// is occluded: its confidence falls to 0 [m]
+    /// is occluded: its confidence falls to 0 \[m\]
     pub occlusion_margin_m: f64,
     /// confidence of a visible joint
     pub visible_confidence: f64,
@@ -105,22 +105,22 @@ impl SkeletonConfig {
 pub struct GestureConfig {
     /// lateral reversals of the hand relative to the elbow that make a wave
     pub reversals: u32,
-    /// within this time [s]
+    /// within this time \[s\]
     pub window_s: f64,
-    /// consecutive reversals are this far apart at least and at most [s]
+    /// consecutive reversals are this far apart at least and at most \[s\]
     /// (half periods of a 0.7-5 Hz wave): faster is tracker noise, slower
     /// is a reach and its return
     pub min_half_period_s: f64,
     pub max_half_period_s: f64,
-    /// a swing between reversals moves the hand at least this far sideways [m]
+    /// a swing between reversals moves the hand at least this far sideways \[m\]
     pub min_swing_m: f64,
-    /// the hand stays at least this far above the elbow while waving [m]
+    /// the hand stays at least this far above the elbow while waving \[m\]
     pub hand_above_elbow_m: f64,
     /// the hand and elbow are tracked at least this confidently
     pub min_confidence: f64,
-    /// after a wave, the same person's next wave counts only after this [s]
+    /// after a wave, the same person's next wave counts only after this \[s\]
     pub refractory_s: f64,
-    /// a frame older than this is not used [ms]
+    /// a frame older than this is not used \[ms\]
     pub max_age_ms: f64,
 }
 
@@ -173,14 +173,14 @@ pub struct CollaborationConfig {
     pub min_hand_confidence: f64,
     /// the collaborative robot part: the link that may touch the hand
     pub robot_link: String,
-    /// a point of that link where the hand is met [m], link frame
+    /// a point of that link where the hand is met \[m\], link frame
     pub robot_point: [f64; 3],
-    /// radius of the robot part around that point [m]
+    /// radius of the robot part around that point \[m\]
     pub robot_radius_m: f64,
     /// the robot part is a capsule: the segment `robot_point ± this` along
-    /// the link frame's z axis, swept by `robot_radius_m` [m]
+    /// the link frame's z axis, swept by `robot_radius_m` \[m\]
     pub robot_half_length_m: f64,
-    /// radius of the hand around the tracked hand joint [m]
+    /// radius of the hand around the tracked hand joint \[m\]
     pub hand_radius_m: f64,
     /// the link whose frame origin is the wrist centre (a wrist push acts there)
     pub wrist_link: String,
@@ -188,48 +188,48 @@ pub struct CollaborationConfig {
     pub approach_speed: f64,
     /// approach: speed at contact [m/s] (ISO/TS 15066's hand figures allow far more; this is gentle)
     pub contact_speed: f64,
-    /// approach: the speed falls from `approach_speed` to `contact_speed` over this distance [m]
+    /// approach: the speed falls from `approach_speed` to `contact_speed` over this distance \[m\]
     pub slow_down_m: f64,
-    /// low-pass of the hand position the approach follows [s]
+    /// low-pass of the hand position the approach follows \[s\]
     pub hand_filter_s: f64,
-    /// the approach aims this far into the modelled hand [m]: the hand seen
+    /// the approach aims this far into the modelled hand \[m\]: the hand seen
     /// in depth is off by centimetres, so the robot part goes on (at
     /// `contact_speed`) until it touches, as the estimated force tells
     pub reach_into_m: f64,
     /// a surface gap to the hand below this (negative: the modelled surfaces
     /// overlap), or an estimated force above `contact_force_n` near the hand,
-    /// is contact [m]; at least `−reach_into_m`
+    /// is contact \[m\]; at least `−reach_into_m`
     pub contact_gap_m: f64,
     pub contact_force_n: f64,
     /// contact: admittance on the estimated force, end-effector velocity per newton [m/(N s)]
     pub admittance: f64,
     /// contact: at the touch the reference leads the end effector by at most
-    /// this [m] (the approach's lead, cut back; the admittance builds the
+    /// this \[m\] (the approach's lead, cut back; the admittance builds the
     /// force from there)
     pub touch_lead_m: f64,
-    /// contact: the end effector keeps pressing the hand with this force [N]
+    /// contact: the end effector keeps pressing the hand with this force \[N\]
     /// (the admittance's reference: it yields to more, closes in on less)
     pub contact_hold_n: f64,
     /// contact → follow once the hand is this far from the robot's surface
-    /// (the robot part's or the wrist's, whichever is nearer) [m] ...
+    /// (the robot part's or the wrist's, whichever is nearer) \[m\] ...
     pub follow_gap_m: f64,
-    /// ... and the estimated force below this [N] (at most `contact_force_n`) ...
+    /// ... and the estimated force below this \[N\] (at most `contact_force_n`) ...
     pub release_force_n: f64,
-    /// ... both for this long without a break [s]
+    /// ... both for this long without a break \[s\]
     pub release_s: f64,
     /// a restarted controller holds (protective stop) while a tracked hand
-    /// is within this of the robot part's or the wrist's surface [m], until
+    /// is within this of the robot part's or the wrist's surface \[m\], until
     /// every hand is farther for `release_s`
     pub restart_clear_m: f64,
-    /// the collaboration ends when the hand has not been seen for this long [s]
+    /// the collaboration ends when the hand has not been seen for this long \[s\]
     pub hand_lost_s: f64,
     /// the approach stops and backs off when an estimated force passes this
     /// fraction of the touched body region's ISO/TS 15066 quasi-static limit
     pub force_limit_fraction: f64,
-    /// quasi-static limits [N] (ISO/TS 15066 as transcribed publicly; check a licensed copy)
+    /// quasi-static limits \[N\] (ISO/TS 15066 as transcribed publicly; check a licensed copy)
     pub iso_hand_n: f64,
     pub iso_lower_arm_n: f64,
-    /// backing off after a force limit: this far along the force [m]
+    /// backing off after a force limit: this far along the force \[m\]
     pub back_off_m: f64,
     /// wrist push: the residual of joints 5-7 at most this fraction of joints 1-4's
     pub wrist_ratio: f64,
@@ -238,20 +238,20 @@ pub struct CollaborationConfig {
     /// shoulder to the wrist turns the elbow about it, which no force at the
     /// wrist does)
     pub wrist_fit: f64,
-    /// wrist push: joints 1-4's residual at least this [Nm] ...
+    /// wrist push: joints 1-4's residual at least this \[Nm\] ...
     pub wrist_min_nm: f64,
-    /// ... for this long [s]
+    /// ... for this long \[s\]
     pub wrist_hold_s: f64,
-    /// wrist push: confirmed by a human part seen within this of the wrist [m]
+    /// wrist push: confirmed by a human part seen within this of the wrist \[m\]
     pub wrist_confirm_m: f64,
     /// full detection is re-armed only after the residual stayed below the
-    /// contact level for this long after the collaboration [s]
+    /// contact level for this long after the collaboration \[s\]
     pub rearm_quiet_s: f64,
-    /// depth masking around the collaborative hand: a sphere of this radius [m] ...
+    /// depth masking around the collaborative hand: a sphere of this radius \[m\] ...
     pub mask_radius_m: f64,
-    /// ... and a capsule of this length from the hand toward the elbow [m]
+    /// ... and a capsule of this length from the hand toward the elbow \[m\]
     pub mask_forearm_m: f64,
-    /// the hand refined from depth: pixels within this of the tracked hand [m]
+    /// the hand refined from depth: pixels within this of the tracked hand \[m\]
     pub refine_radius_m: f64,
 }
 

@@ -12,19 +12,19 @@ const S: &str = "control";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControlConfig {
-    /// Cartesian waypoints of the end effector [m], base frame, visited cyclically
+    /// Cartesian waypoints of the end effector \[m\], base frame, visited cyclically
     pub waypoints: Vec<[f64; 3]>,
-    /// duration of each segment between waypoints [s]
+    /// duration of each segment between waypoints \[s\]
     pub segment_time_s: f64,
     /// link whose origin is the end effector (empty: the deepest link)
     pub ee_link: String,
-    /// posture the null space pulls towards [rad] (empty: the initial measured posture)
+    /// posture the null space pulls towards \[rad\] (empty: the initial measured posture)
     pub posture: Vec<f64>,
     /// null-space posture gain [1/s]
     pub posture_gain: f64,
     /// Cartesian error gain of the inverse kinematics [1/s]
     pub clik_gain: f64,
-    /// damping of the pseudoinverse [m]
+    /// damping of the pseudoinverse \[m\]
     pub damping: f64,
     /// joint tracking stiffness of the computed-torque law [1/s²]
     pub kp: f64,
@@ -34,9 +34,9 @@ pub struct ControlConfig {
     pub velocity_scale: f64,
     /// largest end-effector speed when approaching the path [m/s]
     pub approach_speed: f64,
-    /// after the approach, the path's time law ṡ ramps smoothly from 0 to 1 over this [s]
+    /// after the approach, the path's time law ṡ ramps smoothly from 0 to 1 over this \[s\]
     pub path_ramp_s: f64,
-    /// end-effector distance within which a waypoint counts as reached [m]
+    /// end-effector distance within which a waypoint counts as reached \[m\]
     pub waypoint_tolerance: f64,
     /// reaction to a detected collision
     pub reaction: Reaction,
@@ -50,9 +50,9 @@ pub struct ControlConfig {
     pub float_damping: f64,
     /// retreat: how far back along the path [s of path time]
     pub retreat_path_s: f64,
-    /// retreat: how fast the time law turns [s]
+    /// retreat: how fast the time law turns \[s\]
     pub retreat_ramp_s: f64,
-    /// least time spent reacting before recovering [s]
+    /// least time spent reacting before recovering \[s\]
     pub reaction_min_s: f64,
     /// a hot standby controller (`[services.control_standby]`) answers every
     /// state too, adopting the behaviour of the one in charge, and takes
@@ -61,9 +61,9 @@ pub struct ControlConfig {
     /// resume the task once the residual stayed below the contact level for `resume_quiet_s`
     pub resume: bool,
     pub resume_quiet_s: f64,
-    /// a residual older than this (measured from the state it answers) is stale [ms]
+    /// a residual older than this (measured from the state it answers) is stale \[ms\]
     pub residual_max_age_ms: f64,
-    /// keep this far inside the position limits [rad]
+    /// keep this far inside the position limits \[rad\]
     pub position_margin: f64,
     /// collision avoidance from perception (paper Sect. V); off: the task ignores perception
     pub avoidance: bool,
@@ -77,19 +77,19 @@ pub struct ControlConfig {
     pub feedback_free_speed: f64,
     /// the end effector's feedback may beat its repulsion by a net approach
     /// speed of `approach_gain × (clearance − approach_clearance_m)`: a path
-    /// through a person's reach is followed up to this clearance [m] ...
+    /// through a person's reach is followed up to this clearance \[m\] ...
     pub approach_clearance_m: f64,
     /// ... at this gain [1/s] (0: the repulsion always wins)
     pub approach_gain: f64,
-    /// perception results older than this are stale [ms]: with an obstacle last
+    /// perception results older than this are stale \[ms\]: with an obstacle last
     /// seen nearer than `near_distance_m` a protective stop, otherwise the task slows down
     pub perception_max_age_ms: f64,
     pub near_distance_m: f64,
-    /// stale this long: protective stop whatever was seen last [ms]
+    /// stale this long: protective stop whatever was seen last \[ms\]
     pub perception_stop_after_ms: f64,
     /// speed scale while perception is stale
     pub slow_scale: f64,
-    /// repulsive vectors arrive at the frame rate: low-pass them with this time constant [s]
+    /// repulsive vectors arrive at the frame rate: low-pass them with this time constant \[s\]
     pub repulsion_filter_s: f64,
     /// under avoidance the reference velocity changes by at most this per second [rad/s²]
     pub reference_accel_limit: f64,
@@ -134,7 +134,7 @@ pub enum BodyAvoidance {
 pub struct AvoidanceParams {
     /// joint acceleration limit of the joint-limit bounds, all joints [rad/s²]
     pub accel_limit: f64,
-    /// horizon `T` of the `(Q − q)/T` term of the joint-limit bounds [s]
+    /// horizon `T` of the `(Q − q)/T` term of the joint-limit bounds \[s\]
     pub horizon_s: f64,
     /// `V_max` of eq. 16: the largest repulsive speed, full risk [m/s]. Not a
     /// key of its own: always `[repulsion.params] v_max` (one value, one place).
@@ -142,7 +142,7 @@ pub struct AvoidanceParams {
     pub v_max_repulsion: f64,
     /// damping `λ` of the pseudoinverse [m/s]
     pub damping: f64,
-    /// keep this far inside the model's position limits [rad]
+    /// keep this far inside the model's position limits \[rad\]
     pub position_margin: f64,
 }
 

@@ -15,17 +15,17 @@ pub struct ResidualConfig {
     /// observer gain K_I [1/s]: each residual is a low-pass of τ_ext with
     /// this bandwidth, behind the velocity estimate's own ([`ResidualConfig::step_response`])
     pub gain: PerJoint,
-    /// cut-off of the velocity estimate from positions [Hz]
+    /// cut-off of the velocity estimate from positions \[Hz\]
     pub velocity_cutoff_hz: f64,
-    /// |r_i| above this is a *contact* [Nm]
+    /// |r_i| above this is a *contact* \[Nm\]
     pub contact_threshold: PerJoint,
-    /// |r_i| above this is a *collision* [Nm]
+    /// |r_i| above this is a *collision* \[Nm\]
     pub collision_threshold: PerJoint,
-    /// ‖r‖ above this is a collision [Nm]
+    /// ‖r‖ above this is a collision \[Nm\]
     pub collision_norm_threshold: f64,
     /// nominal viscous friction compensated before integrating [Nm s/rad]
     pub viscous_friction: PerJoint,
-    /// nominal Coulomb friction compensated before integrating [Nm]
+    /// nominal Coulomb friction compensated before integrating \[Nm\]
     pub coulomb_friction: PerJoint,
     /// velocity scale of the smoothed Coulomb term tanh(q̇ / v) [rad/s]
     pub coulomb_velocity: f64,
@@ -35,7 +35,7 @@ pub struct ResidualConfig {
     pub ft_link: String,
     /// samples after (re)start before the residual is declared valid
     pub warmup_samples: u32,
-    /// largest gap between two states integrated as one step [s]; longer gaps re-initialise
+    /// largest gap between two states integrated as one step \[s\]; longer gaps re-initialise
     pub max_gap_s: f64,
 }
 

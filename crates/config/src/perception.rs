@@ -59,24 +59,24 @@ impl CameraSource {
 pub struct CameraConfig {
     /// where the frames come from
     pub source: CameraSource,
-    /// frame rate [Hz] (the simulated camera's and a replay's; a real
+    /// frame rate \[Hz\] (the simulated camera's and a replay's; a real
     /// camera runs at its own)
     pub rate_hz: f64,
-    /// capture → publish delay on top of rendering [ms] (a real sensor's latency)
+    /// capture → publish delay on top of rendering \[ms\] (a real sensor's latency)
     pub latency_ms: f64,
     /// the paper's set-up: 2 m from the base, 1.2 m high, looking at the robot;
-    /// this is the camera's azimuth around the base [rad] (0 = on the x axis)
+    /// this is the camera's azimuth around the base \[rad\] (0 = on the x axis)
     pub azimuth_rad: f64,
     pub intrinsics: Intrinsics,
     /// sensor model (noise, range, edge drop-outs)
     pub render: RenderOptions,
-    /// floor height [m] (absent: no floor)
+    /// floor height \[m\] (absent: no floor)
     pub floor_z: Option<f64>,
-    /// the table under the robot: box corners [m], base frame
+    /// the table under the robot: box corners \[m\], base frame
     pub table_min: [f64; 3],
     pub table_max: [f64; 3],
     /// a real camera's frame whose capture lies further in the past than
-    /// this when it arrives is dropped (counted) [s]
+    /// this when it arrives is dropped (counted) \[s\]
     pub max_age_s: f64,
     /// `source = "freenect"`: the Kinect's index among libfreenect's devices
     pub device_index: u32,
@@ -187,15 +187,15 @@ pub struct IngestConfig {
     pub png_dir: String,
     /// metres per PNG sample unit (0.001: millimetres; TUM RGB-D uses 0.0002)
     pub png_depth_scale: f64,
-    /// replay rate [Hz]
+    /// replay rate \[Hz\]
     pub png_rate_hz: f64,
     /// start over at the end of the directory
     pub png_loop: bool,
     /// self-filter: margin added to the robot's capsules and depth tolerance
     pub self_filter: SelfFilterParams,
-    /// the joint state used must lie within this of the frame's capture time [ms]
+    /// the joint state used must lie within this of the frame's capture time \[ms\]
     pub max_state_gap_ms: f64,
-    /// frames older than this when they arrive are refused [ms]
+    /// frames older than this when they arrive are refused \[ms\]
     pub max_frame_age_ms: f64,
 }
 
@@ -228,9 +228,9 @@ impl IngestConfig {
 pub struct PointConfig {
     pub name: String,
     pub link: String,
-    /// position in the link frame [m]
+    /// position in the link frame \[m\]
     pub xyz: [f64; 3],
-    /// radius of the link around the point [m] (subtracted from distances)
+    /// radius of the link around the point \[m\] (subtracted from distances)
     pub radius: f64,
 }
 
@@ -240,7 +240,7 @@ pub struct PointConfig {
 pub struct RepulsionConfig {
     /// worker processes; point i belongs to worker i mod workers
     pub workers: u32,
-    /// eq. 16 parameters (ρ [m], V_max [m/s], α)
+    /// eq. 16 parameters (ρ \[m\], V_max [m/s], α)
     pub params: RepulsionParams,
     /// control points; the first is the end effector (eq. 19), the others shape velocity bounds (eq. 20)
     pub points: Vec<PointConfig>,

@@ -77,24 +77,24 @@ const fn ro(key: &'static str, lo: f64, hi: f64, unit: &'static str, why: &'stat
 
 const STALE: &str = "an input older than 1 s describes a world long gone";
 
-/// ISO/TS 15066 Annex A, Table A.2: the hands' quasi-static limit [N].
+/// ISO/TS 15066 Annex A, Table A.2: the hands' quasi-static limit \[N\].
 pub fn iso_hand_limit_n() -> f64 {
     phri_iso15066::BodyRegion::HandAndFingers.quasi_static_n()
 }
 
-/// ISO/TS 15066 Annex A, Table A.2: the lower arms' quasi-static limit [N].
+/// ISO/TS 15066 Annex A, Table A.2: the lower arms' quasi-static limit \[N\].
 pub fn iso_lower_arm_limit_n() -> f64 {
     phri_iso15066::BodyRegion::LowerArmAndWrist.quasi_static_n()
 }
 
-/// The smallest stopping time `T_s` [s] the cell may assume: the arm's
+/// The smallest stopping time `T_s` \[s\] the cell may assume: the arm's
 /// measured stop (lock-step: at most 47 ms up to 1.1 m/s, BENCHMARKS.md
 /// "How the arm stops"); ISO/TS 15066 5.5.4 takes `T_s` as measured, never
 /// less.
 pub const MIN_STOP_TIME_S: f64 = 0.047;
-/// The smallest `S_s` per speed [s] (measured: at most 18 ms × v).
+/// The smallest `S_s` per speed \[s\] (measured: at most 18 ms × v).
 pub const MIN_STOP_DISTANCE_PER_SPEED_S: f64 = 0.018;
-/// The smallest `Z_d` [m]: the depth sensor's noise at 2 m (6 mm).
+/// The smallest `Z_d` \[m\]: the depth sensor's noise at 2 m (6 mm).
 pub const MIN_SENSOR_UNCERTAINTY_M: f64 = 0.006;
 
 /// Every safety-relevant setting's safe range. Hand and lower-arm limits
@@ -280,7 +280,7 @@ pub fn check(config: &Config) -> Result<(), Invalid> {
     Ok(())
 }
 
-/// The arm's reach from its base [m]: the sum of the lengths of its links
+/// The arm's reach from its base \[m\]: the sum of the lengths of its links
 /// (each joint's offset from its parent) and of the end effector's offset
 /// from its body, an upper bound on how far any of its points gets.
 pub fn reach_m(model: &phri_model::Model, ee_link: &str) -> f64 {

@@ -42,11 +42,11 @@ pub struct Ros2Config {
     pub joint_states_every: u32,
     /// `/tf`: every N-th robot state
     pub tf_every: u32,
-    /// `/phri/status` [Hz]
+    /// `/phri/status` \[Hz\]
     pub status_hz: f64,
-    /// `/phri/contact_force` [Hz]
+    /// `/phri/contact_force` \[Hz\]
     pub contact_force_hz: f64,
-    /// `/phri/repulsion` [Hz]
+    /// `/phri/repulsion` \[Hz\]
     pub repulsion_hz: f64,
     /// `/phri/depth`: every N-th filtered depth frame
     pub depth_every: u32,
@@ -59,7 +59,7 @@ pub struct Ros2Config {
     /// `/phri/request`: each peer's (DDS writer's) sustained rate [requests/s];
     /// `stop` is never limited
     pub requests_per_s: f64,
-    /// `/phri/request`: each peer's burst above that rate [requests]
+    /// `/phri/request`: each peer's burst above that rate \[requests\]
     pub requests_burst: u32,
 }
 

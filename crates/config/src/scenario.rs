@@ -159,7 +159,7 @@ struct RawHuman {
     repeat_s: Option<f64>,
 }
 
-/// The longest run [s] (about 116 days): a longer one would overflow the
+/// The longest run \[s\] (about 116 days): a longer one would overflow the
 /// nanosecond clocks.
 pub const MAX_DURATION_S: f64 = 1e7;
 

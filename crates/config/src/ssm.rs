@@ -27,15 +27,15 @@ pub struct SsmConfig {
     /// on purpose: power and force limiting instead)
     pub enabled: bool,
     pub human_speed: HumanSpeed,
-    /// T_s: the robot's stopping time [s]
+    /// T_s: the robot's stopping time \[s\]
     pub stop_time_s: f64,
-    /// S_s = this × the speed toward the person [s]
+    /// S_s = this × the speed toward the person \[s\]
     pub stop_distance_per_speed_s: f64,
-    /// C: intrusion distance [m]
+    /// C: intrusion distance \[m\]
     pub intrusion_m: f64,
-    /// Z_d: the person's position uncertainty (the sensor's) [m]
+    /// Z_d: the person's position uncertainty (the sensor's) \[m\]
     pub sensor_uncertainty_m: f64,
-    /// Z_r: the robot's position uncertainty [m]
+    /// Z_r: the robot's position uncertainty \[m\]
     pub robot_uncertainty_m: f64,
     /// measured human speed: it falls by at most this [m/s²] (a rise counts at once)
     pub human_speed_decay: f64,

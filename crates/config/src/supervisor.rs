@@ -11,30 +11,30 @@ use crate::error::Invalid;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SupervisorConfig {
-    /// first restart delay after a crash [ms]; doubles on each quick crash
+    /// first restart delay after a crash \[ms\]; doubles on each quick crash
     pub restart_backoff_min_ms: u64,
-    /// largest restart delay [ms]
+    /// largest restart delay \[ms\]
     pub restart_backoff_max_ms: u64,
-    /// a service that ran this long is healthy again: the back-off resets [s]
+    /// a service that ran this long is healthy again: the back-off resets \[s\]
     pub stable_after_s: f64,
-    /// time a service gets to exit after SIGTERM before SIGKILL [ms]
+    /// time a service gets to exit after SIGTERM before SIGKILL \[ms\]
     pub shutdown_grace_ms: u64,
-    /// health publication rate [Hz]
+    /// health publication rate \[Hz\]
     pub health_hz: f64,
     /// a watched service that does not beat on its liveness service for
-    /// this long is frozen (its deadline unless it sets its own) [ms]
+    /// this long is frozen (its deadline unless it sets its own) \[ms\]
     pub heartbeat_timeout_ms: u64,
     /// services of a cell whose supervisor has published nothing for this
-    /// long stop safely (the robot braked) [s]; long enough for a new
+    /// long stop safely (the robot braked) \[s\]; long enough for a new
     /// supervisor to take the cell over
     pub deadman_s: f64,
     /// a service restarted more than this many times within
     /// `crash_loop_window_s` ends the run (ordered shutdown, a degraded
     /// report, non-zero exit) instead of crash-looping until the end
     pub crash_loop_restarts: u32,
-    /// the window of `crash_loop_restarts` [s]
+    /// the window of `crash_loop_restarts` \[s\]
     pub crash_loop_window_s: f64,
-    /// start-up lasts this long after the last service is started [s]: a
+    /// start-up lasts this long after the last service is started \[s\]: a
     /// service that exits before then fails the start (everything started is
     /// stopped, the supervisor exits non-zero) instead of being restarted
     pub startup_s: f64,
@@ -117,7 +117,7 @@ pub struct ServiceSpec {
     /// extra arguments
     #[serde(default)]
     pub args: Vec<String>,
-    /// pause after starting it before starting the next one [ms]
+    /// pause after starting it before starting the next one \[ms\]
     #[serde(default)]
     pub start_delay_ms: u64,
     /// disabled services are not started
@@ -129,7 +129,7 @@ pub struct ServiceSpec {
     /// restarted)
     #[serde(default)]
     pub heartbeat: Option<String>,
-    /// its liveness deadline: no beat for longer than this is frozen [ms]
+    /// its liveness deadline: no beat for longer than this is frozen \[ms\]
     /// (default: the supervisor's `heartbeat_timeout_ms`)
     #[serde(default)]
     pub heartbeat_timeout_ms: Option<u64>,

@@ -20,25 +20,25 @@ pub struct VoiceConfig {
     /// `stop` needs less: a false stop is safe, a missed one is not (this
     /// complements, never replaces, the emergency stop)
     pub min_stop_score: f64,
-    /// speech shorter than this is refused (`too_short`) [s]
+    /// speech shorter than this is refused (`too_short`) \[s\]
     pub min_utterance_s: f64,
-    /// speech longer than this is refused (`too_long`) [s]
+    /// speech longer than this is refused (`too_long`) \[s\]
     pub max_utterance_s: f64,
-    /// a 10 ms frame this far above the noise floor is speech [dB]
+    /// a 10 ms frame this far above the noise floor is speech \[dB\]
     pub speech_db: f64,
     /// speech begins after this many speech frames in a row [10 ms frames]
     pub onset_frames: u32,
-    /// this long below the threshold ends the utterance [s]
+    /// this long below the threshold ends the utterance \[s\]
     pub hangover_s: f64,
     /// an utterance needs a voiced stretch (periodic at a pitch of
     /// 60-400 Hz) at least this long, else it is refused before decoding
-    /// (`not_speech`: noise, a rattle) [s]; 0 turns the check off
+    /// (`not_speech`: noise, a rattle) \[s\]; 0 turns the check off
     pub min_voiced_s: f64,
-    /// audio kept before the onset and after the end, for the decoder [s]
+    /// audio kept before the onset and after the end, for the decoder \[s\]
     pub padding_s: f64,
     /// `follow` needs the named hand tracked at least this confidently (the gate)
     pub min_hand_confidence: f64,
-    /// a skeleton older than this tracks nothing [ms]
+    /// a skeleton older than this tracks nothing \[ms\]
     pub skeleton_max_age_ms: f64,
 }
 
@@ -102,7 +102,7 @@ pub struct AudioConfig {
     pub source: AudioSource,
     /// with `source = "wav_dir"`: 16 kHz mono 16-bit WAV files, played in name order
     pub wav_dir: String,
-    /// silence between two files [s]
+    /// silence between two files \[s\]
     pub wav_gap_s: f64,
     /// start again after the last file
     pub wav_loop: bool,

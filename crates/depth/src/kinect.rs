@@ -1,6 +1,6 @@
 //! The Kinect v1's depth (what libfreenect's `FREENECT_DEPTH_11BIT` and a
 //! fakenect recording carry): raw 11-bit disparity ↔ depth in millimetres, with OpenKinect's
-//! conversion z [m] = 1 / (raw·(−0.0030711016) + 3.3309495161), tabulated
+//! conversion z \[m\] = 1 / (raw·(−0.0030711016) + 3.3309495161), tabulated
 //! once for the 2048 raw values.
 //!
 //! Quantisation: one raw step is dz ≈ 0.0030711016·z² m (≈ 1.5 mm at
@@ -20,12 +20,12 @@ pub const RAW_COUNT: usize = 2048;
 pub const K1: f64 = -0.003_071_101_6;
 /// Inverse depth at raw 0 [1/m] (OpenKinect).
 pub const K2: f64 = 3.330_949_516_1;
-/// The deepest depth kept [mm]: the Kinect v1 reads nothing useful beyond
+/// The deepest depth kept \[mm\]: the Kinect v1 reads nothing useful beyond
 /// 10 m (libfreenect's `FREENECT_DEPTH_MM_MAX_VALUE`); farther raws (up
 /// to raw 1084, where the formula's depth runs off to infinity) become 0.
 pub const MAX_DEPTH_MM: u16 = 10_000;
 
-/// Depth of raw disparity `raw` [m] by the formula (not rounded; may be
+/// Depth of raw disparity `raw` \[m\] by the formula (not rounded; may be
 /// non-positive or huge past raw 1084).
 pub fn raw_to_m(raw: u16) -> f64 {
     1.0 / (raw as f64 * K1 + K2)
@@ -78,18 +78,18 @@ impl Disparity {
         Disparity { mm, valid_raws }
     }
 
-    /// Depth of raw disparity `raw` [mm] (0: no reading; so is a value
+    /// Depth of raw disparity `raw` \[mm\] (0: no reading; so is a value
     /// outside 11 bits).
     pub fn raw_to_mm(&self, raw: u16) -> u16 {
         self.mm.get(raw as usize).copied().unwrap_or(0)
     }
 
-    /// The nearest and farthest depths a raw can give [mm].
+    /// The nearest and farthest depths a raw can give \[mm\].
     pub fn range_mm(&self) -> (u16, u16) {
         (self.mm[0], self.mm[self.valid_raws - 1])
     }
 
-    /// The raw whose depth is nearest `mm` [mm] (ties to the smaller raw);
+    /// The raw whose depth is nearest `mm` \[mm\] (ties to the smaller raw);
     /// 0 → [`RAW_NONE`]. A depth outside [`Disparity::range_mm`] gets the
     /// end raw (check the range first to refuse it).
     pub fn mm_to_raw(&self, mm: u16) -> u16 {
@@ -113,7 +113,7 @@ impl Disparity {
         }
     }
 
-    /// The depth difference [mm] between the two raws whose depths bracket
+    /// The depth difference \[mm\] between the two raws whose depths bracket
     /// `mm` (the quantisation there): a depth written with
     /// [`Disparity::mm_to_raw`] reads back within half of it. 0 for 0, and
     /// for a depth outside the range.

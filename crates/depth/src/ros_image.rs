@@ -20,13 +20,13 @@
 
 use crate::Intrinsics;
 
-/// The output's width [px] (the `camera/depth` channel's).
+/// The output's width \[px\] (the `camera/depth` channel's).
 pub const OUT_WIDTH: u32 = 640;
-/// The output's height [px].
+/// The output's height \[px\].
 pub const OUT_HEIGHT: u32 = 480;
-/// The widest input accepted [px].
+/// The widest input accepted \[px\].
 pub const MAX_WIDTH: u32 = 1280;
-/// The tallest input accepted [px].
+/// The tallest input accepted \[px\].
 pub const MAX_HEIGHT: u32 = 800;
 
 /// The depth encodings accepted.
@@ -149,7 +149,7 @@ fn shown(s: &str) -> String {
 }
 
 /// The intrinsics of a `sensor_msgs/CameraInfo`: its `K` (row-major 3×3:
-/// fx = K[0], cx = K[2], fy = K[4], cy = K[5]) for an image of
+/// fx = K\[0\], cx = K\[2\], fy = K\[4\], cy = K\[5\]) for an image of
 /// `width`×`height`. Refused: a focal length zero, negative or not finite,
 /// a centre not finite or outside the image, a size out of range.
 pub fn camera_info_intrinsics(
@@ -207,7 +207,7 @@ pub fn footprint(i: u32, n: u32, out: u32) -> (u32, u32) {
     (start as u32, end.min(n) as u32)
 }
 
-/// A `32FC1` sample [m] in millimetres: 0 for no reading (NaN, ±inf, ≤ 0,
+/// A `32FC1` sample \[m\] in millimetres: 0 for no reading (NaN, ±inf, ≤ 0,
 /// or beyond 65.535 m), at least 1 for a reading.
 #[inline]
 pub fn metres_to_mm(m: f32) -> u16 {

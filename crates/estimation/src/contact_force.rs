@@ -14,7 +14,7 @@
 //! `r − J_cᵀ F̂` ([`ForceEstimate::unexplained`]), is the residual of every
 //! other contact: a collision elsewhere shows there.
 //!
-//! Forces are those the human applies to the robot [N], base frame.
+//! Forces are those the human applies to the robot \[N\], base frame.
 //! Allocation-free after construction.
 
 use nalgebra::{DMatrixViewMut, Matrix3, Matrix6xX, Vector3};
@@ -46,7 +46,7 @@ pub enum ForceError {
 pub struct ContactPoint {
     /// the link frame (`Model::frame_id`)
     pub frame: usize,
-    /// the point [m], in that frame
+    /// the point \[m\], in that frame
     pub point: Vector3<f64>,
 }
 
@@ -55,17 +55,17 @@ pub struct ContactPoint {
 pub struct ForceEstimate {
     /// contacts estimated (the first `n` entries are meaningful)
     pub n: usize,
-    /// force the human applies at each contact [N], base frame
+    /// force the human applies at each contact \[N\], base frame
     pub forces: [Vector3<f64>; MAX_FORCE_CONTACTS],
-    /// each contact point [m], base frame
+    /// each contact point \[m\], base frame
     pub points: [Vector3<f64>; MAX_FORCE_CONTACTS],
     /// the residual sees every component of the force (false: a contact on
     /// links 1-2, or rank loss of the stacked Jacobian; `forces` then holds
     /// only what the damped solution recovers)
     pub observable: [bool; MAX_FORCE_CONTACTS],
-    /// ‖r − J_cᵀ F̂‖: the residual these contacts do not explain [Nm]
+    /// ‖r − J_cᵀ F̂‖: the residual these contacts do not explain \[Nm\]
     pub unexplained: f64,
-    /// `r − J_cᵀ F̂` joint by joint [Nm] (the first `min(n, MAX_JOINTS)` entries)
+    /// `r − J_cᵀ F̂` joint by joint \[Nm\] (the first `min(n, MAX_JOINTS)` entries)
     pub left: [f64; MAX_JOINTS],
 }
 
@@ -87,7 +87,7 @@ pub struct ForceEstimator {
 }
 
 impl ForceEstimator {
-    /// An estimator for `model` with pseudoinverse damping `damping` [m].
+    /// An estimator for `model` with pseudoinverse damping `damping` \[m\].
     pub fn new(model: Model, damping: f64) -> ForceEstimator {
         ForceEstimator {
             data: Data::new(&model),
@@ -145,7 +145,7 @@ impl ForceEstimator {
         &self.model
     }
 
-    /// The forces at `contacts` explaining the residual `r` [Nm] at joints `q`.
+    /// The forces at `contacts` explaining the residual `r` \[Nm\] at joints `q`.
     pub fn estimate(
         &mut self,
         q: &[f64],

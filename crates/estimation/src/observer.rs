@@ -35,11 +35,11 @@ pub enum ResidualError {
 /// Result of one step (borrowed from the observer's buffers).
 #[derive(Debug)]
 pub struct ResidualOutput<'a> {
-    /// residual [Nm]
+    /// residual \[Nm\]
     pub r: &'a [f64],
     /// estimated joint velocity [rad/s]
     pub qd: &'a [f64],
-    /// ‖r‖ [Nm]
+    /// ‖r‖ \[Nm\]
     pub norm: f64,
     pub detection: Detection,
     /// past warm-up: the residual is meaningful
@@ -149,7 +149,7 @@ impl ResidualObserver {
         self.r.fill(0.0);
     }
 
-    /// One sample: time `t` [s], measured positions `q`, the torque `tau`
+    /// One sample: time `t` \[s\], measured positions `q`, the torque `tau`
     /// applied since the previous sample, and an optional wrist wrench
     /// (force, moment; base frame, at the F/T link's origin).
     pub fn step(

@@ -44,7 +44,7 @@ impl VelocityEstimator {
         self.qd.fill(0.0);
     }
 
-    /// Feed positions `q` [rad] taken `dt` [s] after the previous ones; returns q̇ [rad/s].
+    /// Feed positions `q` \[rad\] taken `dt` \[s\] after the previous ones; returns q̇ [rad/s].
     pub fn update(&mut self, q: &[f64], dt: f64) -> &[f64] {
         if !self.primed || dt <= 0.0 {
             self.last_q.copy_from_slice(q);

@@ -36,17 +36,17 @@ pub struct Data {
     pub m: DMatrix<f64>,
     /// Coriolis matrix `C(q, q̇)` (Christoffel-consistent)
     pub c: DMatrix<f64>,
-    /// gravity torque `g(q)` [Nm]
+    /// gravity torque `g(q)` \[Nm\]
     pub g: DVector<f64>,
-    /// inverse dynamics result `τ` [Nm]
+    /// inverse dynamics result `τ` \[Nm\]
     pub tau: DVector<f64>,
     /// generalized momentum `p = M q̇`
     pub p: DVector<f64>,
-    /// `C(q, q̇) q̇` [Nm]
+    /// `C(q, q̇) q̇` \[Nm\]
     pub c_qd: DVector<f64>,
-    /// `C(q, q̇)ᵀ q̇` [Nm]
+    /// `C(q, q̇)ᵀ q̇` \[Nm\]
     pub ct_qd: DVector<f64>,
-    /// `Cᵀ q̇ − g`, the residual's integrand besides `τ` and `r` [Nm]
+    /// `Cᵀ q̇ − g`, the residual's integrand besides `τ` and `r` \[Nm\]
     pub residual_bias: DVector<f64>,
     /// forward dynamics result `q̈`
     pub qdd: DVector<f64>,

@@ -376,7 +376,7 @@ fn cholesky_solve_in_place(data: &mut Data) -> Result<(), ModelError> {
     Ok(())
 }
 
-/// Kinetic energy `½ q̇ᵀ M q̇` [J].
+/// Kinetic energy `½ q̇ᵀ M q̇` \[J\].
 pub fn kinetic_energy(
     model: &Model,
     data: &mut Data,
@@ -387,7 +387,7 @@ pub fn kinetic_energy(
     Ok(0.5 * data.p.iter().zip(qd).map(|(p, v)| p * v).sum::<f64>())
 }
 
-/// Potential energy `−Σ m_k gᵀ c_k` [J] (zero at the base origin).
+/// Potential energy `−Σ m_k gᵀ c_k` \[J\] (zero at the base origin).
 pub fn potential_energy(model: &Model, data: &mut Data, q: &[f64]) -> Result<f64, ModelError> {
     check_len("q", model.nv(), q.len())?;
     fk_pass(model, data, q);

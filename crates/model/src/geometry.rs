@@ -10,13 +10,13 @@ use crate::model::{Model, Placement};
 /// their frame's z axis, as in URDF.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    /// segment from `−half_length ẑ` to `+half_length ẑ` swept by a sphere [m]
+    /// segment from `−half_length ẑ` to `+half_length ẑ` swept by a sphere \[m\]
     Capsule { radius: f64, half_length: f64 },
-    /// cylinder along z [m]
+    /// cylinder along z \[m\]
     Cylinder { radius: f64, half_length: f64 },
-    /// sphere [m]
+    /// sphere \[m\]
     Sphere { radius: f64 },
-    /// box with half side lengths [m]
+    /// box with half side lengths \[m\]
     Box { half_extents: Vector3<f64> },
 }
 
@@ -64,7 +64,7 @@ impl Shape {
     /// radius and axis; a box by the capsule along its longest axis whose
     /// radius covers its cross-section. Each contains the shape, and for a box
     /// no capsule along that axis with a shorter segment or a smaller radius
-    /// does (the corners sit on it). Returns `(radius, half_length, R)` [m]:
+    /// does (the corners sit on it). Returns `(radius, half_length, R)` \[m\]:
     /// the capsule's segment is `R (0, 0, ±half_length)` in the shape frame.
     pub fn capsule(&self) -> (f64, f64, Matrix3<f64>) {
         let id = Matrix3::identity();
@@ -92,7 +92,7 @@ impl Shape {
         }
     }
 
-    /// Radius of the smallest sphere around the shape's origin that holds it [m].
+    /// Radius of the smallest sphere around the shape's origin that holds it \[m\].
     pub fn bounding_radius(&self) -> f64 {
         match *self {
             Shape::Capsule {

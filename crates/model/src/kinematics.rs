@@ -80,7 +80,7 @@ pub fn frame_placement(model: &Model, data: &Data, frame: usize) -> Placement {
 }
 
 /// Geometric Jacobian (6×n, linear rows then angular rows, base-frame axes)
-/// of the point `point` [m] fixed in link frame `frame`, after
+/// of the point `point` \[m\] fixed in link frame `frame`, after
 /// [`forward_kinematics`]. Columns of joints that do not move the link are
 /// zero; a mimic joint that moves it adds its motion to its leader's column.
 pub fn point_jacobian(

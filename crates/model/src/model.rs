@@ -9,7 +9,7 @@ use crate::geometry::{CollisionObject, Shape};
 
 pub use crate::urdf::lock_joints;
 
-/// Largest URDF file read [bytes]: robot descriptions are kilobytes (meshes
+/// Largest URDF file read \[bytes\]: robot descriptions are kilobytes (meshes
 /// are separate files), so 16 MiB leaves ample room and bounds what a
 /// wrong path (a log, a device) costs.
 pub const MAX_URDF_BYTES: u64 = 16 << 20;
@@ -17,9 +17,9 @@ pub const MAX_URDF_BYTES: u64 = 16 << 20;
 /// Kind of an actuated joint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JointKind {
-    /// rotation about `axis` [rad]; continuous joints are revolute with infinite position limits
+    /// rotation about `axis` \[rad\]; continuous joints are revolute with infinite position limits
     Revolute,
-    /// translation along `axis` [m]
+    /// translation along `axis` \[m\]
     Prismatic,
 }
 
@@ -28,7 +28,7 @@ pub enum JointKind {
 pub struct Placement {
     /// rotation, child axes in parent coordinates
     pub r: Matrix3<f64>,
-    /// origin of the child frame [m], parent frame
+    /// origin of the child frame \[m\], parent frame
     pub p: Vector3<f64>,
 }
 
@@ -115,7 +115,7 @@ pub struct Joint {
     pub velocity: f64,
     /// effort limit [Nm or N], > 0; ∞ only for a continuous joint without `<limit>`
     pub effort: f64,
-    /// mass [kg], centre of mass [m] and inertia about it [kg m²] of the
+    /// mass \[kg\], centre of mass \[m\] and inertia about it [kg m²] of the
     /// body (links rigidly attached by fixed joints merged), body frame
     pub mass: f64,
     pub com: Vector3<f64>,
@@ -150,7 +150,7 @@ pub struct Model {
     pub skipped_meshes: Vec<String>,
     /// gravity acceleration [m/s²], base frame
     pub gravity: Vector3<f64>,
-    /// mass attached rigidly to the root (does not enter the dynamics) [kg]
+    /// mass attached rigidly to the root (does not enter the dynamics) \[kg\]
     pub root_mass: f64,
     /// rotor inertia reflected at each actuated joint [kg m² or kg], added
     /// to `M`'s diagonal (zero unless [`Model::set_armature`] gives it: a
@@ -164,7 +164,7 @@ pub struct Model {
 }
 
 impl Model {
-    /// The mass of the moving parts [kg]: every body a joint moves (what is
+    /// The mass of the moving parts \[kg\]: every body a joint moves (what is
     /// rigidly attached to the root is not).
     pub fn moving_mass(&self) -> f64 {
         self.joints.iter().map(|j| j.mass).sum()

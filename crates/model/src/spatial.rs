@@ -3,7 +3,7 @@
 //!
 //! A [`Motion`] is `(ω, v_O)`: angular velocity [rad/s] and the linear velocity
 //! [m/s] of the body point that momentarily coincides with the origin. A
-//! [`Force`] is `(n_O, f)`: moment about the origin [Nm] and force [N].
+//! [`Force`] is `(n_O, f)`: moment about the origin \[Nm\] and force \[N\].
 
 use nalgebra::{Matrix3, Matrix6, Vector3};
 
@@ -19,9 +19,9 @@ pub struct Motion {
 /// Spatial force vector (wrench or momentum), base frame, about the base origin.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Force {
-    /// moment about the base origin [Nm]
+    /// moment about the base origin \[Nm\]
     pub n: Vector3<f64>,
-    /// force [N]
+    /// force \[N\]
     pub f: Vector3<f64>,
 }
 
@@ -132,11 +132,11 @@ pub fn skew(x: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// Spatial inertia about the base origin, base-frame axes, stored compactly:
-/// mass `m` [kg], first moment `h = m c` [kg m] and rotational inertia about
+/// mass `m` \[kg\], first moment `h = m c` [kg m] and rotational inertia about
 /// the origin `I_O = I_c − m [c]×²` [kg m²].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Inertia {
-    /// mass [kg]
+    /// mass \[kg\]
     pub m: f64,
     /// first mass moment `m c` [kg m], base frame
     pub h: Vector3<f64>,
@@ -184,7 +184,7 @@ impl Inertia {
         out
     }
 
-    /// Centre of mass [m], base frame (origin for a massless body).
+    /// Centre of mass \[m\], base frame (origin for a massless body).
     #[inline]
     pub fn com(&self) -> Vector3<f64> {
         if self.m > 0.0 {
@@ -248,7 +248,7 @@ pub fn rpy_to_matrix(r: f64, p: f64, y: f64) -> Matrix3<f64> {
     )
 }
 
-/// Rotation by `angle` [rad] about the unit axis `u` (Rodrigues).
+/// Rotation by `angle` \[rad\] about the unit axis `u` (Rodrigues).
 #[inline]
 pub fn axis_angle(u: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
     let (s, c) = angle.sin_cos();

@@ -8,7 +8,7 @@
 //!
 //! The Goldfarb-Idnani dual active-set method (Math. Programming 27, 1983),
 //! in Pinocchio's split: a [`Workspace`] sized once for `n_max` variables
-//! and `m_max` rows holds every buffer and the [`Settings`]; [`solve`]
+//! and `m_max` rows holds every buffer and the [`Settings`]; [`solve()`]
 //! fills it and allocates nothing; its iterations are bounded
 //! ([`Settings::max_iterations`], default 200). [`Start::Warm`] starts from
 //! the last solve's active set (re-verified: rows whose multiplier would be

@@ -54,12 +54,12 @@ use phri_ipc::{
 
 /// Consecutive missing commands the robot tolerates before braking (as Franka's FCI).
 pub const MAX_MISSED: u32 = 20;
-/// Period of `robot/stats` [cycles].
+/// Period of `robot/stats` \[cycles\].
 pub const STATS_EVERY: u64 = 100;
 /// When this process itself woke late (the simulated world paused with it),
-/// the controller gets this much more to answer before the cycle counts as missed [ns].
+/// the controller gets this much more to answer before the cycle counts as missed \[ns\].
 pub const LATE_CYCLE_GRACE_NS: u64 = 500_000;
-/// How often the caller looks for the answer during the grace [ns].
+/// How often the caller looks for the answer during the grace \[ns\].
 pub const GRACE_POLL_NS: u64 = 50_000;
 /// Runs of missed deadlines logged in full; afterwards only runs whose last
 /// miss number is a power of two.
@@ -83,9 +83,9 @@ pub enum LinkError {
 /// The start of a cycle ([`RobotLink::wake`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Wake {
-    /// when this process woke [ns]
+    /// when this process woke \[ns\]
     pub woke_ns: u64,
-    /// the cycle's deadline [ns]; when late, the schedule slips to `woke_ns`
+    /// the cycle's deadline \[ns\]; when late, the schedule slips to `woke_ns`
     /// (the controller gets a full period for every state, rather than
     /// cycles back to back)
     pub deadline_ns: u64,
@@ -199,7 +199,7 @@ pub struct LinkOutput {
     pub takeover: bool,
     /// commands were refused since the last [`RobotLink::commanders_message`]
     /// (a stranger's, a malformed one): publish it now (at most every
-    /// [`REFUSED_PUBLISH_EVERY`] periods)
+    /// `REFUSED_PUBLISH_EVERY` periods)
     pub refused: bool,
 }
 

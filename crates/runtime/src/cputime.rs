@@ -1,7 +1,7 @@
 //! The CPU time a process has used, from `/proc` (the supervisor's budget
 //! and starvation judgements, the monitor's live view).
 
-/// CPU time `pid` has used so far, all its threads [ns]: from each thread's
+/// CPU time `pid` has used so far, all its threads \[ns\]: from each thread's
 /// `schedstat` (nanoseconds), else from `stat`'s utime + stime (clock
 /// ticks). `None`: no such process (or `/proc` unreadable).
 pub fn cpu_time_ns(pid: u32) -> Option<u64> {

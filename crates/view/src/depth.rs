@@ -1,7 +1,7 @@
 //! A depth frame (`perception/depth`: a [`FrameHeader`] and `width × height`
 //! row-major `u16` depths) as viewers show it: its valid pixels
 //! back-projected into packed points in the camera's optical frame (+x
-//! right, +y down, +z along the optical axis, [m]), the camera's pose in the
+//! right, +y down, +z along the optical axis, \[m\]), the camera's pose in the
 //! robot's base frame, and the frame's time on phri's clock. Each viewer
 //! wraps these in its own message (a Foxglove `PointCloud`, a ROS 2
 //! `sensor_msgs/PointCloud2`).
@@ -9,7 +9,7 @@
 use nalgebra::{Matrix3, Vector3};
 use phri_ipc::FrameHeader;
 
-/// Bytes per point: x, y, z as little-endian f32 [m], camera optical frame.
+/// Bytes per point: x, y, z as little-endian f32 \[m\], camera optical frame.
 pub const POINT_STRIDE: usize = 12;
 
 /// Whether the payload holds the `width × height` depths the header announces
@@ -20,9 +20,9 @@ pub fn complete(h: &FrameHeader, depth: &[u16]) -> bool {
 }
 
 /// The frame's valid depths (non-zero), every `k`-th pixel per axis,
-/// back-projected through the header's intrinsics (fx, fy, cx, cy [px],
+/// back-projected through the header's intrinsics (fx, fy, cx, cy \[px\],
 /// `depth_scale` [m per unit]) and appended to `out` as packed points
-/// ([`POINT_STRIDE`] bytes: x, y, z little-endian f32 [m], the camera's
+/// ([`POINT_STRIDE`] bytes: x, y, z little-endian f32 \[m\], the camera's
 /// optical frame). `false` (nothing appended) when the payload is short, `k`
 /// is 0 or the intrinsics are unusable.
 pub fn optical_points(h: &FrameHeader, depth: &[u16], k: usize, out: &mut Vec<u8>) -> bool {
@@ -49,7 +49,7 @@ pub fn optical_points(h: &FrameHeader, depth: &[u16], k: usize, out: &mut Vec<u8
 
 /// The camera's pose in the base frame from a frame header: the rotation
 /// base ← camera optical frame (the header's row-major `pose_r`) and the
-/// optical centre's position in the base frame [m].
+/// optical centre's position in the base frame \[m\].
 pub fn camera_pose(h: &FrameHeader) -> (Matrix3<f64>, Vector3<f64>) {
     (
         Matrix3::from_row_slice(&h.pose_r),

@@ -4,13 +4,13 @@
 //!
 //! - [`depth`]: a depth frame (`perception/depth`) back-projected through its
 //!   header's intrinsics into packed points in the camera's optical frame
-//!   (+x right, +y down, +z along the optical axis, [m]), the camera's pose in
+//!   (+x right, +y down, +z along the optical axis, \[m\]), the camera's pose in
 //!   the robot's base frame and the frame's time on phri's clock.
 //! - [`robot`]: [`RobotView`], the robot's collision capsules and link frames
-//!   posed by forward kinematics from a joint state (base frame, [m]).
+//!   posed by forward kinematics from a joint state (base frame, \[m\]).
 //! - [`status`]: [`Status`], the controller's mode, the collaboration
 //!   phase, the momentum residual and the thresholds it is judged against
-//!   ([Nm]), the obstacle distance ([m]), as one serialisable sample.
+//!   (\[Nm\]), the obstacle distance (\[m\]), as one serialisable sample.
 //!
 //! Frames: the robot's base frame is the cell's world (z up, SI units); the
 //! camera's optical frame is the one its depth frames are taken in.

@@ -1,19 +1,19 @@
 //! The robot as viewers show it: its collision capsules and link frames
 //! posed by forward kinematics from a joint state, in the robot's base frame
-//! [m], with the same shape-to-capsule rule as the simulator's contacts and
+//! \[m\], with the same shape-to-capsule rule as the simulator's contacts and
 //! the camera ([`phri_model::Shape::capsule`]).
 
 use nalgebra::Vector3;
 use phri_model::{forward_kinematics, Data, Model, ModelError, Placement};
 
-/// One capsule: segment `a`–`b` swept by `radius` [m], base frame.
+/// One capsule: segment `a`–`b` swept by `radius` \[m\], base frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Capsule {
-    /// one end of the segment [m], base frame
+    /// one end of the segment \[m\], base frame
     pub a: Vector3<f64>,
-    /// the other end [m], base frame
+    /// the other end \[m\], base frame
     pub b: Vector3<f64>,
-    /// the radius swept around the segment [m]
+    /// the radius swept around the segment \[m\]
     pub radius: f64,
 }
 
@@ -70,7 +70,7 @@ impl RobotView {
     }
 
     /// Each moving link's frame in the base frame at the last pose: `(link,
-    /// placement)` (rotation base ← link, the link's origin [m]).
+    /// placement)` (rotation base ← link, the link's origin \[m\]).
     pub fn link_frames(&self) -> impl Iterator<Item = (&str, Placement)> + '_ {
         self.model
             .joints

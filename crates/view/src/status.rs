@@ -15,14 +15,14 @@ use serde_json::json;
 /// Schema name of [`Status`].
 pub const SCHEMA_NAME: &str = "phri.viz.Status";
 
-/// The thresholds of the collision detector (`[dynamics]`), per joint [Nm].
+/// The thresholds of the collision detector (`[dynamics]`), per joint \[Nm\].
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Thresholds {
-    /// |r_i| above: contact [Nm]
+    /// |r_i| above: contact \[Nm\]
     pub contact: Vec<f64>,
-    /// |r_i| above: collision [Nm]
+    /// |r_i| above: collision \[Nm\]
     pub collision: Vec<f64>,
-    /// ‖r‖ above: collision [Nm]
+    /// ‖r‖ above: collision \[Nm\]
     pub collision_norm: f64,
 }
 
@@ -41,9 +41,9 @@ pub struct Status {
     pub phase_reason: &'static str,
     /// the collaborative human part ([`CollabPart`] name)
     pub human_part: &'static str,
-    /// momentum residual r ≈ τ_ext per joint [Nm]
+    /// momentum residual r ≈ τ_ext per joint \[Nm\]
     pub residual: Vec<f64>,
-    /// ‖r‖ [Nm]
+    /// ‖r‖ \[Nm\]
     pub residual_norm: Option<f64>,
     /// the residual's contact flag: some |r_i| above its contact threshold
     pub contact: bool,
@@ -53,24 +53,24 @@ pub struct Status {
     pub residual_valid: bool,
     /// last joint past its contact threshold (−1: none)
     pub isolated_joint: i32,
-    /// per-joint contact thresholds the residual is judged against [Nm]
+    /// per-joint contact thresholds the residual is judged against \[Nm\]
     pub contact_threshold: Vec<f64>,
-    /// per-joint collision thresholds [Nm]
+    /// per-joint collision thresholds \[Nm\]
     pub collision_threshold: Vec<f64>,
-    /// collision threshold on ‖r‖ [Nm]
+    /// collision threshold on ‖r‖ \[Nm\]
     pub collision_norm_threshold: f64,
-    /// smallest obstacle distance of the control points [m] (null: none seen)
+    /// smallest obstacle distance of the control points \[m\] (null: none seen)
     pub min_distance: Option<f64>,
     /// largest repulsion risk ‖V_Call‖/V_max [0, 1]
     pub risk: Option<f64>,
     /// SNS task scale [0, 1]
     pub task_scale: Option<f64>,
-    /// ‖r − Σ J_kᵀ F̂_k‖: residual the intended contacts do not explain [Nm]
+    /// ‖r − Σ J_kᵀ F̂_k‖: residual the intended contacts do not explain \[Nm\]
     pub unexplained_norm: Option<f64>,
     /// no robot state for longer than phri-viz's `--stale-after`: the cell
     /// stopped (or stalled); the scene is not being sent
     pub stale: bool,
-    /// age of the newest robot state when this status was sent [s] (0: it came
+    /// age of the newest robot state when this status was sent \[s\] (0: it came
     /// with this status; null: none yet)
     pub input_age: Option<f64>,
 }

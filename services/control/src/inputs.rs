@@ -523,7 +523,7 @@ impl InputGate {
         true
     }
 
-    /// `hri/request` from `pid` at `mono_now_ns` [CLOCK_MONOTONIC]: refused
+    /// `hri/request` from `pid` at `mono_now_ns` \[CLOCK_MONOTONIC\]: refused
     /// from the future; its `source` set from its sender.
     pub fn request(&self, pid: i32, r: &mut HriRequest, mono_now_ns: u64) -> bool {
         let c = Owned::HRI_REQUEST;

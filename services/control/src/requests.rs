@@ -13,7 +13,7 @@ pub const REQUEST_QUEUE: usize = HRI_REQUEST.qos.subscriber_max_buffer;
 pub const MAX_REQUESTS: usize = 2 * REQUEST_QUEUE;
 
 /// How long a loss seen while this controller is not in charge still stops
-/// it when it takes charge [s]: both controllers of a hot standby stalled
+/// it when it takes charge \[s\]: both controllers of a hot standby stalled
 /// together, the one that read its full queue first may still be the
 /// standby while the robot hands the charge over to it.
 pub const LOSS_HOLD: std::time::Duration = std::time::Duration::from_secs(1);

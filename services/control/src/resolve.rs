@@ -61,11 +61,11 @@ pub struct SsmPeriod {
     /// reference's slew limit
     pub stopping: bool,
     /// the smallest clearance less the protective separation distance
-    /// over the control points [m] (+∞: none monitored)
+    /// over the control points \[m\] (+∞: none monitored)
     pub min_margin_m: f64,
     /// the largest person's speed toward a control point used [m/s]
     pub human_speed_m_s: f64,
-    /// T_r: the age of the perception acted on [s] (NaN: not monitoring)
+    /// T_r: the age of the perception acted on \[s\] (NaN: not monitoring)
     pub reaction_s: f64,
 }
 
@@ -694,9 +694,9 @@ pub struct FeedbackCaps {
     pub toward: f64,
     /// the whole feedback [m/s]
     pub free: f64,
-    /// the end effector's clearance to its obstacle [m] (∞: none)
+    /// the end effector's clearance to its obstacle \[m\] (∞: none)
     pub clearance: f64,
-    /// the net approach may go on down to this clearance [m] ...
+    /// the net approach may go on down to this clearance \[m\] ...
     pub approach_clearance: f64,
     /// ... at `gain × (clearance − approach_clearance)` [1/s] (0: never)
     pub approach_gain: f64,

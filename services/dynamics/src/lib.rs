@@ -56,10 +56,10 @@ impl DynamicsStep {
         })
     }
 
-    /// One robot state: its positions [rad] at `stamp_ns` [ns, robot clock],
-    /// the torque applied over the period that ended there [Nm] and, when the
+    /// One robot state: its positions \[rad\] at `stamp_ns` [ns, robot clock],
+    /// the torque applied over the period that ended there \[Nm\] and, when the
     /// status says `FT_VALID`, the wrist wrench [N, Nm; base frame, at the
-    /// F/T link's origin]. Returns the residual message: `r` [Nm], the
+    /// F/T link's origin]. Returns the residual message: `r` \[Nm\], the
     /// estimated `qd` [rad/s], ‖r‖, [`residual_flags`], the isolated joint
     /// (−1: none), the state's sequence and stamp. `seq`, `stamp_ns` and
     /// `compute_ns` are those of the last [`DynamicsStep::seal`].
@@ -122,7 +122,7 @@ impl DynamicsStep {
 
     /// Number the residual of the last accepted state for publishing: the
     /// next sequence number, the publish time `stamp_ns` [ns, CLOCK_MONOTONIC]
-    /// and the time its step took `compute_ns` [ns]. A reader drains every
+    /// and the time its step took `compute_ns` \[ns\]. A reader drains every
     /// queued state and publishes the last residual once.
     pub fn seal(&mut self, stamp_ns: u64, compute_ns: u64) -> &Residual {
         self.msg.seq += 1;

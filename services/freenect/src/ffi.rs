@@ -12,7 +12,7 @@
 //! libfreenect calls the depth callback from inside
 //! `freenect_process_events_timeout`, on the thread that called it: the
 //! callback only copies the frame into a buffer allocated up front, owned
-//! by a boxed [`Shared`] whose address libfreenect keeps as the device's
+//! by a boxed `Shared` whose address libfreenect keeps as the device's
 //! user pointer.
 
 use std::ffi::{c_int, c_void};

@@ -22,19 +22,19 @@ pub use timestamps::{Capture, TimestampMapper};
 
 use phri_depth::Intrinsics;
 
-/// Depth image width [px] (`FREENECT_RESOLUTION_MEDIUM`).
+/// Depth image width \[px\] (`FREENECT_RESOLUTION_MEDIUM`).
 pub const WIDTH: u32 = 640;
-/// Depth image height [px].
+/// Depth image height \[px\].
 pub const HEIGHT: u32 = 480;
 /// Pixels in a depth frame.
 pub const PIXELS: usize = phri_depth::kinect::PIXELS;
-/// The Kinect v1 depth camera's nominal focal length along x [px] at 640×480.
+/// The Kinect v1 depth camera's nominal focal length along x \[px\] at 640×480.
 pub const FX: f64 = 580.0;
-/// Its nominal focal length along y [px].
+/// Its nominal focal length along y \[px\].
 pub const FY: f64 = 580.0;
-/// Its nominal principal point, column [px].
+/// Its nominal principal point, column \[px\].
 pub const CX: f64 = 320.0;
-/// Its nominal principal point, row [px].
+/// Its nominal principal point, row \[px\].
 pub const CY: f64 = 240.0;
 
 /// The Kinect v1 depth camera's nominal intrinsics at 640×480 (the values
@@ -49,7 +49,7 @@ pub const KINECT_DEPTH: Intrinsics = Intrinsics {
     cy: CY,
 };
 
-/// How long the service waits for the first frame before it gives up [s].
+/// How long the service waits for the first frame before it gives up \[s\].
 pub const FIRST_FRAME_TIMEOUT_S: u64 = 5;
 
 /// A libfreenect failure; every message is one line naming the device.

@@ -6,7 +6,7 @@
 //! `sscanf(line, "%c-%lf-%u-%*s", …)` on each line of `INDEX.txt`):
 //! - `DIR/INDEX.txt`: file names, one a line, played in order;
 //! - a depth file `d-CURRENTTIME-TIMESTAMP.pgm`: CURRENTTIME the recording
-//!   host's time [s] as a float (fakenect sleeps the difference between
+//!   host's time \[s\] as a float (fakenect sleeps the difference between
 //!   consecutive lines' times; it skips the first sleep while the previous
 //!   time is 0, so times start at 1 s here), TIMESTAMP the device's 32-bit
 //!   timestamp [60 MHz ticks] handed to the depth callback;
@@ -28,7 +28,7 @@ use crate::PIXELS;
 
 /// The depth file's header line.
 pub const PGM_HEADER: &[u8] = b"P5 640 480 65535\n";
-/// CURRENTTIME of the first frame [s] (not 0: see the module's notes).
+/// CURRENTTIME of the first frame \[s\] (not 0: see the module's notes).
 pub const START_TIME_S: f64 = 1.0;
 
 /// A recording that could not be written.
@@ -61,8 +61,8 @@ pub enum RecordingError {
     },
 }
 
-/// A depth file's name: `d-CURRENTTIME-TIMESTAMP.pgm` (time [s], 6
-/// decimals, as libfreenect's recorder writes it; timestamp [ticks]).
+/// A depth file's name: `d-CURRENTTIME-TIMESTAMP.pgm` (time \[s\], 6
+/// decimals, as libfreenect's recorder writes it; timestamp \[ticks\]).
 pub fn depth_file_name(time_s: f64, timestamp: u32) -> String {
     format!("d-{time_s:.6}-{timestamp}.pgm")
 }
@@ -94,9 +94,9 @@ pub fn depth_file(table: &Disparity, frame: usize, mm: &[u16]) -> Result<Vec<u8>
     Ok(out)
 }
 
-/// Write `frames` (640×480 depths [mm], 0: no reading) as a fakenect
+/// Write `frames` (640×480 depths \[mm\], 0: no reading) as a fakenect
 /// recording into `dir` (created if missing), played at `rate_hz`, device
-/// timestamps from `first_timestamp` [ticks] on (wrapping). Returns the
+/// timestamps from `first_timestamp` \[ticks\] on (wrapping). Returns the
 /// file names, in `INDEX.txt`'s order.
 pub fn write_recording<F: AsRef<[u16]>>(
     dir: &Path,

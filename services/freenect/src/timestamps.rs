@@ -33,7 +33,7 @@ pub const WINDOW: usize = 90;
 /// estimate follows [ns per ns]: 5 %.
 pub const MAX_SKEW: f64 = 0.05;
 /// Device and callback clocks disagreeing this much between two frames
-/// restarts the estimate [ns]; also bounds the gap between frames below
+/// restarts the estimate \[ns\]; also bounds the gap between frames below
 /// half a wrap (35.8 s), where a wrap could not be told apart.
 pub const MAX_DISAGREEMENT_NS: u64 = 1_000_000_000;
 

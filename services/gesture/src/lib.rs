@@ -39,9 +39,9 @@ pub struct Wave {
     pub person: u32,
     /// the waving hand
     pub part: CollabPart,
-    /// capture time of the first reversal counted [ns]
+    /// capture time of the first reversal counted \[ns\]
     pub onset_ns: u64,
-    /// capture time of the frame that completed it [ns]
+    /// capture time of the frame that completed it \[ns\]
     pub detected_ns: u64,
     /// the smallest confidence of hand and elbow over the wave [0, 1]
     pub confidence: f64,

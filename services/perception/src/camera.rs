@@ -10,7 +10,7 @@ use phri_model::{Data, Model, ModelError};
 
 use crate::robot::robot_capsules;
 
-/// Depth unit of every frame of this pipeline [m]: millimetres.
+/// Depth unit of every frame of this pipeline \[m\]: millimetres.
 pub const DEPTH_SCALE_M: f64 = phri_depth::png::MILLIMETRE_SCALE_M;
 
 /// Why the camera could not be built or could not render a frame.
@@ -84,7 +84,7 @@ impl CameraSim {
         self.intrinsics.pixel_count()
     }
 
-    /// Capture `world` into `out` (`pixels()` depths [mm], row-major) and
+    /// Capture `world` into `out` (`pixels()` depths \[mm\], row-major) and
     /// write its whole `header`: the next frame number, intrinsics and pose
     /// ([`fill_camera_header`]), the capture time (the world's stamp [ns,
     /// robot clock]), `capture_wall_ns` [ns, CLOCK_MONOTONIC] as given (the
@@ -129,7 +129,7 @@ impl CameraSim {
     }
 }
 
-/// Camera fields of a frame header: frame number `seq`, intrinsics [px], the
+/// Camera fields of a frame header: frame number `seq`, intrinsics \[px\], the
 /// camera pose in the base frame, millimetre depths.
 pub fn fill_camera_header(h: &mut FrameHeader, seq: u64, k: &Intrinsics, pose: &CameraPose) {
     h.seq = seq;

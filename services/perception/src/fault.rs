@@ -7,15 +7,15 @@ use std::fmt;
 
 use phri_ipc::{DepthFault, DepthFaultKind, FrameHeader};
 
-/// Longest publish delay accepted [ms]; longer requests are clamped.
+/// Longest publish delay accepted \[ms\]; longer requests are clamped.
 pub const MAX_DELAY_MS: f64 = 10_000.0;
-/// Longest delay period accepted [s]; longer requests are clamped.
+/// Longest delay period accepted \[s\]; longer requests are clamped.
 pub const MAX_DELAY_DURATION_S: f64 = 3600.0;
-/// A [`DepthFaultKind::Stale`] frame's capture time is moved back this much [ns].
+/// A [`DepthFaultKind::Stale`] frame's capture time is moved back this much \[ns\].
 pub const STALE_BY_NS: u64 = 1_000_000_000;
 /// One pixel in this many becomes a flying pixel under [`DepthFaultKind::Noise`] (2 %).
 pub const NOISE_ONE_IN: u64 = 50;
-/// Flying pixels' depths: `[NOISE_MIN_MM, NOISE_MIN_MM + NOISE_SPAN_MM)` [mm].
+/// Flying pixels' depths: `[NOISE_MIN_MM, NOISE_MIN_MM + NOISE_SPAN_MM)` \[mm\].
 pub const NOISE_MIN_MM: u16 = 500;
 pub const NOISE_SPAN_MM: u16 = 3500;
 
@@ -102,8 +102,8 @@ impl FaultState {
         }
     }
 
-    /// Corrupt this frame (`depth` [mm] and its `header`) if a corruption has
-    /// frames left; returns the extra publish delay in force at `now_ns` [ns].
+    /// Corrupt this frame (`depth` \[mm\] and its `header`) if a corruption has
+    /// frames left; returns the extra publish delay in force at `now_ns` \[ns\].
     /// - noise: one pixel in [`NOISE_ONE_IN`] gets a random depth in
     ///   `[NOISE_MIN_MM, NOISE_MIN_MM + NOISE_SPAN_MM)`
     /// - zeros: every pixel 0 (a blind frame)

@@ -51,7 +51,7 @@ pub enum FrameError {
     NoJointState { seq: u64, limit_ms: f64 },
 }
 
-/// Recent joint states (stamp [ns, robot clock], q [rad]), newest last;
+/// Recent joint states (stamp [ns, robot clock], q \[rad\]), newest last;
 /// fixed capacity, the oldest overwritten.
 pub struct StateHistory {
     n: usize,
@@ -176,7 +176,7 @@ impl Ingest {
     }
 
     /// Validate `header`/`input` (size, camera, millimetres, age, sequence),
-    /// copy the depths [mm] into `out` without isolated flying pixels
+    /// copy the depths \[mm\] into `out` without isolated flying pixels
     /// ([`FlyingPixels`]) and without the robot's pixels (the arm at the state
     /// of `states` nearest the capture time), and complete `header` (joint
     /// state used, the robot's removed pixels, valid pixels left). `now_ns` [ns, robot

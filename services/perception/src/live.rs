@@ -15,10 +15,10 @@ use phri_ipc::{
 
 use crate::camera::fill_camera_header;
 
-/// How often a camera publishes its status [ns]: 2 Hz.
+/// How often a camera publishes its status \[ns\]: 2 Hz.
 pub const STATUS_PERIOD_NS: u64 = 500_000_000;
 
-/// A stamp this far ahead of the clock still counts as now [ns] (the
+/// A stamp this far ahead of the clock still counts as now \[ns\] (the
 /// clocks of a camera's host and of this one, mapped, differ by this much).
 pub const FUTURE_TOLERANCE_NS: u64 = 5_000_000;
 
@@ -215,7 +215,7 @@ impl CameraOut {
         &mut self.stamps
     }
 
-    /// Publish a frame of `k.pixel_count()` depths [mm] captured at
+    /// Publish a frame of `k.pixel_count()` depths \[mm\] captured at
     /// `capture_wall_ns` [ns, CLOCK_MONOTONIC], written by `fill` straight
     /// into the shared-memory sample. Refused (and counted) when the capture
     /// time is not admitted or `fill` refuses the frame: no part of a

@@ -245,7 +245,7 @@ impl Perception {
         self.eyes.get(camera).map_or(&[], |e| &e.results)
     }
 
-    /// Camera `camera`'s last frame: its header and its depths [mm] as
+    /// Camera `camera`'s last frame: its header and its depths \[mm\] as
     /// captured and as filtered by ingestion.
     pub fn frame(&self, camera: usize) -> Option<(&FrameHeader, &[u16], &[u16])> {
         self.eyes

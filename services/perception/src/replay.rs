@@ -111,7 +111,7 @@ impl Replay {
         })
     }
 
-    /// Replay period [ns].
+    /// Replay period \[ns\].
     pub fn period_ns(&self) -> u64 {
         self.period_ns
     }
@@ -131,7 +131,7 @@ impl Replay {
         !self.looping && self.next >= self.files.len()
     }
 
-    /// Read the next frame into `out` (`width × height` depths [mm]); `None`
+    /// Read the next frame into `out` (`width × height` depths \[mm\]); `None`
     /// once the recording is done. On an error `out` may hold part of a
     /// frame: the caller drops it.
     pub fn next_into(&mut self, out: &mut [u16]) -> Option<Result<(), FrameReadError>> {

@@ -115,9 +115,9 @@ impl Worker {
         self.points.len()
     }
 
-    /// Results for `frame` (filtered depths [mm], with the joint state in
+    /// Results for `frame` (filtered depths \[mm\], with the joint state in
     /// its header), one per control point of this worker: the point and the
-    /// closest obstacle [m, base frame], their distance [m] and the repulsive
+    /// closest obstacle [m, base frame], their distance \[m\] and the repulsive
     /// velocity V_Call [m/s, base frame].
     pub fn step(
         &mut self,

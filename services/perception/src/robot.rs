@@ -6,7 +6,7 @@ use phri_model::{Data, Model};
 
 /// Capsules of every collision object at the configuration last passed to
 /// `forward_kinematics`, into `out` [m, base frame], each radius grown by
-/// `margin` [m]. The shape-to-capsule rule is the model's one
+/// `margin` \[m\]. The shape-to-capsule rule is the model's one
 /// ([`phri_model::Shape::capsule`]), so the camera, the self-filter and the
 /// simulator's contacts see the same robot.
 pub fn robot_capsules(model: &Model, data: &Data, margin: f64, out: &mut Vec<Capsule>) {

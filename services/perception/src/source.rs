@@ -25,7 +25,7 @@ impl Ticks {
         }
     }
 
-    /// When the next tick is due [ns]: sleep until then.
+    /// When the next tick is due \[ns\]: sleep until then.
     pub fn deadline_ns(&self) -> u64 {
         self.next_ns
     }
@@ -75,7 +75,7 @@ impl RateLimited {
         }
     }
 
-    /// One more occurrence at `now_ns` [ns]: `Some(n)` when a line is due, `n`
+    /// One more occurrence at `now_ns` \[ns\]: `Some(n)` when a line is due, `n`
     /// the occurrences it reports (this one and the ones not logged before it).
     pub fn hit(&mut self, now_ns: u64) -> Option<u64> {
         self.count += 1;

@@ -95,7 +95,7 @@ impl DepthTracker {
         })
     }
 
-    /// The people of one frame (`header`, `depth` [mm]) into `out`, with
+    /// The people of one frame (`header`, `depth` \[mm\]) into `out`, with
     /// the frame's sequence number and capture times, joints in the robot's
     /// base frame; `states` the robot's recent joint states (for the
     /// self-filter), `now_ns` [robot clock] when the frame is handled.

@@ -132,7 +132,7 @@ pub struct RosCamera {
     /// camera infos refused
     pub infos_refused: u64,
     /// this process's time per published image, from its take out of DDS
-    /// (deserialisation) to its publication: total and largest [ns]
+    /// (deserialisation) to its publication: total and largest \[ns\]
     pub work_ns: (u64, u64),
 }
 

@@ -17,19 +17,19 @@ use crate::msgs::{
 pub const BASE_FRAME: &str = "base_link";
 /// The first depth camera's optical frame.
 pub const CAMERA_FRAME: &str = "camera_depth_optical_frame";
-/// Bytes per point of `/phri/points`: x, y, z as little-endian f32 [m].
+/// Bytes per point of `/phri/points`: x, y, z as little-endian f32 \[m\].
 pub const POINT_STEP: usize = phri_view::depth::POINT_STRIDE;
 
 /// phri's clock (CLOCK_MONOTONIC) to ROS time (the system clock): the
 /// offset between the two, read when the bridge samples them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Clock {
-    /// realtime − monotonic [ns]
+    /// realtime − monotonic \[ns\]
     pub offset_ns: i128,
 }
 
 impl Clock {
-    /// From a reading of both clocks [ns].
+    /// From a reading of both clocks \[ns\].
     pub fn new(monotonic_ns: u64, realtime_ns: u64) -> Clock {
         Clock {
             offset_ns: i128::from(realtime_ns) - i128::from(monotonic_ns),
@@ -69,7 +69,7 @@ fn vector(v: &V3<f64>) -> Vector3 {
 }
 
 /// `robot/state` into `out` (its names set once by the caller): positions
-/// [rad or m] and the torque applied in the last period as effort [Nm];
+/// [rad or m] and the torque applied in the last period as effort \[Nm\];
 /// no velocities (the robot measures positions only). `dof` values, at
 /// most as many as names.
 pub fn joint_state(s: &phri_ipc::JointState, stamp: Time, out: &mut JointState) {
@@ -96,15 +96,15 @@ pub fn transform(stamp: Time, parent: &str, child: &str, p: &Placement) -> Trans
 }
 
 /// The camera's optical frame in [`BASE_FRAME`], from a frame's header
-/// (its pose: rotation row-major, translation [m]).
+/// (its pose: rotation row-major, translation \[m\]).
 pub fn camera_transform(stamp: Time, h: &FrameHeader) -> TransformStamped {
     let (r, p) = phri_view::depth::camera_pose(h);
     transform(stamp, BASE_FRAME, CAMERA_FRAME, &Placement { r, p })
 }
 
 /// The estimated contact forces F̂ of the collaboration as one wrench in
-/// [`BASE_FRAME`]: their sum [N], and their moment about the frame's origin
-/// Σ p × F̂ [Nm] (so one contact's point is recoverable from the two). A
+/// [`BASE_FRAME`]: their sum \[N\], and their moment about the frame's origin
+/// Σ p × F̂ \[Nm\] (so one contact's point is recoverable from the two). A
 /// non-finite force or point counts as none.
 pub fn contact_wrench(c: &CollabState, stamp: Time) -> WrenchStamped {
     let mut force = V3::zeros();
@@ -157,7 +157,7 @@ pub fn depth_image(h: &FrameHeader, depth: &[u16], stamp: Time, out: &mut Image)
 }
 
 /// A depth frame's valid pixels as `sensor_msgs/PointCloud2` in
-/// [`CAMERA_FRAME`] (x, y, z float32 [m]), one pixel in `k` per axis,
+/// [`CAMERA_FRAME`] (x, y, z float32 \[m\]), one pixel in `k` per axis,
 /// unorganised (height 1). `false` when the payload is short, `k` is 0 or
 /// the intrinsics are unusable.
 pub fn points(
@@ -189,7 +189,7 @@ pub fn points(
     true
 }
 
-/// Length of a repulsion arrow per m/s of `V_Call` [s].
+/// Length of a repulsion arrow per m/s of `V_Call` \[s\].
 pub const VELOCITY_ARROW_S: f64 = 0.5;
 
 /// The repulsion workers' latest results as arrows in [`BASE_FRAME`]: one

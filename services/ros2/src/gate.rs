@@ -86,7 +86,7 @@ pub struct RateLimit {
 }
 
 impl RateLimit {
-    /// `per_s` [requests/s] sustained and `burst` [requests] per peer.
+    /// `per_s` [requests/s] sustained and `burst` \[requests\] per peer.
     pub fn new(per_s: f64, burst: u32) -> RateLimit {
         RateLimit {
             per_s,

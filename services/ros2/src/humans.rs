@@ -56,7 +56,7 @@ use crate::msgs::{Header, IdsList, Quaternion, Time, Transform, TransformStamped
 pub const TRACKED_TOPIC: &str = "/humans/bodies/tracked";
 
 /// A camera's bodies stay in `/humans/bodies/tracked` while its newest
-/// skeleton is at most this much older than the one just read [ns].
+/// skeleton is at most this much older than the one just read \[ns\].
 pub const FRESH_NS: u64 = 500_000_000;
 
 // the camera's index is one digit of the body id

@@ -135,7 +135,7 @@ impl From<[f64; 3]> for Vector3 {
     }
 }
 
-/// `geometry_msgs/Point` [m].
+/// `geometry_msgs/Point` \[m\].
 pub type Point = Vector3;
 
 /// `geometry_msgs/Quaternion` (x, y, z, w).
@@ -165,7 +165,7 @@ pub struct Pose {
     pub orientation: Quaternion,
 }
 
-/// `geometry_msgs/Wrench`: force [N] and torque [Nm].
+/// `geometry_msgs/Wrench`: force \[N\] and torque \[Nm\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Wrench {
     pub force: Vector3,
@@ -180,7 +180,7 @@ pub struct WrenchStamped {
 }
 ros_type!(WrenchStamped, "geometry_msgs", "WrenchStamped");
 
-/// `geometry_msgs/Transform`: the child frame's origin [m] and orientation in the parent's.
+/// `geometry_msgs/Transform`: the child frame's origin \[m\] and orientation in the parent's.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Transform {
     pub translation: Vector3,

@@ -32,7 +32,7 @@ pub fn domain_id() -> Result<u16, String> {
     }
 }
 
-/// CLOCK_REALTIME [ns] (ROS time).
+/// CLOCK_REALTIME \[ns\] (ROS time).
 pub fn realtime_ns() -> u64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)

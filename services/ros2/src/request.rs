@@ -28,7 +28,7 @@ pub enum RequestError {
 }
 
 /// The request `text` asks, numbered `seq` and stamped `stamp_ns`
-/// [CLOCK_MONOTONIC]; from whoever shows the part.
+/// \[CLOCK_MONOTONIC\]; from whoever shows the part.
 pub fn parse(text: &str, seq: u64, stamp_ns: u64) -> Result<HriRequest, RequestError> {
     let mut words = text.split_whitespace();
     let first = words

@@ -10,9 +10,9 @@ use phri_ipc::{ContactEvent, ContactPhase, Zeroed, MAX_CONTACTS};
 
 use crate::sim::ContactTruth;
 
-/// Period of the `update` events of an ongoing contact [ns].
+/// Period of the `update` events of an ongoing contact \[ns\].
 pub const UPDATE_NS: u64 = 100_000_000;
-/// A pair apart this long has ended its episode [ns] (a contact that
+/// A pair apart this long has ended its episode \[ns\] (a contact that
 /// flickers across a few periods is one episode).
 pub const END_GAP_NS: u64 = 50_000_000;
 /// Episodes followed at once; more are counted in [`ContactLog::overflowed`].

@@ -86,11 +86,11 @@ pub struct CameraReport {
     pub frames: u64,
     /// frames that never got a result from every repulsion worker
     pub dropped_frames: u64,
-    /// capture → the last worker's result [ms]
+    /// capture → the last worker's result \[ms\]
     pub frame_to_repulsion_ms: Percentiles,
-    /// the frame's arrival at its ingestion → the last worker's result [ms]
+    /// the frame's arrival at its ingestion → the last worker's result \[ms\]
     pub arrival_to_repulsion_ms: Percentiles,
-    /// its ingestion's own time [ms]
+    /// its ingestion's own time \[ms\]
     pub ingest_ms: Percentiles,
     /// share of the fusion's decisions (a point, each time a worker
     /// answers it) this camera's distance won: 1 with one camera
@@ -101,7 +101,7 @@ pub struct CameraReport {
     pub drop_causes: DropCauses,
     /// frames per second on its channel (first to last capture)
     pub rate_hz: f64,
-    /// capture → the frame's arrival on its channel (its publication) [ms]
+    /// capture → the frame's arrival on its channel (its publication) \[ms\]
     pub capture_to_arrival_ms: Percentiles,
     /// the intrinsics of its frames as used on the 640×480 channel (null:
     /// no frame)
@@ -110,7 +110,7 @@ pub struct CameraReport {
     /// `depth` (phri-tracker on its frames)
     pub skeleton_source: String,
     /// the frame's arrival on its channel → its skeleton on
-    /// `perception/skeleton` [ms] (frames whose skeleton was seen)
+    /// `perception/skeleton` \[ms\] (frames whose skeleton was seen)
     pub arrival_to_skeleton_ms: Percentiles,
     /// its skeleton messages seen on `perception/skeleton`, and those with
     /// at least one person
@@ -156,7 +156,7 @@ impl DropCauses {
     }
 }
 
-/// Pinhole intrinsics [px].
+/// Pinhole intrinsics \[px\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct IntrinsicsReport {
     pub fx: f64,

@@ -41,7 +41,7 @@ fn push_capped<T>(list: &mut Vec<T>, left_out: &mut u64, item: T) {
 /// `collaboration.requests[]`.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct RequestReport {
-    /// when the controller answered [s], the report's time base
+    /// when the controller answered \[s\], the report's time base
     pub t_s: f64,
     pub source: String,
     pub kind: String,
@@ -56,7 +56,7 @@ pub struct RequestReport {
     /// voice: the recogniser's score
     #[serde(skip_serializing_if = "Option::is_none")]
     pub score: Option<f64>,
-    /// voice: the utterance's end → the request published [ms]
+    /// voice: the utterance's end → the request published \[ms\]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub utterance_end_to_request_ms: Option<f64>,
     /// who refused it: `control` (the collaboration's state machine) or
@@ -67,13 +67,13 @@ pub struct RequestReport {
 /// `collaboration.utterances[]`: everything `phri-voice` heard.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct UtteranceReport {
-    /// when the verdict was reached [s], the report's time base
+    /// when the verdict was reached \[s\], the report's time base
     pub t_s: f64,
     pub text: String,
     pub intent: String,
     pub score: f64,
     pub verdict: String,
-    /// speech duration [s]
+    /// speech duration \[s\]
     pub duration_s: f64,
     pub decode_ms: f64,
 }
@@ -115,7 +115,7 @@ pub struct CollabReport {
     pub requests_dropped_ros2: u64,
     pub utterances_left_out: u64,
     pub phases_left_out: u64,
-    /// the first wave of the script → the first approach [ms] (null: no wave or no approach)
+    /// the first wave of the script → the first approach \[ms\] (null: no wave or no approach)
     pub wave_to_start_ms: Option<f64>,
     /// touches of the collaborative hand (ground truth): its contacts with
     /// any robot link, apart for less than 0.5 s, are one touch
@@ -126,12 +126,12 @@ pub struct CollabReport {
     /// `‖F̂ − F_true‖ / ‖F_true‖` over the samples with `‖F_true‖ ≥ 5 N` of
     /// the collaborative hand
     pub force_error: ErrorPercentiles,
-    /// largest force of an intended contact [N] (ground truth)
+    /// largest force of an intended contact \[N\] (ground truth)
     pub peak_intended_force_n: Option<f64>,
     /// how the last collaboration ended: `wrist_push`, `request`,
     /// `hand_lost`, `force_limit`, `collision`, `stale` (null: none ended)
     pub ended_by: Option<String>,
-    /// hand ↔ robot point distance while following [m]
+    /// hand ↔ robot point distance while following \[m\]
     pub follow_distance_m: Option<FollowDistance>,
 }
 
@@ -186,10 +186,10 @@ pub struct CollabEvaluator {
 /// one run of the contact phase.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EstimatedContact {
-    /// its first and last observable estimate [s]
+    /// its first and last observable estimate \[s\]
     pub t_start_s: f64,
     pub t_end_s: f64,
-    /// the largest ‖F̂‖ [N]
+    /// the largest ‖F̂‖ \[N\]
     pub peak_force_n: f64,
     /// the collaborative hand (the scripted person's name: `hand_right`)
     pub part: &'static str,
@@ -209,7 +209,7 @@ fn percentile(sorted: &[f64], p: f64) -> Option<f64> {
 
 impl CollabEvaluator {
     /// `t0_ns` [ns, CLOCK_MONOTONIC]: the report's time origin; `wave_onsets`:
-    /// the scenario's wave keyframes [s].
+    /// the scenario's wave keyframes \[s\].
     pub fn new(t0_ns: u64, wave_onsets: Vec<f64>, period_ns: u64) -> CollabEvaluator {
         CollabEvaluator {
             t0_ns,

@@ -11,7 +11,7 @@ use std::collections::VecDeque;
 
 use crate::roster::Roster;
 
-/// CPU use is judged over at most this window [ns] (the caller gives the
+/// CPU use is judged over at most this window \[ns\] (the caller gives the
 /// window: the later half of the silent service's silence, when the
 /// starvation surely had begun, bounded by this).
 pub const WINDOW_NS: u64 = 1_000_000_000;
@@ -33,7 +33,7 @@ pub struct CpuUse {
 }
 
 /// A process's start-up (loading its configuration, model, files) is left
-/// out of the share judged against its budget [ns].
+/// out of the share judged against its budget \[ns\].
 pub const STARTUP_NS: u64 = 1_000_000_000;
 
 /// One service's CPU time over the run [ns]: all of it, and past each
@@ -73,7 +73,7 @@ impl Total {
 /// One service's CPU use over the run (`cpu` in the report).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CpuReport {
-    /// CPU time its processes used [s]
+    /// CPU time its processes used \[s\]
     pub cpu_s: f64,
     /// of one core, over the time they ran past their start-up (their
     /// first second; over all of it for a process that ran no longer)

@@ -17,7 +17,7 @@ pub struct MicReport {
     pub source: String,
     /// the ALSA capture device (`[mic] device`; the stand-in's: `sim`)
     pub device: String,
-    /// the device's own rate [Hz] (0: no status arrived)
+    /// the device's own rate \[Hz\] (0: no status arrived)
     pub device_rate_hz: u32,
     /// `audio/mic` chunks published (20 ms each)
     pub chunks: u64,

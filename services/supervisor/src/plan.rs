@@ -20,7 +20,7 @@ pub struct Plan {
     pub loaded: Loaded,
     /// enabled services in start order
     pub services: Vec<(String, ServiceSpec)>,
-    /// run length [s]; `None`: until SIGINT/SIGTERM
+    /// run length \[s\]; `None`: until SIGINT/SIGTERM
     pub duration_s: Option<f64>,
     /// the residual detector, resolved for the robot's joints
     pub detector: DetectorInfo,

@@ -29,7 +29,7 @@ pub struct Observed {
     pub priority: Option<i32>,
     /// the CPUs its main thread may run on
     pub cpus: Vec<usize>,
-    /// memory locked into RAM [kB] (`VmLck`)
+    /// memory locked into RAM \[kB\] (`VmLck`)
     pub locked_kb: u64,
 }
 

@@ -25,7 +25,7 @@ pub struct Percentiles {
 pub struct TorqueLoop {
     pub cycles: u64,
     pub missed_deadlines: u64,
-    /// state published → command received [µs]
+    /// state published → command received \[µs\]
     pub latency_us: Percentiles,
     /// periods run with the brakes engaged (start-up's wait included)
     pub braked_cycles: u64,
@@ -54,13 +54,13 @@ pub struct ContactReport {
     pub part: String,
     pub peak_force_n: f64,
     pub intended: bool,
-    /// first collision flag of the residual after the contact began [ms], null if none
+    /// first collision flag of the residual after the contact began \[ms\], null if none
     pub detected_after_ms: Option<f64>,
     /// when some joint's true τ_ext first reached twice its collision threshold [ms after start], null if never
     pub reached_twice_threshold_after_ms: Option<f64>,
-    /// detection delay counted from that moment [ms]
+    /// detection delay counted from that moment \[ms\]
     pub detected_after_twice_threshold_ms: Option<f64>,
-    /// first-order bound −ln(1 − θ/F)/K_I + 2 ms for F = 2θ [ms]
+    /// first-order bound −ln(1 − θ/F)/K_I + 2 ms for F = 2θ \[ms\]
     pub bound_ms: f64,
     /// when the observer's model fed with the true τ_ext (the residual an
     /// exact model would read) first reached a collision threshold [ms after
@@ -87,27 +87,27 @@ pub struct Event {
 /// What happened right after a controller (re)started.
 #[derive(Clone, Debug, Serialize)]
 pub struct Resync {
-    /// first status of the new controller [s]
+    /// first status of the new controller \[s\]
     pub t_s: f64,
     /// largest true joint speed in the following 0.5 s [rad/s]
     pub max_joint_speed_rad_s: f64,
-    /// largest change of the true joint positions in the following 0.5 s [rad]
+    /// largest change of the true joint positions in the following 0.5 s \[rad\]
     pub max_joint_travel_rad: f64,
 }
 
 /// Where the arm stood when a restarted simulator published its first state.
 #[derive(Clone, Debug, Serialize)]
 pub struct SimRestart {
-    /// first state of the new simulator [s]
+    /// first state of the new simulator \[s\]
     pub t_s: f64,
-    /// largest change of a true joint position against the predecessor's last state [rad]
+    /// largest change of a true joint position against the predecessor's last state \[rad\]
     pub arm_jump_rad: f64,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TaskReport {
     pub waypoints_reached: u64,
-    /// when the last of them was reached [s], null if none
+    /// when the last of them was reached \[s\], null if none
     pub last_waypoint_t_s: Option<f64>,
 }
 
@@ -118,18 +118,18 @@ pub struct PerceptionReport {
     pub frames: u64,
     /// frames that never got a result from every repulsion worker
     pub dropped_frames: u64,
-    /// capture → the last worker's result [ms]
+    /// capture → the last worker's result \[ms\]
     pub frame_to_repulsion_ms: Percentiles,
-    /// the frame's arrival at ingestion → the last worker's result [ms]
+    /// the frame's arrival at ingestion → the last worker's result \[ms\]
     /// (frames whose results all carry the arrival)
     pub arrival_to_repulsion_ms: Percentiles,
     /// ingestion's own time: the frame's arrival → its publication on
-    /// `perception/depth` [ms] (frames seen with the arrival)
+    /// `perception/depth` \[ms\] (frames seen with the arrival)
     pub ingest_ms: Percentiles,
     /// the distance computation of a frame: the sum over every worker of its
-    /// compute time [ms] (complete frames)
+    /// compute time \[ms\] (complete frames)
     pub repulsion_compute_ms: Percentiles,
-    /// the frame's arrival → its skeleton on `perception/skeleton` [ms]
+    /// the frame's arrival → its skeleton on `perception/skeleton` \[ms\]
     /// (every camera's frames whose skeleton was seen)
     pub arrival_to_skeleton_ms: Percentiles,
     /// each camera's own figures (the keys above pool every camera's frames)
@@ -192,7 +192,7 @@ pub struct Report {
     pub protective_stops: u64,
     pub events: Vec<Event>,
     pub task: TaskReport,
-    /// smallest human-robot surface distance (ground truth) [m], null without a human
+    /// smallest human-robot surface distance (ground truth) \[m\], null without a human
     pub min_distance_m: Option<f64>,
     /// controller (re)starts after the first, and how the arm moved right after
     pub resyncs: Vec<Resync>,
@@ -267,9 +267,9 @@ const DEFAULT_PERCEPTION_MAX_AGE_NS: u64 = 100_000_000;
 /// input's service; one entered with both fresh, by a `stop` request.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StaleBounds {
-    /// [ns]
+    /// \[ns\]
     pub residual_ns: u64,
-    /// [ns]; `None`: the cell has no perception
+    /// \[ns\]; `None`: the cell has no perception
     pub perception_ns: Option<u64>,
 }
 
@@ -351,7 +351,7 @@ pub struct Evaluation {
 /// What the evaluator needs to know about the detector.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectorInfo {
-    /// per-joint collision thresholds [Nm]
+    /// per-joint collision thresholds \[Nm\]
     pub collision_threshold: Vec<f64>,
     /// observer gain [1/s] (the smallest, for the bound)
     pub gain: f64,
@@ -572,7 +572,7 @@ impl Evaluator {
         }
     }
 
-    /// The control period [s] (1 ms unless told).
+    /// The control period \[s\] (1 ms unless told).
     pub fn with_period(mut self, period_s: f64) -> Evaluator {
         if period_s > 0.0 && period_s.is_finite() {
             self.period_s = period_s;
@@ -1003,7 +1003,7 @@ impl Evaluator {
         self.status.last = now;
     }
 
-    /// How far the robot's loop is behind the wall clock [ns]: the periods
+    /// How far the robot's loop is behind the wall clock \[ns\]: the periods
     /// it did not run ([`crate::robot_pace::PaceReport::cycles_short`]).
     pub fn robot_behind_ns(&self) -> u64 {
         let period_ns = (self.period_s * 1e9).round() as u64;

@@ -34,7 +34,7 @@ const MAX_GAP_S: f64 = 0.1;
 
 impl ResidualModel {
     /// The model of `dynamics`' observer with per-joint `gains` [1/s] and
-    /// collision `thresholds` [Nm] (one per joint).
+    /// collision `thresholds` \[Nm\] (one per joint).
     pub fn new(dynamics: &ResidualConfig, gains: Vec<f64>, thresholds: Vec<f64>) -> ResidualModel {
         let n = gains.len().min(thresholds.len());
         ResidualModel {

@@ -14,7 +14,7 @@ impl RestartPolicy {
         self.started_ns = now_ns;
     }
 
-    /// The service exited at `now_ns`: when to start it again [ns].
+    /// The service exited at `now_ns`: when to start it again \[ns\].
     pub fn exited(&mut self, now_ns: u64, min_ms: u64, max_ms: u64, stable_after_s: f64) -> u64 {
         let ran_s = now_ns.saturating_sub(self.started_ns) as f64 * 1e-9;
         if ran_s >= stable_after_s {

@@ -57,7 +57,7 @@ pub struct RobotPace {
 }
 
 impl RobotPace {
-    /// For a robot whose loop runs every `period_s` [s].
+    /// For a robot whose loop runs every `period_s` \[s\].
     pub fn new(period_s: f64) -> RobotPace {
         RobotPace {
             period_ns: (period_s * 1e9).round().max(1.0) as u64,

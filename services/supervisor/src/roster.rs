@@ -24,16 +24,16 @@ pub struct Supervised {
     /// process id while it runs (started or adopted); `None` while it is down
     pub pid: Option<u32>,
     pub policy: RestartPolicy,
-    /// when to start it again [ns], while a restart is pending
+    /// when to start it again \[ns\], while a restart is pending
     pub restart_at: Option<u64>,
     /// last beat on its liveness service (`liveness/<name>`), or since
     /// when its silence is judged afresh ((re)start, a dependency silent,
-    /// killed frozen) [ns]
+    /// killed frozen) \[ns\]
     pub last_heartbeat_ns: u64,
     /// its liveness deadline passed without a beat (iceoryx2's WaitSet
     /// said so); cleared by a beat or a fresh judgement
     pub missed: bool,
-    /// last (re)start [ns]
+    /// last (re)start \[ns\]
     pub started_ns: u64,
     /// its heartbeat was heard since its last (re)start
     pub heard_since_start: bool,
@@ -67,7 +67,7 @@ impl Supervised {
 pub struct Frozen {
     /// index in the roster
     pub index: usize,
-    /// how long its heartbeat channel had been silent [ns]
+    /// how long its heartbeat channel had been silent \[ns\]
     pub silent_ns: u64,
 }
 
@@ -203,7 +203,7 @@ impl Roster {
         self.services[index].policy.restarts = restarts;
     }
 
-    /// Service `index` ended at `now_ns`: when it will be started again [ns]
+    /// Service `index` ended at `now_ns`: when it will be started again \[ns\]
     /// (`None`: it is not restarted, `restart = false`).
     pub fn exited(&mut self, index: usize, now_ns: u64) -> Option<u64> {
         let sup = &self.sup;
@@ -273,7 +273,7 @@ impl Roster {
     }
 
     /// Starting service `index` failed at `now_ns`: try again after the next
-    /// back-off (counted as a restart); returns when [ns].
+    /// back-off (counted as a restart); returns when \[ns\].
     pub fn restart_failed(&mut self, index: usize, now_ns: u64) -> u64 {
         let sup = &self.sup;
         let s = &mut self.services[index];

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 pub const STATE_JSON: &str = "state.json";
 /// File name of [`SupervisorState`] in the run directory.
 pub const STATE_FILE: &str = "supervisor.state";
-/// Largest state file read [bytes] (a cell of 64 services needs a few KiB).
+/// Largest state file read \[bytes\] (a cell of 64 services needs a few KiB).
 pub const MAX_STATE_LEN: u64 = 1 << 20;
 
 /// A state file that cannot be used, naming it.
@@ -149,7 +149,7 @@ impl SupervisorState {
         write_private(&run_dir.join(STATE_FILE), &self.encode())
     }
 
-    /// When the cell started [ns]: the previous supervisor's start survives a
+    /// When the cell started \[ns\]: the previous supervisor's start survives a
     /// takeover (if it is plausible: set and not after `now_ns`), else `now_ns`.
     pub fn cell_start_ns(previous: Option<&SupervisorState>, now_ns: u64) -> u64 {
         previous

@@ -26,7 +26,7 @@ pub enum ExitVerdict {
     /// reported (the reason) and started again after its back-off (the time
     /// \[ns\], or never with `restart = false`)
     PartnerCrashLoop(String, Option<u64>),
-    /// a crash: started again at this time [ns], or never (`restart = false`)
+    /// a crash: started again at this time \[ns\], or never (`restart = false`)
     Restart(Option<u64>),
 }
 

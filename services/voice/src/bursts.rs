@@ -12,13 +12,13 @@
 //! gain that takes a random walk in 10 ms steps (σ 3 dB a step, between
 //! −20 and 0 dB: the syllable-like ups and downs that made 22 of 30 such
 //! bursts `stop` before issue 26), scaled so its RMS over the burst is the
-//! level asked for [dBFS].
+//! level asked for \[dBFS\].
 
 use std::f64::consts::PI;
 
 use phri_ipc::AUDIO_RATE_HZ;
 
-/// A burst's length [s].
+/// A burst's length \[s\].
 pub const BURST_S: f64 = 0.6;
 
 /// What a burst is made of.

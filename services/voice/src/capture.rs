@@ -64,7 +64,7 @@ const OTHER_FORMATS: [Format; 19] = [
     Format::IEC958SubframeLE,
 ];
 
-/// Which of [`FORMATS`] the device gives.
+/// Which of `FORMATS` the device gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleFormat {
     S16,
@@ -198,7 +198,7 @@ impl Capture {
         Capture::open_at(device, AUDIO_RATE_HZ)
     }
 
-    /// Open `device`, asking it for `rate` [Hz] (the nearest it has); the
+    /// Open `device`, asking it for `rate` \[Hz\] (the nearest it has); the
     /// chunks are 16 kHz whatever the device's rate.
     pub fn open_at(device: &str, rate: u32) -> Result<Capture, CaptureError> {
         let dev = || device.to_string();
@@ -278,7 +278,7 @@ impl Capture {
         })
     }
 
-    /// The device's own rate [Hz].
+    /// The device's own rate \[Hz\].
     pub fn device_rate(&self) -> u32 {
         self.rate
     }

@@ -134,7 +134,7 @@ pub struct Listener {
     pub not_speech: u64,
     /// the last utterance's voicing (none when it was not analysed)
     pub last_voicing: Option<Voicing>,
-    /// audio decoded and the time it took [s]
+    /// audio decoded and the time it took \[s\]
     pub audio_s: f64,
     pub decode_s: f64,
 }
@@ -164,7 +164,7 @@ impl Listener {
     }
 
     /// Feed one chunk; `hands` is the scene when it arrives, `clock` the
-    /// CLOCK_MONOTONIC time [ns] (read after decoding: the verdict's time).
+    /// CLOCK_MONOTONIC time \[ns\] (read after decoding: the verdict's time).
     pub fn step(
         &mut self,
         chunk: &AudioChunk,

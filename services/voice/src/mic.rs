@@ -8,12 +8,12 @@
 use phri_config::{Invalid, MicConfig, MicSource};
 use phri_ipc::{MicStatus, Zeroed, AUDIO_RATE_HZ};
 
-/// Duration of one `audio/mic` chunk [ns].
+/// Duration of one `audio/mic` chunk \[ns\].
 pub const CHUNK_NS: u64 =
     phri_ipc::AUDIO_CHUNK_SAMPLES as u64 * 1_000_000_000 / AUDIO_RATE_HZ as u64;
 
 /// The chunks to publish at `now_ns` (time since the stream's sample 0
-/// [ns]): every chunk wholly captured by then from `next` on, or, for a
+/// \[ns\]): every chunk wholly captured by then from `next` on, or, for a
 /// source that has published nothing yet (`None`) or fell more than
 /// `max_burst` chunks behind, none (it starts over from the present).
 pub fn due(next: Option<u64>, now_ns: u64, max_burst: u64) -> std::ops::Range<u64> {
@@ -36,11 +36,11 @@ pub enum SourceFlag {
 /// `phri-mic`'s own flags: they override `[mic]`.
 #[derive(clap::Args, Debug, Clone, Default, PartialEq)]
 pub struct MicFlags {
-    /// Where the sound comes from (overrides [mic] source): sim, the stand-in
-    /// of [audio]; alsa, a real microphone (mono, resampled to 16 kHz)
+    /// Where the sound comes from (overrides \[mic\] source): sim, the stand-in
+    /// of \[audio\]; alsa, a real microphone (mono, resampled to 16 kHz)
     #[arg(long, value_enum, value_name = "SOURCE")]
     pub source: Option<SourceFlag>,
-    /// The ALSA capture device with --source alsa (overrides [mic] device;
+    /// The ALSA capture device with --source alsa (overrides \[mic\] device;
     /// `arecord -L` lists them: "default", "hw:1,0", "plughw:1,0")
     #[arg(long, value_name = "NAME")]
     pub device: Option<String>,
@@ -73,7 +73,7 @@ pub struct MicStats {
     next_ns: u64,
 }
 
-/// Between two `audio/mic/status` messages [ns].
+/// Between two `audio/mic/status` messages \[ns\].
 pub const STATUS_PERIOD_NS: u64 = 500_000_000;
 
 impl MicStats {

@@ -78,7 +78,7 @@ fn gcd(mut a: u64, mut b: u64) -> u64 {
 }
 
 impl Resampler {
-    /// A converter from `in_rate` to `out_rate` [Hz] (both > 0, else the
+    /// A converter from `in_rate` to `out_rate` \[Hz\] (both > 0, else the
     /// input passes through unchanged), sized for input blocks of up to
     /// `max_block` samples.
     pub fn new(in_rate: u32, out_rate: u32, max_block: usize) -> Resampler {

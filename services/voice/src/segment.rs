@@ -4,7 +4,7 @@
 //! once, for the longest utterance.
 //!
 //! - the noise floor starts at the first frame's energy, follows quiet
-//!   frames down at once and up slowly ([`FLOOR_RISE_DB_PER_S`]), not at
+//!   frames down at once and up slowly (`FLOOR_RISE_DB_PER_S`), not at
 //!   all during speech, and ten times as fast after a too-long utterance
 //!   (the noise itself may have risen: a machine started);
 //! - a frame [`VoiceConfig::speech_db`] above the floor is speech; speech
@@ -45,7 +45,7 @@ pub struct Segment {
 }
 
 impl Segment {
-    /// Speech duration [s].
+    /// Speech duration \[s\].
     pub fn duration_s(&self) -> f64 {
         self.end_ns.saturating_sub(self.start_ns) as f64 * 1e-9
     }
@@ -94,7 +94,7 @@ pub struct Segmenter {
 }
 
 impl Segmenter {
-    /// The longest utterance's audio [samples] (its buffers' size).
+    /// The longest utterance's audio \[samples\] (its buffers' size).
     pub fn capacity(cfg: &VoiceConfig) -> usize {
         let rate = AUDIO_RATE_HZ as f64;
         let padding = (cfg.padding_s * rate) as usize;
@@ -129,7 +129,7 @@ impl Segmenter {
         &self.out
     }
 
-    /// The tracked noise floor [dBFS] (none before the first frame).
+    /// The tracked noise floor \[dBFS\] (none before the first frame).
     pub fn floor_db(&self) -> Option<f64> {
         self.floor_db
     }

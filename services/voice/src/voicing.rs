@@ -33,7 +33,7 @@
 
 use phri_ipc::AUDIO_RATE_HZ;
 
-/// The analysis rate [Hz] (16 kHz decimated by [`DECIMATE`]).
+/// The analysis rate \[Hz\] (16 kHz decimated by `DECIMATE`).
 pub const RATE_HZ: usize = 4000;
 const DECIMATE: usize = AUDIO_RATE_HZ as usize / RATE_HZ;
 /// Frame hop: 10 ms at [`RATE_HZ`].
@@ -41,7 +41,7 @@ pub const HOP: usize = RATE_HZ / 100;
 /// Correlation window: 20 ms at [`RATE_HZ`] (a longer one loses a falling
 /// pitch: espeak's "stop" falls from 102 to 77 Hz in 110 ms).
 pub const WINDOW: usize = 80;
-/// The pitch range searched [Hz].
+/// The pitch range searched \[Hz\].
 pub const MIN_PITCH_HZ: f64 = 60.0;
 pub const MAX_PITCH_HZ: f64 = 400.0;
 const MIN_LAG: usize = (RATE_HZ as f64 / MAX_PITCH_HZ) as usize;
@@ -51,7 +51,7 @@ const MAX_LAG: usize = (RATE_HZ as f64 / MIN_PITCH_HZ) as usize + 1;
 const MIN_TONE_LAG: usize = 3;
 /// A frame whose correlation peak reaches this is periodic.
 pub const VOICED_CORRELATION: f64 = 0.5;
-/// Only frames within this of the utterance's loudest count [dB].
+/// Only frames within this of the utterance's loudest count \[dB\].
 pub const LOUD_DB: f64 = 25.0;
 /// The low-pass: windowed sinc (Hamming), cut-off 1 kHz at 16 kHz.
 const TAPS: usize = 63;
@@ -68,12 +68,12 @@ pub struct Voicing {
 }
 
 impl Voicing {
-    /// The longest voiced stretch [s].
+    /// The longest voiced stretch \[s\].
     pub fn longest_s(&self) -> f64 {
         self.longest_run as f64 * HOP as f64 / RATE_HZ as f64
     }
 
-    /// Voiced long enough to be speech: a run of at least `min_voiced_s` [s]
+    /// Voiced long enough to be speech: a run of at least `min_voiced_s` \[s\]
     /// (0: everything is).
     pub fn is_speech(&self, min_voiced_s: f64) -> bool {
         self.longest_s() + 1e-9 >= min_voiced_s
@@ -83,12 +83,12 @@ impl Voicing {
 /// One frame of the analysis (for tuning).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Frame {
-    /// the correlation peak over the pitch range, and its pitch [Hz]
+    /// the correlation peak over the pitch range, and its pitch \[Hz\]
     pub correlation: f64,
     pub pitch_hz: f64,
     /// the best correlation at a shorter lag (above the pitch range)
     pub faster: f64,
-    /// band energy against the utterance's loudest frame [dB]
+    /// band energy against the utterance's loudest frame \[dB\]
     pub db: f64,
     pub voiced: bool,
 }

@@ -8,14 +8,14 @@
 use phri_runtime::{now_ns, sleep_until_ns};
 use serde_json::{json, Value};
 
-/// Wake-up latency bins [µs]: 1 µs each, the last holds everything above.
+/// Wake-up latency bins \[µs\]: 1 µs each, the last holds everything above.
 const BINS: usize = 20_000;
 
 /// What a floor thread measured.
 #[derive(Clone, Debug)]
 pub struct Floor {
     period_ns: u64,
-    /// wake-ups per latency [µs]
+    /// wake-ups per latency \[µs\]
     hist: Vec<u64>,
     /// wake-ups more than half a period late
     late: u64,
@@ -30,7 +30,7 @@ impl Floor {
         self.hist.iter().sum()
     }
 
-    /// The latency [µs] under which a share `q` of the wake-ups fell.
+    /// The latency \[µs\] under which a share `q` of the wake-ups fell.
     fn percentile(&self, q: f64) -> Option<f64> {
         let n = self.wakeups();
         if n == 0 {
@@ -48,7 +48,7 @@ impl Floor {
     }
 
     /// As JSON: wake-ups, those over half a period late and their share,
-    /// latency p50/p99/max [µs], and whether the thread got its priority.
+    /// latency p50/p99/max \[µs\], and whether the thread got its priority.
     pub fn to_json(&self) -> Value {
         let n = self.wakeups();
         json!({
@@ -71,7 +71,7 @@ impl Floor {
 
 /// Run the calling thread on `cpu` (`None`: any) under SCHED_FIFO at
 /// `priority` (0: the normal scheduler), waking every `period_ns` until
-/// `until_ns` [CLOCK_MONOTONIC], counting from `from_ns` on.
+/// `until_ns` \[CLOCK_MONOTONIC\], counting from `from_ns` on.
 pub fn measure(
     cpu: Option<usize>,
     priority: i32,

@@ -48,9 +48,9 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Cmd {
-    /// Start a cell of its own, listen to the torque loop and print each hop's latency distribution [µs]
+    /// Start a cell of its own, listen to the torque loop and print each hop's latency distribution \[µs\]
     Loop {
-        /// Length of the measured run [s] (the first 1.5 s are start-up, not measured)
+        /// Length of the measured run \[s\] (the first 1.5 s are start-up, not measured)
         #[arg(long, value_name = "SECONDS", default_value_t = 30.0, allow_negative_numbers = true, value_parser = positive)]
         duration: f64,
         /// Scenario the cell runs
@@ -62,7 +62,7 @@ enum Cmd {
     },
     /// Run the cell once with the machine's floor measured beside it: CPU per service, the torque loop's pace and latency against the floor's, perception's latency
     Cell {
-        /// Length of the run [s] (the floor is measured after its first 1.5 s)
+        /// Length of the run \[s\] (the floor is measured after its first 1.5 s)
         #[arg(long, value_name = "SECONDS", default_value_t = 60.0, allow_negative_numbers = true, value_parser = positive)]
         duration: f64,
         /// Scenario the cell runs
@@ -84,7 +84,7 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// Hand-off time of one payload between two processes: iceoryx2 zero-copy against a Unix socket [µs]
+    /// Hand-off time of one payload between two processes: iceoryx2 zero-copy against a Unix socket \[µs\]
     Transport {
         /// Round trips per payload size (at least 10)
         #[arg(long, value_name = "N", default_value_t = 2000)]

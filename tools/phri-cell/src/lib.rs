@@ -82,7 +82,7 @@ pub struct CellOptions {
     /// replace every camera's distances by the truth ([`truth::rewrite`]):
     /// what the avoidance does with perception that hides nothing
     pub truth_perception: bool,
-    /// run the hot standby beside the controller ([`standby`];
+    /// run the hot standby beside the controller (`standby`;
     /// `phri-lockstep` follows `[control] standby`)
     pub standby: bool,
 }

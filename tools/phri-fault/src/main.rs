@@ -76,19 +76,19 @@ struct Cli {
     /// Injections (0: until --until, state.json disappears or Ctrl-C)
     #[arg(long, value_name = "N", default_value_t = 1)]
     times: u64,
-    /// Wait this long before each injection [s]
+    /// Wait this long before each injection \[s\]
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative, conflicts_with = "random")]
     every: Option<f64>,
-    /// Wait a uniformly random time in [MIN, MAX] before each injection [s]
+    /// Wait a uniformly random time in [MIN, MAX] before each injection \[s\]
     #[arg(long, value_name = "MIN,MAX", allow_hyphen_values = true, value_parser = min_max)]
     random: Option<(f64, f64)>,
     /// Seed of the random choices [default: from the clock]
     #[arg(long, value_name = "S")]
     seed: Option<u64>,
-    /// Inject nothing later than this long after the start [s]
+    /// Inject nothing later than this long after the start \[s\]
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     until: Option<f64>,
-    /// How long slow and delay last [s]
+    /// How long slow and delay last \[s\]
     #[arg(long = "for", value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     for_s: Option<f64>,
     /// Frames corrupt acts on [default: 30]

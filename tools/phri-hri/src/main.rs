@@ -68,7 +68,7 @@ enum Cmd {
         /// What was asked, for the report (default: the command)
         #[arg(long, value_name = "T")]
         text: Option<String>,
-        /// How long to wait for the controller's answer on collab/state [s]
+        /// How long to wait for the controller's answer on collab/state \[s\]
         #[arg(
             long,
             value_name = "SECONDS",
@@ -81,7 +81,7 @@ enum Cmd {
     /// Resume a cell its dead-man stopped (no supervisor was heard): the
     /// supervisor starts its services again; waits until every one runs
     Resume {
-        /// How long to wait for every service to run again [s]
+        /// How long to wait for every service to run again \[s\]
         #[arg(
             long,
             value_name = "SECONDS",
@@ -96,7 +96,7 @@ enum Cmd {
         /// Print the current state once and exit
         #[arg(long)]
         once: bool,
-        /// End after this long [s]
+        /// End after this long \[s\]
         #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = seconds)]
         seconds: Option<f64>,
     },
@@ -118,7 +118,7 @@ fn part_parser() -> impl TypedValueParser<Value = CollabPart> {
         .try_map(|s| CollabPart::from_name(&s))
 }
 
-/// A duration between 0 and one day [s].
+/// A duration between 0 and one day \[s\].
 fn seconds(v: &str) -> Result<f64, String> {
     let s: f64 = v
         .trim()

@@ -12,7 +12,7 @@ const SKIPPED_DIRS: &[&str] = &["target", "tests", "benches"];
 const SKIPPED_ROOT_DIRS: &[&str] = &["patches"];
 
 /// Every `.rs` file under `root` (absolute paths, sorted) but those in
-/// [`SKIPPED_DIRS`], [`SKIPPED_ROOT_DIRS`] and hidden directories (`.git`,
+/// `SKIPPED_DIRS`, `SKIPPED_ROOT_DIRS` and hidden directories (`.git`,
 /// `.cargo`).
 pub fn rust_files(root: &Path) -> Result<Vec<PathBuf>, LintError> {
     let mut files = Vec::new();

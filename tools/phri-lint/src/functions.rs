@@ -20,7 +20,7 @@ pub struct Function {
     /// provided method); a function inside a function by its own name.
     pub name: String,
     /// From the `fn` keyword's line to the closing brace's, both counted
-    /// [lines]; attributes and doc comments before it do not count.
+    /// \[lines\]; attributes and doc comments before it do not count.
     pub lines: usize,
 }
 

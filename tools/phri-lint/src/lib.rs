@@ -24,6 +24,6 @@ pub use files::rust_files;
 pub use functions::{scan_file, Function};
 pub use workspace::long_functions;
 
-/// The longest a function may be outside test code [lines], from the line of
+/// The longest a function may be outside test code \[lines\], from the line of
 /// its `fn` keyword to the line of its closing brace, both counted.
 pub const MAX_FUNCTION_LINES: usize = 120;

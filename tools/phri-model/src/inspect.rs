@@ -23,7 +23,7 @@ pub(crate) struct InspectArgs {
     /// Joint accelerations [rad/s² or m/s²] for tau (RNEA) [default: zero]
     #[arg(long, value_name = "v1,v2,…", allow_hyphen_values = true, value_parser = parse_values)]
     qdd: Option<Values>,
-    /// Also print the Jacobian of point x,y,z [m] fixed in link LINK's frame
+    /// Also print the Jacobian of point x,y,z \[m\] fixed in link LINK's frame
     #[arg(long, value_name = "LINK:x,y,z", allow_hyphen_values = true, value_parser = parse_point)]
     point: Option<(String, Vector3<f64>)>,
 }

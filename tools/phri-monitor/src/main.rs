@@ -40,7 +40,7 @@ const BIN: &str = "phri-monitor";
 const POLL: Duration = Duration::from_millis(2);
 /// `top`'s refresh period: statistics trimmed, the newest values read, the screen redrawn.
 const REFRESH: Duration = Duration::from_millis(250);
-/// Window of `top`'s channel statistics [ns].
+/// Window of `top`'s channel statistics \[ns\].
 const WINDOW_NS: u64 = 1_000_000_000;
 /// What `top --once` watches before printing its one snapshot.
 const ONCE_SPAN: Duration = Duration::from_secs(1);
@@ -87,7 +87,7 @@ enum Cmd {
         /// Channel to measure
         #[arg(value_parser = channel_names())]
         channel: String,
-        /// Measuring window [s]
+        /// Measuring window \[s\]
         #[arg(long, value_name = "S", value_parser = positive, default_value_t = 1.0)]
         seconds: f64,
         /// One window, then exit
@@ -99,7 +99,7 @@ enum Cmd {
     },
     /// The cell's nodes and every channel's ports, rate, samples and drops
     List {
-        /// Measuring window [s]
+        /// Measuring window \[s\]
         #[arg(long, value_name = "S", value_parser = positive, default_value_t = 1.0)]
         seconds: f64,
         /// One JSON object
@@ -468,7 +468,7 @@ struct Sampler {
     i_health: usize,
     i_health_more: usize,
     i_collab: usize,
-    /// each stream's mean interval when last measured [ms]
+    /// each stream's mean interval when last measured \[ms\]
     known_mean_ms: HashMap<&'static str, f64>,
     /// each service's CPU use
     cpu: CpuMeter,

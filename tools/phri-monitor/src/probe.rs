@@ -105,7 +105,7 @@ impl Stats {
         self.window_end_ns = None;
     }
 
-    /// Time since the newest sample was received [ms] (streams whose
+    /// Time since the newest sample was received \[ms\] (streams whose
     /// messages carry no publish time have no `age_ms`).
     pub fn recv_age_ms(&self) -> Option<f64> {
         self.newest_recv_ns

@@ -18,19 +18,19 @@ use ratatui::widgets::{
 };
 use serde_json::Value;
 
-/// Span of the plots' history [s].
+/// Span of the plots' history \[s\].
 pub const HISTORY_S: f64 = 30.0;
 /// A stream is stale when its newest sample is older than this many of its
 /// mean intervals ...
 const STALE_INTERVALS: f64 = 5.0;
-/// ... and at least this old [ms] (a 1 kHz stream is not stale after 5 ms).
+/// ... and at least this old \[ms\] (a 1 kHz stream is not stale after 5 ms).
 const STALE_FLOOR_MS: f64 = 250.0;
 /// Age after which a stream too slow to have a mean interval in the 1 s
-/// window (under 2 Hz) is stale [ms].
+/// window (under 2 Hz) is stale \[ms\].
 const STALE_SLOW_MS: f64 = 3000.0;
-/// Width of the services pane beside the channels [columns].
+/// Width of the services pane beside the channels \[columns\].
 const SERVICES_W: u16 = 44;
-/// Channel pane width from which every column shows [columns].
+/// Channel pane width from which every column shows \[columns\].
 const FULL_TABLE_W: u16 = 104;
 
 /// How current a channel's traffic is.
@@ -50,7 +50,7 @@ pub enum Freshness {
 
 impl Freshness {
     /// A channel's freshness from its figures: `age_ms` of its newest sample
-    /// and `mean_ms` interval over the window [ms], both unknown when not seen.
+    /// and `mean_ms` interval over the window \[ms\], both unknown when not seen.
     pub fn of(
         present: bool,
         on_demand: bool,
@@ -104,12 +104,12 @@ pub struct ChannelRow {
     pub publishers: u64,
     /// subscribers other than this monitor
     pub subscribers: u64,
-    /// samples per second over the window [Hz]
+    /// samples per second over the window \[Hz\]
     pub rate_hz: f64,
-    /// mean and largest interval between samples [ms]
+    /// mean and largest interval between samples \[ms\]
     pub mean_ms: Option<f64>,
     pub max_ms: Option<f64>,
-    /// age of the newest sample [ms]: since it was published, else (messages
+    /// age of the newest sample \[ms\]: since it was published, else (messages
     /// without a publish time) since it was received
     pub age_ms: Option<f64>,
     /// [bytes/s]
@@ -122,9 +122,9 @@ pub struct ChannelRow {
 impl ChannelRow {
     /// The row of channel `name` from its JSON figures (`present`,
     /// `publishers`, `subscribers` and the probe's summary); `known_mean_ms`:
-    /// the stream's mean interval when last measured [ms], which judges its
+    /// the stream's mean interval when last measured \[ms\], which judges its
     /// age once the window holds no interval any more; `recv_age_ms`: time
-    /// since the newest sample was received [ms], the age of messages
+    /// since the newest sample was received \[ms\], the age of messages
     /// without a publish time.
     pub fn from_json(
         name: &'static str,
@@ -177,7 +177,7 @@ impl ServiceRow {
 /// second of refreshes.
 #[derive(Clone, Debug, Default)]
 pub struct CpuMeter {
-    /// per pid: (when [s], its CPU time then [ns], its smoothed share)
+    /// per pid: (when \[s\], its CPU time then \[ns\], its smoothed share)
     seen: std::collections::HashMap<i32, (f64, u64, Option<f64>)>,
 }
 
@@ -207,15 +207,15 @@ impl CpuMeter {
 pub struct Snapshot {
     /// the controller's mode ([`ControlMode`] name)
     pub mode: Option<&'static str>,
-    /// smallest obstacle distance of the control points [m]
+    /// smallest obstacle distance of the control points \[m\]
     pub min_distance: Option<f64>,
-    /// ‖r‖ of the momentum residual [Nm]
+    /// ‖r‖ of the momentum residual \[Nm\]
     pub residual_norm: Option<f64>,
     /// [`residual_flags`] of the newest residual
     pub residual_flags: u32,
     /// the collaboration's phase name
     pub collab_phase: Option<&'static str>,
-    /// F̂ of the collaborative contact [N], base frame
+    /// F̂ of the collaborative contact \[N\], base frame
     pub contact_force: Option<[f64; 3]>,
     /// the robot's brakes are engaged
     pub braking: bool,
@@ -253,11 +253,11 @@ impl Series {
 /// The live plots' histories.
 #[derive(Clone, Debug, Default)]
 pub struct History {
-    /// smallest obstacle distance [m]
+    /// smallest obstacle distance \[m\]
     pub distance: Series,
-    /// ‖r‖ [Nm]
+    /// ‖r‖ \[Nm\]
     pub residual: Series,
-    /// applied joint torque per joint [Nm] (`robot/state` τ)
+    /// applied joint torque per joint \[Nm\] (`robot/state` τ)
     pub torque: Vec<Series>,
 }
 
@@ -311,7 +311,7 @@ pub enum View {
 #[derive(Clone, Debug, Default)]
 pub struct TopState {
     pub prefix: String,
-    /// time since the monitor started [s]
+    /// time since the monitor started \[s\]
     pub t_s: f64,
     pub snapshot: Snapshot,
     /// in the cell's order
@@ -801,7 +801,7 @@ fn render_plots(st: &TopState, area: Rect, buf: &mut Buffer) {
     plot(st.t_s, " joint torque τ [Nm] ", &lines, bounds, c, buf);
 }
 
-/// One chart of the last [`HISTORY_S`] seconds up to `now` [s].
+/// One chart of the last [`HISTORY_S`] seconds up to `now` \[s\].
 fn plot(
     now: f64,
     title: &str,

@@ -1,6 +1,6 @@
 //! What `phri-record` takes from a cell configuration: its `[record]`
 //! section (phri-config; the flags override it) and the residual's collision
-//! norm threshold `dynamics.collision_norm_threshold` [Nm] for the plots.
+//! norm threshold `dynamics.collision_norm_threshold` \[Nm\] for the plots.
 
 use std::path::Path;
 

@@ -18,7 +18,7 @@ const H: usize = 600;
 const GAP_S: f64 = 0.2;
 
 /// Writes every figure of `series` into `out` as `format`: the threshold
-/// [Nm] on the residual's when known, the path `without` the person [m]
+/// \[Nm\] on the residual's when known, the path `without` the person \[m\]
 /// under the end effector's (empty: none); the collaboration's two only
 /// when the recording has one.
 pub fn save_all(

@@ -173,7 +173,7 @@ pub struct Figure {
 }
 
 impl Figure {
-    /// A white `w` × `h` [px] figure.
+    /// A white `w` × `h` \[px\] figure.
     pub fn new(w: usize, h: usize) -> Figure {
         Figure {
             canvas: Canvas::new(w, h),

@@ -15,8 +15,8 @@ use crate::{read_file, ReadError, METADATA_NAME};
 /// Someone nearer than this to a control point counts as present \[m\] (ρ of eq. 16).
 pub const NEAR_M: f64 = 0.4;
 
-/// Every series of a recording's figures; times `t` [s] from the first
-/// message read, positions [m] and forces [N] in the base frame.
+/// Every series of a recording's figures; times `t` \[s\] from the first
+/// message read, positions \[m\] and forces \[N\] in the base frame.
 #[derive(Clone, Debug)]
 pub struct Series {
     /// end-effector x, y (`control/status` `ee`) and whether the person was
@@ -24,7 +24,7 @@ pub struct Series {
     pub ee: Vec<(f64, f64, bool)>,
     /// (t, `control/status` `min_distance`), the finite ones
     pub dist: Vec<(f64, f64)>,
-    /// (t, ‖r‖ [Nm]) of `dynamics/residual`
+    /// (t, ‖r‖ \[Nm\]) of `dynamics/residual`
     pub norm: Vec<(f64, f64)>,
     /// times at which the residual's collision flag rose
     pub rises: Vec<f64>,
@@ -79,7 +79,7 @@ impl Series {
             || topic == COLLAB_STATE.name
     }
 
-    /// Adds message `v` of `topic` (one [`Series::reads`]) logged at `t` [s].
+    /// Adds message `v` of `topic` (one [`Series::reads`]) logged at `t` \[s\].
     pub fn add(&mut self, topic: &str, t: f64, v: &Value) {
         if topic == COLLAB_STATE.name {
             self.collab_state(t, v);
@@ -173,7 +173,7 @@ impl Series {
     }
 }
 
-/// The collision norm threshold [Nm] from the metadata of the recording
+/// The collision norm threshold \[Nm\] from the metadata of the recording
 /// `buf` (read from `file`), and its message count, each when recorded.
 pub fn summary(buf: &[u8], file: &str) -> Result<(Option<f64>, Option<u64>), ReadError> {
     let mut threshold = None;
@@ -243,7 +243,7 @@ pub enum PlotError {
     NoMessages { file: String, what: String },
 }
 
-/// The end-effector x-y path [m] of the recording `file`'s `control/status`.
+/// The end-effector x-y path \[m\] of the recording `file`'s `control/status`.
 pub fn ee_path(file: &str) -> Result<Vec<(f64, f64)>, PlotError> {
     let buf = read_file(file)?;
     let mut out = Vec::new();

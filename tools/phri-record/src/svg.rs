@@ -75,7 +75,7 @@ pub fn base64(bytes: &[u8]) -> String {
 }
 
 impl Svg {
-    /// An empty `w` × `h` [px] document with a white background.
+    /// An empty `w` × `h` \[px\] document with a white background.
     pub fn new(w: usize, h: usize) -> Svg {
         let mut body = String::new();
         let _ = writeln!(body, r##"<rect width="{w}" height="{h}" fill="#ffffff"/>"##);

@@ -83,12 +83,12 @@ fn layout(s: &str, size: f64) -> (Vec<(GlyphId, f32)>, f32) {
     (out, caret)
 }
 
-/// Width of `s` at `size` [px]: the sum of its advances and kerning.
+/// Width of `s` at `size` \[px\]: the sum of its advances and kerning.
 pub fn width(s: &str, size: f64) -> f64 {
     layout(s, size).1 as f64
 }
 
-/// Height of a capital letter above the baseline at `size` [px] (to centre
+/// Height of a capital letter above the baseline at `size` \[px\] (to centre
 /// a line of text on a point: baseline at the point's y + cap height / 2).
 pub fn cap_height(size: f64) -> f64 {
     let f = font();
@@ -99,8 +99,8 @@ pub fn cap_height(size: f64) -> f64 {
     (units / em) as f64 * size
 }
 
-/// Draw `s` anti-aliased at `size` [px], its baseline at `y` and its anchor
-/// at `x` [px]: each pixel a glyph covers is blended towards `col` by the
+/// Draw `s` anti-aliased at `size` \[px\], its baseline at `y` and its anchor
+/// at `x` \[px\]: each pixel a glyph covers is blended towards `col` by the
 /// covered fraction.
 pub fn draw(c: &mut Canvas, x: f64, y: f64, s: &str, col: Rgb, size: f64, anchor: Anchor) {
     let (glyphs, w) = layout(s, size);

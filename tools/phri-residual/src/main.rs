@@ -39,13 +39,13 @@ struct Cli {
     /// Robot model (URDF) the log was recorded with
     #[arg(long, value_name = "FILE", required = true)]
     urdf: Option<String>,
-    /// Recorded log: CSV `t,q1..qn,tau1..taun` (t [s], q [rad], tau [Nm])
+    /// Recorded log: CSV `t,q1..qn,tau1..taun` (t \[s\], q \[rad\], tau \[Nm\])
     #[arg(long, value_name = "LOG.csv", required = true)]
     log: Option<String>,
     /// Observer gain K_I on every joint [1/s] (default: the configuration's `dynamics.gain`)
     #[arg(long, value_name = "K", allow_negative_numbers = true, value_parser = positive)]
     ki: Option<f64>,
-    /// Integrate with this fixed period [s] instead of the log's t column
+    /// Integrate with this fixed period \[s\] instead of the log's t column
     #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive)]
     dt: Option<f64>,
     /// phri configuration to take `[dynamics]` from (friction model, thresholds); without it no friction is compensated

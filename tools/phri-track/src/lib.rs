@@ -47,10 +47,10 @@ pub struct Args {
     /// metres per depth unit
     #[arg(long, default_value_t = 0.001)]
     pub depth_scale_m: f64,
-    /// frame width [px]
+    /// frame width \[px\]
     #[arg(long, default_value_t = 640)]
     pub width: u32,
-    /// frame height [px]
+    /// frame height \[px\]
     #[arg(long, default_value_t = 480)]
     pub height: u32,
     /// track each frame on its own (no ids or smoothing across frames)

@@ -1,6 +1,6 @@
 //! Foxglove primitives from phri's geometry: poses, colours, timestamps, and
 //! the shapes Foxglove lacks (a capsule is a cylinder and two spheres; an
-//! arrow is posed along its +x axis). Positions in [m], base frame.
+//! arrow is posed along its +x axis). Positions in \[m\], base frame.
 
 use foxglove::messages::{
     ArrowPrimitive, Color, CylinderPrimitive, LinePrimitive, Point3, Pose, Quaternion,
@@ -79,7 +79,7 @@ pub fn rotation_between(from: &Vector3<f64>, to: &Vector3<f64>) -> UnitQuaternio
     })
 }
 
-/// A sphere of `radius` [m] centred at `c`.
+/// A sphere of `radius` \[m\] centred at `c`.
 pub fn sphere(c: &Vector3<f64>, radius: f64, color: Color) -> SpherePrimitive {
     let d = 2.0 * radius;
     SpherePrimitive {
@@ -89,7 +89,7 @@ pub fn sphere(c: &Vector3<f64>, radius: f64, color: Color) -> SpherePrimitive {
     }
 }
 
-/// A capsule (segment `a`–`b` swept by `radius` [m]) as Foxglove draws it:
+/// A capsule (segment `a`–`b` swept by `radius` \[m\]) as Foxglove draws it:
 /// a cylinder between the end centres (none when they coincide) and a sphere
 /// at each end.
 pub fn capsule(
@@ -117,7 +117,7 @@ pub fn capsule(
     )
 }
 
-/// An arrow from `tail` along `v` [m] (its length is ‖v‖), `diameter` [m]
+/// An arrow from `tail` along `v` \[m\] (its length is ‖v‖), `diameter` \[m\]
 /// thick; `None` when `v` is (nearly) zero.
 pub fn arrow(
     tail: &Vector3<f64>,
@@ -140,7 +140,7 @@ pub fn arrow(
     })
 }
 
-/// Line segments `(a, b)` drawn `thickness` [m] thick (a LINE_LIST).
+/// Line segments `(a, b)` drawn `thickness` \[m\] thick (a LINE_LIST).
 pub fn segments(
     pairs: &[(Vector3<f64>, Vector3<f64>)],
     thickness: f64,

@@ -14,7 +14,7 @@
 //! Foxglove's WebSocket protocol, to its owner only ([`peer`], `server`); `phri-record` writes the same messages on
 //! the same topics ([`topics::ALL`]) into its MCAP files, so a recording shows
 //! the same 3-D scene. Frames: `base` is the robot's base frame (the cell's
-//! world, z up, [m]); the camera's optical frame is `camera`.
+//! world, z up, \[m\]); the camera's optical frame is `camera`.
 
 pub mod depth;
 pub mod geometry;

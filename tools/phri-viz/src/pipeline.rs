@@ -32,9 +32,9 @@ use phri_view::RobotView;
 /// How often each kind of output is made.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rates {
-    /// scene, frames, depth [Hz]
+    /// scene, frames, depth \[Hz\]
     pub scene_hz: f64,
-    /// joint states and status [Hz] (by the robot's clock; ≥ its rate: every state)
+    /// joint states and status \[Hz\] (by the robot's clock; ≥ its rate: every state)
     pub joints_hz: f64,
     /// the depth image keeps every k-th pixel per axis
     pub depth_downsample: usize,
@@ -53,9 +53,9 @@ impl Default for Rates {
     }
 }
 
-/// Results older than this are no longer shown [ns]: a stopped worker's arrows vanish.
+/// Results older than this are no longer shown \[ns\]: a stopped worker's arrows vanish.
 pub const REPULSION_MAX_AGE_NS: u64 = 500_000_000;
-/// Time between two stale statuses [ns].
+/// Time between two stale statuses \[ns\].
 pub const STALE_STATUS_EVERY_NS: u64 = 250_000_000;
 
 /// One Foxglove message.
@@ -183,7 +183,7 @@ impl Pipeline {
         self.stale
     }
 
-    /// Time since the tick that saw the newest robot state, at `now_ns` [ns]
+    /// Time since the tick that saw the newest robot state, at `now_ns` \[ns\]
     /// (None: no state yet).
     pub fn input_age_ns(&self, now_ns: u64) -> Option<u64> {
         self.state_seen_ns.map(|t| now_ns.saturating_sub(t))
@@ -333,7 +333,7 @@ impl Pipeline {
         }
     }
 
-    /// At `now_ns` [CLOCK_MONOTONIC]: the scene and the frames when due (the
+    /// At `now_ns` \[CLOCK_MONOTONIC\]: the scene and the frames when due (the
     /// scene needs a joint state), and the newest depth frame when one came;
     /// when the robot's state is stale, a stale status instead of the scene.
     pub fn tick(&mut self, now_ns: u64, wanted: &dyn Fn(&str) -> bool, out: &mut Vec<Output>) {

@@ -1,6 +1,6 @@
 //! The 3-D scene as `foxglove.SceneUpdate`s, one per topic, each a whole
 //! replacement (every earlier entity of the topic deleted, the current ones
-//! added), all posed in the base frame [m].
+//! added), all posed in the base frame \[m\].
 
 use foxglove::messages::Color;
 use foxglove::messages::{
@@ -39,9 +39,9 @@ pub const FORCE_PARTIAL_COLOR: Color = rgba(0.85, 0.5, 0.85, 0.7);
 pub const VELOCITY_ARROW_S: f64 = 1.0;
 /// Length of a contact-force arrow per force [m/N]: 10 N → 10 cm.
 pub const FORCE_ARROW_M_PER_N: f64 = 0.01;
-/// Radius of a control point's marker [m].
+/// Radius of a control point's marker \[m\].
 pub const POINT_RADIUS: f64 = 0.015;
-/// Radius of the collaborative hand's marker [m].
+/// Radius of the collaborative hand's marker \[m\].
 pub const HAND_RADIUS: f64 = 0.04;
 
 fn v3(a: &[f64; 3]) -> Vector3<f64> {
@@ -68,7 +68,7 @@ fn meta(key: &str, value: impl ToString) -> KeyValuePair {
     }
 }
 
-/// A whole replacement of a topic's scene at `t` [ns]: what was there before goes.
+/// A whole replacement of a topic's scene at `t` \[ns\]: what was there before goes.
 pub fn replace_all(t: u64, entities: Vec<SceneEntity>) -> SceneUpdate {
     SceneUpdate {
         deletions: vec![SceneEntityDeletion {

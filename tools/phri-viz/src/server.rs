@@ -58,7 +58,7 @@ const MAX_REQUEST: usize = 1 << 20;
 pub struct Limits {
     /// clients served at once (more are refused)
     pub max_clients: usize,
-    /// messages waiting for one client, at most [bytes] (the oldest go first)
+    /// messages waiting for one client, at most \[bytes\] (the oldest go first)
     pub queue_bytes: usize,
 }
 

@@ -20,9 +20,9 @@ pub const COLLAB: &str = "/viz/collab";
 pub const TF: &str = "/viz/tf";
 /// `foxglove.PointCloud`: the filtered depth (`perception/depth`), base frame.
 pub const POINTS: &str = "/viz/depth/points";
-/// `foxglove.RawImage`: the filtered depth as a 16UC1 image [mm].
+/// `foxglove.RawImage`: the filtered depth as a 16UC1 image \[mm\].
 pub const IMAGE: &str = "/viz/depth/image";
-/// `foxglove.JointStates`: position [rad] and applied torque [Nm] of every joint (`robot/state`).
+/// `foxglove.JointStates`: position \[rad\] and applied torque \[Nm\] of every joint (`robot/state`).
 pub const JOINTS: &str = "/viz/joints";
 /// `phri.viz.Status` (JSON): mode, phase, residual and thresholds ([`crate::status::Status`]).
 pub const STATUS: &str = "/viz/status";

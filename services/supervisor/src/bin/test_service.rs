@@ -18,13 +18,13 @@ use phri_runtime::{now_ns, ServiceContext};
 /// How the stand-in misbehaves.
 #[derive(clap::Args, Debug)]
 struct Misbehave {
-    /// Busy-loop from this cell time on [s]
+    /// Busy-loop from this cell time on \[s\]
     #[arg(long, value_name = "S")]
     spin_from: Option<f64>,
-    /// Stop busy-looping at this cell time [s]
+    /// Stop busy-looping at this cell time \[s\]
     #[arg(long, value_name = "S")]
     spin_until: Option<f64>,
-    /// Exit with status 1 after running this long [s]
+    /// Exit with status 1 after running this long \[s\]
     #[arg(long, value_name = "S")]
     exit_after: Option<f64>,
 }

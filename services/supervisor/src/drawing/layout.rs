@@ -7,7 +7,7 @@
 //! straight arrow); the tests of [`super`] fail on either for the default
 //! cell, so that a change of the cell is a change of this file too.
 
-/// An axis-aligned rectangle [px].
+/// An axis-aligned rectangle \[px\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rect {
     pub x: f64,
@@ -75,7 +75,7 @@ pub struct Place {
     /// the roster's services it holds (one box for the hot standby pair,
     /// one for the repulsion workers)
     pub services: &'static [&'static str],
-    /// where [px]
+    /// where \[px\]
     pub rect: Rect,
     /// what its processes do, in a few words
     pub what: &'static str,
@@ -102,7 +102,7 @@ const fn place(
 /// The supervisor's name among the places' services.
 pub const SUPERVISOR: &str = "(supervisor)";
 
-/// The picture's size [px].
+/// The picture's size \[px\].
 pub const WIDTH: f64 = 1110.0;
 pub const HEIGHT: f64 = 700.0;
 
@@ -218,7 +218,7 @@ pub enum Label {
 pub struct Route {
     pub from: &'static str,
     pub to: &'static str,
-    /// the polyline [px], the first point on `from`'s border, the last on `to`'s
+    /// the polyline \[px\], the first point on `from`'s border, the last on `to`'s
     pub points: &'static [(f64, f64)],
     pub label: Label,
 }

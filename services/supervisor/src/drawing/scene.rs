@@ -23,7 +23,7 @@ pub enum Font {
 }
 
 impl Font {
-    /// Its size [px].
+    /// Its size \[px\].
     pub fn size(self) -> f64 {
         match self {
             Font::Title => 12.5,
@@ -34,13 +34,13 @@ impl Font {
         }
     }
 
-    /// The estimated width of `text` [px].
+    /// The estimated width of `text` \[px\].
     pub fn width(self, text: &str) -> f64 {
         text.chars().count() as f64 * 0.6 * self.size()
     }
 }
 
-/// One line of text, centred on `x`, its baseline at `y` [px].
+/// One line of text, centred on `x`, its baseline at `y` \[px\].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Line {
     pub x: f64,
@@ -50,7 +50,7 @@ pub struct Line {
 }
 
 impl Line {
-    /// The box the line takes [px].
+    /// The box the line takes \[px\].
     pub fn bounds(&self) -> Rect {
         let s = self.font.size();
         Rect::new(
@@ -86,7 +86,7 @@ pub struct BoxShape {
 /// An arrow's label: its channels, one line each or all on one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LabelShape {
-    /// the box it covers (turned: the turned box) [px]
+    /// the box it covers (turned: the turned box) \[px\]
     pub rect: Rect,
     pub lines: Vec<String>,
     /// runs up a vertical segment
@@ -122,7 +122,7 @@ pub struct Scene {
 
 /// Line spacing inside boxes and labels [px].
 const LEADING: f64 = 13.0;
-/// Inner margin of a box [px].
+/// Inner margin of a box \[px\].
 pub const PAD: f64 = 8.0;
 
 /// `words` joined by ", " into lines of at most `width` px in `font`.

@@ -71,7 +71,7 @@ pub fn no_live_supervisor(
 
 /// Run every enabled service once with `--check` on a private copy of the
 /// merged configuration, with the flags it will be started with, all at
-/// once: each must accept it (exit 0) within [`CHECK_TIMEOUT`]. The first
+/// once: each must accept it (exit 0) within `CHECK_TIMEOUT`. The first
 /// refusal is returned, naming the service and quoting its line.
 pub fn check_services(plan: &Plan, launch: &Launch) -> Result<(), SupervisorError> {
     let tmp = launch

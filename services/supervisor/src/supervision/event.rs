@@ -71,7 +71,7 @@ pub enum Event {
     NodeCounter(String),
     /// SIGINT or SIGTERM: the run is to end
     Signal,
-    /// the simulated robot's loop is this far behind the wall clock [ns]
+    /// the simulated robot's loop is this far behind the wall clock \[ns\]
     /// (periods it did not run since the cell started, all its processes
     /// added up): the scenario's time, which the person, the microphone
     /// and the contacts follow, is the robot's

@@ -31,18 +31,18 @@ use crate::cpu::CpuUse;
 use crate::realtime::{RealtimeWatch, Wanted};
 use crate::roster::Roster;
 
-/// Period of the supervision loop [ns].
+/// Period of the supervision loop \[ns\].
 pub const TICK_NS: u64 = 10_000_000;
-/// Period of the watch over who publishes on `robot/command` [ns].
+/// Period of the watch over who publishes on `robot/command` \[ns\].
 pub const WATCH_NS: u64 = 50_000_000;
-/// Period of the samples of the services' CPU time [ns].
+/// Period of the samples of the services' CPU time \[ns\].
 pub const CPU_SAMPLE_NS: u64 = 20_000_000;
-/// How long health goes out every tick after a (re)start [ns].
+/// How long health goes out every tick after a (re)start \[ns\].
 pub const FAST_HEALTH_NS: u64 = 1_000_000_000;
-/// A supervision loop later than this was a stall of the supervisor itself [ns].
+/// A supervision loop later than this was a stall of the supervisor itself \[ns\].
 pub const STALL_NS: u64 = 100_000_000;
 /// A service's real-time process is judged no earlier than this after its
-/// (re)start: it opens its ports before it asks for SCHED_FIFO [ns].
+/// (re)start: it opens its ports before it asks for SCHED_FIFO \[ns\].
 pub const RT_SETTLE_NS: u64 = 200_000_000;
 
 /// What a supervision is made of.
@@ -61,9 +61,9 @@ pub struct Setup {
     pub online: usize,
     /// `--require-rt`: a service without real-time scheduling ends the run
     pub require_rt: bool,
-    /// when the run began [ns] (the run's length counts from it)
+    /// when the run began \[ns\] (the run's length counts from it)
     pub t0_ns: u64,
-    /// the run's length [s] (`None`: until a signal)
+    /// the run's length \[s\] (`None`: until a signal)
     pub duration_s: Option<f64>,
     /// the run's length is counted on the simulated robot's clock: a run
     /// whose robot loop fell behind (a loaded machine) goes on by as long
@@ -244,7 +244,7 @@ impl Supervision {
             && self.end_ns().is_none_or(|e| now_ns < e)
     }
 
-    /// When the run's length is reached [ns]: its end on the wall clock,
+    /// When the run's length is reached \[ns\]: its end on the wall clock,
     /// later by as much as the simulated robot fell behind (at most the
     /// length again).
     pub fn end_ns(&self) -> Option<u64> {

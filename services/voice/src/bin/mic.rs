@@ -21,9 +21,9 @@ use phri_voice::capture::Capture;
 use phri_voice::mic::{due, Clip, MicFlags, MicStats, Playback, CHUNK_NS};
 use phri_voice::wav;
 
-/// Further behind than this, the mic skips ahead (a reader's queue holds 4 s) [chunks].
+/// Further behind than this, the mic skips ahead (a reader's queue holds 4 s) \[chunks\].
 const MAX_BURST: u64 = 100;
-/// A capture read waits this long for the device before the loop beats [ms].
+/// A capture read waits this long for the device before the loop beats \[ms\].
 const CAPTURE_WAIT_MS: u32 = 100;
 
 fn main() -> ExitCode {

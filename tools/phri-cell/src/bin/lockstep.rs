@@ -37,7 +37,7 @@ struct Cli {
     /// Scenario: a name of the configuration's scenarios, or a scenario file
     #[arg(long, value_name = "NAME|FILE", required = true)]
     scenario: Option<String>,
-    /// Simulated time of each run [s] (default: the scenario's duration)
+    /// Simulated time of each run \[s\] (default: the scenario's duration)
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     duration: Option<f64>,
     /// Cell configuration (TOML)
@@ -50,16 +50,16 @@ struct Cli {
     /// Override one configuration value, e.g. `--set control.avoidance=false` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-    /// Offset of the person's script against the robot's cycle [s] (repeatable: one run each)
+    /// Offset of the person's script against the robot's cycle \[s\] (repeatable: one run each)
     #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = finite)]
     offset: Vec<f64>,
-    /// Offsets FROM, FROM+STEP, … up to TO [s], one run each (after the --offset runs), e.g. `--sweep -4,0,0.5`
+    /// Offsets FROM, FROM+STEP, … up to TO \[s\], one run each (after the --offset runs), e.g. `--sweep -4,0,0.5`
     #[arg(long, value_name = "FROM,TO,STEP", allow_hyphen_values = true)]
     sweep: Option<String>,
-    /// Capture → repulsion results at the controller [ms] (default 6.5: the multi-process cell's p99 before the vector lanes; 4.3-4.5 ms since, so the default errs late)
+    /// Capture → repulsion results at the controller \[ms\] (default 6.5: the multi-process cell's p99 before the vector lanes; 4.3-4.5 ms since, so the default errs late)
     #[arg(long = "latency-ms", value_name = "MS", allow_negative_numbers = true)]
     latency_ms: Option<f64>,
-    /// A service outage in simulated time [s], `perception|dynamics|control|standby:FROM:TO` (repeatable; `control` is the first controller, `standby` the hot standby)
+    /// A service outage in simulated time \[s\], `perception|dynamics|control|standby:FROM:TO` (repeatable; `control` is the first controller, `standby` the hot standby)
     #[arg(long, value_name = "SERVICE:FROM:TO")]
     outage: Vec<Outage>,
     /// Run without the camera and perception

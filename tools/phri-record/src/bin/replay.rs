@@ -149,7 +149,7 @@ fn out_for(node: &IpcNode, prefix: &str, name: &str) -> Result<Box<dyn Out>, Box
     }
 }
 
-/// One recorded message to replay: (log time [ns], channel, JSON bytes).
+/// One recorded message to replay: (log time \[ns\], channel, JSON bytes).
 type Recorded = (u64, &'static str, Vec<u8>);
 
 fn body(cli: Cli) -> Result<(), Box<dyn Error>> {

@@ -16,7 +16,7 @@ use crate::progress::Progress;
 pub const POLL: Duration = Duration::from_millis(5);
 
 /// Records `recs` (and the scene of `viz`) through `node` into `recording`,
-/// written to `path`, until `shutdown` or after `seconds` [s]; the last line
+/// written to `path`, until `shutdown` or after `seconds` \[s\]; the last line
 /// on stderr says what was written.
 pub fn record(
     mut recording: Recording,

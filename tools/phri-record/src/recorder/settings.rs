@@ -22,22 +22,22 @@ pub const SCENE_RATES: Rates = Rates {
 /// command line flattens them in).
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct Flags {
-    /// Stop after this long [s] (default: on Ctrl-C)
+    /// Stop after this long \[s\] (default: on Ctrl-C)
     #[arg(long, value_name = "S")]
     pub seconds: Option<f64>,
-    /// Keep every N-th depth frame [default: [record] frame_every, 10]
+    /// Keep every N-th depth frame \[default: [record\] frame_every, 10]
     #[arg(long, value_name = "N")]
     pub frame_every: Option<u64>,
-    /// Keep one depth pixel in K per axis [default: [record] frame_downsample, 4]
+    /// Keep one depth pixel in K per axis \[default: [record\] frame_downsample, 4]
     #[arg(long, value_name = "K")]
     pub frame_downsample: Option<usize>,
-    /// Chunk compression: zstd, lz4 or none [default: [record] compression, zstd]
+    /// Chunk compression: zstd, lz4 or none \[default: [record\] compression, zstd]
     #[arg(long, value_name = "zstd|lz4|none")]
     pub compression: Option<String>,
-    /// Cell configuration: [record], the robot model, the collision threshold and the cameras (a further camera's channels, `camera/1/depth`, …, are recorded too)
+    /// Cell configuration: \[record\], the robot model, the collision threshold and the cameras (a further camera's channels, `camera/1/depth`, …, are recorded too)
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Collision norm threshold written into the metadata for phri-plot [Nm] [default: the configuration's]
+    /// Collision norm threshold written into the metadata for phri-plot \[Nm\] [default: the configuration's]
     #[arg(long, value_name = "NM", allow_negative_numbers = true)]
     pub threshold: Option<f64>,
 }
@@ -46,11 +46,11 @@ pub struct Flags {
 pub struct Settings {
     /// `[record]` with the flags over it, validated
     pub rc: RecordConfig,
-    /// collision norm threshold [Nm]: `--threshold`, else the configuration's
+    /// collision norm threshold \[Nm\]: `--threshold`, else the configuration's
     pub threshold: Option<f64>,
     /// the cell's configuration (the scene's robot model, thresholds, cameras)
     pub loaded: phri_config::Loaded,
-    /// stop after this long [s], > 0
+    /// stop after this long \[s\], > 0
     pub seconds: Option<f64>,
 }
 
