@@ -520,7 +520,7 @@ fn account_joints(
         matched: m,
     } = *case;
     for (ji, js) in joints.iter_mut().enumerate() {
-        let vis = visible(&pose, zbuf, &body.joints[ji], body.radii[ji]);
+        let vis = visible(pose, zbuf, &body.joints[ji], body.radii[ji]);
         let rep = m
             .filter(|&i| out[i].confidence[ji] > 0.0)
             .map(|i| out[i].joints[ji]);
@@ -590,7 +590,7 @@ fn empty_rooms(scene: &mut Scene) {
             *seed += 1;
             r.reseed(*seed);
             r.render(&[], boxes, Some(0.0), depth).unwrap();
-            let n = t.step(&depth, DT, out).unwrap();
+            let n = t.step(depth, DT, out).unwrap();
             frames_with += usize::from(n > 0);
             people += n;
         }
@@ -642,7 +642,7 @@ fn two_people(scene: &mut Scene) {
             *seed += 1;
             r.reseed(*seed);
             r.render(&caps, &[], Some(0.0), depth).unwrap();
-            let n = t.step(&depth, DT, out).unwrap();
+            let n = t.step(depth, DT, out).unwrap();
             let bodies = [&still, &walker];
             let m = matches(&out[..n], &pose, &bodies);
             false_people += n - m.iter().flatten().count();

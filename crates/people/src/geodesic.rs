@@ -123,7 +123,7 @@ impl Geodesic {
         if self.cells.is_empty() {
             return;
         }
-        self.from_centre(seg.components[person].centroid);
+        self.search_from_centre(seg.components[person].centroid);
         self.find_extrema(k, min_m);
     }
 
@@ -227,7 +227,7 @@ impl Geodesic {
     /// The centre (the node nearest `centroid`, camera frame \[m\]) and the
     /// geodesic distances and paths from it ([`Geodesic::dist0`],
     /// [`Geodesic::pred0`]).
-    fn from_centre(&mut self, centroid: [f64; 3]) {
+    fn search_from_centre(&mut self, centroid: [f64; 3]) {
         let n = self.cells.len();
         let cen = [centroid[0] as f32, centroid[1] as f32, centroid[2] as f32];
         let mut best = (f32::INFINITY, 0u32);

@@ -44,6 +44,10 @@ impl MassProps {
     }
 }
 
+/// A link's mass \[kg\], centre of mass \[m\] and inertia about it
+/// \[kg m²\], body frame.
+type Inertial = (f64, Vector3<f64>, Matrix3<f64>);
+
 /// The `<inertial>` of `link`, whose frame sits at `in_body` in its body's
 /// frame: mass [kg], centre of mass [m] and inertia about it [kg m²], body
 /// frame; `None` without mass and inertia. Refuses a negative mass, a
@@ -51,7 +55,7 @@ impl MassProps {
 pub(super) fn link_inertial(
     link: &urdf_rs::Link,
     in_body: &Placement,
-) -> Result<Option<(f64, Vector3<f64>, Matrix3<f64>)>, ModelError> {
+) -> Result<Option<Inertial>, ModelError> {
     let inertial = &link.inertial;
     let el = format!("link '{}' inertial", link.name);
     let m = finite(inertial.mass.value, &el, "mass")?;
