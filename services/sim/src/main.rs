@@ -142,7 +142,8 @@ impl Outbox {
         let published = now_ns();
         fill_state(sim, out, seq, stamp_ns, published, &mut self.state);
         ports.state.publish(&self.state)?;
-        self.shared_arm.store(&sim.truth().q, published);
+        self.shared_arm
+            .store(&sim.truth().q, published, sim.human_time_s());
         fill_truth(sim, seq, stamp_ns, &mut self.truth);
         ports.truth.publish(&self.truth)?;
         for e in self.contact_log.step(stamp_ns, &sim.truth().contacts) {

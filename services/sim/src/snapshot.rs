@@ -1,7 +1,10 @@
 //! The arm's last joint positions on disk (`<run-dir>/sim-arm.state`,
 //! bincode), so that a simulator restarted inside a running cell puts the arm
 //! back where it was, at rest, as a real arm stands braked while its adapter
-//! restarts, instead of at the scenario's initial configuration.
+//! restarts, instead of at the scenario's initial configuration; and the
+//! person's script time with them, so that the person goes on from where the
+//! robot's clock had brought them (a loaded machine's robot runs behind the
+//! wall clock, and the scenario with it).
 //!
 //! The 1 kHz loop only stores into [`SharedArm`] (atomics: no allocation, no
 //! lock); a helper thread copies it out every [`SAVE_PERIOD`] and writes the
@@ -27,7 +30,8 @@ pub const FILE_NAME: &str = "sim-arm.state";
 pub const SAVE_PERIOD: Duration = Duration::from_millis(10);
 /// A snapshot older than this is not the arm's state any more \[ns\].
 pub const MAX_AGE_NS: u64 = 2_000_000_000;
-const VERSION: u32 = 1;
+/// The snapshot format's version: 2 added the person's script time.
+pub const VERSION: u32 = 2;
 
 /// The arm at one instant.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,6 +41,8 @@ pub struct ArmSnapshot {
     pub stamp_ns: u64,
     /// joint positions \[rad\]
     pub q: Vec<f64>,
+    /// the person's script time at `stamp_ns` \[s\]
+    pub scenario_s: f64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -59,6 +65,7 @@ pub enum SnapshotError {
 pub struct SharedArm {
     seq: AtomicU64,
     stamp_ns: AtomicU64,
+    scenario_bits: AtomicU64,
     n: usize,
     q: [AtomicU64; MAX_JOINTS],
 }
@@ -69,13 +76,15 @@ impl SharedArm {
         SharedArm {
             seq: AtomicU64::new(0),
             stamp_ns: AtomicU64::new(0),
+            scenario_bits: AtomicU64::new(0),
             n: n.min(MAX_JOINTS),
             q: std::array::from_fn(|_| AtomicU64::new(0)),
         }
     }
 
-    /// Store positions `q` \[rad\] true at `stamp_ns`. Single writer; allocates nothing.
-    pub fn store(&self, q: &[f64], stamp_ns: u64) {
+    /// Store positions `q` \[rad\] true at `stamp_ns`, the person's script at
+    /// `scenario_s` \[s\]. Single writer; allocates nothing.
+    pub fn store(&self, q: &[f64], stamp_ns: u64, scenario_s: f64) {
         let s = self.seq.load(Ordering::Relaxed);
         self.seq.store(s.wrapping_add(1), Ordering::Relaxed);
         fence(Ordering::Release);
@@ -83,6 +92,8 @@ impl SharedArm {
             dst.store(x.to_bits(), Ordering::Relaxed);
         }
         self.stamp_ns.store(stamp_ns, Ordering::Relaxed);
+        self.scenario_bits
+            .store(scenario_s.to_bits(), Ordering::Relaxed);
         self.seq.store(s.wrapping_add(2), Ordering::Release);
     }
 
@@ -102,12 +113,14 @@ impl SharedArm {
                 .map(|x| f64::from_bits(x.load(Ordering::Relaxed)))
                 .collect();
             let stamp_ns = self.stamp_ns.load(Ordering::Relaxed);
+            let scenario_s = f64::from_bits(self.scenario_bits.load(Ordering::Relaxed));
             fence(Ordering::Acquire);
             if self.seq.load(Ordering::Relaxed) == s1 {
                 return Some(ArmSnapshot {
                     version: VERSION,
                     stamp_ns,
                     q,
+                    scenario_s,
                 });
             }
         }
@@ -168,6 +181,9 @@ pub fn load_fresh(
     if s.q.iter().any(|x| !x.is_finite()) {
         return Err(decode("a joint position is not finite".into()));
     }
+    if !s.scenario_s.is_finite() || s.scenario_s < 0.0 {
+        return Err(decode(format!("scenario time {} s", s.scenario_s)));
+    }
     if s.stamp_ns < not_before_ns || s.stamp_ns > now_ns || now_ns - s.stamp_ns > MAX_AGE_NS {
         return Ok(None);
     }
@@ -177,8 +193,11 @@ pub fn load_fresh(
 /// How a simulator restarted inside a running cell picked the cell up ([`resume`]).
 #[derive(Debug)]
 pub struct Resumed {
-    /// how long ago the cell started \[s\]: the person's script continues from there
+    /// how long ago the cell started \[s\]
     pub behind_s: f64,
+    /// where the person's script continues \[s\]: the predecessor's script
+    /// time in its snapshot plus the time since, or `behind_s` without one
+    pub scenario_s: f64,
     pub arm: ArmResume,
 }
 
@@ -197,8 +216,10 @@ pub enum ArmResume {
 
 /// Restarted inside a running cell that started at `cell_start_ns` (it is
 /// `now_ns`): the world went on without us, so the person continues where the
-/// cell's clock is, and the arm stands, at rest, where this process's
-/// predecessor last saved it in `snapshot` (if given, fresh and fitting).
+/// predecessor's script was (its snapshot's script time plus the time since;
+/// without a snapshot, the time since the cell started), and the arm stands,
+/// at rest, where the predecessor last saved it in `snapshot` (if given,
+/// fresh and fitting).
 pub fn resume(
     sim: &mut Simulator,
     cell_start_ns: u64,
@@ -206,25 +227,34 @@ pub fn resume(
     snapshot: Option<&Path>,
 ) -> Resumed {
     let behind_s = now_ns.saturating_sub(cell_start_ns) as f64 * 1e-9;
-    sim.set_human_time_offset(behind_s);
+    let mut scenario_s = behind_s;
     let arm = match snapshot {
         None => ArmResume::Initial,
         Some(path) => match load_fresh(path, sim.model().nv(), cell_start_ns, now_ns) {
-            Ok(Some(s)) => match sim.reset_state(&s.q) {
-                Ok(()) => ArmResume::Restored {
-                    path: path.to_path_buf(),
-                    age_ns: now_ns.saturating_sub(s.stamp_ns),
-                },
-                Err(error) => ArmResume::Refused {
-                    path: path.to_path_buf(),
-                    error,
-                },
-            },
+            Ok(Some(s)) => {
+                let age_ns = now_ns.saturating_sub(s.stamp_ns);
+                scenario_s = s.scenario_s + age_ns as f64 * 1e-9;
+                match sim.reset_state(&s.q) {
+                    Ok(()) => ArmResume::Restored {
+                        path: path.to_path_buf(),
+                        age_ns,
+                    },
+                    Err(error) => ArmResume::Refused {
+                        path: path.to_path_buf(),
+                        error,
+                    },
+                }
+            }
             Ok(None) => ArmResume::Initial,
             Err(e) => ArmResume::Unreadable(e),
         },
     };
-    Resumed { behind_s, arm }
+    sim.set_human_time_offset(scenario_s);
+    Resumed {
+        behind_s,
+        scenario_s,
+        arm,
+    }
 }
 
 impl Resumed {
@@ -233,8 +263,8 @@ impl Resumed {
         let mut lines = Vec::new();
         if self.behind_s > 1.0 {
             lines.push(format!(
-                "the cell started {:.1} s ago: the scenario continues from there",
-                self.behind_s
+                "the cell started {:.1} s ago: the scenario continues from {:.1} s",
+                self.behind_s, self.scenario_s
             ));
         }
         match &self.arm {
@@ -271,9 +301,9 @@ mod tests {
         let arm = SharedArm::new(7);
         assert!(arm.load().is_none());
         let q = [0.1, -0.2, 0.3, -1.4, 0.5, 0.6, -0.7];
-        arm.store(&q, 5_000_000_000);
+        arm.store(&q, 5_000_000_000, 12.5);
         let s = arm.load().unwrap();
-        assert_eq!(s.q, q);
+        assert_eq!((s.q.as_slice(), s.scenario_s), (&q[..], 12.5));
         let p = tmp("rt");
         save(&p, &s).unwrap();
         assert_eq!(load_fresh(&p, 7, 0, 5_500_000_000).unwrap(), Some(s));
@@ -316,9 +346,20 @@ mod tests {
             version: VERSION,
             stamp_ns: 1,
             q: vec![f64::NAN; 7],
+            scenario_s: 0.0,
         };
         save(&p, &good).unwrap();
         assert!(load_fresh(&p, 7, 0, 2).is_err());
+        // nor a script time that is none
+        for t in [f64::NAN, f64::INFINITY, -1.0] {
+            let bad = ArmSnapshot {
+                q: vec![0.1; 7],
+                scenario_s: t,
+                ..good.clone()
+            };
+            save(&p, &bad).unwrap();
+            assert!(load_fresh(&p, 7, 0, 2).is_err(), "{t}");
+        }
     }
 
     #[test]
@@ -329,6 +370,7 @@ mod tests {
             version: VERSION,
             stamp_ns: 1,
             q: vec![0.1; 7],
+            scenario_s: 3.0,
         };
         save(&p, &s).unwrap();
         let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
@@ -366,14 +408,18 @@ mod tests {
             std::thread::spawn(move || {
                 for k in 1..=200_000u64 {
                     let x = k as f64;
-                    arm.store(&[x; 7], k);
+                    arm.store(&[x; 7], k, x);
                 }
             })
         };
         let mut seen = 0;
         while !writer.is_finished() || seen == 0 {
             if let Some(s) = arm.load() {
-                assert!(s.q.iter().all(|x| *x == s.stamp_ns as f64), "{s:?}");
+                assert!(
+                    s.q.iter().all(|x| *x == s.stamp_ns as f64)
+                        && s.scenario_s == s.stamp_ns as f64,
+                    "{s:?}"
+                );
                 seen += 1;
             }
         }

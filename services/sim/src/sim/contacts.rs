@@ -97,7 +97,7 @@ impl Simulator {
         let Some(mut human) = self.human.take() else {
             return;
         };
-        let t_human = self.t + self.human_time_offset;
+        let t_human = self.human_time_s();
         let (pushing, reach) = self.scripted_push(&human, t_human);
         let capsules: &[HumanCapsule] = human.pose_reaching(t_human, reach);
         self.human_contacts(capsules, pushing, dt, exact);

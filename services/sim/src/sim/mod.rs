@@ -337,6 +337,12 @@ impl Simulator {
         self.t
     }
 
+    /// The person's script time \[s\]: the simulation time plus the offset
+    /// of [`Simulator::set_human_time_offset`].
+    pub fn human_time_s(&self) -> f64 {
+        self.t + self.human_time_offset
+    }
+
     /// Run the human script `offset_s` \[s\] ahead of the simulation clock
     /// (negative: behind). A restarted simulator uses it to continue the
     /// scenario where the cell is, rather than replaying the person from the

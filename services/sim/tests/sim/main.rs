@@ -8,5 +8,6 @@ mod common;
 mod contact_parry;
 mod person;
 mod physics;
+mod resume;
 mod scenarios;
 mod world;
