@@ -753,8 +753,12 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     // loaded machine's supervisor may reap up to a second late
     let stop = events(&r, "protective_stop", "control");
     assert!(
-        stop.iter().any(|e| e["t_s"].as_f64().unwrap() >= kill_t - 1.0
-            && e["detail"].as_str().unwrap_or("").contains("perception is stale")),
+        stop.iter()
+            .any(|e| e["t_s"].as_f64().unwrap() >= kill_t - 1.0
+                && e["detail"]
+                    .as_str()
+                    .unwrap_or("")
+                    .contains("perception is stale")),
         "no protective stop on stale perception after the kill: {}",
         r["events"]
     );
@@ -799,11 +803,7 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
     cell.kill("camera", libc::SIGKILL);
     cell.kill("camera-1", libc::SIGKILL);
     let r = cell.finish();
-    assert_eq!(
-        restarts(&r, "camera-1"), 2,
-        "{}",
-        r["services"]
-    );
+    assert_eq!(restarts(&r, "camera-1"), 2, "{}", r["services"]);
     assert_eq!(restarts(&r, "perception"), 1);
     assert_eq!(restarts(&r, "camera"), 1);
     for s in ["camera", "camera-1", "perception", "perception-1"] {

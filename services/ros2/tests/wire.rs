@@ -184,7 +184,11 @@ fn an_independent_dds_peer_reads_the_cell_and_its_request_starts_a_collaboration
     seqs.dedup();
     let span = (seqs[seqs.len() - 1] - seqs[0] + 1) as f64;
     let share = seqs.len() as f64 / span;
-    assert!(share > 0.5, "the test saw {:.1} % of robot/state", share * 100.0);
+    assert!(
+        share > 0.5,
+        "the test saw {:.1} % of robot/state",
+        share * 100.0
+    );
     assert!(
         equal as f64 >= 0.99 * share * lines as f64,
         "{equal} of {lines} positions equal to a robot/state's \

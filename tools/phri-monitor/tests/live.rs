@@ -41,7 +41,10 @@ fn within(x: f64, nominal: f64, tol: f64) -> bool {
 fn rate_ok(c: &serde_json::Value, nominal: f64, slack: f64) -> bool {
     let rate = c["rate_hz"].as_f64().unwrap_or(0.0);
     let samples = c["samples"].as_f64().unwrap_or(0.0).max(1.0);
-    let consistent = match (c["mean_interval_ms"].as_f64(), c["max_interval_ms"].as_f64()) {
+    let consistent = match (
+        c["mean_interval_ms"].as_f64(),
+        c["max_interval_ms"].as_f64(),
+    ) {
         (Some(mean), Some(max)) => {
             // the window's edges, in sample periods: at most the longest
             // interval at either end

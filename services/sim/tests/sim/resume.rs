@@ -39,7 +39,10 @@ fn the_person_continues_from_the_predecessor_s_script_time() {
     assert!((r.scenario_s - 12.3).abs() < 1e-9, "{r:?}");
     assert!((r.behind_s - 20.0).abs() < 1e-9, "{r:?}");
     assert!((resumed_sim.human_time_s() - 12.3).abs() < 1e-9);
-    assert!(matches!(r.arm, snapshot::ArmResume::Restored { .. }), "{r:?}");
+    assert!(
+        matches!(r.arm, snapshot::ArmResume::Restored { .. }),
+        "{r:?}"
+    );
     let line = r.log_lines().join("\n");
     assert!(line.contains("continues from 12.3 s"), "{line}");
     // without a snapshot of this cell: the wall clock's time since it started
