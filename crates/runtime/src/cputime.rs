@@ -37,6 +37,21 @@ pub fn cpu_time_ns(pid: u32) -> Option<u64> {
     Some((utime + stime).saturating_mul(1_000_000_000 / hz))
 }
 
+/// Time a hypervisor has taken from this machine so far, per CPU on average
+/// \[ns\] (`steal` of `/proc/stat`, in clock ticks): a process's CPU time
+/// leaves it out, so a share of a CPU judged on a virtual machine is judged
+/// against what the machine had. `None`: `/proc/stat` unreadable.
+pub fn steal_ns() -> Option<u64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let mut lines = stat.lines();
+    // "cpu user nice system idle iowait irq softirq steal …": all CPUs
+    let steal: u64 = lines.next()?.split_whitespace().nth(8)?.parse().ok()?;
+    let cpus = lines.take_while(|l| l.starts_with("cpu")).count().max(1) as u64;
+    // SAFETY: sysconf has no preconditions
+    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as u64;
+    Some(steal.saturating_mul(1_000_000_000 / hz) / cpus)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -52,5 +67,12 @@ mod tests {
         }
         assert!(cpu_time_ns(std::process::id()).unwrap() > mine);
         assert_eq!(cpu_time_ns(u32::MAX - 1), None);
+    }
+
+    #[test]
+    fn steal_is_read_and_never_runs_backwards() {
+        let a = steal_ns().expect("/proc/stat");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        assert!(steal_ns().unwrap() >= a);
     }
 }

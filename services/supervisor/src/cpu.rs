@@ -16,7 +16,8 @@ use crate::roster::Roster;
 /// starvation surely had begun, bounded by this).
 pub const WINDOW_NS: u64 = 1_000_000_000;
 /// A service that used more than this share of one CPU over the window
-/// starves what shares its CPUs.
+/// starves what shares its CPUs: a share of what the machine had of it, a
+/// hypervisor's steal left out ([`CpuUse::available`]).
 pub const STARVING_SHARE: f64 = 0.9;
 /// Samples spanning less than this are no judgement [ns].
 const MIN_SPAN_NS: u64 = 50_000_000;
@@ -30,6 +31,8 @@ pub struct CpuUse {
     /// per service: its processes' CPU time and running time before the
     /// current process [ns], and the current one's first and newest sample
     totals: Vec<Total>,
+    /// (time, the machine's stolen time so far per CPU) [ns] over the last window
+    steal: VecDeque<(u64, u64)>,
 }
 
 /// A process's start-up (loading its configuration, model, files) is left
@@ -88,7 +91,50 @@ impl CpuUse {
         CpuUse {
             samples: vec![VecDeque::new(); services],
             totals: vec![Total::default(); services],
+            steal: VecDeque::new(),
         }
+    }
+
+    /// The machine had lost `steal_ns` per CPU to its hypervisor at `now_ns`
+    /// (`None`: unknown, the history is dropped).
+    pub fn record_steal(&mut self, now_ns: u64, steal_ns: Option<u64>) {
+        let Some(t) = steal_ns else {
+            self.steal.clear();
+            return;
+        };
+        if self.steal.back().is_some_and(|&(_, last)| t < last) {
+            self.steal.clear();
+        }
+        self.steal.push_back((now_ns, t));
+        while self
+            .steal
+            .front()
+            .is_some_and(|&(at, _)| now_ns.saturating_sub(at) > WINDOW_NS)
+        {
+            self.steal.pop_front();
+        }
+    }
+
+    /// The share of each CPU the hypervisor left the machine over the last
+    /// `window_ns` \[0.25, 1\]: 1 without samples (not a virtual machine,
+    /// or not known). A process that had all of a CPU the machine had shows
+    /// this share of the wall clock in its CPU time.
+    pub fn available(&self, window_ns: u64) -> f64 {
+        let Some(&(t1, s1)) = self.steal.back() else {
+            return 1.0;
+        };
+        let Some(&(t0, s0)) = self
+            .steal
+            .iter()
+            .find(|&&(t, _)| t1.saturating_sub(t) <= window_ns)
+        else {
+            return 1.0;
+        };
+        let span = t1.saturating_sub(t0);
+        if span < MIN_SPAN_NS.max(window_ns / 2) {
+            return 1.0;
+        }
+        (1.0 - s1.saturating_sub(s0) as f64 / span as f64).clamp(0.25, 1.0)
     }
 
     /// What service `index` used over the run so far, with its `budget`.
@@ -242,12 +288,16 @@ pub enum Verdict {
 /// half (the starvation had surely begun by then) or, when that half holds
 /// too few CPU samples because the supervisor itself was held up for part
 /// of it, over the whole silence (windows clamped to 0.1-1 × [`WINDOW_NS`]).
+/// Shares are of what the machine had of a CPU ([`CpuUse::available`]).
 /// `None` without samples over either: no verdict without evidence.
 pub fn judge(roster: &Roster, cpu: &CpuUse, frozen: usize, silent_ns: u64) -> Option<Verdict> {
     let clamp = |w: u64| w.clamp(WINDOW_NS / 10, WINDOW_NS);
     [clamp(silent_ns / 2), clamp(silent_ns)]
         .into_iter()
-        .find_map(|window| busiest(roster, cpu, frozen, window))
+        .find_map(|window| {
+            let (index, share) = busiest(roster, cpu, frozen, window)?;
+            Some((index, share / cpu.available(window)))
+        })
         .map(|(index, share)| {
             if share > STARVING_SHARE && index != frozen {
                 Verdict::Starved {
@@ -415,6 +465,28 @@ mod tests {
         assert_eq!(report["spinner"].share, 0.0);
         // a service never sampled is left out
         assert!(CpuUse::new(3).report(&r).is_empty());
+    }
+
+    #[test]
+    fn a_spinner_short_of_the_threshold_only_by_a_hypervisor_s_steal_is_the_culprit() {
+        let r = roster();
+        let mut cpu = CpuUse::new(3);
+        // the spinner's CPU time: 85 % of the wall clock
+        sample(&mut cpu, 0, 2000, &[0.3, 0.0, 0.85]);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
+        // the hypervisor took 15 % of each CPU meanwhile: the spinner had
+        // all the machine had of its CPU
+        for t in (0..=2000u64).step_by(50) {
+            cpu.record_steal(t * MS, Some(t * MS * 15 / 100));
+        }
+        assert!((cpu.available(WINDOW_NS) - 0.85).abs() < 1e-9);
+        let (who, share) = culprit(&r, &cpu, 1, WINDOW_NS).expect("the spinner");
+        assert_eq!(who, 2);
+        assert!((share - 1.0).abs() < 1e-9, "{share}");
+        // steal unknown (a sample missing): judged on the wall clock again
+        cpu.record_steal(2050 * MS, None);
+        assert_eq!(cpu.available(WINDOW_NS), 1.0);
+        assert_eq!(culprit(&r, &cpu, 1, WINDOW_NS), None);
     }
 
     #[test]

@@ -115,6 +115,15 @@ pub struct StreamClock {
     anchor: Option<(u64, u64)>,
 }
 
+/// A read up to this much later than the stream's own clock puts its block
+/// is a reader held up (a loaded machine), not a device that fell behind:
+/// the stream's clock stays \[ns\].
+const LATE_READ_NS: f64 = 100e6;
+/// The stream's clock follows such late reads by this fraction of their
+/// lateness (a device slower than the wall clock is tracked, 100 ppm to
+/// within 64 µs; a read 8 ms late moves the time by 0.25 ms).
+const LATE_READ_SLEW: f64 = 1.0 / 32.0;
+
 /// Frames at `rate` as nanoseconds.
 fn frames_ns(frames: f64, rate: u32) -> f64 {
     frames * 1e9 / rate.max(1) as f64
@@ -129,7 +138,9 @@ impl StreamClock {
     /// A block of `frames` frames starting at device frame `first` was read
     /// at `done_ns` with `delay` frames still buffered: the capture time of
     /// its first frame, and when the block's end is due if the device ran
-    /// ahead of the wall clock by more than `slack_ns` (wait until then).
+    /// ahead of the wall clock by more than `slack_ns` (wait until then). A
+    /// read that comes late by up to 100 ms keeps the stream's own time;
+    /// later, the time is measured afresh.
     pub fn block(
         &mut self,
         first: u64,
@@ -149,6 +160,12 @@ impl StreamClock {
                 let nominal = nominal as u64;
                 self.anchor = Some((first, nominal));
                 return (nominal, Some(end as u64));
+            }
+            let late = measured as f64 - nominal;
+            if (0.0..=LATE_READ_NS).contains(&late) {
+                let t = (nominal + late * LATE_READ_SLEW) as u64;
+                self.anchor = Some((first, t));
+                return (t, None);
             }
         }
         self.anchor = Some((first, measured));
@@ -458,6 +475,12 @@ mod tests {
         assert_eq!(wait, Some(1_020_000_000));
         // the frame times follow the anchor
         assert_eq!(c.time_of(480.0, rate), 1_010_000_000);
+        // a reader held up 8 ms: the stream's time, all but 1/32 of it
+        let (t2, wait) = c.block(640, 320, rate, 1_048_000_000, 0, 5_000_000);
+        assert_eq!((t2, wait), (1_020_250_000, None));
+        // held up past 100 ms: measured afresh
+        let (t3, _) = c.block(960, 320, rate, 1_200_000_000, 0, 5_000_000);
+        assert_eq!(t3, 1_180_000_000);
         // an overrun starts the clock over from the reads
         c.reset();
         let (t, wait) = c.block(640, 320, rate, 5_000_000_000, 0, 5_000_000);

@@ -157,6 +157,8 @@ impl Driver {
                     let cpu_ns = sup.roster().get(index).pid.and_then(cpu_time_ns);
                     self.feed(sup, now_ns, Event::CpuTime { index, cpu_ns })?;
                 }
+                let steal_ns = phri_runtime::cputime::steal_ns();
+                self.feed(sup, now_ns, Event::Steal { steal_ns })?;
             }
             Action::Watch => {
                 let me = std::process::id() as i32;

@@ -45,6 +45,9 @@ pub enum Event {
     /// service `index`'s process had used `cpu_ns` of CPU time so far
     /// (`None`: not running, or not readable)
     CpuTime { index: usize, cpu_ns: Option<u64> },
+    /// the machine had lost `steal_ns` per CPU to its hypervisor so far
+    /// (`None`: not readable)
+    Steal { steal_ns: Option<u64> },
     /// process `pid` (`who`: its command line), not a controller this
     /// supervisor started, publishes on the robot's command `channel`
     CommandIntruder {

@@ -199,6 +199,7 @@ impl Supervision {
                 out.push(Action::Degrade(reason));
             }
             Event::CpuTime { index, cpu_ns } => self.cpu.record(index, now_ns, cpu_ns),
+            Event::Steal { steal_ns } => self.cpu.record_steal(now_ns, steal_ns),
             Event::CommandIntruder { pid, who, channel } => {
                 self.command_intruder(now_ns, pid, &who, channel, out)
             }
