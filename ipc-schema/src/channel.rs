@@ -34,6 +34,7 @@ use crate::qos::{Qos, DELIVERY_WAIT};
 pub struct Channel<P: ?Sized + 'static, H: 'static = ()> {
     /// service name (`robot/state`): what flows, from whom
     pub name: &'static str,
+    /// publishers and subscribers allowed, queue depths, history, overflow
     pub qos: Qos,
     /// a new sample is announced on the event service of the same name
     pub wakes: bool,
@@ -624,6 +625,7 @@ impl<T: Message> Publisher<T> {
         }
     }
 
+    /// The name of the channel it publishes on.
     pub fn channel(&self) -> &'static str {
         self.raw.channel
     }
@@ -708,6 +710,7 @@ impl<T: Message> Subscriber<T> {
         self.raw.wait(timeout)
     }
 
+    /// The name of the channel it reads.
     pub fn channel(&self) -> &'static str {
         self.raw.channel
     }
@@ -767,6 +770,7 @@ impl<T: Message> LatestReader<T> {
         self.value.as_ref()
     }
 
+    /// The subscriber it reads from (polling, [`Queue::Latest`]).
     pub fn subscriber(&self) -> &Subscriber<T> {
         &self.sub
     }
@@ -842,6 +846,7 @@ impl FrameSampleMut {
         unsafe { &*(self.0.user_header() as *const Opaque).cast::<FrameHeader>() }
     }
 
+    /// the frame's header, to fill in
     pub fn user_header_mut(&mut self) -> &mut FrameHeader {
         // SAFETY: as FrameSampleMut::user_header
         unsafe { &mut *(self.0.user_header_mut() as *mut Opaque).cast::<FrameHeader>() }
@@ -854,6 +859,7 @@ impl FrameSampleMut {
         unsafe { std::slice::from_raw_parts(bytes.as_ptr().cast::<u16>(), bytes.len() / 2) }
     }
 
+    /// depths \[mm\], row-major, to fill in
     pub fn payload_mut(&mut self) -> &mut [u16] {
         let bytes = self.0.payload_mut();
         // SAFETY: as FrameSampleMut::payload
@@ -959,6 +965,7 @@ impl FramePublisher {
         Ok(())
     }
 
+    /// The name of the channel it publishes on.
     pub fn channel(&self) -> &'static str {
         self.raw.channel
     }
@@ -989,6 +996,7 @@ impl FrameSubscriber {
         self.raw.wait(timeout)
     }
 
+    /// The name of the channel it reads.
     pub fn channel(&self) -> &'static str {
         self.raw.channel
     }

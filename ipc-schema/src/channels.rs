@@ -300,7 +300,9 @@ pub const ON_DEMAND: &[&str] = &[
 /// Something done with each channel of the cell, typed: tools that handle
 /// every channel (monitor, recorder) implement this instead of matching names.
 pub trait ChannelVisitor {
+    /// Do it with a channel of messages of type `T`.
     fn message<T: Message>(&mut self, channel: Channel<T>);
+    /// Do it with a channel of depth frames.
     fn frames(&mut self, channel: FrameChannel);
 }
 

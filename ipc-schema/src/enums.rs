@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("{what}: unknown value {value}")]
 pub struct UnknownValue {
+    /// what was read (`"control mode"`)
     pub what: &'static str,
+    /// the value received
     pub value: u32,
 }
 
@@ -16,8 +18,11 @@ pub struct UnknownValue {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("{what}: unknown name '{name}' (expected one of: {expected})")]
 pub struct UnknownName {
+    /// what was named (`"reaction"`)
     pub what: &'static str,
+    /// the name given
     pub name: String,
+    /// the names accepted, comma separated
     pub expected: String,
 }
 
@@ -188,7 +193,9 @@ wire_enum! {
     CollabPart, "collaborative part" {
         /// none named
         None = 0 => "none",
+        /// the right hand
         RightHand = 1 => "right_hand",
+        /// the left hand
         LeftHand = 2 => "left_hand",
     }
 }
@@ -286,6 +293,7 @@ wire_enum! {
     /// Why the collaboration last changed, or why a request was refused
     /// ([`crate::CollabState::reason`], [`crate::CollabState::request_reason`]).
     CollabReason, "collaboration reason" {
+        /// none yet: no change of phase, no request answered
         None = 0 => "none",
         /// a request was accepted
         Accepted = 1 => "accepted",
@@ -327,20 +335,35 @@ wire_enum! {
     /// The 15 joints of a tracked person ([`crate::TrackedPerson::joints`]),
     /// in OpenNI/NiTE's order.
     SkeletonJoint, "skeleton joint" {
+        /// the head
         Head = 0 => "head",
+        /// the neck
         Neck = 1 => "neck",
+        /// the torso (centre of the trunk)
         Torso = 2 => "torso",
+        /// the left shoulder
         LeftShoulder = 3 => "left_shoulder",
+        /// the right shoulder
         RightShoulder = 4 => "right_shoulder",
+        /// the left elbow
         LeftElbow = 5 => "left_elbow",
+        /// the right elbow
         RightElbow = 6 => "right_elbow",
+        /// the left hand
         LeftHand = 7 => "left_hand",
+        /// the right hand
         RightHand = 8 => "right_hand",
+        /// the left hip
         LeftHip = 9 => "left_hip",
+        /// the right hip
         RightHip = 10 => "right_hip",
+        /// the left knee
         LeftKnee = 11 => "left_knee",
+        /// the right knee
         RightKnee = 12 => "right_knee",
+        /// the left foot
         LeftFoot = 13 => "left_foot",
+        /// the right foot
         RightFoot = 14 => "right_foot",
     }
 }
@@ -361,18 +384,31 @@ wire_enum! {
     /// A human body region, numbered as in [`crate::ContactTruth::human_part`]
     /// and [`crate::WorldCapsule::part`]; names as written in scenario files.
     BodyPart, "body part" {
+        /// head
         Head = 0 => "head",
+        /// torso
         Torso = 1 => "torso",
+        /// pelvis
         Pelvis = 2 => "pelvis",
+        /// left upper arm
         UpperArmLeft = 3 => "upper_arm_left",
+        /// right upper arm
         UpperArmRight = 4 => "upper_arm_right",
+        /// left forearm
         ForearmLeft = 5 => "forearm_left",
+        /// right forearm
         ForearmRight = 6 => "forearm_right",
+        /// left hand
         HandLeft = 7 => "hand_left",
+        /// right hand
         HandRight = 8 => "hand_right",
+        /// left thigh
         ThighLeft = 9 => "thigh_left",
+        /// right thigh
         ThighRight = 10 => "thigh_right",
+        /// left shin
         ShinLeft = 11 => "shin_left",
+        /// right shin
         ShinRight = 12 => "shin_right",
     }
 }

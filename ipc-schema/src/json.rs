@@ -30,10 +30,12 @@ pub type Counted = (&'static str, &'static [&'static str]);
 pub mod finite {
     use super::*;
 
+    /// Write `x`; `null` when it is not finite.
     pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
         x.is_finite().then_some(*x).serialize(s)
     }
 
+    /// Read a number; `null` as NaN.
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
         Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
     }
@@ -45,6 +47,7 @@ pub mod distance {
 
     pub use super::finite::serialize;
 
+    /// Read a number; `null` as +inf.
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
         Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
     }
@@ -55,10 +58,13 @@ pub mod distance {
 pub mod finite_array {
     use super::*;
 
+    /// Write every entry; `null` for one that is not finite.
     pub fn serialize<S: Serializer, const N: usize>(a: &[f64; N], s: S) -> Result<S::Ok, S::Error> {
         s.collect_seq(a.iter().map(|x| x.is_finite().then_some(*x)))
     }
 
+    /// Read up to `N` numbers or `null`s (NaN); the entries not given stay 0,
+    /// more than `N` is an error.
     pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
         d: D,
     ) -> Result<[f64; N], D::Error> {
@@ -89,10 +95,12 @@ pub mod finite_array {
 pub mod flag {
     use super::*;
 
+    /// Write `true` for any non-zero value.
     pub fn serialize<S: Serializer>(v: &u32, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_bool(*v != 0)
     }
 
+    /// Read a boolean as 1 or 0.
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
         Ok(bool::deserialize(d)? as u32)
     }
@@ -102,10 +110,12 @@ pub mod flag {
 pub mod opt_ns {
     use super::*;
 
+    /// Write the age; `null` for `u64::MAX`.
     pub fn serialize<S: Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
         (*v != u64::MAX).then_some(*v).serialize(s)
     }
 
+    /// Read an age; `null` as `u64::MAX`.
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
         Ok(Option::<u64>::deserialize(d)?.unwrap_or(u64::MAX))
     }
@@ -120,10 +130,12 @@ macro_rules! by_name {
             use super::*;
             use crate::enums::$enum;
 
+            /// Write the name of the value (`"unknown"` for one the enum lacks).
             pub fn serialize<S: Serializer>(v: &u32, s: S) -> Result<S::Ok, S::Error> {
                 s.serialize_str($enum::name_of(*v))
             }
 
+            /// Read a name as its wire value; an unknown name is an error.
             pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
                 let name = String::deserialize(d)?;
                 $enum::from_name(&name)
@@ -190,10 +202,13 @@ by_name!(
 pub mod i16_array {
     use super::*;
 
+    /// Write every sample as a number.
     pub fn serialize<S: Serializer, const N: usize>(a: &[i16; N], s: S) -> Result<S::Ok, S::Error> {
         s.collect_seq(a.iter())
     }
 
+    /// Read up to `N` samples; the samples not given stay 0, more than `N` is
+    /// an error.
     pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
         d: D,
     ) -> Result<[i16; N], D::Error> {
@@ -247,10 +262,13 @@ pub fn to_c_str<const N: usize>(text: &str) -> [u8; N] {
 pub mod c_string {
     use super::*;
 
+    /// Write the text up to its first NUL (`"?"` when not UTF-8).
     pub fn serialize<S: Serializer, const N: usize>(b: &[u8; N], s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(super::c_str_ref(b))
     }
 
+    /// Read a string of at most `N` bytes, zero padded; a longer one is an
+    /// error.
     pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
         d: D,
     ) -> Result<[u8; N], D::Error> {
@@ -288,6 +306,8 @@ pub mod latency_hist {
         }
     }
 
+    /// Write the summary: `bin_us`, `count`, `first_bin`, `last_bin` and the
+    /// non-empty `bins` as `[bin, count]` pairs.
     pub fn serialize<S: Serializer, const N: usize>(h: &[u32; N], s: S) -> Result<S::Ok, S::Error> {
         let count: u64 = h.iter().map(|&c| u64::from(c)).sum();
         let mut st = s.serialize_struct("LatencyHist", 5)?;
@@ -305,6 +325,8 @@ pub mod latency_hist {
         bins: Vec<(usize, u32)>,
     }
 
+    /// Read the non-empty bins back (the others 0); a bin past `N` − 1, or a
+    /// `count` that is not the bins' total, is an error.
     pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
         d: D,
     ) -> Result<[u32; N], D::Error> {

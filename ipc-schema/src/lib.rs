@@ -7,6 +7,8 @@
 //! across processes); every message carries a sequence number. Joint arrays
 //! hold `dof` valid entries in the order `phri-model` prints.
 
+#![deny(missing_docs)]
+
 pub mod channel;
 pub mod channels;
 pub mod cleanup;

@@ -50,12 +50,14 @@ pub mod robot_status {
 #[repr(C)]
 #[type_name("phri::JointState")]
 pub struct JointState {
+    /// sequence number, one per state
     pub seq: u64,
     /// measurement time \[ns\]: the robot's cycle clock (CLOCK_MONOTONIC at
     /// start, then exactly one period per state)
     pub stamp_ns: u64,
     /// when the robot published it [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
+    /// joints: valid entries of `q` and `tau`
     pub dof: u32,
     /// [`robot_status`] bits
     pub status: u32,
@@ -72,6 +74,7 @@ pub struct JointState {
     pub command_seq: u64,
     /// consecutive periods without a fresh command
     pub missed_commands: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
 }
@@ -81,12 +84,15 @@ pub struct JointState {
 #[repr(C)]
 #[type_name("phri::TorqueCommand")]
 pub struct TorqueCommand {
+    /// sequence number
     pub seq: u64,
     /// publish time \[ns\]
     pub stamp_ns: u64,
     /// the state this command answers
     pub state_seq: u64,
+    /// measurement time of the state answered \[ns, robot clock\]
     pub state_stamp_ns: u64,
+    /// joints: valid entries of `tau`
     pub dof: u32,
     /// [`crate::ControlMode`]
     #[serde(with = "crate::json::control_mode")]
@@ -113,17 +119,22 @@ pub mod residual_flags {
 #[repr(C)]
 #[type_name("phri::Residual")]
 pub struct Residual {
+    /// sequence number
     pub seq: u64,
     /// publish time \[ns\]
     pub stamp_ns: u64,
+    /// `seq` of the joint state it was computed from
     pub state_seq: u64,
+    /// measurement time of that state \[ns, robot clock\]
     pub state_stamp_ns: u64,
+    /// joints: valid entries of `r` and `qd`
     pub dof: u32,
     /// [`residual_flags`]
     pub flags: u32,
     /// last joint whose residual passed its contact threshold (−1: none): the
     /// colliding link is this joint's link or one after it (paper Sect. III)
     pub isolated_joint: i32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
     /// residual r ≈ τ_ext \[Nm\]
@@ -144,9 +155,11 @@ pub struct Residual {
 #[repr(C)]
 #[type_name("phri::ControlStatus")]
 pub struct ControlStatus {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
+    /// `seq` of the state answered
     pub state_seq: u64,
     /// measurement time of the state answered [ns, robot clock]
     pub state_stamp_ns: u64,
@@ -157,8 +170,11 @@ pub struct ControlStatus {
     pub reaction: u32,
     /// task waypoints reached since start
     pub waypoints_reached: u64,
+    /// collisions detected (reactions entered) since start
     pub detections: u64,
+    /// protective stops entered since start
     pub protective_stops: u64,
+    /// returns to the task after a reaction's recovery since start
     pub resumes: u64,
     /// age of the residual used \[ns\] (u64::MAX: none)
     #[serde(with = "crate::json::opt_ns")]
@@ -202,6 +218,7 @@ pub struct ContactTruth {
     /// 1 when the part is designated collaborative
     #[serde(with = "crate::json::flag")]
     pub intended: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
     /// force on the robot \[N\], base frame
@@ -220,22 +237,29 @@ pub struct ContactTruth {
 #[repr(C)]
 #[type_name("phri::Truth")]
 pub struct Truth {
+    /// sequence number: the joint state's, as `state_seq`
     pub seq: u64,
+    /// measurement time of that joint state \[ns, robot clock\]
     pub stamp_ns: u64,
     /// the [`JointState`] published with this truth
     pub state_seq: u64,
+    /// valid entries of `contacts`
     pub n_contacts: u32,
+    /// joints: valid entries of `tau_ext`, `q` and `qd`
     pub dof: u32,
     /// true external joint torque \[Nm\]
     #[serde(with = "crate::json::finite_array")]
     pub tau_ext: [f64; MAX_DOF],
+    /// true joint positions \[rad\] (not quantised as the encoders' are)
     #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
+    /// true joint velocities \[rad/s\]
     #[serde(with = "crate::json::finite_array")]
     pub qd: [f64; MAX_DOF],
     /// human-robot surface distance \[m\] (negative: penetration; +inf: no human)
     #[serde(with = "crate::json::distance")]
     pub min_distance: f64,
+    /// the deepest contacts, base frame (the first `n_contacts`)
     pub contacts: [ContactTruth; MAX_CONTACTS],
 }
 
@@ -244,7 +268,9 @@ pub struct Truth {
 #[repr(C)]
 #[type_name("phri::RobotStats")]
 pub struct RobotStats {
+    /// sequence number
     pub seq: u64,
+    /// publish time \[ns, CLOCK_MONOTONIC\]
     pub stamp_ns: u64,
     /// control periods run
     pub cycles: u64,
@@ -271,11 +297,14 @@ pub struct ServiceHealth {
     /// service name, UTF-8, zero padded
     #[serde(with = "crate::json::c_string")]
     pub name: [u8; 32],
+    /// process id (0: not running)
     pub pid: i32,
     /// 1 while the process runs
     #[serde(with = "crate::json::flag")]
     pub alive: u32,
+    /// times the supervisor restarted it
     pub restarts: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
     /// last start \[ns\]
@@ -283,6 +312,7 @@ pub struct ServiceHealth {
 }
 
 impl ServiceHealth {
+    /// The service's name as text (`?` when not UTF-8).
     pub fn name_str(&self) -> &str {
         crate::json::c_str_ref(&self.name)
     }
@@ -293,13 +323,19 @@ impl ServiceHealth {
 #[repr(C)]
 #[type_name("phri::Health")]
 pub struct Health {
+    /// sequence number
     pub seq: u64,
+    /// publish time \[ns, CLOCK_MONOTONIC\]
     pub stamp_ns: u64,
     /// services supervised; `services` lists the first [`MAX_SERVICES`] of
     /// them in start order (read `count.min(MAX_SERVICES)` entries)
     pub count: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
+    /// the services in start order: from the first (`supervisor/health`) or from
+    /// number [`MAX_SERVICES`] on (`supervisor/health/more`); the entries past
+    /// the last service are zeroed
     pub services: [ServiceHealth; MAX_SERVICES],
 }
 
@@ -314,6 +350,7 @@ pub const AUDIT_CHANNELS: usize = 8;
 #[repr(C)]
 #[type_name("phri::InputAudit")]
 pub struct InputAudit {
+    /// sequence number (per reader)
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -327,6 +364,7 @@ pub struct InputAudit {
 }
 
 impl InputAudit {
+    /// The reader's service name as text (`?` when not UTF-8).
     pub fn service_str(&self) -> &str {
         crate::json::c_str_ref(&self.service)
     }
@@ -339,6 +377,7 @@ impl InputAudit {
 #[repr(C)]
 #[type_name("phri::BridgeRequests")]
 pub struct BridgeRequests {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -364,6 +403,7 @@ impl Zeroed for BridgeRequests {}
 #[repr(C)]
 #[type_name("phri::CameraStatus")]
 pub struct CameraStatus {
+    /// sequence number (per camera)
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -396,6 +436,7 @@ impl Zeroed for CameraStatus {}
 #[repr(C)]
 #[type_name("phri::MicStatus")]
 pub struct MicStatus {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -421,6 +462,7 @@ pub const BOX_ERROR_TEXT: usize = 128;
 #[repr(C)]
 #[type_name("phri::BoxStatus")]
 pub struct BoxStatus {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -446,6 +488,7 @@ pub struct BoxStatus {
     pub last_error: [u8; BOX_ERROR_TEXT],
     /// joints in the arrays below
     pub dof: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
     /// the box's own joint torques of its newest state \[Nm\] (FCI's `tau_J`,
@@ -461,14 +504,20 @@ pub struct BoxStatus {
     /// too far ahead; states whose joint positions are not finite, or moved
     /// faster than the joints' velocity limits allow (never published)
     pub refused_foreign: u64,
+    /// state datagrams refused: of the wrong size
     pub refused_malformed: u64,
+    /// state datagrams refused: a message id not above the newest
     pub refused_stale_id: u64,
+    /// state datagrams refused: a message id too far ahead
     pub refused_id_ahead: u64,
+    /// states refused: joint positions that are not finite
     pub refused_non_finite: u64,
+    /// states refused: joints that moved faster than their velocity limits allow
     pub refused_too_fast: u64,
 }
 
 impl BoxStatus {
+    /// The newest error's text (`?` when not UTF-8).
     pub fn last_error_str(&self) -> &str {
         crate::json::c_str_ref(&self.last_error)
     }
@@ -476,6 +525,7 @@ impl BoxStatus {
 
 /// A zeroed value of a plain-data message (all fields are numbers).
 pub trait Zeroed: Sized + Copy {
+    /// All bytes zero: every number 0, every text empty.
     fn zeroed() -> Self {
         // SAFETY: every message type is #[repr(C)] of integers and floats, for
         // which all-zero bytes are a valid value.
@@ -499,14 +549,18 @@ impl Zeroed for BoxStatus {}
 #[repr(C)]
 #[type_name("phri::WorldCapsule")]
 pub struct WorldCapsule {
+    /// one end of the segment \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub a: [f64; 3],
+    /// the other end of the segment \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
     pub b: [f64; 3],
+    /// the capsule's radius \[m\]
     #[serde(with = "crate::json::finite")]
     pub radius: f64,
     /// human body part ([`crate::BodyPart`] as i32)
     pub part: i32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
 }
@@ -517,14 +571,18 @@ pub struct WorldCapsule {
 #[repr(C)]
 #[type_name("phri::WorldState")]
 pub struct WorldState {
+    /// sequence number: the joint state's
     pub seq: u64,
     /// [ns, robot clock]
     pub stamp_ns: u64,
+    /// joints: valid entries of `q`
     pub dof: u32,
+    /// valid entries of `human`
     pub n_human: u32,
     /// true joint positions \[rad\]
     #[serde(with = "crate::json::finite_array")]
     pub q: [f64; MAX_DOF],
+    /// the human's capsules (the first `n_human`)
     pub human: [WorldCapsule; MAX_HUMAN_CAPSULES],
 }
 
@@ -542,15 +600,20 @@ pub struct FrameHeader {
     pub capture_wall_ns: u64,
     /// when this sample was published [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
+    /// image width \[px\]
     pub width: u32,
+    /// image height \[px\]
     pub height: u32,
     /// pinhole intrinsics \[px\]
     #[serde(with = "crate::json::finite")]
     pub fx: f64,
+    /// focal length along y \[px\] (`fx`: along x)
     #[serde(with = "crate::json::finite")]
     pub fy: f64,
+    /// principal point, x \[px\]
     #[serde(with = "crate::json::finite")]
     pub cx: f64,
+    /// principal point, y \[px\]
     #[serde(with = "crate::json::finite")]
     pub cy: f64,
     /// metres per depth unit (0.001: millimetres)
@@ -560,6 +623,7 @@ pub struct FrameHeader {
     /// x right, y down, z forward) then translation \[m\]
     #[serde(with = "crate::json::finite_array")]
     pub pose_r: [f64; 9],
+    /// the camera's position in the base frame \[m\] (the pose's translation)
     #[serde(with = "crate::json::finite_array")]
     pub pose_t: [f64; 3],
     /// joint state used to remove the robot's own pixels (perception/depth only)
@@ -567,6 +631,7 @@ pub struct FrameHeader {
     pub q: [f64; MAX_DOF],
     /// stamp of that joint state [ns, robot clock] (0: none)
     pub q_stamp_ns: u64,
+    /// joints: valid entries of `q`
     pub dof: u32,
     /// pixels removed as the robot's own
     pub removed_pixels: u32,
@@ -607,6 +672,7 @@ pub struct PointRepulsion {
 #[repr(C)]
 #[type_name("phri::RepulsionResult")]
 pub struct RepulsionResult {
+    /// sequence number (per worker)
     pub seq: u64,
     /// the frame this answers
     pub frame_seq: u64,
@@ -616,15 +682,19 @@ pub struct RepulsionResult {
     pub published_ns: u64,
     /// the frame's capture time [ns, CLOCK_MONOTONIC]
     pub frame_capture_wall_ns: u64,
+    /// this worker's number, below `workers`: it owns the control points `i`
+    /// with `i mod workers = worker`
     pub worker: u32,
     /// workers in the configuration
     pub workers: u32,
+    /// valid entries of `points`
     pub n_points: u32,
     /// the frame's arrival at ingestion → this result's publication \[ns\],
     /// saturating (0: unknown). Was padding: the layout and size are unchanged.
     pub since_arrival_ns: u32,
     /// processing time \[ns\]
     pub compute_ns: u64,
+    /// one result per control point the worker owns (the first `n_points`)
     pub points: [PointRepulsion; MAX_POINTS_PER_WORKER],
 }
 
@@ -639,6 +709,7 @@ impl Zeroed for RepulsionResult {}
 #[repr(C)]
 #[type_name("phri::DepthFault")]
 pub struct DepthFault {
+    /// sequence number
     pub seq: u64,
     /// when it was sent [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -666,6 +737,7 @@ impl Zeroed for DepthFault {}
 #[repr(C)]
 #[type_name("phri::ContactEvent")]
 pub struct ContactEvent {
+    /// sequence number
     pub seq: u64,
     /// [ns, robot clock]: the state this event was seen with
     pub stamp_ns: u64,
@@ -728,9 +800,12 @@ pub struct Skeleton {
     pub capture_wall_ns: u64,
     /// when this was published [ns, CLOCK_MONOTONIC]
     pub published_ns: u64,
+    /// valid entries of `people`
     pub n_people: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
+    /// the people seen (the first `n_people`)
     pub people: [TrackedPerson; MAX_PEOPLE],
 }
 
@@ -742,6 +817,7 @@ impl Zeroed for Skeleton {}
 #[repr(C)]
 #[type_name("phri::HriRequest")]
 pub struct HriRequest {
+    /// sequence number (per source)
     pub seq: u64,
     /// when it was made [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -779,6 +855,7 @@ impl Zeroed for HriRequest {}
 #[repr(C)]
 #[type_name("phri::AudioChunk")]
 pub struct AudioChunk {
+    /// chunk number: a gap is audio lost
     pub seq: u64,
     /// capture time of the first sample [ns, CLOCK_MONOTONIC]
     pub capture_ns: u64,
@@ -802,9 +879,11 @@ impl Zeroed for AudioChunk {}
 #[repr(C)]
 #[type_name("phri::Utterance")]
 pub struct Utterance {
+    /// sequence number
     pub seq: u64,
     /// speech began / ended [ns, CLOCK_MONOTONIC: `audio/mic`'s capture clock]
     pub start_ns: u64,
+    /// speech ended \[ns, CLOCK_MONOTONIC\] (`audio/mic`'s capture clock)
     pub end_ns: u64,
     /// when the verdict was reached [ns, CLOCK_MONOTONIC]
     pub decoded_ns: u64,
@@ -892,6 +971,7 @@ pub struct ContactForce {
 #[repr(C)]
 #[type_name("phri::CollabState")]
 pub struct CollabState {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -913,14 +993,19 @@ pub struct CollabState {
     /// the last request answered: its source ([`crate::RequestSource`], 0: none yet),
     /// kind, part, whether it was accepted and why ([`crate::CollabReason`])
     pub request_source: u32,
+    /// the last request answered: its kind ([`crate::RequestKind`])
     pub request_kind: u32,
+    /// the last request answered: its part ([`crate::CollabPart`])
     pub request_part: u32,
+    /// the last request answered: 1 when it was accepted
     #[serde(with = "crate::json::flag")]
     pub request_accepted: u32,
+    /// the last request answered: why ([`crate::CollabReason`])
     #[serde(with = "crate::json::collab_reason")]
     pub request_reason: u32,
     /// the last request answered: its sequence number (per source) and when it was made [ns, CLOCK_MONOTONIC]
     pub request_seq: u64,
+    /// the last request answered: when it was made \[ns, CLOCK_MONOTONIC\]
     pub request_stamp_ns: u64,
     /// the collaborative hand the controller uses \[m\], base frame
     #[serde(with = "crate::json::finite_array")]
@@ -931,12 +1016,14 @@ pub struct CollabState {
     /// ‖r − Σ J_kᵀ F̂_k‖: the residual the intended contacts do not explain \[Nm\]
     #[serde(with = "crate::json::finite")]
     pub unexplained_norm: f64,
+    /// valid entries of `forces`
     pub n_forces: u32,
     /// requests this controller may have lost since it started: each time
     /// it found its `hri/request` queue full after not reading it for
     /// `phri_ipc::DELIVERY_WAIT` (a publisher may have left it out), once
     /// (what was the padding: same size)
     pub requests_dropped: u32,
+    /// the estimated contact forces (the first `n_forces`)
     pub forces: [ContactForce; MAX_COLLAB_FORCES],
 }
 
@@ -949,6 +1036,7 @@ impl Zeroed for CollabState {}
 #[repr(C)]
 #[type_name("phri::SsmStatus")]
 pub struct SsmStatus {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -1004,16 +1092,21 @@ pub const BEHAVIOUR_BYTES: usize = 8192;
 #[repr(C)]
 #[type_name("phri::ControlBehaviour")]
 pub struct ControlBehaviour {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
     /// the state whose step left this behaviour
     pub state_seq: u64,
+    /// measurement time of that state \[ns, robot clock\]
     pub state_stamp_ns: u64,
     /// bytes used in `bytes`
     pub len: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
+    /// the behaviour state: `len` bytes in the controller's own layout (not in
+    /// the JSON view)
     #[serde(skip, default = "crate::json::zero_bytes")]
     pub bytes: [u8; BEHAVIOUR_BYTES],
 }
@@ -1028,11 +1121,13 @@ impl Zeroed for ControlBehaviour {}
 #[repr(C)]
 #[type_name("phri::CommanderStats")]
 pub struct CommanderStats {
+    /// sequence number
     pub seq: u64,
     /// publish time [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
     /// the slot in charge now (0 or 1)
     pub in_charge: u32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad: u32,
     /// periods whose applied command was each slot's fresh answer
@@ -1043,6 +1138,7 @@ pub struct CommanderStats {
     pub takeovers: u64,
     /// the last takeover: the state answered [ns, robot clock] and its number (0: none yet)
     pub last_takeover_state_stamp_ns: u64,
+    /// the last takeover: the `seq` of the state answered (0: none yet)
     pub last_takeover_state_seq: u64,
     /// the slot that took over
     pub last_takeover_to: u32,
@@ -1070,6 +1166,7 @@ pub struct CommanderStats {
     pub refused_malformed: [u64; 2],
     /// the newest refused stranger's pid (0: none)
     pub stranger_pid: i32,
+    /// padding, not in the JSON view
     #[serde(skip)]
     pub _pad2: u32,
 }

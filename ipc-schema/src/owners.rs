@@ -41,13 +41,21 @@ pub const PUBLISHERS: &[(&str, &[&str])] = &[
 pub struct Owned(usize);
 
 impl Owned {
+    /// `robot/state`: the joint states
     pub const ROBOT_STATE: Owned = Owned(0);
+    /// `dynamics/residual` (and its standby's): the momentum residual
     pub const DYNAMICS_RESIDUAL: Owned = Owned(1);
+    /// `perception/repulsion`: the repulsion workers' results
     pub const PERCEPTION_REPULSION: Owned = Owned(2);
+    /// `perception/skeleton`: the body tracker's people
     pub const PERCEPTION_SKELETON: Owned = Owned(3);
+    /// `perception/hand`: the collaborative hand
     pub const PERCEPTION_HAND: Owned = Owned(4);
+    /// `hri/request`: people's requests
     pub const HRI_REQUEST: Owned = Owned(5);
+    /// `audio/mic`: the microphone's audio
     pub const AUDIO_MIC: Owned = Owned(6);
+    /// `control/behaviour` (and the standby's): the controller's behaviour state
     pub const CONTROL_BEHAVIOUR: Owned = Owned(7);
 
     /// The owned channel named `name`, if it is one. A further camera's
@@ -67,6 +75,8 @@ impl Owned {
         PUBLISHERS.iter().position(|(c, _)| *c == name).map(Owned)
     }
 
+    /// The channel's name as [`PUBLISHERS`] lists it (a further camera's or a
+    /// standby's channel is owned under that name).
     pub fn name(self) -> &'static str {
         PUBLISHERS[self.0].0
     }
@@ -81,7 +91,12 @@ impl Owned {
 pub enum Sender {
     /// a service the supervisor started to publish this channel: its name's
     /// index in the table and, for a repulsion worker, its worker number
-    Owner { slot: usize, worker: Option<u32> },
+    Owner {
+        /// the service's index in the table's roles ([`OwnerTable::roles`])
+        slot: usize,
+        /// its worker number (repulsion workers; `None` for the others)
+        worker: Option<u32>,
+    },
     /// any other process
     Stranger,
     /// no supervisor: every sender is taken as it is (a service run by
@@ -125,8 +140,11 @@ pub fn from_the_future(stamp_ns: u64, now_ns: u64) -> bool {
 /// One configured service: its binary and (repulsion workers) its worker number.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ServiceRole {
+    /// the service's name in the roster
     pub name: String,
+    /// the binary it runs (`phri-repulsion`)
     pub binary: String,
+    /// its worker number (repulsion workers; `None` for the others)
     pub worker: Option<u32>,
 }
 
@@ -162,6 +180,8 @@ impl OwnerTable {
         OwnerTable::new(Vec::new(), false)
     }
 
+    /// Whether senders are checked (false: every sender is
+    /// [`Sender::Unchecked`]).
     pub fn supervised(&self) -> bool {
         self.supervised
     }

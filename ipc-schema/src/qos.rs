@@ -10,6 +10,7 @@ pub struct Qos {
     /// publishers allowed at once (1 for every channel but the workers' results:
     /// one source of truth, one commander)
     pub max_publishers: usize,
+    /// subscribers allowed at once
     pub max_subscribers: usize,
     /// largest queue a subscriber may ask for (evaluation readers drain at ~100 Hz)
     pub subscriber_max_buffer: usize,

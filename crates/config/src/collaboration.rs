@@ -34,6 +34,7 @@ pub struct SkeletonConfig {
     /// standard deviation of each joint's slowly drifting offset \[m\], per
     /// axis (a tracker's bias), and how fast it drifts: its correlation time \[s\]
     pub bias_m: f64,
+    /// the drifting offset's correlation time \[s\]
     pub bias_time_s: f64,
     /// frames of latency: a frame's skeleton is computed from the world this many frames earlier
     pub latency_frames: u32,
@@ -81,6 +82,7 @@ impl SkeletonSource {
 }
 
 impl SkeletonConfig {
+    /// Range checks of every field, the depth tracker's included.
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "skeleton";
         self.tracker
@@ -111,6 +113,8 @@ pub struct GestureConfig {
     /// (half periods of a 0.7-5 Hz wave): faster is tracker noise, slower
     /// is a reach and its return
     pub min_half_period_s: f64,
+    /// the most time between consecutive reversals \[s\] (above
+    /// `min_half_period_s`)
     pub max_half_period_s: f64,
     /// a swing between reversals moves the hand at least this far sideways \[m\]
     pub min_swing_m: f64,
@@ -125,6 +129,8 @@ pub struct GestureConfig {
 }
 
 impl GestureConfig {
+    /// Range checks of every field; `min_half_period_s` below
+    /// `max_half_period_s`.
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "gesture";
         if !(2..=20).contains(&self.reversals) {
@@ -200,6 +206,7 @@ pub struct CollaborationConfig {
     /// overlap), or an estimated force above `contact_force_n` near the hand,
     /// is contact \[m\]; at least `−reach_into_m`
     pub contact_gap_m: f64,
+    /// an estimated force near the hand above this is contact \[N\]
     pub contact_force_n: f64,
     /// contact: admittance on the estimated force, end-effector velocity per newton [m/(N s)]
     pub admittance: f64,
@@ -228,6 +235,7 @@ pub struct CollaborationConfig {
     pub force_limit_fraction: f64,
     /// quasi-static limits \[N\] (ISO/TS 15066 as transcribed publicly; check a licensed copy)
     pub iso_hand_n: f64,
+    /// quasi-static limit of the lower arms and wrists \[N\]
     pub iso_lower_arm_n: f64,
     /// backing off after a force limit: this far along the force \[m\]
     pub back_off_m: f64,
@@ -256,6 +264,9 @@ pub struct CollaborationConfig {
 }
 
 impl CollaborationConfig {
+    /// Range checks of every field, and of the pairs that must agree
+    /// (`contact_speed` ≤ `approach_speed`, `release_force_n` ≤
+    /// `contact_force_n`, `contact_gap_m` ≥ −`reach_into_m`).
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "collaboration";
         within(S, "min_hand_confidence", self.min_hand_confidence, 0.0, 1.0)?;

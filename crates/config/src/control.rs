@@ -60,6 +60,8 @@ pub struct ControlConfig {
     pub standby: bool,
     /// resume the task once the residual stayed below the contact level for `resume_quiet_s`
     pub resume: bool,
+    /// how long the residual must stay below the contact level before the
+    /// task resumes \[s\]
     pub resume_quiet_s: f64,
     /// a residual older than this (measured from the state it answers) is stale \[ms\]
     pub residual_max_age_ms: f64,
@@ -84,6 +86,8 @@ pub struct ControlConfig {
     /// perception results older than this are stale \[ms\]: with an obstacle last
     /// seen nearer than `near_distance_m` a protective stop, otherwise the task slows down
     pub perception_max_age_ms: f64,
+    /// an obstacle last seen nearer than this makes stale perception a
+    /// protective stop \[m\]
     pub near_distance_m: f64,
     /// stale this long: protective stop whatever was seen last \[ms\]
     pub perception_stop_after_ms: f64,

@@ -11,7 +11,9 @@ use phri_ipc::BodyPart;
 /// One of the person's hands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Hand {
+    /// the right hand
     Right,
+    /// the left hand
     Left,
 }
 
@@ -40,6 +42,7 @@ impl Hand {
 /// The wave blends in and out over 0.5 s at the ends of its interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wave {
+    /// the waving hand
     pub hand: Hand,
     /// \[Hz\], in (0, [`Wave::MAX_FREQUENCY_HZ`]]
     pub frequency_hz: f64,
@@ -48,7 +51,9 @@ pub struct Wave {
 }
 
 impl Wave {
+    /// Highest wave frequency a script may ask for \[Hz\].
     pub const MAX_FREQUENCY_HZ: f64 = 5.0;
+    /// Largest wave amplitude a script may ask for \[m\].
     pub const MAX_AMPLITUDE_M: f64 = 0.5;
 }
 
@@ -82,7 +87,9 @@ impl Push {
 
     /// Ramp time \[s\] of the force, at the start and the end of the push.
     pub const RAMP_S: f64 = 0.2;
+    /// Largest push force a script may ask for \[N\].
     pub const MAX_FORCE_N: f64 = 500.0;
+    /// Farthest a push's point may be from its link's frame origin \[m\].
     pub const MAX_POINT_M: f64 = 1.0;
 }
 
@@ -124,24 +131,56 @@ pub struct HumanScript {
 /// Why a [`HumanScript`] was refused. `index` is the keyframe's position.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ScriptError {
+    /// the floor height \[m\] is not a finite number
     #[error("floor_z: {0} is not a finite number")]
     FloorZ(f64),
+    /// the script has no keyframe
     #[error("keyframe: a human needs at least one keyframe")]
     NoKeyframe,
+    /// the script has more than [`HumanScript::MAX_KEYFRAMES`] keyframes
     #[error("keyframe: {count} keyframes, more than the {max} a script may have")]
-    TooMany { count: usize, max: usize },
+    TooMany {
+        /// the keyframes given
+        count: usize,
+        /// the most a script may have
+        max: usize,
+    },
+    /// a number of a keyframe is not finite
     #[error("keyframe[{index}].{field}: not a finite number")]
-    NotFinite { index: usize, field: &'static str },
+    NotFinite {
+        /// the keyframe's position
+        index: usize,
+        /// its key (`t`, `base`, `right_hand`, …)
+        field: &'static str,
+    },
+    /// a keyframe's time is not after the previous keyframe's
     #[error("keyframe[{index}].t: {t} s is not after the previous keyframe's {previous} s (keyframes must be sorted by strictly increasing t)")]
-    Unsorted { index: usize, t: f64, previous: f64 },
+    Unsorted {
+        /// the keyframe's position
+        index: usize,
+        /// its time \[s\]
+        t: f64,
+        /// the previous keyframe's time \[s\]
+        previous: f64,
+    },
+    /// the loop period is not finite and positive, or before the last
+    /// keyframe
     #[error("repeat_s: {repeat_s} s must be finite and at least the last keyframe's time {last} s (and > 0)")]
-    Repeat { repeat_s: f64, last: f64 },
+    Repeat {
+        /// the loop period asked for \[s\]
+        repeat_s: f64,
+        /// the last keyframe's time \[s\]
+        last: f64,
+    },
     /// a wave or push value out of range; `field` is the key below the
     /// keyframe, such as `wave.frequency_hz` or `push.force_n`
     #[error("keyframe[{index}].{field}: {reason}")]
     Invalid {
+        /// the keyframe's position
         index: usize,
+        /// the key below the keyframe
         field: &'static str,
+        /// why the value is refused
         reason: String,
     },
 }

@@ -10,6 +10,8 @@
 //! ([`Config::validate`]) and, given the robot model, checked against it
 //! ([`Config::check_model`]: joint counts, link names).
 
+#![deny(missing_docs)]
+
 pub mod check;
 pub mod collaboration;
 pub mod control;
@@ -83,6 +85,7 @@ pub const MAX_ROSTER: usize = 2 * phri_ipc::MAX_SERVICES;
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioSection {
+    /// the scenario's name ("": none)
     pub name: String,
     /// absolute path of the scenario file ("": none, free motion without a person)
     pub file: String,
@@ -92,9 +95,13 @@ pub struct ScenarioSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
+    /// `[robot]`: the arm, its model and its collision capsules
     pub robot: RobotSection,
+    /// `[supervisor]`: how the supervisor runs the cell
     pub supervisor: SupervisorConfig,
+    /// `[services.NAME]`: every service the supervisor may start, by name
     pub services: BTreeMap<String, ServiceSpec>,
+    /// `[sim]`: the simulated arm
     pub sim: SimConfig,
     /// the first camera (`[camera]`, or the first `[[camera]]`)
     pub camera: CameraConfig,
@@ -102,19 +109,33 @@ pub struct Config {
     /// entry over the defaults of `[camera]`)
     #[serde(skip)]
     pub cameras: Vec<CameraConfig>,
+    /// `[perception]`: depth ingestion
     pub perception: IngestConfig,
+    /// `[repulsion]`: the repulsion workers and their control points
     pub repulsion: RepulsionConfig,
+    /// `[dynamics]`: the momentum residual and contact detection
     pub dynamics: ResidualConfig,
+    /// `[control]`: the controller's task, reactions and avoidance
     pub control: ControlConfig,
+    /// `[ssm]`: speed and separation monitoring (ISO/TS 15066 5.5.4)
     pub ssm: SsmConfig,
+    /// `[record]`: what the recorder keeps of the depth frames
     pub record: RecordConfig,
+    /// `[skeleton]`: the people a camera sees
     pub skeleton: SkeletonConfig,
+    /// `[gesture]`: the waving detector
     pub gesture: GestureConfig,
+    /// `[collaboration]`: the controller's collaboration phases
     pub collaboration: CollaborationConfig,
+    /// `[voice]`: offline command recognition
     pub voice: VoiceConfig,
+    /// `[audio]`: the microphone stand-in `phri-mic`
     pub audio: AudioConfig,
+    /// `[mic]`: the microphone behind `audio/mic`
     pub mic: MicConfig,
+    /// `[ros2]`: the ROS 2 bridge
     pub ros2: Ros2Config,
+    /// `[scenario]`: the scenario the cell runs
     #[serde(default)]
     pub scenario: ScenarioSection,
 }
@@ -123,7 +144,9 @@ pub struct Config {
 /// (what the supervisor writes for its services).
 #[derive(Clone, Debug)]
 pub struct Loaded {
+    /// the configuration, typed and validated
     pub config: Config,
+    /// the scenario the cell runs (free motion when none)
     pub scenario: Scenario,
     /// the merged table, paths made absolute
     pub table: Table,
@@ -178,6 +201,7 @@ pub struct SafetyOff {
     pub function: &'static str,
     /// the key that switched it off (`control.avoidance`)
     pub key: String,
+    /// where that key's value came from
     pub origin: Origin,
 }
 

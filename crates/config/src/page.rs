@@ -32,9 +32,11 @@ pub struct Row {
     pub default: String,
     /// the default comes from the default arm's robot file
     pub from_robot_file: bool,
+    /// its unit ("" for a count, a flag, a name or a dimensionless number)
     pub unit: &'static str,
     /// `[lo, hi]` or `(lo, hi]` without the unit; "" for none
     pub range: String,
+    /// what it sets, in one line
     pub text: &'static str,
 }
 

@@ -67,6 +67,8 @@ pub struct CameraConfig {
     /// the paper's set-up: 2 m from the base, 1.2 m high, looking at the robot;
     /// this is the camera's azimuth around the base \[rad\] (0 = on the x axis)
     pub azimuth_rad: f64,
+    /// image size and pinhole parameters \[px\] (the simulated camera's and
+    /// a replay's; a real camera gives its own)
     pub intrinsics: Intrinsics,
     /// sensor model (noise, range, edge drop-outs)
     pub render: RenderOptions,
@@ -74,6 +76,7 @@ pub struct CameraConfig {
     pub floor_z: Option<f64>,
     /// the table under the robot: box corners \[m\], base frame
     pub table_min: [f64; 3],
+    /// the table's upper corner \[m\], base frame
     pub table_max: [f64; 3],
     /// a real camera's frame whose capture lies further in the past than
     /// this when it arrives is dropped (counted) \[s\]
@@ -101,6 +104,8 @@ impl CameraConfig {
             .map_err(|e| Invalid::new("camera.azimuth_rad", e.to_string()))
     }
 
+    /// Range checks of every field, the source's own keys, the pose, the
+    /// intrinsics and the sensor model.
     pub fn validate(&self) -> Result<(), Invalid> {
         within("camera", "rate_hz", self.rate_hz, 1e-3, 1000.0)?;
         within("camera", "max_age_s", self.max_age_s, 1e-3, 10.0)?;
@@ -182,6 +187,7 @@ pub enum DepthSource {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IngestConfig {
+    /// where the frames come from (`png`: the older way to replay)
     pub source: DepthSource,
     /// with `source = "png"`: the directory, its files replayed in name order
     pub png_dir: String,
@@ -200,6 +206,7 @@ pub struct IngestConfig {
 }
 
 impl IngestConfig {
+    /// Range checks of every field, the self-filter's included.
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "perception";
         if self.source == DepthSource::Png && self.png_dir.is_empty() {
@@ -226,7 +233,9 @@ impl IngestConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PointConfig {
+    /// the point's name (`end_effector`, `wrist`, …)
     pub name: String,
+    /// the link the point is fixed on
     pub link: String,
     /// position in the link frame \[m\]
     pub xyz: [f64; 3],
@@ -277,6 +286,8 @@ impl RepulsionConfig {
             .collect()
     }
 
+    /// Range checks: 1-16 workers, no more points per worker than a message
+    /// carries, positive eq. 16 parameters, finite points.
     pub fn validate(&self) -> Result<(), Invalid> {
         if !(1..=16).contains(&self.workers) {
             return Err(Invalid::new(

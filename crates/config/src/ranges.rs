@@ -26,9 +26,13 @@ use crate::Config;
 pub struct Range {
     /// dotted key (`perception.self_filter.margin_m`)
     pub key: &'static str,
+    /// lower end, in `unit`
     pub lo: f64,
+    /// `lo` itself is outside the range
     pub lo_open: bool,
+    /// upper end, in `unit` (always included)
     pub hi: f64,
+    /// the key's unit ("" for a dimensionless number)
     pub unit: &'static str,
     /// what goes wrong outside it
     pub why: &'static str,

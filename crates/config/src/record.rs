@@ -8,12 +8,16 @@ use crate::error::Invalid;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Compression {
+    /// Zstandard
     Zstd,
+    /// LZ4
     Lz4,
+    /// uncompressed chunks
     None,
 }
 
 impl Compression {
+    /// The name in `[record] compression`: `zstd`, `lz4` or `none`.
     pub fn name(self) -> &'static str {
         match self {
             Compression::Zstd => "zstd",
@@ -51,6 +55,7 @@ pub struct RecordConfig {
 }
 
 impl RecordConfig {
+    /// `frame_every` at least 1, `frame_downsample` in 1..=16.
     pub fn validate(&self) -> Result<(), Invalid> {
         if self.frame_every == 0 {
             return Err(Invalid::new("record.frame_every", "must be at least 1"));

@@ -54,9 +54,13 @@ pub struct RobotSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CapsuleConfig {
+    /// the link the capsule is fixed on
     pub link: String,
+    /// one end of the segment \[m\], link frame
     pub a: [f64; 3],
+    /// the other end of the segment \[m\], link frame
     pub b: [f64; 3],
+    /// the sphere's radius \[m\], in (0, 1\]
     pub radius: f64,
 }
 

@@ -64,6 +64,8 @@ pub struct Ros2Config {
 }
 
 impl Ros2Config {
+    /// Every "every N" and stride at least 1, rates in (0, 1000\] Hz,
+    /// a request rate in (0, 1000\] per second and a burst of at least 1.
     pub fn validate(&self) -> Result<(), Invalid> {
         for (name, v) in [
             ("joint_states_every", self.joint_states_every),

@@ -51,7 +51,9 @@ use crate::human_script::{Hand, HumanScript, Keyframe, Push, ScriptError, Wave};
 /// A loaded, checked scenario.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scenario {
+    /// the scenario's name (`collision`)
     pub name: String,
+    /// what happens in it, in a line ("" when the file gives none)
     pub description: String,
     /// default run length \[s\] ([`Scenario::DEFAULT_DURATION_S`] when the file gives none)
     pub duration_s: f64,
@@ -91,24 +93,35 @@ impl VoiceLine {
 /// `<scenario>` for text), `field` a dotted path such as `human.keyframe[2].t`.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
+    /// the file could not be read
     #[error("{}: cannot read: {source}", path.display())]
     Io {
+        /// the file
         path: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
     /// TOML syntax, a missing or unknown field or a wrong type, at `line`
     /// (1-based; 0 when unknown) in the table or key `field` (empty when unknown)
     #[error("{origin}:{line}: {}{message}", if field.is_empty() { String::new() } else { format!("{field}: ") })]
     Parse {
+        /// the file (`<scenario>` for text)
         origin: String,
+        /// the line, 1-based (0: unknown)
         line: usize,
+        /// the table or key, dotted ("": unknown)
         field: String,
+        /// the parser's message
         message: String,
     },
+    /// a well-typed value out of range, or a human script refused
     #[error("{origin}: {field}: {reason}")]
     Invalid {
+        /// the file (`<scenario>` for text)
         origin: String,
+        /// the key, dotted (`human.keyframe[2].t`)
         field: String,
+        /// why the value is refused
         reason: String,
     },
     /// a file another user could have written, or not a regular file

@@ -26,6 +26,7 @@ pub struct SsmConfig {
     /// monitor outside the collaboration (it lets a person touch the robot
     /// on purpose: power and force limiting instead)
     pub enabled: bool,
+    /// how fast the person is taken to approach: measured or ISO 13855's
     pub human_speed: HumanSpeed,
     /// T_s: the robot's stopping time \[s\]
     pub stop_time_s: f64,
@@ -42,6 +43,7 @@ pub struct SsmConfig {
 }
 
 impl SsmConfig {
+    /// Every time, distance, uncertainty and the speed's decay is non-negative.
     pub fn validate(&self) -> Result<(), Invalid> {
         for (name, v) in [
             ("stop_time_s", self.stop_time_s),

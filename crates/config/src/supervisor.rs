@@ -58,6 +58,8 @@ fn watchdog_priority() -> i32 {
 }
 
 impl SupervisorConfig {
+    /// Range checks of every field; the dead-man's time spans at least 5
+    /// health periods.
     pub fn validate(&self) -> Result<(), Invalid> {
         positive("supervisor", "stable_after_s", self.stable_after_s)?;
         positive("supervisor", "health_hz", self.health_hz)?;

@@ -25,14 +25,22 @@ use std::path::{Component, Path, PathBuf};
 /// Why a file is not read.
 #[derive(Debug, thiserror::Error)]
 pub enum TrustError {
+    /// the file could not be opened, examined or read
     #[error("{}: cannot read: {source}", path.display())]
     Io {
+        /// the file
         path: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
     /// not a regular file (a FIFO, a device, a directory)
     #[error("{}: is a {kind}, not a regular file: refused", path.display())]
-    NotRegular { path: PathBuf, kind: &'static str },
+    NotRegular {
+        /// the file
+        path: PathBuf,
+        /// what it is instead (`FIFO`, `directory`, …)
+        kind: &'static str,
+    },
     /// the file, or `dir` above it, is another user's or writable by others
     #[error("{}: {}owned by {}, mode {mode:04o}{}: refused (only files of this user, uid {me}, or root that no one else can write are read)",
         path.display(),
@@ -40,13 +48,17 @@ pub enum TrustError {
         user_name(*owner),
         if *writable { ", writable by other users" } else { "" })]
     Untrusted {
+        /// the file
         path: PathBuf,
         /// the directory at fault (`None`: the file itself)
         dir: Option<PathBuf>,
+        /// the owner's uid (of `dir` when given, else of the file)
         owner: u32,
+        /// its permission bits
         mode: u32,
         /// group or others may write it
         writable: bool,
+        /// this process's effective uid
         me: u32,
     },
 }

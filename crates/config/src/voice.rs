@@ -43,6 +43,9 @@ pub struct VoiceConfig {
 }
 
 impl VoiceConfig {
+    /// Range checks of every field, and of the pairs that must agree
+    /// (`min_stop_score` ≤ `min_score`, `min_utterance_s` below
+    /// `max_utterance_s`).
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "voice";
         if !self.min_score.is_finite() {
@@ -99,6 +102,7 @@ pub enum AudioSource {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AudioConfig {
+    /// the simulated room or recordings
     pub source: AudioSource,
     /// with `source = "wav_dir"`: 16 kHz mono 16-bit WAV files, played in name order
     pub wav_dir: String,
@@ -114,6 +118,7 @@ pub struct AudioConfig {
 }
 
 impl AudioConfig {
+    /// Range checks of every field; `wav_dir` given when it is the source.
     pub fn validate(&self) -> Result<(), Invalid> {
         const S: &str = "audio";
         if self.source == AudioSource::WavDir && self.wav_dir.trim().is_empty() {
@@ -140,6 +145,7 @@ pub enum MicSource {
 }
 
 impl MicSource {
+    /// The name in `[mic] source`: `sim` or `alsa`.
     pub fn name(self) -> &'static str {
         match self {
             MicSource::Sim => "sim",
@@ -152,12 +158,14 @@ impl MicSource {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MicConfig {
+    /// the stand-in of `[audio]` or a real microphone
     pub source: MicSource,
     /// `source = "alsa"`: the ALSA capture device (`arecord -L` lists them)
     pub device: String,
 }
 
 impl MicConfig {
+    /// `device` names an ALSA device: 1-256 printable characters.
     pub fn validate(&self) -> Result<(), Invalid> {
         let d = self.device.trim();
         if d.is_empty() || d.len() > 256 || d.chars().any(|c| c.is_control()) {

@@ -150,9 +150,13 @@ impl Default for Repulsion {
 /// Inclusive pixel window: columns `u0..=u1`, rows `v0..=v1`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PixelWindow {
+    /// first column \[px\]
     pub u0: usize,
+    /// last column \[px\], `≥ u0`
     pub u1: usize,
+    /// first row \[px\]
     pub v0: usize,
+    /// last row \[px\], `≥ v0`
     pub v1: usize,
 }
 

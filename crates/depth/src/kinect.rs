@@ -36,10 +36,20 @@ pub fn raw_to_m(raw: u16) -> f64 {
 pub enum FrameError {
     /// wrong number of pixels in or out
     #[error("a frame of {got} pixels ({expected} expected)")]
-    Size { got: usize, expected: usize },
+    Size {
+        /// pixels in the frame given
+        got: usize,
+        /// pixels of a 640×480 frame
+        expected: usize,
+    },
     /// a value that is not 11 bits
     #[error("pixel {pixel}: raw value {raw} is not an 11-bit disparity")]
-    NotDisparity { pixel: usize, raw: u16 },
+    NotDisparity {
+        /// row-major index of the pixel
+        pixel: usize,
+        /// its value
+        raw: u16,
+    },
 }
 
 /// The raw → millimetre table and its inverse.

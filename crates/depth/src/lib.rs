@@ -21,6 +21,8 @@
 //! reading. The per-frame paths allocate nothing: buffers are preallocated by
 //! the constructors and outputs are caller-owned slices.
 
+#![deny(missing_docs)]
+
 pub mod camera;
 pub mod distance;
 pub mod error;

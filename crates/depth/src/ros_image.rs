@@ -65,13 +65,32 @@ pub enum RosImageError {
     Encoding(String),
     /// zero or beyond the largest size
     #[error("size {width}×{height} outside 1×1..={MAX_WIDTH}×{MAX_HEIGHT}")]
-    Size { width: u32, height: u32 },
+    Size {
+        /// the image's width \[px\] (or 640 for an output of the wrong length)
+        width: u32,
+        /// the image's height \[px\] (or the output's length / 640)
+        height: u32,
+    },
     /// a row shorter than its pixels
     #[error("step {step} < width {width} × {bytes} bytes")]
-    Step { step: u32, width: u32, bytes: usize },
+    Step {
+        /// the image's bytes per row
+        step: u32,
+        /// the image's width \[px\]
+        width: u32,
+        /// bytes per pixel of its encoding
+        bytes: usize,
+    },
     /// fewer bytes than step × height
     #[error("{len} bytes of data < step {step} × height {height}")]
-    Data { len: usize, step: u32, height: u32 },
+    Data {
+        /// bytes of data given
+        len: usize,
+        /// the image's bytes per row
+        step: u32,
+        /// the image's height \[px\]
+        height: u32,
+    },
     /// a camera info that gives no usable intrinsics
     #[error("camera info: {0}")]
     Info(String),
@@ -80,23 +99,32 @@ pub enum RosImageError {
 /// A `sensor_msgs/Image` as received: its fields, the data borrowed.
 #[derive(Clone, Copy, Debug)]
 pub struct ImageView<'a> {
+    /// image width \[px\]
     pub width: u32,
+    /// image height \[px\]
     pub height: u32,
+    /// the `encoding` field, e.g. `16UC1` (see [`DepthEncoding::parse`])
     pub encoding: &'a str,
     /// `is_bigendian` ≠ 0: the samples are big-endian
     pub is_bigendian: u8,
     /// bytes per row
     pub step: u32,
+    /// the pixels, row by row, `step` bytes a row
     pub data: &'a [u8],
 }
 
 /// An image's checked layout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {
+    /// image width \[px\], 1 to [`MAX_WIDTH`]
     pub width: u32,
+    /// image height \[px\], 1 to [`MAX_HEIGHT`]
     pub height: u32,
+    /// the sample format
     pub encoding: DepthEncoding,
+    /// the samples are big-endian
     pub big_endian: bool,
+    /// bytes per row, at least `width` × the encoding's bytes per pixel
     pub step: usize,
 }
 

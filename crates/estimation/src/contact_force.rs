@@ -29,14 +29,19 @@ pub const MAX_JOINTS: usize = 16;
 /// Why an estimate could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum ForceError {
+    /// `q` or `r` of the wrong length
     #[error(transparent)]
     Length(#[from] LengthError),
+    /// a kinematics call on the model failed (e.g. a contact's frame unknown)
     #[error(transparent)]
     Model(#[from] phri_model::ModelError),
+    /// more contacts than [`MAX_FORCE_CONTACTS`]: how many were given
     #[error("at most {MAX_FORCE_CONTACTS} contacts, got {0}")]
     TooMany(usize),
+    /// the named input holds a NaN or an infinity
     #[error("{0}: not a finite number")]
     NotFinite(&'static str),
+    /// a frame index the model does not have
     #[error("no frame {0} in the model")]
     UnknownFrame(usize),
 }
@@ -141,6 +146,7 @@ impl ForceEstimator {
         true
     }
 
+    /// The robot model the estimator runs on.
     pub fn model(&self) -> &Model {
         &self.model
     }

@@ -15,12 +15,17 @@ pub struct Detection {
 /// Per-joint two-level thresholds (as Franka's contact/collision levels).
 #[derive(Clone, Debug)]
 pub struct Detector {
+    /// contact threshold on each `|r_i|` \[Nm\], one per joint
     pub contact: Vec<f64>,
+    /// collision threshold on each `|r_i|` \[Nm\], one per joint
     pub collision: Vec<f64>,
+    /// collision threshold on `‖r‖` \[Nm\]
     pub norm: f64,
 }
 
 impl Detector {
+    /// Judge the residual `r` \[Nm\] (one per joint, at most as many as
+    /// thresholds) against both levels and the norm threshold.
     pub fn classify(&self, r: &[f64]) -> Detection {
         let mut d = Detection::default();
         let mut sq = 0.0;

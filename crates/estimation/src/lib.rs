@@ -4,6 +4,8 @@
 //! and its two-level contact/collision detector with isolation of the
 //! colliding link ([`detect`]).
 
+#![deny(missing_docs)]
+
 pub mod contact_force;
 pub mod detect;
 pub mod observer;

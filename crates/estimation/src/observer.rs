@@ -28,6 +28,7 @@ pub enum ResidualError {
     /// the time, `q` or `tau` holds a NaN or an infinity
     #[error("{0}: not a finite number")]
     NotFinite(&'static str),
+    /// a dynamics or kinematics call on the model failed
     #[error(transparent)]
     Model(#[from] phri_model::ModelError),
 }
@@ -41,6 +42,7 @@ pub struct ResidualOutput<'a> {
     pub qd: &'a [f64],
     /// ‖r‖ \[Nm\]
     pub norm: f64,
+    /// `r` judged by the detector (all false during warm-up)
     pub detection: Detection,
     /// past warm-up: the residual is meaningful
     pub valid: bool,
@@ -132,10 +134,12 @@ impl ResidualObserver {
         })
     }
 
+    /// The robot model the observer runs on.
     pub fn model(&self) -> &Model {
         &self.model
     }
 
+    /// The contact and collision thresholds, from the `[dynamics]` settings.
     pub fn detector(&self) -> &Detector {
         &self.detector
     }

@@ -11,6 +11,8 @@ pub struct VelocityEstimator {
 }
 
 impl VelocityEstimator {
+    /// An estimator for `n` joints, its low-pass cut off at `cutoff_hz` \[Hz\],
+    /// at rest until it has seen positions.
     pub fn new(n: usize, cutoff_hz: f64) -> Self {
         VelocityEstimator {
             cutoff_hz,
@@ -66,6 +68,7 @@ impl VelocityEstimator {
         (-2.0 * std::f64::consts::PI * self.cutoff_hz * dt.max(0.0)).exp()
     }
 
+    /// The current estimate q̇ \[rad/s\].
     pub fn velocity(&self) -> &[f64] {
         &self.qd
     }

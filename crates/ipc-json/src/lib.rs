@@ -8,23 +8,37 @@
 //! `n_contacts`, ...) and padded back with zeros when reading. Depth frames
 //! are summarised ([`frame_json`]).
 
+#![deny(missing_docs)]
+
 use phri_ipc::{FrameHeader, Message};
 use serde_json::{json, Map, Value};
 
 /// A JSON value that is not the view of a message.
 #[derive(Debug, thiserror::Error)]
 pub enum JsonError {
+    /// the value is not a JSON object
     #[error("{message}: not a JSON object")]
-    NotAnObject { message: &'static str },
+    NotAnObject {
+        /// the message type's name, e.g. `JointState`
+        message: &'static str,
+    },
+    /// a field of the wrong kind, or a value the message's decoder refused
     #[error("{message}: field '{field}': {detail}")]
     Field {
+        /// the message type's name, e.g. `JointState`
         message: &'static str,
+        /// the field's name
         field: String,
+        /// what is wrong with its value
         detail: String,
     },
+    /// the decoder refused the object and no single field could be blamed
+    /// (e.g. a field missing)
     #[error("{message}: {source}")]
     Decode {
+        /// the message type's name, e.g. `JointState`
         message: &'static str,
+        /// the decoder's error
         #[source]
         source: serde_json::Error,
     },

@@ -10,6 +10,7 @@ use crate::{judge, BodyRegion};
 pub struct JudgedContact {
     /// when it began and last touched \[s\]
     pub t_start_s: f64,
+    /// when it last touched \[s\]
     pub t_end_s: f64,
     /// the robot's link
     pub link: String,
@@ -26,6 +27,7 @@ pub struct JudgedContact {
     pub limit_n: f64,
     /// `limit_n − peak_force_n` \[N\]
     pub margin_n: f64,
+    /// the peak stayed within the limit
     pub within_limit: bool,
     /// a touch of the collaboration, not a collision
     pub intended: bool,
@@ -37,6 +39,7 @@ pub struct JudgedContact {
 /// Every contact of a run judged, and how many were over their limit.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Judged {
+    /// every contact, in the order added
     pub contacts: Vec<JudgedContact>,
     /// contacts over their region's limit
     pub over_limit: usize,

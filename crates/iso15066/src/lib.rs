@@ -12,6 +12,8 @@
 //! (REFERENCE §11): check a licensed copy of the standard before any safety
 //! claim rests on them.
 
+#![deny(missing_docs)]
+
 pub mod contact;
 pub mod pfl;
 pub mod region;

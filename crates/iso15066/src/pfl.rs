@@ -53,7 +53,9 @@ pub fn transient_speed_limit(region: BodyRegion, m_r: f64) -> f64 {
 /// Transient or quasi-static, by the contact's duration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ContactKind {
+    /// at most [`TRANSIENT_MAX_S`]: an impact the body part can recoil from
     Transient,
+    /// longer than [`TRANSIENT_MAX_S`]: a clamping or a pressing held
     QuasiStatic,
 }
 
@@ -70,7 +72,9 @@ impl ContactKind {
 /// A contact against its body region's limit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Judgement {
+    /// the body region touched
     pub region: BodyRegion,
+    /// transient or quasi-static, by the contact's duration
     pub kind: ContactKind,
     /// the region's limit for this kind of contact \[N\]; 0 for a transient
     /// contact of a region where none is allowed (skull, face)

@@ -3,17 +3,29 @@
 /// A body region of Annex A, Table A.2.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BodyRegion {
+    /// skull and forehead (no transient contact allowed)
     SkullAndForehead,
+    /// face (no transient contact allowed)
     Face,
+    /// neck
     Neck,
+    /// back and shoulders
     BackAndShoulders,
+    /// chest
     Chest,
+    /// abdomen
     Abdomen,
+    /// pelvis
     Pelvis,
+    /// upper arm and elbow joint
     UpperArmAndElbow,
+    /// lower arm and wrist joint
     LowerArmAndWrist,
+    /// hand and fingers
     HandAndFingers,
+    /// thigh and knee
     ThighAndKnee,
+    /// lower leg
     LowerLeg,
 }
 

@@ -10,7 +10,9 @@ use nalgebra::{DMatrixView, DMatrixViewMut};
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 #[error("not positive definite: pivot {index} is {pivot}")]
 pub struct NotPositiveDefinite {
+    /// row (and column) of the failing pivot
     pub index: usize,
+    /// the pivot's value before its square root: `≤ min_pivot` or not finite
     pub pivot: f64,
 }
 

@@ -11,13 +11,29 @@ use crate::model::{Model, Placement};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
     /// segment from `−half_length ẑ` to `+half_length ẑ` swept by a sphere \[m\]
-    Capsule { radius: f64, half_length: f64 },
+    Capsule {
+        /// radius of the swept sphere \[m\]
+        radius: f64,
+        /// half the segment's length \[m\]
+        half_length: f64,
+    },
     /// cylinder along z \[m\]
-    Cylinder { radius: f64, half_length: f64 },
+    Cylinder {
+        /// radius \[m\]
+        radius: f64,
+        /// half the length along z \[m\]
+        half_length: f64,
+    },
     /// sphere \[m\]
-    Sphere { radius: f64 },
+    Sphere {
+        /// radius \[m\]
+        radius: f64,
+    },
     /// box with half side lengths \[m\]
-    Box { half_extents: Vector3<f64> },
+    Box {
+        /// half the side lengths along x, y, z \[m\]
+        half_extents: Vector3<f64>,
+    },
 }
 
 /// One collision primitive rigidly attached to a body.
@@ -29,6 +45,7 @@ pub struct CollisionObject {
     pub body: Option<usize>,
     /// shape frame in the body frame
     pub placement: Placement,
+    /// the primitive, in the shape frame
     pub shape: Shape,
 }
 

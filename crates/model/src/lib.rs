@@ -32,6 +32,8 @@
 //! (checked before parsing: the parser recurses), a file larger than
 //! [`MAX_URDF_BYTES`].
 
+#![deny(missing_docs)]
+
 pub mod cholesky;
 pub mod data;
 pub mod dynamics;

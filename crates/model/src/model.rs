@@ -33,6 +33,7 @@ pub struct Placement {
 }
 
 impl Placement {
+    /// the identity: child frame = parent frame
     pub const IDENTITY: Placement = Placement {
         r: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
         p: Vector3::new(0.0, 0.0, 0.0),
@@ -92,6 +93,7 @@ pub struct Joint {
     pub name: String,
     /// URDF link that is this joint's child (the body frame)
     pub child_link: String,
+    /// revolute (continuous included) or prismatic
     pub kind: JointKind,
     /// index of the parent joint, `None` when the parent body is the root
     pub parent: Option<usize>,
@@ -109,6 +111,7 @@ pub struct Joint {
     /// like any joint's but enforced by nothing: it has no degree of freedom
     /// (Pinocchio keeps none for it either)
     pub lower: f64,
+    /// upper position limit \[rad or m\]; +∞ for continuous joints (see `lower`)
     pub upper: f64,
     /// velocity limit [rad/s or m/s], > 0; ∞ only for a continuous joint
     /// without `<limit>`
@@ -118,13 +121,16 @@ pub struct Joint {
     /// mass \[kg\], centre of mass \[m\] and inertia about it [kg m²] of the
     /// body (links rigidly attached by fixed joints merged), body frame
     pub mass: f64,
+    /// centre of mass of the body \[m\], body frame
     pub com: Vector3<f64>,
+    /// rotational inertia of the body about its centre of mass \[kg m²\], body-frame axes
     pub inertia_com: Matrix3<f64>,
 }
 
 /// A URDF link as a frame rigidly attached to a body.
 #[derive(Clone, Debug)]
 pub struct Frame {
+    /// link name from the URDF
     pub name: String,
     /// body the link is attached to: the joint index, `None` for the root body
     pub body: Option<usize>,

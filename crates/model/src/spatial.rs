@@ -26,16 +26,19 @@ pub struct Force {
 }
 
 impl Motion {
+    /// no motion
     pub const ZERO: Motion = Motion {
         w: Vector3::new(0.0, 0.0, 0.0),
         v: Vector3::new(0.0, 0.0, 0.0),
     };
 
+    /// From its angular part `w` and its linear part `v` at the base origin.
     #[inline]
     pub fn new(w: Vector3<f64>, v: Vector3<f64>) -> Self {
         Self { w, v }
     }
 
+    /// Both parts times `s`.
     #[inline]
     pub fn scale(&self, s: f64) -> Motion {
         Motion {
@@ -74,6 +77,7 @@ impl Motion {
         self.v + self.w.cross(p)
     }
 
+    /// As a 6-vector, ordering (angular, linear).
     #[inline]
     pub fn to_vector(&self) -> nalgebra::Vector6<f64> {
         nalgebra::Vector6::new(self.w.x, self.w.y, self.w.z, self.v.x, self.v.y, self.v.z)
@@ -92,11 +96,13 @@ impl std::ops::Add for Motion {
 }
 
 impl Force {
+    /// no force
     pub const ZERO: Force = Force {
         n: Vector3::new(0.0, 0.0, 0.0),
         f: Vector3::new(0.0, 0.0, 0.0),
     };
 
+    /// From a 6-vector, ordering (moment, force).
     #[inline]
     pub fn from_vector(x: &nalgebra::Vector6<f64>) -> Self {
         Force {
@@ -145,6 +151,7 @@ pub struct Inertia {
 }
 
 impl Inertia {
+    /// no mass, no inertia
     pub const ZERO: Inertia = Inertia {
         m: 0.0,
         h: Vector3::new(0.0, 0.0, 0.0),

@@ -12,10 +12,15 @@ pub enum TrackError {
     /// a per-frame buffer of the wrong length
     #[error("{what}: {got} pixels, the {width}x{height} camera needs {expected}")]
     FrameSize {
+        /// which buffer, e.g. the depth frame or the ignore mask
         what: &'static str,
+        /// the camera's image width \[px\]
         width: u32,
+        /// the camera's image height \[px\]
         height: u32,
+        /// pixels needed, `width × height`
         expected: usize,
+        /// pixels the buffer has
         got: usize,
     },
     /// a time step that is negative or not finite

@@ -54,6 +54,8 @@ pub struct Geodesic {
     adj: Vec<[Edge; SLOTS]>,
     /// per node: distance from the centre \[m\] and the predecessor toward it
     pub dist0: Vec<f32>,
+    /// per node: the next node on its shortest path to the centre ([`NONE`] at the
+    /// centre and where unreached)
     pub pred0: Vec<u32>,
     /// per node: distance from the centre and every extremum \[m\]
     pub agex: Vec<f32>,

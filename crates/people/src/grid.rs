@@ -33,12 +33,15 @@ pub struct SampleParams<'a> {
     pub scale_m: f64,
     /// nearest and farthest reading kept \[m\]
     pub min_m: f64,
+    /// farthest reading kept \[m\]
     pub max_m: f64,
     /// pixels to ignore (the robot's own), row-major, `true` = ignore
     pub ignore: Option<&'a [bool]>,
     /// learned background and its margin `m + k σ_z`
     pub background: Option<&'a Background>,
+    /// the margin's constant part `m` \[m\]
     pub bg_margin_m: f64,
+    /// the margin's noise part `k`, in depth-noise deviations σ_z
     pub bg_margin_sigmas: f64,
 }
 

@@ -22,6 +22,8 @@
 //! metres, seconds. Pure and deterministic: no I/O, no allocation per frame
 //! after [`Tracker::new`]. Every tunable is in [`TrackerConfig`].
 
+#![deny(missing_docs)]
+
 pub mod background;
 pub mod config;
 pub mod error;
@@ -50,20 +52,35 @@ pub const JOINTS: usize = 15;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum Joint {
+    /// centre of the head
     Head = 0,
+    /// neck, on the surface path from the head toward the body's centre
     Neck = 1,
+    /// centre of the torso, below the neck
     Torso = 2,
+    /// the person's left shoulder
     LeftShoulder = 3,
+    /// the person's right shoulder
     RightShoulder = 4,
+    /// the person's left elbow
     LeftElbow = 5,
+    /// the person's right elbow
     RightElbow = 6,
+    /// the person's left hand
     LeftHand = 7,
+    /// the person's right hand
     RightHand = 8,
+    /// the person's left hip
     LeftHip = 9,
+    /// the person's right hip
     RightHip = 10,
+    /// the person's left knee
     LeftKnee = 11,
+    /// the person's right knee
     RightKnee = 12,
+    /// the person's left foot
     LeftFoot = 13,
+    /// the person's right foot
     RightFoot = 14,
 }
 

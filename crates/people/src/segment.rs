@@ -52,6 +52,7 @@ pub struct Component {
     pub label: u32,
     /// its cells are `Segmenter::order[start..end]`
     pub start: usize,
+    /// one past its last cell in `Segmenter::order`
     pub end: usize,
     /// mean of its points, camera frame \[m\]
     pub centroid: [f64; 3],
@@ -63,6 +64,7 @@ pub struct Component {
     pub width_m: f64,
     /// height along up of its highest and lowest point, relative to the camera \[m\]
     pub top_m: f64,
+    /// height along up of its lowest point, relative to the camera \[m\]
     pub bottom_m: f64,
     /// RMS distance of its points from their best plane \[m\]
     pub planar_rms_m: f64,

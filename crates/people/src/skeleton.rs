@@ -111,14 +111,19 @@ fn inset(p: [f64; 3], inset: f64) -> [f64; 3] {
 
 /// Everything the labelling reads.
 pub struct Body<'a> {
+    /// the tracker's settings
     pub cfg: &'a TrackerConfig,
+    /// this frame's samples
     pub grid: &'a Grid,
+    /// this frame's components, the person's among them
     pub seg: &'a Segmenter,
+    /// the person's component
     pub comp: &'a Component,
     /// the person's index in `seg.components`
     pub person: usize,
     /// unit up and across vectors, camera frame
     pub up: [f64; 3],
+    /// unit across vector (camera x made perpendicular to `up`), camera frame
     pub side: [f64; 3],
 }
 

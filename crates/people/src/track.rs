@@ -18,6 +18,7 @@ const MAX_SPEED_MPS: f64 = 2.0;
 pub struct Track {
     /// stable id (> 0) while `alive`
     pub id: u32,
+    /// the slot holds a person (seen, or hidden for at most `max_hidden_s`)
     pub alive: bool,
     /// seen in the last frame
     pub seen: bool,
@@ -25,9 +26,11 @@ pub struct Track {
     pub hidden_s: f64,
     /// last seen centroid \[m\] and its velocity \[m/s\], camera frame
     pub centroid: [f64; 3],
+    /// velocity of the centroid \[m/s\], camera frame
     pub velocity: [f64; 3],
     /// smoothed joints \[m\] and this frame's confidences
     pub joints: [[f64; 3]; JOINTS],
+    /// this frame's confidence of each joint in \[0, 1\] (0: not seen)
     pub confidence: [f64; JOINTS],
     filters: [OneEuro; JOINTS],
 }
@@ -46,6 +49,7 @@ impl Track {
 /// Up to [`MAX_PEOPLE`] tracks.
 #[derive(Debug, Clone, Default)]
 pub struct Tracks {
+    /// the tracks, alive or not (see [`Track::alive`])
     pub slots: [Track; MAX_PEOPLE],
     next_id: u32,
 }

@@ -2,6 +2,8 @@
 //! arm's alike: the robot side of the 1 kHz protocol ([`link`]), so that an
 //! adapter for a real arm never links the simulator.
 
+#![deny(missing_docs)]
+
 pub mod link;
 
 pub use link::{

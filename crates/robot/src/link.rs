@@ -74,8 +74,15 @@ pub const SLOT_SERVICES: [&str; SLOTS] = ["control", "control_standby"];
 /// Why a [`RobotLink`] could not be built.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum LinkError {
+    /// the joint count is 0 or more than a command carries
     #[error("robot link: {dof} joints; a command carries 1 to {max}")]
-    Joints { dof: usize, max: usize },
+    Joints {
+        /// the joint count asked for
+        dof: usize,
+        /// the most joints a command carries (`phri_ipc::MAX_DOF`)
+        max: usize,
+    },
+    /// the control period is 0 ns
     #[error("robot link: the control period must be at least 1 ns")]
     Period,
 }
@@ -140,9 +147,11 @@ pub struct CycleTiming {
 pub struct MissRun {
     /// numbers of the run's first and last missed deadline (counted since start)
     pub first: u64,
+    /// number of the run's last missed deadline (counted since start)
     pub last: u64,
     /// cycles of the first and last miss
     pub first_cycle: u64,
+    /// cycle of the last miss
     pub last_cycle: u64,
     /// first miss: time from its state's publication to the decision \[µs\]
     pub since_published_us: u64,
@@ -172,6 +181,7 @@ pub struct LinkOutput {
     /// 0): the newest valid command's, reused while commands are missing;
     /// ignored while braking
     pub tau: [f64; MAX_DOF],
+    /// the arm's joint count: how many entries of `tau` are valid
     pub dof: usize,
     /// engage the brakes this period
     pub brake: bool,

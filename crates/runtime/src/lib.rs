@@ -4,6 +4,8 @@
 //! signals, and the service context (arguments, configuration through
 //! `phri-config`, the node).
 
+#![deny(missing_docs)]
+
 pub mod cli;
 pub mod clock;
 pub mod cputime;

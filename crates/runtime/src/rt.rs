@@ -3,13 +3,18 @@
 /// What could not be done to make a process real-time.
 #[derive(Debug, thiserror::Error)]
 pub enum RtError {
+    /// no real-time priority asked for (0 or below): the normal scheduler
     #[error("real-time priority 0: normal scheduler")]
     NoPriority,
+    /// the system refused SCHED_FIFO (no permission, no real-time budget)
     #[error("SCHED_FIFO {priority} refused: {source}")]
     Scheduler {
+        /// the priority asked for
         priority: i32,
+        /// the system's error
         source: std::io::Error,
     },
+    /// the system refused to lock the process's memory (`mlockall`)
     #[error("mlockall refused: {0}")]
     Lock(std::io::Error),
 }

@@ -26,24 +26,53 @@ use std::path::{Path, PathBuf};
 /// Why a path is not trusted, naming it.
 #[derive(Debug, thiserror::Error)]
 pub enum TrustError {
+    /// the path could not be examined, created, read or written
     #[error("{}: {source}", path.display())]
     Io {
+        /// the path
         path: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
+    /// the path is a symbolic link
     #[error("{}: is a symbolic link (refused: it could point anywhere)", .0.display())]
     Symlink(PathBuf),
+    /// the path is not the kind of file expected
     #[error("{}: not a {expected}", path.display())]
     Kind {
+        /// the path
         path: PathBuf,
+        /// what it should be (`directory`, `regular file`)
         expected: &'static str,
     },
+    /// the path is owned by another user
     #[error("{}: owned by uid {owner}, not by this user (uid {me}): refused", path.display())]
-    Owner { path: PathBuf, owner: u32, me: u32 },
+    Owner {
+        /// the path
+        path: PathBuf,
+        /// its owner's uid
+        owner: u32,
+        /// this process's effective uid
+        me: u32,
+    },
+    /// the path is writable by its group or by other users
     #[error("{}: writable by other users (mode {mode:o}): refused", path.display())]
-    Writable { path: PathBuf, mode: u32 },
+    Writable {
+        /// the path
+        path: PathBuf,
+        /// its permission bits
+        mode: u32,
+    },
+    /// the state file is larger than the bound its reader gives
     #[error("{}: {size} bytes, more than the {max} a state file may have", path.display())]
-    TooLarge { path: PathBuf, size: u64, max: u64 },
+    TooLarge {
+        /// the path
+        path: PathBuf,
+        /// its size \[bytes\]
+        size: u64,
+        /// the bound \[bytes\]
+        max: u64,
+    },
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> TrustError + '_ {

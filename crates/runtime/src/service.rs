@@ -15,12 +15,16 @@ use crate::Shutdown;
 /// Why a service could not start.
 #[derive(Debug, thiserror::Error)]
 pub enum ServiceError {
+    /// the configuration could not be loaded or was refused
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// an iceoryx2 node or port could not be opened
     #[error(transparent)]
     Ipc(#[from] IpcError),
+    /// the SIGINT / SIGTERM handlers could not be installed
     #[error("signal handlers: {0}")]
     Signals(std::io::Error),
+    /// the `--config` file is not one this user can trust
     #[error("--config {0}")]
     Untrusted(#[from] crate::rundir::TrustError),
 }
@@ -35,6 +39,7 @@ pub struct ServiceContext {
     pub prefix: String,
     /// SCHED_FIFO priority (0: normal scheduler)
     pub rt_priority: i32,
+    /// set on SIGINT / SIGTERM, or by the dead-man; the service's loop ends then
     pub shutdown: Shutdown,
     /// the command line's shared flags
     pub flags: ServiceFlags,

@@ -17,11 +17,13 @@ impl Shutdown {
         Ok(Shutdown(flag))
     }
 
+    /// A signal arrived or [`Shutdown::request`] was called.
     #[inline]
     pub fn requested(&self) -> bool {
         self.0.load(Ordering::Relaxed)
     }
 
+    /// Request shutdown as a signal would (for every clone of this handle).
     pub fn request(&self) {
         self.0.store(true, Ordering::Relaxed)
     }

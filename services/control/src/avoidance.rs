@@ -201,12 +201,14 @@ pub fn end_effector_velocity(xdot_task: &Vector3<f64>, v_call_ee: &Vector3<f64>)
 /// `Matrix6xX`, `Matrix3xX` or `DMatrix`) and its repulsive vector.
 #[derive(Clone, Copy, Debug)]
 pub struct ControlPoint<'a> {
+    /// the point's Jacobian, base frame (at least 3 rows, the first three linear)
     pub jacobian: DMatrixView<'a, f64>,
     /// `V_Call(P)`, pointing away from the obstacle, base frame [m/s]
     pub v_call: Vector3<f64>,
 }
 
 impl<'a> ControlPoint<'a> {
+    /// The point of `jacobian` (any matrix that views as a `DMatrixView`) and `v_call`.
     pub fn new(jacobian: impl Into<DMatrixView<'a, f64>>, v_call: Vector3<f64>) -> Self {
         ControlPoint {
             jacobian: jacobian.into(),
@@ -224,6 +226,7 @@ pub struct AvoidanceOutput<'a> {
     pub scale: f64,
     /// joints SNS held at a bound (bit per joint)
     pub saturated: u32,
+    /// SNS's pseudoinverse solutions plus simplex steps
     pub iterations: u32,
     /// largest correction of SNS's final safety clamp (round-off only)
     pub clamp_correction: f64,
@@ -231,6 +234,7 @@ pub struct AvoidanceOutput<'a> {
     pub risk: f64,
     /// the velocity bounds SNS used (speed scale included)
     pub qd_min: &'a [f64],
+    /// the upper of those bounds \[rad/s\]
     pub qd_max: &'a [f64],
     /// the body points' null-space task (all zero when it is off)
     pub body: BodyTaskOutcome,
@@ -334,6 +338,7 @@ impl Avoidance {
         }
     }
 
+    /// The settings in use.
     pub fn params(&self) -> &AvoidanceParams {
         &self.params
     }

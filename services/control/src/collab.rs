@@ -76,7 +76,9 @@ pub enum RobotState {
 /// The answer to one request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Answer {
+    /// the request was accepted
     pub accepted: bool,
+    /// why it was refused, or what the accepted request did
     pub reason: CollabReason,
 }
 
@@ -134,6 +136,7 @@ snapshot_fields!(CollabMachine {
 });
 
 impl CollabMachine {
+    /// An idle machine with the `[collaboration]` settings `cfg`.
     pub fn new(cfg: &CollaborationConfig) -> CollabMachine {
         CollabMachine {
             cfg: cfg.clone(),
@@ -151,6 +154,7 @@ impl CollabMachine {
         }
     }
 
+    /// The current phase.
     pub fn phase(&self) -> CollabPhase {
         self.phase
     }

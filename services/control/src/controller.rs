@@ -53,16 +53,20 @@ impl ControllerParams {
 pub struct ControlOutput<'a> {
     /// joint torque \[Nm\], limits enforced
     pub tau: &'a [f64],
+    /// the mode of this period
     pub mode: ControlMode,
+    /// what the limiter had to do
     pub limits: LimitActivity,
 }
 
 /// Counts since the start.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ControlCounters {
+    /// task waypoints reached
     pub waypoints_reached: u64,
     /// collisions reacted to
     pub detections: u64,
+    /// protective stops entered
     pub protective_stops: u64,
     /// task resumptions after a reaction or a stop
     pub resumes: u64,
@@ -792,14 +796,17 @@ impl Controller {
         }
     }
 
+    /// The robot model.
     pub fn model(&self) -> &Model {
         &self.model
     }
 
+    /// What the controller was built with besides `[control]`.
     pub fn params(&self) -> &ControllerParams {
         &self.params
     }
 
+    /// The current mode (the last step's).
     pub fn mode(&self) -> ControlMode {
         self.mode
     }
@@ -852,6 +859,7 @@ impl Controller {
         self.collab.as_ref()
     }
 
+    /// Counts since the start.
     pub fn counters(&self) -> &ControlCounters {
         &self.counters
     }

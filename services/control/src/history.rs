@@ -51,6 +51,7 @@ impl PathHistory {
         self.cap
     }
 
+    /// Forget all entries.
     pub fn clear(&mut self) {
         self.len = 0;
     }

@@ -433,6 +433,7 @@ impl InputGate {
         )
     }
 
+    /// The owner table: each input channel's sender, and what was refused.
     pub fn owners(&self) -> &OwnerTable {
         &self.owners
     }

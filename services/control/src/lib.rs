@@ -27,6 +27,8 @@
 //! [`snapshot`] carries the behaviour state from one controller to another
 //! (a hot standby adopting the primary's every period).
 
+#![deny(missing_docs)]
+
 pub mod avoidance;
 pub mod body_task;
 pub mod clik;

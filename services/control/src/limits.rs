@@ -5,9 +5,13 @@ use phri_model::Model;
 /// Joint limits, with stiffness of the virtual end stops.
 #[derive(Clone, Debug)]
 pub struct Limits {
+    /// lower position limit per joint \[rad\]
     pub lower: Vec<f64>,
+    /// upper position limit per joint \[rad\]
     pub upper: Vec<f64>,
+    /// velocity limit per joint \[rad/s\]
     pub velocity: Vec<f64>,
+    /// torque limit per joint \[Nm\]
     pub effort: Vec<f64>,
     /// keep this far inside the position limits \[rad\]
     pub margin: f64,
@@ -16,14 +20,19 @@ pub struct Limits {
 /// What the limiter had to do in one step (bit per joint).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LimitActivity {
+    /// joints pushed back by the virtual end stops
     pub position: u32,
+    /// joints braked for exceeding their velocity limit
     pub velocity: u32,
+    /// joints whose torque was clamped to their limit
     pub torque: u32,
     /// the command was not finite and was replaced
     pub non_finite: bool,
 }
 
 impl Limits {
+    /// The limits of the model's actuated joints, keeping `margin` \[rad\] inside
+    /// the position limits.
     pub fn from_model(model: &Model, margin: f64) -> Limits {
         Limits {
             lower: model.actuated().iter().map(|j| j.lower).collect(),

@@ -10,7 +10,9 @@ use crate::controller::Controller;
 /// [ns, CLOCK_MONOTONIC] (the lock-step cell may pass its robot clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Stamps {
+    /// the controller woke for the state
     pub woke_ns: u64,
+    /// its answer was ready (the messages' stamp)
     pub done_ns: u64,
 }
 

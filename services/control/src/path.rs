@@ -20,7 +20,9 @@ pub fn min_jerk(u: f64) -> (f64, f64) {
 /// Cyclic path through waypoints, parametrised by path time `s` \[s\].
 #[derive(Clone, Debug)]
 pub struct Path {
+    /// end-effector waypoints \[m\], base frame; the last leads back to the first
     pub waypoints: Vec<Vector3<f64>>,
+    /// duration of each segment \[s\]
     pub segment_time: f64,
 }
 
@@ -70,9 +72,13 @@ fn unit(v: Vector3<f64>) -> Vector3<f64> {
 /// A straight minimum-jerk move of the end effector from `from` to `to`.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Approach {
+    /// start \[m\], base frame
     pub from: Vector3<f64>,
+    /// end \[m\], base frame
     pub to: Vector3<f64>,
+    /// duration of the move \[s\]
     pub duration: f64,
+    /// time since the start \[s\] (at most `duration`)
     pub t: f64,
 }
 
@@ -84,6 +90,7 @@ snapshot_fields!(Approach {
 });
 
 impl Approach {
+    /// From `from` to `to` at a peak speed of `speed` \[m/s\], lasting at least 0.5 s.
     pub fn new(from: Vector3<f64>, to: Vector3<f64>, speed: f64) -> Approach {
         // a minimum-jerk move peaks at 1.875× its mean speed
         let duration = ((to - from).norm() * 1.875 / speed.max(1e-3)).max(0.5);
@@ -95,6 +102,7 @@ impl Approach {
         }
     }
 
+    /// The move has reached `to`.
     pub fn done(&self) -> bool {
         self.t >= self.duration
     }

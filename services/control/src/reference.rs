@@ -39,6 +39,7 @@ snapshot_fields!(JointReference {
 });
 
 impl JointReference {
+    /// All zero, for `n` joints.
     pub fn new(n: usize) -> JointReference {
         JointReference {
             q_ref: vec![0.0; n],

@@ -86,34 +86,64 @@ pub const HEADER_BYTES: usize = 24;
 pub enum SnapshotError {
     /// the buffer is too small for the behaviour state
     #[error("behaviour snapshot: needs {need} bytes, the buffer holds {have}")]
-    BufferTooSmall { need: usize, have: usize },
+    BufferTooSmall {
+        /// bytes the behaviour state needs
+        need: usize,
+        /// bytes the buffer holds
+        have: usize,
+    },
     /// fewer bytes than the header (or, after it, its length) announces
     #[error("behaviour snapshot: {have} bytes, {need} expected")]
-    Truncated { need: usize, have: usize },
+    Truncated {
+        /// bytes expected: the header's, or the length it announces
+        need: usize,
+        /// bytes given
+        have: usize,
+    },
     /// not a behaviour snapshot
     #[error("behaviour snapshot: bad magic {got:#010x}")]
-    Magic { got: u32 },
+    Magic {
+        /// the first four bytes, little-endian
+        got: u32,
+    },
     /// another layout version
     #[error("behaviour snapshot: version {got}, this controller reads version {expected}")]
-    Version { expected: u32, got: u32 },
+    Version {
+        /// the version this controller reads ([`VERSION`])
+        expected: u32,
+        /// the snapshot's version
+        got: u32,
+    },
     /// a controller of another robot
     #[error("behaviour snapshot: from a controller of {got} joints, this one has {expected}")]
-    Dof { expected: u32, got: u32 },
+    Dof {
+        /// this controller's joints
+        expected: u32,
+        /// the snapshot's joints
+        got: u32,
+    },
     /// a controller of another configuration (control points, collaboration, …)
     #[error(
         "behaviour snapshot: another configuration's layout ({got_bytes} bytes, \
          fingerprint {got:#018x}; this controller's: {expected_bytes} bytes, {expected:#018x})"
     )]
     Layout {
+        /// this controller's fingerprint of its configuration's sizes
         expected: u64,
+        /// the snapshot's fingerprint
         got: u64,
+        /// this controller's snapshot length \[bytes\]
         expected_bytes: usize,
+        /// the snapshot's length, as its header says \[bytes\]
         got_bytes: usize,
     },
     /// a value that makes no sense (an unknown enum value or tag, a length
     /// or index that does not fit), at this byte offset
     #[error("behaviour snapshot: malformed at byte {at}")]
-    Malformed { at: usize },
+    Malformed {
+        /// byte offset of the value at fault, from the snapshot's start
+        at: usize,
+    },
 }
 
 /// Writes little-endian values into a caller's buffer. Past its end it
@@ -124,10 +154,12 @@ pub struct Writer<'a> {
 }
 
 impl<'a> Writer<'a> {
+    /// A writer at the start of `buf`.
     pub fn new(buf: &'a mut [u8]) -> Writer<'a> {
         Writer { buf, pos: 0 }
     }
 
+    /// Append `b` as it is (past the buffer's end: only counted).
     pub fn bytes(&mut self, b: &[u8]) {
         let end = self.pos + b.len();
         if let Some(dst) = self.buf.get_mut(self.pos..end) {
@@ -136,22 +168,27 @@ impl<'a> Writer<'a> {
         self.pos = end;
     }
 
+    /// Append a byte.
     pub fn u8(&mut self, v: u8) {
         self.bytes(&[v]);
     }
 
+    /// Append a `u32`, little-endian.
     pub fn u32(&mut self, v: u32) {
         self.bytes(&v.to_le_bytes());
     }
 
+    /// Append a `u64`, little-endian.
     pub fn u64(&mut self, v: u64) {
         self.bytes(&v.to_le_bytes());
     }
 
+    /// Append an `f64` as its bits (a `u64`).
     pub fn f64(&mut self, v: f64) {
         self.u64(v.to_bits());
     }
 
+    /// Append a `bool` as a byte 0 or 1.
     pub fn bool(&mut self, v: bool) {
         self.u8(u8::from(v));
     }
@@ -255,18 +292,22 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// The next byte (0 once short of bytes or after a fault).
     pub fn u8(&mut self) -> u8 {
         self.take::<1>()[0]
     }
 
+    /// The next `u32`, little-endian (0 once short of bytes or after a fault).
     pub fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.take())
     }
 
+    /// The next `u64`, little-endian (0 once short of bytes or after a fault).
     pub fn u64(&mut self) -> u64 {
         u64::from_le_bytes(self.take())
     }
 
+    /// The next `f64`, from its bits.
     pub fn f64(&mut self) -> f64 {
         f64::from_bits(self.u64())
     }
@@ -308,7 +349,9 @@ impl<'a> Reader<'a> {
 /// by the receiver's configuration. `load` changes `self` only through
 /// [`Reader::store`] (or after checking [`Reader::applying`]).
 pub trait Snapshot {
+    /// Append this state to `w`.
     fn save(&self, w: &mut Writer<'_>);
+    /// Read this state from `r`, in the layout [`Snapshot::save`] writes.
     fn load(&mut self, r: &mut Reader<'_>);
 }
 

@@ -171,21 +171,39 @@ pub const fn max_iterations(n: usize, m: usize) -> u32 {
 /// Why [`SnsSolver::solve`] refused a problem.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum SnsError {
+    /// a slice or Jacobian whose length does not fit the joints or the task
     #[error(transparent)]
     Dimension(#[from] LengthError),
     /// a Jacobian with fewer rows than the task needs
     #[error("{what}: expected at least {min} rows, got {got}")]
     TooFewRows {
+        /// the Jacobian, e.g. `task jacobian`
         what: &'static str,
+        /// the rows it needs at least
         min: usize,
+        /// the rows it has
         got: usize,
     },
+    /// a task of no rows, or of more than the solver was built for
     #[error("task dimension {m} is outside 1..={m_max}")]
-    TaskDimension { m: usize, m_max: usize },
+    TaskDimension {
+        /// the task's rows
+        m: usize,
+        /// the most the solver takes
+        m_max: usize,
+    },
+    /// a joint whose lower velocity bound is above its upper one
     #[error("joint {joint}: velocity bounds are inconsistent (min > max)")]
-    InconsistentBounds { joint: usize },
+    InconsistentBounds {
+        /// the joint's index
+        joint: usize,
+    },
+    /// a NaN or infinite input
     #[error("non-finite {what}")]
-    NonFinite { what: &'static str },
+    NonFinite {
+        /// the input: `task velocity`, `jacobian`, `damping` or `velocity bound`
+        what: &'static str,
+    },
 }
 
 /// The answer of [`SnsSolver::solve`], borrowing the solver's buffer.

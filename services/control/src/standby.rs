@@ -51,10 +51,12 @@ pub struct Standby {
 }
 
 impl Standby {
+    /// A controller answering on `slot`, no behaviour adopted yet.
     pub fn new(slot: Slot) -> Standby {
         Standby { slot, adopted: 0 }
     }
 
+    /// The command slot it answers on.
     pub fn slot(&self) -> Slot {
         self.slot
     }

@@ -16,6 +16,7 @@ pub struct DynamicsTerms {
 }
 
 impl DynamicsTerms {
+    /// Zero terms for `n` joints.
     pub fn new(n: usize) -> DynamicsTerms {
         DynamicsTerms {
             m_diag: vec![0.0; n],

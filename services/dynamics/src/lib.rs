@@ -4,6 +4,8 @@
 //! themselves live in `phri-estimation`; `main.rs` only wires `robot/state`
 //! to `dynamics/residual`, and the lock-step cell calls the same step.
 
+#![deny(missing_docs)]
+
 use phri_config::ResidualConfig;
 use phri_estimation::{ResidualError, ResidualObserver};
 use phri_ipc::{residual_flags, robot_status, JointState, Residual, Zeroed};
@@ -14,17 +16,33 @@ use phri_model::Model;
 pub enum DynamicsError {
     /// the robot model has more joints than a message carries
     #[error("the model has {model} joints, the messages carry at most {max}")]
-    TooManyJoints { model: usize, max: usize },
+    TooManyJoints {
+        /// joints of the model
+        model: usize,
+        /// most joints a message carries
+        max: usize,
+    },
     /// a state whose joint count is not the model's
     #[error("state {seq} has {got} joints, the model {model}")]
-    Dof { seq: u64, got: u32, model: usize },
+    Dof {
+        /// the state's sequence number
+        seq: u64,
+        /// joints in the state
+        got: u32,
+        /// joints of the model
+        model: usize,
+    },
     /// the observer refused the state (non-finite values) or its configuration
     #[error("state {seq}: {source}")]
     State {
+        /// the state's sequence number
         seq: u64,
+        /// the observer's error
         #[source]
         source: ResidualError,
     },
+    /// the observer could not be built from the model and the `[dynamics]`
+    /// settings
     #[error(transparent)]
     Config(#[from] ResidualError),
 }
@@ -136,6 +154,7 @@ impl DynamicsStep {
         &self.msg
     }
 
+    /// The residual observer, with its state and settings.
     pub fn observer(&self) -> &ResidualObserver {
         &self.observer
     }

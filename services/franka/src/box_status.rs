@@ -45,11 +45,20 @@ impl BoxError {
 /// the joints can).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Refused {
+    /// state datagrams from another address or port than the box's
     pub foreign: u64,
+    /// state datagrams of the wrong size, or not parsable
     pub malformed: u64,
+    /// state datagrams whose message id is not above the newest accepted one
+    /// (a duplicate or a replay)
     pub stale_id: u64,
+    /// state datagrams whose message id is further ahead than the time since
+    /// allows
     pub id_ahead: u64,
+    /// states with a joint position that is not finite ([`crate::StateGuard`])
     pub non_finite: u64,
+    /// states whose joints moved faster than their velocity limits allow
+    /// ([`crate::StateGuard`])
     pub too_fast: u64,
 }
 

@@ -15,12 +15,16 @@ pub const JOINTS: usize = 7;
 /// Why an [`FciCycle`] could not be built, or refused a state.
 #[derive(Debug, thiserror::Error)]
 pub enum CycleError {
+    /// the robot model has another number of joints than [`JOINTS`]
     #[error("the robot model has {0} joints; a Franka arm has 7")]
     Joints(usize),
+    /// the protocol's bookkeeping could not be set up
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// the control period \[s\] is not a positive finite number
     #[error("the control period must be positive, not {0} s")]
     Period(f64),
+    /// the model's gravity could not be computed
     #[error("robot model: {0}")]
     Model(#[from] phri_model::ModelError),
 }

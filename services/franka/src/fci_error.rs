@@ -5,24 +5,55 @@
 /// What went wrong between the adapter and the control box at `address`.
 #[derive(Debug, thiserror::Error)]
 pub enum FciError {
+    /// nothing accepts FCI connections at the address
     #[error("connection refused by the box at {address}: nothing accepts FCI connections there (the box is off or restarting, FCI is not enabled in Desk, or franka-sim is not running)")]
-    Refused { address: String },
+    Refused {
+        /// the box's address as given
+        address: String,
+    },
+    /// the box closed or reset the connection
     #[error("connection closed by the box at {address}")]
-    Closed { address: String },
+    Closed {
+        /// the box's address as given
+        address: String,
+    },
+    /// the box did not accept the connection in time
     #[error("the box at {address} did not accept the connection within the connect timeout")]
-    ConnectTimeout { address: String },
+    ConnectTimeout {
+        /// the box's address as given
+        address: String,
+    },
+    /// the box accepted the connection but never answered the handshake
     #[error("the box at {address} accepted the connection but never answered the FCI handshake")]
-    Silent { address: String },
+    Silent {
+        /// the box's address as given
+        address: String,
+    },
+    /// no state datagram came within the receive timeout
     #[error("the box at {address} sent no state within the receive timeout")]
-    NoStates { address: String },
+    NoStates {
+        /// the box's address as given
+        address: String,
+    },
+    /// the start-up (handshake, first state, robot model) took too long
     #[error("the box at {address} did not finish the start-up (handshake, first state, robot model) within {seconds:.1} s")]
-    StartDeadline { address: String, seconds: f64 },
+    StartDeadline {
+        /// the box's address as given
+        address: String,
+        /// the time allowed \[s\]
+        seconds: f64,
+    },
+    /// no address given (`--robot-ip` empty)
     #[error("--robot-ip: empty; give the control box's address (`172.16.0.2`, or `127.0.0.1:1337` for franka-sim)")]
     EmptyAddress,
+    /// any other error of the FCI client
     #[error("{address}: {what}: {source}")]
     Other {
+        /// the box's address as given
         address: String,
+        /// what the adapter was doing
         what: &'static str,
+        /// the client's error
         source: Box<franka::FrankaError>,
     },
 }

@@ -6,6 +6,8 @@
 //! included) into what the box accepts, with the protocol rules of
 //! [`phri_robot::RobotLink`] (fresh, reused, missed; brakes after 20).
 
+#![deny(missing_docs)]
+
 pub mod box_status;
 pub mod cycle;
 pub mod fci_error;

@@ -40,16 +40,23 @@ pub const POSITION_SLACK_RAD: f64 = 1e-4;
 pub enum StateRefusal {
     /// a joint position is NaN or infinite
     #[error("joint {joint}: position not finite")]
-    NonFinite { joint: usize },
+    NonFinite {
+        /// index of the first such joint
+        joint: usize,
+    },
     /// a joint is further from where the last accepted state was heading
     /// than its velocity limit allows in the time the message ids say passed
     #[error(
         "joint {joint}: {off_rad:.4} rad from its prediction after {periods} ms, at most {allowed_rad:.4} allowed"
     )]
     TooFast {
+        /// index of the first such joint
         joint: usize,
+        /// its distance from the predicted position \[rad\]
         off_rad: f64,
+        /// the distance allowed \[rad\]
         allowed_rad: f64,
+        /// message ids since the last accepted state (at least 1) \[ms\]
         periods: u64,
     },
 }

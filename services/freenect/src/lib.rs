@@ -10,6 +10,8 @@
 //! - [`recording`]: fakenect recordings written from millimetre frames (for
 //!   tests without a Kinect).
 
+#![deny(missing_docs)]
+
 pub use phri_depth::kinect as disparity;
 pub mod ffi;
 pub mod recording;
@@ -57,29 +59,56 @@ pub const FIRST_FRAME_TIMEOUT_S: u64 = 5;
 pub enum FreenectError {
     /// no device at that index
     #[error("freenect device {index}: no Kinect found (libfreenect sees {count} devices)")]
-    NoDevice { index: u32, count: u32 },
+    NoDevice {
+        /// the device's index among libfreenect's devices
+        index: u32,
+        /// devices libfreenect sees
+        count: u32,
+    },
     /// a libfreenect call failed
     #[error("freenect device {index}: {call} failed (code {code})")]
     Call {
+        /// the device's index among libfreenect's devices
         index: u32,
+        /// the libfreenect function
         call: &'static str,
+        /// its return code
         code: i32,
     },
     /// libfreenect has no 640×480 11-bit depth mode of 614400 bytes
     #[error("freenect device {index}: no 640x480 11-bit depth mode (libfreenect offers {width}x{height}, {bytes} bytes)")]
     Mode {
+        /// the device's index among libfreenect's devices
         index: u32,
+        /// width of the mode libfreenect offers \[px\]
         width: i16,
+        /// its height \[px\]
         height: i16,
+        /// its frame size \[bytes\]
         bytes: i32,
     },
     /// event processing failed (USB error, or fakenect past its recording)
     #[error("freenect device {index}: processing events failed (code {code})")]
-    Events { index: u32, code: i32 },
+    Events {
+        /// the device's index among libfreenect's devices
+        index: u32,
+        /// the return code of `freenect_process_events_timeout`
+        code: i32,
+    },
     /// no frame within the wait
     #[error("freenect device {index}: no depth frame within {waited_ms} ms")]
-    Timeout { index: u32, waited_ms: u64 },
+    Timeout {
+        /// the device's index among libfreenect's devices
+        index: u32,
+        /// how long it waited \[ms\]
+        waited_ms: u64,
+    },
     /// no frame at all since the start
     #[error("freenect device {index}: no depth frame within {seconds} s")]
-    NeverAnswered { index: u32, seconds: u64 },
+    NeverAnswered {
+        /// the device's index among libfreenect's devices
+        index: u32,
+        /// how long it waited for the first frame \[s\]
+        seconds: u64,
+    },
 }

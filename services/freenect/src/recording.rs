@@ -37,17 +37,25 @@ pub enum RecordingError {
     /// a frame of the wrong size
     #[error("frame {frame}: {got} pixels ({expected} expected)")]
     Size {
+        /// index of the frame
         frame: usize,
+        /// its pixels
         got: usize,
+        /// pixels of a frame (640×480)
         expected: usize,
     },
     /// a depth no raw disparity reads as
     #[error("frame {frame}, pixel {pixel}: {mm} mm is outside the Kinect's {lo}..={hi} mm")]
     OutOfRange {
+        /// index of the frame
         frame: usize,
+        /// index of the pixel in the frame, row-major
         pixel: usize,
+        /// its depth \[mm\]
         mm: u16,
+        /// the smallest depth a disparity reads as \[mm\]
         lo: u16,
+        /// the largest depth a disparity reads as \[mm\]
         hi: u16,
     },
     /// a rate that is not a positive finite number of frames per second
@@ -56,7 +64,9 @@ pub enum RecordingError {
     /// the file system
     #[error("{path}: {source}")]
     Io {
+        /// the file or directory
         path: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
 }

@@ -66,6 +66,7 @@ pub struct TimestampMapper {
 }
 
 impl TimestampMapper {
+    /// A mapper that has seen no frame yet.
     pub fn new() -> TimestampMapper {
         TimestampMapper::default()
     }

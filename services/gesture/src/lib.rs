@@ -21,6 +21,8 @@
 //! reaching, pointing, walking with swinging arms or a hand waving below the
 //! elbow never make a wave. Times are the frames' capture times.
 
+#![deny(missing_docs)]
+
 use phri_config::{GestureConfig, Invalid};
 use phri_ipc::{
     CollabPart, HriRequest, RequestKind, RequestSource, Skeleton, SkeletonJoint, Zeroed, MAX_PEOPLE,
@@ -181,6 +183,7 @@ pub struct WaveDetector {
 }
 
 impl WaveDetector {
+    /// A detector with the `[gesture]` settings `cfg` (validated here), tracking no one yet.
     pub fn new(cfg: &GestureConfig) -> Result<WaveDetector, Invalid> {
         cfg.validate()?;
         Ok(WaveDetector {

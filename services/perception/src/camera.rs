@@ -16,13 +16,16 @@ pub const DEPTH_SCALE_M: f64 = phri_depth::png::MILLIMETRE_SCALE_M;
 /// Why the camera could not be built or could not render a frame.
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
+    /// an invalid `[camera]` section (or its pose)
     #[error(transparent)]
     Config(#[from] Invalid),
     /// the renderer refused the intrinsics, pose or sensor model
     #[error("camera: {0}")]
     Renderer(#[source] DepthError),
+    /// rendering a frame failed
     #[error("camera: {0}")]
     Render(#[source] DepthError),
+    /// the arm could not be placed at the world's joint positions (kinematics)
     #[error("camera: {0}")]
     Model(#[from] ModelError),
 }
@@ -30,10 +33,13 @@ pub enum CameraError {
 /// A frame header whose camera fields do not describe a camera.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum HeaderError {
+    /// the intrinsics describe no camera (size, focal lengths, principal point)
     #[error(transparent)]
     Intrinsics(DepthError),
+    /// an entry of the pose is NaN or infinite
     #[error("camera pose not finite")]
     PoseNotFinite,
+    /// the pose's rotation is not orthonormal
     #[error("camera rotation is not orthonormal")]
     NotOrthonormal,
 }

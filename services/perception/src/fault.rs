@@ -17,6 +17,7 @@ pub const STALE_BY_NS: u64 = 1_000_000_000;
 pub const NOISE_ONE_IN: u64 = 50;
 /// Flying pixels' depths: `[NOISE_MIN_MM, NOISE_MIN_MM + NOISE_SPAN_MM)` \[mm\].
 pub const NOISE_MIN_MM: u16 = 500;
+/// Width of the flying pixels' depth range \[mm\].
 pub const NOISE_SPAN_MM: u16 = 3500;
 
 /// What an accepted fault will do.
@@ -24,9 +25,19 @@ pub const NOISE_SPAN_MM: u16 = 3500;
 pub enum FaultAccepted {
     /// frames published `delay_ms` late for `duration_s` (as requested; clamped
     /// to [`MAX_DELAY_MS`], [`MAX_DELAY_DURATION_S`])
-    Delay { delay_ms: f64, duration_s: f64 },
+    Delay {
+        /// the delay requested \[ms\]
+        delay_ms: f64,
+        /// for how long, as requested \[s\]
+        duration_s: f64,
+    },
     /// the next `frames` frames corrupted
-    Corrupt { kind: DepthFaultKind, frames: u32 },
+    Corrupt {
+        /// the corruption
+        kind: DepthFaultKind,
+        /// how many frames it corrupts
+        frames: u32,
+    },
 }
 
 impl fmt::Display for FaultAccepted {
@@ -46,8 +57,15 @@ impl fmt::Display for FaultAccepted {
 /// A fault request the camera ignores; its state is unchanged.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum FaultRefused {
+    /// a delay or a duration that is negative or not finite
     #[error("delay {delay_ms} ms for {duration_s} s refused")]
-    Delay { delay_ms: f64, duration_s: f64 },
+    Delay {
+        /// the delay requested \[ms\]
+        delay_ms: f64,
+        /// the duration requested \[s\]
+        duration_s: f64,
+    },
+    /// a kind code that names no [`DepthFaultKind`]
     #[error("unknown kind {0} ignored")]
     UnknownKind(u32),
 }

@@ -17,38 +17,91 @@ const RESTARTED_SEQ: u64 = 2;
 /// Why a frame was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum FrameError {
+    /// the payload is not the header's width × height (or the output is smaller)
     #[error("frame {seq}: {got} pixels, the header says {width}×{height}")]
     Size {
+        /// the frame's sequence number
         seq: u64,
+        /// depths in the payload
         got: usize,
+        /// width in the header \[px\]
         width: u32,
+        /// height in the header \[px\]
         height: u32,
     },
     /// the header's intrinsics or pose describe no camera
     #[error("frame {seq}: {source}")]
-    Camera { seq: u64, source: HeaderError },
+    Camera {
+        /// the frame's sequence number
+        seq: u64,
+        /// what is wrong with the header
+        source: HeaderError,
+    },
     /// the self-filter refused the camera or the frame
     #[error("frame {seq}: self-filter: {source}")]
-    Filter { seq: u64, source: DepthError },
+    Filter {
+        /// the frame's sequence number
+        seq: u64,
+        /// the filter's error
+        source: DepthError,
+    },
     /// the joint state could not be placed (kinematics)
     #[error("frame {seq}: {source}")]
-    Model { seq: u64, source: ModelError },
+    Model {
+        /// the frame's sequence number
+        seq: u64,
+        /// the kinematics error
+        source: ModelError,
+    },
+    /// depths in another unit than millimetres
     #[error("frame {seq}: depth scale {scale} m per unit (this pipeline works in millimetres)")]
-    Scale { seq: u64, scale: f64 },
+    Scale {
+        /// the frame's sequence number
+        seq: u64,
+        /// the header's depth scale \[m\] per unit
+        scale: f64,
+    },
+    /// captured longer ago than `[perception] max_frame_age_ms`
     #[error("frame {seq}: captured {age_ms:.0} ms ago (limit {limit_ms:.0} ms)")]
     Stale {
+        /// the frame's sequence number
         seq: u64,
+        /// time since the capture \[ms\]
         age_ms: f64,
+        /// the age allowed \[ms\]
         limit_ms: f64,
     },
+    /// captured more than 5 ms after the time the frame is handled
     #[error("frame {seq}: capture time lies {ahead_ms:.1} ms in the future")]
-    Future { seq: u64, ahead_ms: f64 },
+    Future {
+        /// the frame's sequence number
+        seq: u64,
+        /// how far ahead \[ms\]
+        ahead_ms: f64,
+    },
+    /// a frame number not above the last accepted one (a camera that
+    /// restarted, numbering its frames from 1 again, is accepted)
     #[error("frame {seq}: sequence went back from {last}")]
-    Sequence { seq: u64, last: u64 },
+    Sequence {
+        /// the frame's sequence number
+        seq: u64,
+        /// the last accepted frame's sequence number
+        last: u64,
+    },
+    /// no pixel with a reading (once isolated flying pixels are removed)
     #[error("frame {seq}: no valid pixel")]
-    Empty { seq: u64 },
+    Empty {
+        /// the frame's sequence number
+        seq: u64,
+    },
+    /// no joint state within `[perception] max_state_gap_ms` of the capture time
     #[error("frame {seq}: no joint state within {limit_ms:.0} ms of the capture time")]
-    NoJointState { seq: u64, limit_ms: f64 },
+    NoJointState {
+        /// the frame's sequence number
+        seq: u64,
+        /// the gap allowed \[ms\]
+        limit_ms: f64,
+    },
 }
 
 /// Recent joint states (stamp [ns, robot clock], q \[rad\]), newest last;

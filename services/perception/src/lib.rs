@@ -10,6 +10,8 @@
 //! the lock-step cell calls the same steps. Configuration sections come from
 //! `phri-config` (`[camera]`, `[perception]`, `[repulsion]`).
 
+#![deny(missing_docs)]
+
 pub mod camera;
 pub mod fault;
 pub mod flag;

@@ -27,30 +27,44 @@ use crate::tracker::{DepthTracker, TrackerError};
 /// Why a perception step failed, by the service whose step it was.
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
+    /// the simulated camera could not be built or could not render
     #[error("camera {camera}: {source}")]
     Camera {
+        /// index of the camera in `[[camera]]`
         camera: usize,
+        /// the camera's error
         #[source]
         source: CameraError,
     },
+    /// ingestion refused the camera's frame
     #[error("camera {camera}: {source}")]
     Frame {
+        /// index of the camera in `[[camera]]`
         camera: usize,
+        /// why
         #[source]
         source: FrameError,
     },
+    /// a repulsion worker could not be built or could not answer
     #[error("camera {camera}: {source}")]
     Repulsion {
+        /// index of the camera in `[[camera]]`
         camera: usize,
+        /// the worker's error
         #[source]
         source: RepulsionError,
     },
+    /// the tracker on depth failed on the camera's frame
     #[error("camera {camera}: {source}")]
     Tracker {
+        /// index of the camera in `[[camera]]`
         camera: usize,
+        /// the tracker's error
         #[source]
         source: TrackerError,
     },
+    /// a configuration section that does not fit (ingestion, the tracker on
+    /// depth, a worker's camera view)
     #[error(transparent)]
     Config(#[from] Invalid),
 }

@@ -28,32 +28,55 @@ use phri_depth::{DepthPngError, Intrinsics};
 /// Why a recording cannot be replayed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
+    /// an invalid `[camera]` section
     #[error(transparent)]
     Config(#[from] Invalid),
+    /// the directory could not be read
     #[error("camera.replay_dir {}: {source}", dir.display())]
     Dir {
+        /// the directory (`camera.replay_dir`, resolved)
         dir: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
+    /// the directory holds no recorded frame
     #[error("camera.replay_dir {}: no recorded frame (16-bit PNG, raw or a fakenect INDEX.txt)", dir.display())]
-    Empty { dir: PathBuf },
+    Empty {
+        /// the directory (`camera.replay_dir`, resolved)
+        dir: PathBuf,
+    },
     /// a file that is no recorded frame of this camera
     #[error("camera.replay_dir: {}: {reason}", path.display())]
-    NotAFrame { path: PathBuf, reason: String },
+    NotAFrame {
+        /// the file
+        path: PathBuf,
+        /// why it is refused
+        reason: String,
+    },
 }
 
 /// Why one frame could not be read at its turn.
 #[derive(Debug, thiserror::Error)]
 pub enum FrameReadError {
+    /// a PNG that is not a depth frame of this camera, or could not be read
     #[error(transparent)]
     Png(#[from] DepthPngError),
+    /// the file could not be read
     #[error("{}: {source}", path.display())]
     Io {
+        /// the file
         path: PathBuf,
+        /// the system's error
         source: std::io::Error,
     },
+    /// the file is no frame of this camera (size, header, values)
     #[error("{}: {reason}", path.display())]
-    Invalid { path: PathBuf, reason: String },
+    Invalid {
+        /// the file
+        path: PathBuf,
+        /// what is wrong with it
+        reason: String,
+    },
 }
 
 /// How a recorded frame is stored.
@@ -73,7 +96,9 @@ const FAKENECT_HEADER: &[u8] = b"P5 640 480 65535\n";
 /// One recorded frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameFile {
+    /// the file
     pub path: PathBuf,
+    /// how it is stored
     pub format: FrameFormat,
 }
 

@@ -19,27 +19,65 @@ use crate::camera::{header_camera, HeaderError};
 /// Why a worker could not be built or could not answer a frame.
 #[derive(Debug, thiserror::Error)]
 pub enum RepulsionError {
+    /// an invalid `[repulsion]` section
     #[error(transparent)]
     Config(#[from] Invalid),
+    /// the worker index is not below `repulsion.workers`
     #[error("repulsion.workers = {workers}: worker {worker} does not exist")]
-    NoSuchWorker { worker: u32, workers: u32 },
+    NoSuchWorker {
+        /// the worker index asked for
+        worker: u32,
+        /// workers configured
+        workers: u32,
+    },
+    /// a control point names a link the model does not have
     #[error("repulsion.points[{index}] ({name}): unknown link '{link}'")]
     UnknownLink {
+        /// index of the point in `repulsion.points`
         index: usize,
+        /// the point's name
         name: String,
+        /// the link it names
         link: String,
     },
+    /// `repulsion.params` refused by the depth-space distance
     #[error("repulsion.params: {0}")]
     Params(#[source] DepthError),
     /// the frame's joint state is not one of this model
     #[error("frame {seq}: joint state of {got} joints, the model has {model}")]
-    Dof { seq: u64, got: u32, model: usize },
+    Dof {
+        /// the frame's sequence number
+        seq: u64,
+        /// joints of the state in the frame's header
+        got: u32,
+        /// joints of the model
+        model: usize,
+    },
+    /// the frame header's camera fields describe no camera
     #[error("frame {seq}: {source}")]
-    Camera { seq: u64, source: HeaderError },
+    Camera {
+        /// the frame's sequence number
+        seq: u64,
+        /// what is wrong with the header
+        source: HeaderError,
+    },
+    /// the depth-space distance refused the camera or the frame
     #[error("frame {seq}: {source}")]
-    Depth { seq: u64, source: DepthError },
+    Depth {
+        /// the frame's sequence number
+        seq: u64,
+        /// its error
+        source: DepthError,
+    },
+    /// the control points could not be placed at the frame's joint state
+    /// (kinematics)
     #[error("frame {seq}: {source}")]
-    Model { seq: u64, source: ModelError },
+    Model {
+        /// the frame's sequence number
+        seq: u64,
+        /// the kinematics error
+        source: ModelError,
+    },
 }
 
 /// One worker's state; `step` allocates nothing after the first frame.
@@ -111,6 +149,7 @@ impl Worker {
         Ok(self)
     }
 
+    /// Control points this worker answers for.
     pub fn n_points(&self) -> usize {
         self.points.len()
     }

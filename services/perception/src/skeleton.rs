@@ -131,6 +131,8 @@ fn gauss(rng: &mut SmallRng) -> f64 {
 }
 
 impl SkeletonTracker {
+    /// The tracker of `[skeleton]` (`cfg`, its noise seeded by `cfg.seed`) for
+    /// the camera of `intrinsics` at `pose` (base frame), no frame seen yet.
     pub fn new(cfg: &SkeletonConfig, intrinsics: Intrinsics, pose: CameraPose) -> SkeletonTracker {
         let mut rng = SmallRng::seed_from_u64(cfg.seed ^ 0x5EED_5EED);
         let mut bias = [[0.0; 3]; SKELETON_JOINTS];

@@ -67,6 +67,7 @@ impl RateLimited {
     /// Once per second.
     pub const SECOND_NS: u64 = 1_000_000_000;
 
+    /// At most one line per `interval_ns` \[ns\]; the first occurrence is logged.
     pub fn new(interval_ns: u64) -> RateLimited {
         RateLimited {
             interval_ns,

@@ -33,7 +33,9 @@ pub enum TrackerError {
     /// the tracker refused the camera or the frame
     #[error("frame {seq}: {source}")]
     Track {
+        /// the frame's sequence number
         seq: u64,
+        /// the tracker's error
         #[source]
         source: TrackError,
     },

@@ -51,27 +51,42 @@ const WAIT: Duration = Duration::from_millis(50);
 /// `sensor_msgs/RegionOfInterest`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RegionOfInterest {
+    /// the region's leftmost column \[px\]
     pub x_offset: u32,
+    /// the region's top row \[px\]
     pub y_offset: u32,
+    /// the region's rows \[px\]
     pub height: u32,
+    /// the region's columns \[px\]
     pub width: u32,
+    /// whether a rectified region is to be computed from this raw one
     pub do_rectify: bool,
 }
 
 /// `sensor_msgs/CameraInfo`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CameraInfo {
+    /// the camera's optical frame and the time
     pub header: Header,
+    /// rows of the images it calibrates \[px\] (0 with `width` 0: the image's)
     pub height: u32,
+    /// columns of the images it calibrates \[px\] (0 with `height` 0: the image's)
     pub width: u32,
+    /// the distortion model of `d` (`plumb_bob`, ...); unused by phri
     pub distortion_model: String,
+    /// the distortion coefficients; unused by phri
     pub d: Vec<f64>,
     /// row-major 3×3 intrinsics: fx, 0, cx; 0, fy, cy; 0, 0, 1
     pub k: [f64; 9],
+    /// row-major 3×3 rectification rotation (stereo); unused by phri
     pub r: [f64; 9],
+    /// row-major 3×4 projection of the rectified image; unused by phri
     pub p: [f64; 12],
+    /// horizontal binning (0 or 1: none); unused by phri
     pub binning_x: u32,
+    /// vertical binning (0 or 1: none); unused by phri
     pub binning_y: u32,
+    /// the region of the full image captured (all 0: the full image); unused by phri
     pub roi: RegionOfInterest,
 }
 

@@ -17,6 +17,7 @@ pub const LOCALHOST_ONLY_VAR: &str = "ROS_LOCALHOST_ONLY";
 /// than guess how far it may reach.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum DiscoveryError {
+    /// [`RANGE_VAR`] holds none of ROS 2's values: the value, cut and escaped
     #[error("{RANGE_VAR}: '{0}' is not LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT")]
     Range(String),
 }
@@ -33,6 +34,7 @@ pub enum DecidedBy {
 }
 
 impl DecidedBy {
+    /// Its name in a log line: the configuration key or the variable.
     pub fn name(self) -> &'static str {
         match self {
             DecidedBy::Config => "ros2.discovery",

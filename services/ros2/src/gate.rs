@@ -149,13 +149,18 @@ pub enum RefusalKind {
 /// Refusals per kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Refusals {
+    /// `[ros2] accept_requests = false`
     pub not_accepted: u64,
+    /// not a request the cell takes from ROS 2
     pub not_a_request: u64,
+    /// over their peer's rate limit
     pub rate_limited: u64,
+    /// samples DDS could not make a `std_msgs/String` of
     pub malformed: u64,
 }
 
 impl Refusals {
+    /// Count one refusal of `kind`.
     pub fn add(&mut self, kind: RefusalKind) {
         let n = match kind {
             RefusalKind::NotAccepted => &mut self.not_accepted,
@@ -166,6 +171,7 @@ impl Refusals {
         *n += 1;
     }
 
+    /// Refusals of every kind together.
     pub fn total(&self) -> u64 {
         self.not_accepted + self.not_a_request + self.rate_limited + self.malformed
     }

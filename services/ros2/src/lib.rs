@@ -32,6 +32,8 @@
 //! converts only those (ROS 2's "lazy publisher"; the cell's CPU is not
 //! spent on images nobody looks at).
 
+#![deny(missing_docs)]
+
 pub mod camera;
 pub mod convert;
 pub mod discovery;
@@ -63,6 +65,7 @@ pub use request::RequestError;
 /// Why the bridge cannot start.
 #[derive(Debug, thiserror::Error)]
 pub enum BridgeError {
+    /// `[dynamics]`'s contact or collision threshold does not fit the model: why
     #[error("{0}")]
     Config(String),
 }
@@ -83,6 +86,7 @@ pub enum Refused {
 }
 
 impl Refused {
+    /// This refusal's kind, for the refusal counts and log lines.
     pub fn kind(&self) -> RefusalKind {
         match self {
             Refused::NotAccepted => RefusalKind::NotAccepted,
@@ -102,18 +106,26 @@ fn is_stop(r: &Result<HriRequest, RequestError>) -> bool {
 pub struct RequestSample {
     /// the DDS writer that sent it
     pub peer: PeerId,
+    /// the `std_msgs/String`'s text, as received
     pub text: String,
 }
 
 /// Published and refused, per topic, since the bridge started.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
+    /// `/joint_states`
     pub joint_states: u64,
+    /// `/tf` messages of the arm's links
     pub tf: u64,
+    /// `/phri/status`
     pub status: u64,
+    /// `/phri/contact_force`
     pub contact_force: u64,
+    /// `/phri/repulsion`
     pub repulsion: u64,
+    /// `/phri/depth` images
     pub depth: u64,
+    /// `/phri/points` clouds
     pub points: u64,
     /// `/humans/bodies/tracked`
     pub humans: u64,
@@ -135,12 +147,19 @@ pub struct Counts {
 /// discovery). The bridge converts and publishes only these.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Subscribed {
+    /// `/joint_states`
     pub joint_states: bool,
+    /// `/tf` (the arm's links, the camera's frame and the bodies' frames)
     pub tf: bool,
+    /// `/phri/status`
     pub status: bool,
+    /// `/phri/contact_force`
     pub contact_force: bool,
+    /// `/phri/repulsion`
     pub repulsion: bool,
+    /// `/phri/depth`
     pub depth: bool,
+    /// `/phri/points`
     pub points: bool,
     /// `/humans/bodies/tracked`
     pub humans: bool,
@@ -168,13 +187,17 @@ impl Subscribed {
 
 /// What one robot state gives.
 pub struct StateOut<'a> {
+    /// `/joint_states`, when due and subscribed
     pub joint_state: Option<&'a JointState>,
+    /// `/tf`: each moving link in [`BASE_FRAME`], when due and subscribed
     pub tf: Option<TfMessage>,
 }
 
 /// What one depth frame gives.
 pub struct FrameOut<'a> {
+    /// `/phri/depth`, when due and subscribed
     pub image: Option<&'a Image>,
+    /// `/phri/points`, when due and subscribed
     pub points: Option<&'a PointCloud2>,
     /// the camera's optical frame in [`BASE_FRAME`] at the frame's time
     pub camera_tf: Option<TfMessage>,
@@ -241,6 +264,7 @@ pub struct Bridge {
     robot: String,
     /// the topics with subscribers (the binary keeps it current)
     pub subscribed: Subscribed,
+    /// what was published and refused since the bridge started
     pub counts: Counts,
     /// the last `ros2/requests` message's sequence number
     requests_seq: u64,

@@ -11,18 +11,25 @@ use crate::gate::shown;
 /// ones cut and escaped ([`shown`]): an error is fit for a log line.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum RequestError {
+    /// no word at all
     #[error("empty request")]
     Empty,
+    /// the first word is not a request: the word, shown
     #[error("'{0}' is not a request (begin, start, follow PART, end, stop)")]
     Kind(String),
+    /// the second word is not a part: the word, shown
     #[error("'{0}' is not a part (right_hand, left_hand)")]
     Part(String),
+    /// `follow` without a part
     #[error("follow needs a part (right_hand, left_hand)")]
     PartMissing,
+    /// `end` or `stop` with a part: the request's name
     #[error("{0} names no part")]
     PartNotTaken(&'static str),
+    /// `resume`: the operator's alone, at the cell
     #[error("resume is the operator's, at the cell (phri-hri resume)")]
     Resume,
+    /// a word after the part: the first such word, shown
     #[error("'{0}' after the request")]
     Trailing(String),
 }

@@ -50,6 +50,7 @@ impl Default for ContactLog {
 }
 
 impl ContactLog {
+    /// No episode in progress, no events.
     pub fn new() -> ContactLog {
         ContactLog {
             open: [Open::default(); SLOTS],

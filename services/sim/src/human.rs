@@ -31,9 +31,13 @@ use phri_ipc::BodyPart;
 /// `radius` \[m\], robot base frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HumanCapsule {
+    /// the body part it stands for
     pub part: BodyPart,
+    /// one end of the axis segment \[m\], base frame
     pub a: Vector3<f64>,
+    /// the other end of the axis segment \[m\], base frame
     pub b: Vector3<f64>,
+    /// radius of the swept sphere \[m\]
     pub radius: f64,
 }
 
@@ -45,16 +49,22 @@ pub const WAVE_BLEND_S: f64 = 0.5;
 pub mod body {
     /// shoulder joint centres: height above the floor and half width
     pub const SHOULDER_Z: f64 = 1.45;
+    /// shoulder joint centres: distance from the body's mid plane (half width)
     pub const SHOULDER_Y: f64 = 0.19;
     /// upper arm (shoulder → elbow) and forearm (elbow → hand centre) lengths
     pub const UPPER_ARM: f64 = 0.30;
+    /// forearm length, elbow → hand centre
     pub const FOREARM: f64 = 0.28;
     /// the forearm capsule ends at the wrist, this far before the hand centre;
     /// the hand capsule runs from the wrist to `HAND_TIP` past the hand centre
     pub const WRIST_BEFORE_HAND: f64 = 0.07;
+    /// how far the hand capsule reaches past the hand centre
     pub const HAND_TIP: f64 = 0.02;
+    /// upper arm capsule radius
     pub const R_UPPER_ARM: f64 = 0.05;
+    /// forearm capsule radius
     pub const R_FOREARM: f64 = 0.04;
+    /// hand capsule radius
     pub const R_HAND: f64 = 0.045;
     /// a hanging hand, relative to its shoulder: forward, outward, down
     pub const HANG: [f64; 3] = [0.03, 0.05, -0.55];
@@ -67,21 +77,30 @@ pub mod body {
     pub const WAVE_SWING_MAX: f64 = 0.2;
     /// head: vertical segment and radius (top of the head at 1.75 m)
     pub const HEAD: [f64; 2] = [1.56, 1.65];
+    /// head capsule radius
     pub const R_HEAD: f64 = 0.10;
     /// torso (chest and abdomen): vertical segment and radius
     pub const TORSO: [f64; 2] = [1.08, 1.33];
+    /// torso capsule radius
     pub const R_TORSO: f64 = 0.15;
     /// pelvis: horizontal segment across the hips at this height, radius
     pub const PELVIS_Z: f64 = 0.95;
+    /// pelvis: half length of the segment across the hips
     pub const PELVIS_Y: f64 = 0.08;
+    /// pelvis capsule radius
     pub const R_PELVIS: f64 = 0.12;
     /// legs: hip, knee and ankle heights of the standing leg (thigh 0.38 m,
     /// shin 0.40 m), half stance width, radii
     pub const HIP_Z: f64 = 0.88;
+    /// knee height of the standing leg
     pub const KNEE_Z: f64 = 0.50;
+    /// ankle height of the standing leg
     pub const ANKLE_Z: f64 = 0.10;
+    /// half stance width: the legs' distance from the body's mid plane
     pub const LEG_Y: f64 = 0.10;
+    /// thigh capsule radius
     pub const R_THIGH: f64 = 0.075;
+    /// shin capsule radius
     pub const R_SHIN: f64 = 0.055;
 }
 
@@ -225,7 +244,9 @@ fn side_of(hand: Hand) -> f64 {
 /// goes from 0 to 1.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reach {
+    /// the hand placed
     pub hand: Hand,
+    /// where the hand centre goes at full weight \[m\], base frame
     pub point: Vector3<f64>,
     /// in \[0, 1\]
     pub weight: f64,
@@ -236,6 +257,7 @@ pub struct Reach {
 pub struct ActivePush<'s> {
     /// index of the keyframe that starts it
     pub keyframe: usize,
+    /// the push as the keyframe scripts it
     pub push: &'s Push,
     /// ramp factor in \[0, 1\]: 0 → 1 over [`Push::RAMP_S`] after the
     /// keyframe, 1 → 0 over the same time before the interval's end
@@ -258,6 +280,7 @@ pub struct Human {
 }
 
 impl Human {
+    /// A human following `script`, posed at time 0.
     pub fn new(script: HumanScript) -> Human {
         let capsules = BodyPart::ALL
             .iter()
@@ -273,6 +296,7 @@ impl Human {
         h
     }
 
+    /// The script it follows.
     pub fn script(&self) -> &HumanScript {
         &self.script
     }

@@ -28,6 +28,8 @@
 //! are deterministic given the seed; [`Simulator::step`] and
 //! [`RobotLink::cycle`] allocate nothing.
 
+#![deny(missing_docs)]
+
 pub mod contact;
 pub mod contact_log;
 pub mod error;

@@ -36,6 +36,7 @@ pub const VERSION: u32 = 2;
 /// The arm at one instant.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ArmSnapshot {
+    /// format version ([`VERSION`] when written by this build)
     pub version: u32,
     /// when the positions were true [ns, CLOCK_MONOTONIC]
     pub stamp_ns: u64,
@@ -45,17 +46,29 @@ pub struct ArmSnapshot {
     pub scenario_s: f64,
 }
 
+/// Why a snapshot could not be saved or read.
 #[derive(Debug, thiserror::Error)]
 pub enum SnapshotError {
     /// not a file this user alone could have written (or too large)
     #[error(transparent)]
     Untrusted(#[from] phri_runtime::rundir::TrustError),
+    /// not a snapshot of this version, or one with a non-finite value (also: it
+    /// could not be encoded)
     #[error("{path}: not an arm snapshot: {reason}")]
-    Decode { path: PathBuf, reason: String },
+    Decode {
+        /// the snapshot file
+        path: PathBuf,
+        /// what is wrong with it
+        reason: String,
+    },
+    /// a snapshot of an arm with another number of joints
     #[error("{path}: {found} joints, the model has {expected}")]
     Joints {
+        /// the snapshot file
         path: PathBuf,
+        /// joints in the snapshot
         found: usize,
+        /// joints of the model
         expected: usize,
     },
 }
@@ -198,6 +211,7 @@ pub struct Resumed {
     /// where the person's script continues \[s\]: the predecessor's script
     /// time in its snapshot plus the time since, or `behind_s` without one
     pub scenario_s: f64,
+    /// where the arm stands
     pub arm: ArmResume,
 }
 
@@ -207,9 +221,19 @@ pub enum ArmResume {
     /// no run directory, or no snapshot of this cell's recent past: at its initial position
     Initial,
     /// at rest where the snapshot at `path` put it, taken `age_ns` \[ns\] ago
-    Restored { path: PathBuf, age_ns: u64 },
+    Restored {
+        /// the snapshot file
+        path: PathBuf,
+        /// age of the snapshot \[ns\]
+        age_ns: u64,
+    },
     /// the snapshot at `path` does not fit the arm (joint limits): at its initial position
-    Refused { path: PathBuf, error: SimError },
+    Refused {
+        /// the snapshot file
+        path: PathBuf,
+        /// why the arm cannot stand there
+        error: SimError,
+    },
     /// the snapshot could not be read: at its initial position
     Unreadable(SnapshotError),
 }

@@ -76,6 +76,7 @@ pub struct RefusedCommands {
 pub struct RobotRefused {
     /// the control box's states (null: no control box, a simulated arm)
     pub states: Option<RefusedStates>,
+    /// the commands the robot never applied, per slot
     pub commands: RefusedCommands,
 }
 

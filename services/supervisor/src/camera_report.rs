@@ -115,6 +115,7 @@ pub struct CameraReport {
     /// its skeleton messages seen on `perception/skeleton`, and those with
     /// at least one person
     pub skeletons: u64,
+    /// of those, the ones with at least one person
     pub skeletons_with_people: u64,
 }
 
@@ -159,9 +160,13 @@ impl DropCauses {
 /// Pinhole intrinsics \[px\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct IntrinsicsReport {
+    /// focal length along x \[px\]
     pub fx: f64,
+    /// focal length along y \[px\]
     pub fy: f64,
+    /// principal point, x \[px\]
     pub cx: f64,
+    /// principal point, y \[px\]
     pub cy: f64,
 }
 

@@ -43,10 +43,16 @@ fn push_capped<T>(list: &mut Vec<T>, left_out: &mut u64, item: T) {
 pub struct RequestReport {
     /// when the controller answered \[s\], the report's time base
     pub t_s: f64,
+    /// who asked: `gesture`, `voice`, `cli`, `ros2`
     pub source: String,
+    /// what was asked: `begin`, `end`, `stop`, `follow`, `resume`
     pub kind: String,
+    /// the collaborative part named: `none`, `right_hand`, `left_hand`
     pub part: String,
+    /// the request was accepted
     pub accepted: bool,
+    /// the controller's reason (`accepted`, or why it refused), or the
+    /// recogniser's verdict for a voice request it refused itself
     pub reason: String,
     /// the request's number (per source)
     pub seq: u64,
@@ -69,27 +75,38 @@ pub struct RequestReport {
 pub struct UtteranceReport {
     /// when the verdict was reached \[s\], the report's time base
     pub t_s: f64,
+    /// the words recognised (empty: none)
     pub text: String,
+    /// the command recognised: `none`, `follow_right_hand`, `begin`, ...
     pub intent: String,
+    /// the recogniser's score: acoustic log-likelihood per 10 ms frame
+    /// against a free phone loop (higher: surer; 0 when nothing decoded)
     pub score: f64,
+    /// what became of it: `accepted`, `no_match`, `low_score`, ...
     pub verdict: String,
     /// speech duration \[s\]
     pub duration_s: f64,
+    /// decoding time \[ms\]
     pub decode_ms: f64,
 }
 
 /// `collaboration.phases[]`: each change of phase.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct PhaseReport {
+    /// when the controller's state said so \[s\], the report's time base
     pub t_s: f64,
+    /// the new phase: `idle`, `approach`, `contact`, `follow`, `back_off`
     pub phase: String,
+    /// why it changed (the controller's reason)
     pub reason: String,
 }
 
 /// Relative error percentiles.
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct ErrorPercentiles {
+    /// median (null: no sample)
     pub p50: Option<f64>,
+    /// 95th percentile (null: no sample)
     pub p95: Option<f64>,
     /// samples graded
     pub samples: usize,
@@ -101,7 +118,9 @@ pub struct CollabReport {
     /// requests in time order: the controller's answers, and the voice
     /// requests the recogniser refused itself
     pub requests: Vec<RequestReport>,
+    /// the utterances `phri-voice` heard, in the order of their verdicts
     pub utterances: Vec<UtteranceReport>,
+    /// the changes of phase, in order
     pub phases: Vec<PhaseReport>,
     /// requests, utterances and phase changes past the first
     /// [`MAX_LISTED`] of each, counted but not listed
@@ -113,7 +132,9 @@ pub struct CollabReport {
     pub requests_dropped: u64,
     /// of them, dropped by the ROS 2 bridge (`ros2/requests`)
     pub requests_dropped_ros2: u64,
+    /// utterances past the first [`MAX_LISTED`], counted but not listed
     pub utterances_left_out: u64,
+    /// phase changes past the first [`MAX_LISTED`], counted but not listed
     pub phases_left_out: u64,
     /// the first wave of the script → the first approach \[ms\] (null: no wave or no approach)
     pub wave_to_start_ms: Option<f64>,
@@ -135,8 +156,10 @@ pub struct CollabReport {
     pub follow_distance_m: Option<FollowDistance>,
 }
 
+/// The hand ↔ robot point distance while following, over the run's samples.
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct FollowDistance {
+    /// median \[m\]
     pub p50: f64,
 }
 
@@ -188,6 +211,7 @@ pub struct CollabEvaluator {
 pub struct EstimatedContact {
     /// its first and last observable estimate \[s\]
     pub t_start_s: f64,
+    /// its last observable estimate \[s\]
     pub t_end_s: f64,
     /// the largest ‖F̂‖ \[N\]
     pub peak_force_n: f64,
@@ -252,6 +276,8 @@ impl CollabEvaluator {
         self.bridge_last = m.dropped;
     }
 
+    /// The controller's `collab/state`: requests answered, phase changes,
+    /// F̂ in contact, the hand's distance while following.
     pub fn on_state(&mut self, s: &CollabState) {
         let t = self.t(s.stamp_ns);
         let dropped = u64::from(s.requests_dropped);
@@ -422,6 +448,8 @@ impl CollabEvaluator {
         }
     }
 
+    /// A `sim/truth` sample: the true force of the collaborative hand and
+    /// its touches, and the robot clock's epoch.
     pub fn on_truth(&mut self, m: &Truth) {
         if self.epoch_ns.is_none() && m.seq > 0 {
             self.epoch_ns = Some(m.stamp_ns.saturating_sub((m.seq - 1) * self.period_ns));

@@ -278,10 +278,20 @@ pub fn share_cpus(a: &[usize], b: &[usize]) -> bool {
 pub enum Verdict {
     /// another service used more than [`STARVING_SHARE`] of a CPU they
     /// share: it starved the silent one (its index and share)
-    Starved { culprit: usize, share: f64 },
+    Starved {
+        /// roster index of the service that starved it
+        culprit: usize,
+        /// the share of one CPU it used over the window (1.0: a whole CPU)
+        share: f64,
+    },
     /// nobody starved it: frozen by itself (the busiest service on its
     /// CPUs, itself included, and its share)
-    Frozen { busiest: usize, share: f64 },
+    Frozen {
+        /// roster index of the busiest service on its CPUs (maybe itself)
+        busiest: usize,
+        /// the share of one CPU it used over the window (1.0: a whole CPU)
+        share: f64,
+    },
 }
 
 /// Judge a silence of `silent_ns` on `frozen`'s heartbeat over its later

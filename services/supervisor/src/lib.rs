@@ -13,6 +13,8 @@
 //! reaps the processes, reads the channels, publishes the health, writes
 //! the files, every 10 ms; `main.rs` only reads the command line.
 
+#![deny(missing_docs)]
+
 pub mod box_report;
 pub mod camera_report;
 pub mod collab_report;

@@ -7,6 +7,7 @@ use serde::Serialize;
 /// `voice` in the report.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct VoiceReport {
+    /// the microphone (`voice.mic`)
     pub mic: MicReport,
 }
 
@@ -56,6 +57,7 @@ impl MicEval {
         self.latest = *m;
     }
 
+    /// `voice` in the report: the chunks and overruns of every process so far.
     pub fn report(&self) -> VoiceReport {
         VoiceReport {
             mic: MicReport {

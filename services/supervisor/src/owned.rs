@@ -103,6 +103,8 @@ pub struct AuditLog {
 type Counts = [[u64; REFUSALS]; PUBLISHERS.len()];
 
 impl AuditLog {
+    /// A reader's `audit/inputs`: its counts since it started (a lower `seq`
+    /// is a new process of it: its predecessor's counts are kept).
     pub fn on_audit(&mut self, m: &InputAudit) {
         let entry = self.readers.entry(m.service_str().to_string()).or_insert((
             0,
@@ -129,6 +131,8 @@ impl AuditLog {
         pids.extend_from_slice(&m.stranger_pid[..PUBLISHERS.len()]);
     }
 
+    /// `inputs` in the report: each reader's counts summed over its
+    /// processes, with the newest stranger's pid.
     pub fn report(&self) -> InputsReport {
         let mut out = BTreeMap::new();
         for (reader, (_, last, base)) in &self.readers {

@@ -144,6 +144,8 @@ impl Plan {
         }
     }
 
+    /// The report's evaluation of this run, its time origin `t0_ns` \[ns,
+    /// CLOCK_MONOTONIC\]: staleness bounds, robot, period and sensors as planned.
     pub fn evaluator(&self, t0_ns: u64) -> Evaluator {
         // the controller's perception comes from the repulsion workers
         let perception = self

@@ -68,10 +68,13 @@ pub use phri_runtime::cputime::cpu_time_ns;
 /// Why a service binary cannot be run.
 #[derive(Debug, thiserror::Error)]
 pub enum BinaryError {
+    /// no file at the path (or the path cannot be read)
     #[error("not found")]
     Missing,
+    /// the path is a directory or another non-regular file
     #[error("not a regular file")]
     NotAFile,
+    /// this process may not execute it: its permission bits (mode & 0o7777)
     #[error("not executable (mode {0:o})")]
     NotExecutable(u32),
 }
@@ -193,15 +196,19 @@ impl Launch {
 
 /// A running supervised process.
 pub enum Proc {
+    /// a child this supervisor started
     Child(Child),
     /// adopted from a dead supervisor: its pid and what its command line must contain
     Adopted {
+        /// its pid
         pid: u32,
+        /// what its command line must contain (`--prefix P` of the run)
         prefix: String,
     },
 }
 
 impl Proc {
+    /// The process's pid.
     pub fn pid(&self) -> u32 {
         match self {
             Proc::Child(c) => c.id(),
@@ -209,6 +216,7 @@ impl Proc {
         }
     }
 
+    /// Send signal `sig` (`libc::SIGTERM`, ...) to the process; errors are ignored.
     pub fn signal(&self, sig: i32) {
         // SAFETY: kill(2) on a pid this supervisor started or adopted after checking its command line.
         unsafe { libc::kill(self.pid() as i32, sig) };
@@ -261,6 +269,8 @@ pub fn cause_line(stderr: &str) -> Option<String> {
 /// How [`status_text`] begins for a service its dead-man stopped.
 pub const DEADMAN_TEXT: &str = "stopped by its dead-man";
 
+/// How a process ended, in words: `exited with status N`, `killed by signal N`, or
+/// [`DEADMAN_TEXT`] when its dead-man stopped it.
 pub fn status_text(st: std::process::ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (st.code(), st.signal()) {

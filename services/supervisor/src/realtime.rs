@@ -37,11 +37,27 @@ pub struct Observed {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Shortfall {
     /// not under SCHED_FIFO at the configured priority
-    Scheduler { wanted: i32, got: Option<i32> },
+    Scheduler {
+        /// the configured priority (at most 99)
+        wanted: i32,
+        /// the highest real-time priority among its threads (`None`: the
+        /// normal scheduler)
+        got: Option<i32>,
+    },
     /// CPUs configured that this machine does not have online
-    MissingCpus { wanted: Vec<usize>, online: usize },
+    MissingCpus {
+        /// the configured CPUs, sorted
+        wanted: Vec<usize>,
+        /// how many CPUs this machine has online
+        online: usize,
+    },
     /// pinned elsewhere than configured (or not pinned)
-    Cpus { wanted: Vec<usize>, got: Vec<usize> },
+    Cpus {
+        /// the configured CPUs, sorted
+        wanted: Vec<usize>,
+        /// the CPUs its main thread may run on
+        got: Vec<usize>,
+    },
     /// real-time, but its memory is not locked (page faults can stall it)
     Unlocked,
 }
@@ -266,6 +282,7 @@ impl RealtimeWatch {
         short
     }
 
+    /// `realtime` in the report, as judged so far.
     pub fn report(&self) -> RealtimeReport {
         self.report.clone()
     }
@@ -297,12 +314,17 @@ pub enum ProbeError {
     /// the kernel refused it (no CAP_SYS_NICE, an rtprio limit)
     #[error("SCHED_FIFO {priority} refused: {source}")]
     Refused {
+        /// the SCHED_FIFO priority asked for
         priority: i32,
+        /// the kernel's error
         source: std::io::Error,
     },
     /// the scratch thread that asked did not come back
     #[error("SCHED_FIFO {priority}: the probe failed")]
-    Failed { priority: i32 },
+    Failed {
+        /// the SCHED_FIFO priority asked for
+        priority: i32,
+    },
 }
 
 /// What the services of a run ask for that this machine refuses.

@@ -16,14 +16,21 @@ use crate::residual_model::ResidualModel;
 /// `torque_loop.latency_us`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Percentiles {
+    /// median, in the unit of the key that holds it
     pub p50: f64,
+    /// 99th percentile
     pub p99: f64,
+    /// largest
     pub max: f64,
 }
 
+/// `torque_loop` in the report: the robot's loop as `robot/stats` tells it,
+/// summed over the robot's restarts.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TorqueLoop {
+    /// control periods run
     pub cycles: u64,
+    /// periods whose command did not arrive before the next period began
     pub missed_deadlines: u64,
     /// state published → command received \[µs\]
     pub latency_us: Percentiles,
@@ -37,22 +44,30 @@ pub struct TorqueLoop {
     pub pace: crate::robot_pace::PaceReport,
 }
 
+/// `services.NAME` in the report: one supervised service.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ServiceReport {
+    /// restarts over the run
     pub restarts: u32,
+    /// it was running when the run ended
     pub alive_at_end: bool,
 }
 
 /// One ground-truth contact episode.
 #[derive(Clone, Debug, Serialize)]
 pub struct ContactReport {
+    /// when it began \[s\], the report's time base
     pub t_start_s: f64,
+    /// when it was last seen \[s\]
     pub t_end_s: f64,
     /// robot link touched
     pub link: String,
     /// human body part
     pub part: String,
+    /// largest contact force \[N\] (ground truth)
     pub peak_force_n: f64,
+    /// the scenario meant it (a collaboration's touch, a scripted push):
+    /// not a collision
     pub intended: bool,
     /// first collision flag of the residual after the contact began \[ms\], null if none
     pub detected_after_ms: Option<f64>,
@@ -78,9 +93,14 @@ pub struct ContactReport {
 /// the robot's loop slipped when this machine stalled it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Event {
+    /// when \[s\] since the run's start
     pub t_s: f64,
+    /// what happened: `detection`, `reaction`, `protective_stop`, `restart`,
+    /// `exit`, `frozen`, ...
     pub kind: String,
+    /// the service it concerns (`control`, `dynamics`, the robot's, ...)
     pub service: String,
+    /// in words
     pub detail: String,
 }
 
@@ -104,8 +124,10 @@ pub struct SimRestart {
     pub arm_jump_rad: f64,
 }
 
+/// `task` in the report: how far the controller's task got.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TaskReport {
+    /// task waypoints reached, summed over the controller's restarts
     pub waypoints_reached: u64,
     /// when the last of them was reached \[s\], null if none
     pub last_waypoint_t_s: Option<f64>,
@@ -180,17 +202,28 @@ pub struct Report {
     pub degraded: Vec<String>,
     /// what the evaluation lost on the way (a stalled supervisor)
     pub evaluation: Evaluation,
+    /// length of the run \[s\], from the cell's start to its end
     pub duration_s: f64,
+    /// the scenario's name
     pub scenario: String,
     /// the arm (set by the supervisor)
     pub robot: RobotReport,
+    /// the robot's torque loop
     pub torque_loop: TorqueLoop,
+    /// per service: its restarts, and whether it ran at the end
     pub services: BTreeMap<String, ServiceReport>,
+    /// every ground-truth contact episode, with its detection delays
     pub contacts: Vec<ContactReport>,
+    /// collisions the residual flagged outside every contact episode (and
+    /// the grace after one)
     pub false_detections: u64,
+    /// collisions the controller detected (reactions entered)
     pub detections: u64,
+    /// protective stops the controller entered
     pub protective_stops: u64,
+    /// what happened, in time order
     pub events: Vec<Event>,
+    /// the task's progress
     pub task: TaskReport,
     /// smallest human-robot surface distance (ground truth) \[m\], null without a human
     pub min_distance_m: Option<f64>,
@@ -235,6 +268,8 @@ pub struct Report {
 /// one's (`ssm_violations`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct IsoSection {
+    /// the contacts judged and speed and separation monitoring's counts
+    /// (their keys at this level)
     #[serde(flatten)]
     pub judged: phri_iso15066::Judged,
     /// violations of the protective separation distance computed with
@@ -301,8 +336,12 @@ impl StaleBounds {
 /// Why a protective stop began (see [`StaleBounds::cause`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StopCause {
+    /// the residual was older than its bound (dynamics late or down)
     StaleResidual,
+    /// perception was older than its bound (camera, ingestion or a worker
+    /// late or down)
     StalePerception,
+    /// both inputs fresh: a `stop` request
     Request,
     /// a restarted controller holds while a hand is at the robot
     ControllerRestart,
@@ -344,7 +383,9 @@ impl StopCause {
 /// `sim/truth` sample (1 kHz, 256 deep) only coarsens the detection timing.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Evaluation {
+    /// `sim/truth` samples missing from the stream (gaps in its numbering)
     pub truth_samples_lost: u64,
+    /// `sim/contacts` events missing from the stream
     pub contact_events_lost: u64,
 }
 
@@ -730,6 +771,8 @@ impl Evaluator {
         (ns as f64 - self.t0_ns as f64) * 1e-9
     }
 
+    /// Add an event ([`Event`]) at `t_ns` \[ns, CLOCK_MONOTONIC\]: the
+    /// supervisor's own (a restart, an exit, a frozen service, ...).
     pub fn event(&mut self, t_ns: u64, kind: &str, service: &str, detail: impl Into<String>) {
         let t_s = self.t(t_ns);
         self.events.push(Event {
@@ -746,6 +789,8 @@ impl Evaluator {
         (self.max_joint_step, self.max_joint_step_t)
     }
 
+    /// A `sim/truth` sample: the contact episodes and their peak forces, the
+    /// model residual, the nearest distance, the arm's steps and jumps.
     pub fn on_truth(&mut self, m: &Truth) {
         let t = self.t_robot(m.stamp_ns);
         if m.seq > self.truth_seq + 1 && self.truth_seq > 0 {
@@ -845,6 +890,8 @@ impl Evaluator {
         }
     }
 
+    /// A residual of `dynamics/residual`: a collision flag detects the
+    /// contacts it falls in, and a new one is a `detection` event.
     pub fn on_residual(&mut self, m: &Residual) {
         if m.flags & residual_flags::VALID == 0 {
             return;
@@ -895,6 +942,9 @@ impl Evaluator {
         }
     }
 
+    /// The controller's `control/status`: waypoints, detections, protective
+    /// stops and their causes, mode changes as events (`reaction_name`: the
+    /// configured reaction, for the `reaction` event), controller restarts.
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
         // one time base: the status's publish time (CLOCK_MONOTONIC); its pair
         // of stamps maps the robot's clock (truth, residual) onto it
@@ -1010,6 +1060,8 @@ impl Evaluator {
         self.pace.report().cycles_short.saturating_mul(period_ns)
     }
 
+    /// The robot's `robot/stats`: its loop's counters and latency histogram
+    /// (summed over its restarts), missed deadlines and brakes as events.
     pub fn on_stats(&mut self, m: &RobotStats) {
         self.pace.on_stats(m);
         let t = self.t(m.stamp_ns);

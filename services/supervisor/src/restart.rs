@@ -3,6 +3,7 @@
 /// Per-service restart bookkeeping (times in ns, CLOCK_MONOTONIC).
 #[derive(Clone, Debug, Default)]
 pub struct RestartPolicy {
+    /// restarts so far
     pub restarts: u32,
     quick_failures: u32,
     started_ns: u64,

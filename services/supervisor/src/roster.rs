@@ -20,9 +20,11 @@ use crate::state::{ServiceJson, ServiceState, StateJson, SupervisorState, STATE_
 pub struct Supervised {
     /// its key under `[services]`
     pub name: String,
+    /// its configuration (`[services.NAME]`)
     pub spec: ServiceSpec,
     /// process id while it runs (started or adopted); `None` while it is down
     pub pid: Option<u32>,
+    /// its restarts and back-off
     pub policy: RestartPolicy,
     /// when to start it again \[ns\], while a restart is pending
     pub restart_at: Option<u64>,
@@ -148,22 +150,27 @@ impl Roster {
         s.restart_at = None;
     }
 
+    /// How many services are supervised.
     pub fn len(&self) -> usize {
         self.services.len()
     }
 
+    /// No service is supervised.
     pub fn is_empty(&self) -> bool {
         self.services.is_empty()
     }
 
+    /// Service `index` (in start order); panics when there is no such service.
     pub fn get(&self, index: usize) -> &Supervised {
         &self.services[index]
     }
 
+    /// Every service, in start order (its position is its index).
     pub fn iter(&self) -> impl Iterator<Item = &Supervised> {
         self.services.iter()
     }
 
+    /// How the supervisor behaves (`[supervisor]` of the configuration).
     pub fn config(&self) -> &SupervisorConfig {
         &self.sup
     }

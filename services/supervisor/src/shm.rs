@@ -30,13 +30,28 @@ const SEGMENT_LEN: u64 = 16;
 /// A node-counter segment that cannot be trusted, naming it.
 #[derive(Debug, thiserror::Error)]
 pub enum ShmError {
+    /// not a regular file of this user: another user could stop every node creation
     #[error("{}: iceoryx2's node counter of this prefix is {what}: refused (another user could stop every node creation; remove it, or use another --prefix)", path.display())]
-    Foreign { path: PathBuf, what: String },
+    Foreign {
+        /// the segment
+        path: PathBuf,
+        /// what it is instead (`not a regular file`, `owned by uid N`, ...)
+        what: String,
+    },
+    /// its contents are not what iceoryx2 writes (size, version field)
     #[error("{}: iceoryx2's node counter of this prefix was altered ({what}): refused (remove it once no cell of this prefix runs)", path.display())]
-    Altered { path: PathBuf, what: String },
+    Altered {
+        /// the segment
+        path: PathBuf,
+        /// what differs from what iceoryx2 writes
+        what: String,
+    },
+    /// it could not be inspected or made owner-only
     #[error("{}: {source}", path.display())]
     Io {
+        /// the segment
         path: PathBuf,
+        /// the error of the operation on it
         source: std::io::Error,
     },
 }

@@ -40,6 +40,7 @@ pub struct ControlReport {
     /// takeovers counted by the adapter but not seen one by one (two within
     /// one message); they count in `takeover_count`
     pub takeovers_unlisted: u64,
+    /// every takeover the adapter counted, summed over its restarts
     pub takeover_count: u64,
     /// periods each controller's fresh command was applied, by its command channel
     pub periods_commanded: BTreeMap<String, u64>,
@@ -69,6 +70,7 @@ pub struct StandbyEvaluator {
 }
 
 impl StandbyEvaluator {
+    /// An evaluator with nothing read yet (`standby`: a hot standby runs).
     pub fn new(standby: bool) -> StandbyEvaluator {
         StandbyEvaluator {
             report: ControlReport {
@@ -158,6 +160,7 @@ pub struct ResidualPair {
 }
 
 impl ResidualPair {
+    /// A pair with nothing read yet (`standby`: the standby's residual runs).
     pub fn new(standby: bool) -> ResidualPair {
         ResidualPair {
             kept: [Vec::with_capacity(KEPT), Vec::with_capacity(KEPT)],
@@ -192,6 +195,7 @@ impl ResidualPair {
         self.next[slot] = (self.next[slot] + 1) % KEPT;
     }
 
+    /// The report so far.
     pub fn report(&self) -> DynamicsReport {
         let mut r = self.report.clone();
         r.max_residual_disagreement_nm = (r.residuals_compared > 0).then_some(self.max);

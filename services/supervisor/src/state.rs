@@ -26,10 +26,18 @@ pub const MAX_STATE_LEN: u64 = 1 << 20;
 /// A state file that cannot be used, naming it.
 #[derive(Debug, thiserror::Error)]
 pub enum StateError {
+    /// it cannot be read, or is not trusted: a symbolic link, another user's,
+    /// writable by others, or too large
     #[error(transparent)]
     Untrusted(#[from] TrustError),
+    /// it is not a state file of this version
     #[error("{}: not a state file of this version: {reason}", path.display())]
-    Malformed { path: PathBuf, reason: String },
+    Malformed {
+        /// the state file
+        path: PathBuf,
+        /// the parser's error
+        reason: String,
+    },
 }
 
 /// `<run-dir>/state.json`:
@@ -96,27 +104,35 @@ impl StateJson {
 /// this one died adopts the running services instead of starting a second cell.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SupervisorState {
+    /// format version of the file ([`STATE_VERSION`]); another is not read
     pub version: u32,
+    /// the process id of the supervisor that wrote it
     pub supervisor_pid: u32,
+    /// iceoryx2 prefix of the run
     pub prefix: String,
     /// when the cell started [ns, CLOCK_MONOTONIC]: a supervisor that takes
     /// the cell over keeps it (services get it in `PHRI_CELL_START_NS`)
     pub cell_start_ns: u64,
+    /// every supervised service, in start order
     pub services: Vec<ServiceState>,
 }
 
 /// One service in [`SupervisorState`].
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ServiceState {
+    /// the service, as named in `[services.NAME]`
     pub name: String,
     /// 0: not running
     pub pid: u32,
+    /// restarts so far
     pub restarts: u32,
 }
 
+/// Format version of [`SupervisorState`]: a file of another version is not read.
 pub const STATE_VERSION: u32 = 2;
 
 impl SupervisorState {
+    /// The file's bytes (bincode, standard configuration).
     pub fn encode(&self) -> Vec<u8> {
         bincode::serde::encode_to_vec(self, bincode::config::standard()).unwrap_or_default()
     }

@@ -24,11 +24,14 @@ pub const BURST_S: f64 = 0.6;
 /// What a burst is made of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BurstKind {
+    /// white noise
     White,
+    /// impulses at random times, each a click and a damped resonance
     Clatter,
 }
 
 impl BurstKind {
+    /// The kind's name: `white` or `clatter`.
     pub fn name(self) -> &'static str {
         match self {
             BurstKind::White => "white",
@@ -51,10 +54,12 @@ pub fn kind_of(k: usize) -> BurstKind {
 pub struct Rng(u64);
 
 impl Rng {
+    /// A generator seeded with `seed`.
     pub fn new(seed: u64) -> Rng {
         Rng(seed)
     }
 
+    /// The next value, uniform over all of `u64`.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;

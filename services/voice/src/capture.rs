@@ -24,18 +24,41 @@ use crate::resample::Resampler;
 /// Why the microphone could not be opened or read. One line each, naming the device.
 #[derive(Debug, thiserror::Error)]
 pub enum CaptureError {
+    /// the device could not be opened
     #[error("ALSA capture device \"{device}\": cannot open it ({message}); `arecord -L` lists the devices")]
-    Open { device: String, message: String },
-    #[error("ALSA capture device \"{device}\": sample format {format} not supported (phri-mic takes S16_LE, S32_LE or FLOAT_LE)")]
-    Format { device: String, format: String },
-    #[error("ALSA capture device \"{device}\": cannot set {what} ({message})")]
-    Params {
+    Open {
+        /// the device's ALSA name
         device: String,
-        what: &'static str,
+        /// ALSA's error
         message: String,
     },
+    /// the device offers none of the sample formats taken
+    #[error("ALSA capture device \"{device}\": sample format {format} not supported (phri-mic takes S16_LE, S32_LE or FLOAT_LE)")]
+    Format {
+        /// the device's ALSA name
+        device: String,
+        /// the first other format it offers (`(none known)`: none phri-mic can name)
+        format: String,
+    },
+    /// a hardware parameter could not be set
+    #[error("ALSA capture device \"{device}\": cannot set {what} ({message})")]
+    Params {
+        /// the device's ALSA name
+        device: String,
+        /// the parameter, e.g. `the rate`
+        what: &'static str,
+        /// ALSA's error, or why the value is refused
+        message: String,
+    },
+    /// a read failed, other than by an overrun (the device unplugged): the
+    /// capture ends
     #[error("ALSA capture device \"{device}\": {message}; capture ended")]
-    Device { device: String, message: String },
+    Device {
+        /// the device's ALSA name
+        device: String,
+        /// ALSA's error
+        message: String,
+    },
 }
 
 /// The sample formats taken, best first.
@@ -67,8 +90,11 @@ const OTHER_FORMATS: [Format; 19] = [
 /// Which of `FORMATS` the device gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleFormat {
+    /// signed 16-bit little-endian (`S16_LE`)
     S16,
+    /// signed 32-bit little-endian (`S32_LE`)
     S32,
+    /// 32-bit float little-endian (`FLOAT_LE`)
     F32,
 }
 
@@ -82,6 +108,7 @@ impl SampleFormat {
         })
     }
 
+    /// ALSA's name of the format, e.g. `S16_LE`.
     pub fn name(self) -> &'static str {
         match self {
             SampleFormat::S16 => "S16_LE",
@@ -300,14 +327,17 @@ impl Capture {
         self.rate
     }
 
+    /// The channels the device delivers (downmixed to mono).
     pub fn channels(&self) -> u32 {
         self.channels
     }
 
+    /// The sample format the device delivers.
     pub fn format(&self) -> SampleFormat {
         self.format
     }
 
+    /// The device's ALSA name, as opened.
     pub fn device(&self) -> &str {
         &self.device
     }

@@ -19,22 +19,43 @@ pub type Ptr = *mut c_void;
 
 /// The functions, resolved once; the libraries stay loaded while this lives.
 pub struct Api {
+    /// `ps_args()`: the decoder's argument definitions, for `cmd_ln_parse_r`
     pub ps_args: unsafe extern "C" fn() -> *const c_void,
+    /// `cmd_ln_parse_r(inout, defn, argc, argv, strict)`: a configuration from
+    /// command-line arguments (null: refused)
     pub cmd_ln_parse_r: unsafe extern "C" fn(Ptr, *const c_void, i32, *mut *mut c_char, i32) -> Ptr,
+    /// `cmd_ln_free_r(config)`: release a configuration
     pub cmd_ln_free_r: unsafe extern "C" fn(Ptr) -> i32,
+    /// `ps_init(config)`: a decoder (null: failed)
     pub ps_init: unsafe extern "C" fn(Ptr) -> Ptr,
+    /// `ps_free(ps)`: release a decoder
     pub ps_free: unsafe extern "C" fn(Ptr) -> i32,
+    /// `ps_add_word(ps, word, phones, update)`: add a word to the dictionary
     pub ps_add_word: unsafe extern "C" fn(Ptr, *const c_char, *const c_char, i32) -> i32,
+    /// `ps_set_jsgf_string(ps, name, jsgf)`: a JSGF grammar as the search `name`
     pub ps_set_jsgf_string: unsafe extern "C" fn(Ptr, *const c_char, *const c_char) -> i32,
+    /// `ps_set_search(ps, name)`: make the search `name` the active one
     pub ps_set_search: unsafe extern "C" fn(Ptr, *const c_char) -> i32,
+    /// `ps_start_utt(ps)`: begin an utterance
     pub ps_start_utt: unsafe extern "C" fn(Ptr) -> i32,
+    /// `ps_process_raw(ps, data, n_samples, no_search, full_utt)`: decode 16-bit
+    /// samples
     pub ps_process_raw: unsafe extern "C" fn(Ptr, *const i16, usize, i32, i32) -> i32,
+    /// `ps_end_utt(ps)`: end the utterance
     pub ps_end_utt: unsafe extern "C" fn(Ptr) -> i32,
+    /// `ps_get_hyp(ps, out_best_score)`: the best hypothesis's words (null: none)
     pub ps_get_hyp: unsafe extern "C" fn(Ptr, *mut i32) -> *const c_char,
+    /// `ps_seg_iter(ps)`: an iterator over the best hypothesis's word segments
+    /// (null: none)
     pub ps_seg_iter: unsafe extern "C" fn(Ptr) -> Ptr,
+    /// `ps_seg_next(seg)`: the next segment (null at the end, the iterator freed)
     pub ps_seg_next: unsafe extern "C" fn(Ptr) -> Ptr,
+    /// `ps_seg_word(seg)`: the segment's word
     pub ps_seg_word: unsafe extern "C" fn(Ptr) -> *const c_char,
+    /// `ps_seg_frames(seg, out_sf, out_ef)`: the segment's first and last frame
     pub ps_seg_frames: unsafe extern "C" fn(Ptr, *mut i32, *mut i32),
+    /// `ps_seg_prob(seg, out_ascr, out_lscr, out_lback)`: the segment's acoustic
+    /// and language scores and back-off; returns its posterior probability
     pub ps_seg_prob: unsafe extern "C" fn(Ptr, *mut i32, *mut i32, *mut i32) -> i32,
     _sphinxbase: Library,
     _pocketsphinx: Library,

@@ -13,6 +13,8 @@
 //! lower score (`[voice] min_stop_score`): a protective stop, which
 //! complements and never replaces the robot's emergency stop.
 
+#![deny(missing_docs)]
+
 pub mod bursts;
 pub mod capture;
 pub mod error;
@@ -40,6 +42,7 @@ pub use voicing::{Voicing, VoicingMeter};
 pub struct Hands {
     /// (person, confidence) of the right / left hand
     pub right: Option<(u32, f64)>,
+    /// the same for the left hand
     pub left: Option<(u32, f64)>,
 }
 
@@ -117,6 +120,7 @@ pub fn confidence(score: f64, min_score: f64) -> f64 {
 /// What one utterance came to.
 #[derive(Clone, Copy, Debug)]
 pub struct Heard {
+    /// the utterance, with its verdict
     pub utterance: Utterance,
     /// the request to publish (accepted utterances)
     pub request: Option<HriRequest>,
@@ -136,10 +140,13 @@ pub struct Listener {
     pub last_voicing: Option<Voicing>,
     /// audio decoded and the time it took \[s\]
     pub audio_s: f64,
+    /// the time decoding took \[s\], the voicing analysis included
     pub decode_s: f64,
 }
 
 impl Listener {
+    /// The segmenter, voicing meter and recogniser of `cfg`; fails when
+    /// pocketsphinx or its model cannot be loaded.
     pub fn new(cfg: &VoiceConfig) -> Result<Listener, VoiceError> {
         Ok(Listener {
             cfg: cfg.clone(),

@@ -69,6 +69,7 @@ impl MicFlags {
 /// `audio/mic/status`: the microphone's figures, 2 Hz and at exit.
 #[derive(Clone, Debug)]
 pub struct MicStats {
+    /// the last message (source and device rate set once, the rest per message)
     pub status: MicStatus,
     next_ns: u64,
 }
@@ -77,6 +78,8 @@ pub struct MicStats {
 pub const STATUS_PERIOD_NS: u64 = 500_000_000;
 
 impl MicStats {
+    /// Figures of `source` at `device_rate_hz` \[Hz\]; the first message is due at
+    /// once.
     pub fn new(source: MicSource, device_rate_hz: u32) -> MicStats {
         let mut status = MicStatus::zeroed();
         status.source = match source {
@@ -109,7 +112,9 @@ impl MicStats {
 /// A recording and the sample it starts at.
 #[derive(Clone, Debug)]
 pub struct Clip {
+    /// the sample it begins at (16 kHz, from the stream's start)
     pub start: u64,
+    /// the recording, 16 kHz mono
     pub samples: Vec<i16>,
 }
 

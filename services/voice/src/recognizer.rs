@@ -38,6 +38,7 @@ const PHONE_LOOP: &CStr = c"phones";
 pub struct Decoded {
     /// the words (empty: the grammar matched nothing)
     pub text: String,
+    /// the command the words name ([`intent_of`])
     pub intent: VoiceIntent,
     /// command vs phone loop, acoustic log-likelihood per frame (0 when nothing matched)
     pub score: f64,

@@ -154,10 +154,12 @@ impl Resampler {
         }
     }
 
+    /// The input rate \[Hz\].
     pub fn in_rate(&self) -> u32 {
         self.in_rate
     }
 
+    /// The output rate \[Hz\].
     pub fn out_rate(&self) -> u32 {
         self.out_rate
     }

@@ -31,16 +31,21 @@ const NS_PER_SAMPLE: f64 = 1e9 / AUDIO_RATE_HZ as f64;
 pub enum SegmentKind {
     /// an utterance to decode
     Speech,
+    /// speech shorter than [`VoiceConfig::min_utterance_s`]: not decoded
     TooShort,
+    /// speech longer than [`VoiceConfig::max_utterance_s`], cut off there: not
+    /// decoded
     TooLong,
 }
 
 /// A finished utterance; its audio is [`Segmenter::audio`] until the next push.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
+    /// what became of the speech
     pub kind: SegmentKind,
     /// speech began / ended [ns, the stream's capture clock]
     pub start_ns: u64,
+    /// speech ended, on the same clock \[ns\]
     pub end_ns: u64,
 }
 
@@ -73,6 +78,8 @@ enum State {
     },
 }
 
+/// The energy detector: samples and their capture time in, finished
+/// utterances out (see the module's docs).
 pub struct Segmenter {
     speech_db: f64,
     onset_frames: u32,
@@ -101,6 +108,8 @@ impl Segmenter {
         ((cfg.max_utterance_s + cfg.hangover_s) * rate) as usize + 2 * padding + 4 * FRAME
     }
 
+    /// A segmenter with the thresholds and durations of `cfg`, its buffers
+    /// allocated for the longest utterance.
     pub fn new(cfg: &VoiceConfig) -> Segmenter {
         let rate = AUDIO_RATE_HZ as f64;
         let padding = (cfg.padding_s * rate) as usize;

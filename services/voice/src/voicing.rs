@@ -43,6 +43,7 @@ pub const HOP: usize = RATE_HZ / 100;
 pub const WINDOW: usize = 80;
 /// The pitch range searched \[Hz\].
 pub const MIN_PITCH_HZ: f64 = 60.0;
+/// The top of the pitch range searched \[Hz\].
 pub const MAX_PITCH_HZ: f64 = 400.0;
 const MIN_LAG: usize = (RATE_HZ as f64 / MAX_PITCH_HZ) as usize;
 const MAX_LAG: usize = (RATE_HZ as f64 / MIN_PITCH_HZ) as usize + 1;
@@ -85,11 +86,13 @@ impl Voicing {
 pub struct Frame {
     /// the correlation peak over the pitch range, and its pitch \[Hz\]
     pub correlation: f64,
+    /// the pitch of that peak \[Hz\]
     pub pitch_hz: f64,
     /// the best correlation at a shorter lag (above the pitch range)
     pub faster: f64,
     /// band energy against the utterance's loudest frame \[dB\]
     pub db: f64,
+    /// the frame counts as voiced (periodic, no shorter lag beats it, loud enough)
     pub voiced: bool,
 }
 

@@ -110,7 +110,9 @@ pub struct CollabInput<'a> {
 /// The last request answered, for `collab/state`.
 #[derive(Clone, Copy, Debug)]
 pub struct Answered {
+    /// the request
     pub request: HriRequest,
+    /// the answer it got
     pub answer: Answer,
 }
 
@@ -367,6 +369,7 @@ impl Collaboration {
         })
     }
 
+    /// The collaboration's phase.
     pub fn phase(&self) -> CollabPhase {
         self.machine.phase()
     }
@@ -388,6 +391,7 @@ impl Collaboration {
         self.forces.share_kinematics(data, q);
     }
 
+    /// The phase machine.
     pub fn machine(&self) -> &CollabMachine {
         &self.machine
     }
@@ -452,6 +456,7 @@ impl Collaboration {
         self.sighting.map(|(_, t)| t)
     }
 
+    /// The last request answered (`None`: none yet).
     pub fn last_answer(&self) -> Option<&Answered> {
         self.last_answer.as_ref()
     }

@@ -150,7 +150,10 @@ pub enum Behaviour {
     Cartesian(CartesianRef),
     /// the acceleration is written; the torque law adds the bias and, for
     /// the reflex (eq. 9), subtracts the residual
-    Joint { minus_r: bool },
+    Joint {
+        /// the torque law subtracts the residual (the reflex, eq. 9)
+        minus_r: bool,
+    },
 }
 
 #[cfg(test)]

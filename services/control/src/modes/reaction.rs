@@ -116,16 +116,23 @@ snapshot_fields!(ReactionState { t0, retreat });
 pub struct ReactionIo<'a> {
     /// measured joint positions \[rad\] and estimated velocities [rad/s]
     pub q: &'a [f64],
+    /// estimated joint velocities \[rad/s\]
     pub qd: &'a [f64],
     /// the period \[s\] and the controller's time \[s\]
     pub dt: f64,
+    /// the controller's time \[s\]
     pub t: f64,
     /// the residual r \[Nm\] (`None`: vanished; the reaction holds)
     pub residual: Option<&'a [f64]>,
+    /// the joint reference (the admittance and the retreat move it)
     pub reference: &'a mut JointReference,
+    /// the joint limits (the admittance's reference stays inside)
     pub limits: &'a Limits,
+    /// the path history the retreat walks back
     pub history: &'a PathHistory,
+    /// the model terms (floating replaces the bias by `g − D q̇`)
     pub terms: &'a mut DynamicsTerms,
+    /// the joint tracking gains
     pub gains: TrackingGains,
     /// the acceleration for the torque law [rad/s²]
     pub accel: &'a mut [f64],
@@ -146,6 +153,7 @@ impl ReactionState {
         }
     }
 
+    /// The configured strategy (`[control] reaction`).
     pub fn strategy(&self) -> Reaction {
         self.strategy
     }

@@ -131,6 +131,7 @@ impl TaskState {
         self.s = s;
     }
 
+    /// Waypoints reached since the start.
     pub fn waypoints_reached(&self) -> u64 {
         self.waypoints_reached
     }

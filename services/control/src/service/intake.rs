@@ -42,6 +42,7 @@ pub struct Intake {
 
 /// One period's inputs, and whether a lost request calls for a stop.
 pub struct Gathered<'a> {
+    /// the step's input for this state
     pub input: ControlInput<'a>,
     /// a request lost may have been a stop: the controller in charge stops
     pub requests_lost: bool,

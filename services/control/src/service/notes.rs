@@ -7,9 +7,19 @@ use crate::{InputError, SnapshotError};
 #[derive(Debug)]
 pub enum Note {
     /// a refused input: the error and how many so far
-    Refused { error: InputError, count: u64 },
+    Refused {
+        /// why it was refused
+        error: InputError,
+        /// inputs refused so far
+        count: u64,
+    },
     /// a peer's behaviour state refused: the error and how many so far
-    Behaviour { error: SnapshotError, count: u64 },
+    Behaviour {
+        /// why it was refused
+        error: SnapshotError,
+        /// behaviour states refused so far
+        count: u64,
+    },
 }
 
 impl std::fmt::Display for Note {

@@ -30,6 +30,7 @@ pub struct RobotCapsule {
     pub body: Option<usize>,
     /// axis endpoints \[m\], base frame, at the current state
     pub a: Vector3<f64>,
+    /// the other axis endpoint \[m\], base frame, at the current state
     pub b: Vector3<f64>,
     /// \[m\]
     pub radius: f64,

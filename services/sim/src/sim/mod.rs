@@ -64,6 +64,7 @@ pub struct ExternalForce {
 pub struct ScriptedPush {
     /// link frame (`Model::frame_id`) and its body (`None`: the base)
     pub frame: usize,
+    /// the link's body (joint index), `None` for the base
     pub body: Option<usize>,
     /// index into `model.collisions` of the capsule reported as touched: the
     /// link's own, else the first on the same body
@@ -72,7 +73,9 @@ pub struct ScriptedPush {
     pub point: nalgebra::Vector3<f64>,
     /// \[N\] once ramped up
     pub force_n: f64,
+    /// the pushing hand's body part
     pub part: BodyPart,
+    /// whether the contact counts as intended (collaboration), as scripted
     pub intended: bool,
 }
 

@@ -65,6 +65,7 @@ pub struct Truth {
     pub t_s: f64,
     /// joint positions \[rad\] and velocities [rad/s], unquantized
     pub q: Vec<f64>,
+    /// joint velocities \[rad/s\], unquantized
     pub qd: Vec<f64>,
     /// external joint torque `Σ J_cᵀ F` of every contact at the current state [N·m]
     pub tau_ext: Vec<f64>,

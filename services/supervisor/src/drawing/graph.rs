@@ -50,7 +50,10 @@ pub struct Edge {
 /// The cell as boxes and arrows.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellGraph {
+    /// the boxes: the layout's places that hold a service, in [`PLACES`]
+    /// order, then a spare place for each service no place names
     pub nodes: Vec<Node>,
+    /// the arrows between them (none to an observer), by index into `nodes`
     pub edges: Vec<Edge>,
 }
 

@@ -10,13 +10,18 @@
 /// An axis-aligned rectangle \[px\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rect {
+    /// left edge
     pub x: f64,
+    /// top edge (y down)
     pub y: f64,
+    /// width
     pub w: f64,
+    /// height
     pub h: f64,
 }
 
 impl Rect {
+    /// A rectangle of size `w` × `h` whose top-left corner is (`x`, `y`).
     pub const fn new(x: f64, y: f64, w: f64, h: f64) -> Rect {
         Rect { x, y, w, h }
     }
@@ -26,10 +31,12 @@ impl Rect {
         Rect::new(cx - w / 2.0, cy - h / 2.0, w, h)
     }
 
+    /// Its right edge: `x + w`.
     pub fn right(&self) -> f64 {
         self.x + self.w
     }
 
+    /// Its bottom edge: `y + h` (y down).
     pub fn bottom(&self) -> f64 {
         self.y + self.h
     }
@@ -104,6 +111,7 @@ pub const SUPERVISOR: &str = "(supervisor)";
 
 /// The picture's size \[px\].
 pub const WIDTH: f64 = 1110.0;
+/// The picture's height \[px\].
 pub const HEIGHT: f64 = 700.0;
 
 // columns: sources, perception, repulsion, control
@@ -216,10 +224,13 @@ pub enum Label {
 /// The course of one arrow, from the publisher's box to the reader's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Route {
+    /// the publisher's place (its `slot`)
     pub from: &'static str,
+    /// the reader's place (its `slot`)
     pub to: &'static str,
     /// the polyline \[px\], the first point on `from`'s border, the last on `to`'s
     pub points: &'static [(f64, f64)],
+    /// where its label goes
     pub label: Label,
 }
 

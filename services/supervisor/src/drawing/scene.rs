@@ -43,9 +43,13 @@ impl Font {
 /// One line of text, centred on `x`, its baseline at `y` \[px\].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Line {
+    /// the line's centre, horizontally \[px\]
     pub x: f64,
+    /// its baseline \[px\]
     pub y: f64,
+    /// the words
     pub text: String,
+    /// its font
     pub font: Font,
 }
 
@@ -76,10 +80,13 @@ pub enum Shade {
 /// A process's box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BoxShape {
+    /// where \[px\]
     pub rect: Rect,
+    /// its colour
     pub shade: Shade,
     /// the roster's services in it (a tooltip)
     pub tooltip: String,
+    /// its text: the binaries, the place's words, the channels of note
     pub lines: Vec<Line>,
 }
 
@@ -88,6 +95,7 @@ pub struct BoxShape {
 pub struct LabelShape {
     /// the box it covers (turned: the turned box) \[px\]
     pub rect: Rect,
+    /// its lines of text: the channels, all on one line or one a line
     pub lines: Vec<String>,
     /// runs up a vertical segment
     pub turned: bool,
@@ -96,10 +104,16 @@ pub struct LabelShape {
 /// An arrow from a publisher's box to a reader's.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Arrow {
+    /// the publisher's place (its slot)
     pub from: String,
+    /// the reader's place (its slot)
     pub to: String,
+    /// the channels the one publishes and the other reads
     pub channels: Vec<&'static str>,
+    /// the polyline \[px\], from the publisher's box to the reader's
     pub points: Vec<(f64, f64)>,
+    /// its label (`None`: the route's label is [`Label::Shared`], or names a
+    /// segment the route does not have)
     pub label: Option<LabelShape>,
     /// the layout has a route for it (else: straight, centre to centre)
     pub routed: bool,
@@ -110,9 +124,13 @@ pub struct Arrow {
 /// The whole picture.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
+    /// width \[px\]
     pub width: f64,
+    /// height \[px\]
     pub height: f64,
+    /// one per node of the [`CellGraph`], in its order
     pub boxes: Vec<BoxShape>,
+    /// one per edge of the [`CellGraph`], in its order
     pub arrows: Vec<Arrow>,
     /// the legend and the footer
     pub texts: Vec<Line>,

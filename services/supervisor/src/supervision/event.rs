@@ -15,14 +15,27 @@ pub enum Event {
     /// service `index`'s process `pid`, left by a supervisor that died,
     /// was taken over; that supervisor had restarted it `restarts` times
     Adopted {
+        /// the service's roster index
         index: usize,
+        /// the process taken over
         pid: u32,
+        /// the restarts the dead supervisor counted
         restarts: u32,
     },
     /// service `index` was started (or restarted) as process `pid`
-    Started { index: usize, pid: u32 },
+    Started {
+        /// the service's roster index
+        index: usize,
+        /// its new process
+        pid: u32,
+    },
     /// service `index` could not be started (`error`: why, in one line)
-    SpawnFailed { index: usize, error: String },
+    SpawnFailed {
+        /// the service's roster index
+        index: usize,
+        /// why, in one line
+        error: String,
+    },
     /// the actions of the last step are done: the sequence under way (the
     /// start-up, a round) goes on while [`super::Supervision::awaits`]
     Done,
@@ -44,32 +57,54 @@ pub enum Event {
     RobotIntruder(String),
     /// service `index`'s process had used `cpu_ns` of CPU time so far
     /// (`None`: not running, or not readable)
-    CpuTime { index: usize, cpu_ns: Option<u64> },
+    CpuTime {
+        /// the service's roster index
+        index: usize,
+        /// CPU time its process used so far \[ns\] (`None`: not running, or
+        /// not readable)
+        cpu_ns: Option<u64>,
+    },
     /// the machine had lost `steal_ns` per CPU to its hypervisor so far
-    /// (`None`: not readable)
-    Steal { steal_ns: Option<u64> },
+    Steal {
+        /// stolen time per CPU so far \[ns\] (`None`: `/proc/stat` not readable)
+        steal_ns: Option<u64>,
+    },
     /// process `pid` (`who`: its command line), not a controller this
     /// supervisor started, publishes on the robot's command `channel`
     CommandIntruder {
+        /// the intruder's pid
         pid: i32,
+        /// its command line
         who: String,
+        /// the command channel it publishes on
         channel: &'static str,
     },
     /// process `pid` (`who`: its command line) publishes on the owned
     /// `channel` without being the service that owns it
     Stranger {
+        /// the owned channel
         channel: &'static str,
+        /// the stranger's pid
         pid: i32,
+        /// its command line
         who: String,
     },
     /// what service `index`'s process `pid` got of real-time scheduling
     Realtime {
+        /// the service's roster index
         index: usize,
+        /// its process
         pid: u32,
+        /// what the kernel reports that process has
         observed: Observed,
     },
     /// service `index`'s process ended (`detail`: its exit status in words)
-    Exited { index: usize, detail: String },
+    Exited {
+        /// the service's roster index
+        index: usize,
+        /// its exit status in words
+        detail: String,
+    },
     /// iceoryx2's node counter is no longer this user's alone (`reason`)
     NodeCounter(String),
     /// SIGINT or SIGTERM: the run is to end
@@ -104,7 +139,12 @@ pub enum Action {
     Watch,
     /// read what service `index`'s process `pid` got of real-time
     /// scheduling (→ [`Event::Realtime`])
-    Observe { index: usize, pid: u32 },
+    Observe {
+        /// the service's roster index
+        index: usize,
+        /// its process
+        pid: u32,
+    },
     /// reap the processes that ended (→ [`Event::Exited`], each noticed at
     /// its own time), while [`super::Supervision::reaping`]
     Reap,
@@ -114,7 +154,10 @@ pub enum Action {
     /// write `state.json` and `supervisor.state`
     WriteState,
     /// publish the health (and beat with it) stamped `now_ns`
-    PublishHealth { now_ns: u64 },
+    PublishHealth {
+        /// the health's stamp \[ns, CLOCK_MONOTONIC\]
+        now_ns: u64,
+    },
     /// check that iceoryx2's node counter is still this user's alone
     /// (→ [`Event::NodeCounter`] when not)
     CheckNodeCounter,
@@ -124,9 +167,13 @@ pub enum Action {
     Warn(String),
     /// an event in the report: at `at_ns`, of `kind`, about `service`
     Record {
+        /// when \[ns, CLOCK_MONOTONIC\]
         at_ns: u64,
+        /// the report event's kind: `restart`, `exit`, `frozen`, ...
         kind: &'static str,
+        /// the service it concerns, or `supervisor` or `robot`
         service: String,
+        /// in words
         detail: String,
     },
     /// the run is reported degraded, for `reason`
