@@ -27,12 +27,55 @@ const MIN_SPAN_NS: u64 = 50_000_000;
 #[derive(Clone, Debug)]
 pub struct CpuUse {
     /// per service: (time [ns], CPU time so far [ns]) over the last window
-    samples: Vec<VecDeque<(u64, u64)>>,
+    samples: Vec<Counter>,
     /// per service: its processes' CPU time and running time before the
     /// current process [ns], and the current one's first and newest sample
     totals: Vec<Total>,
     /// (time, the machine's stolen time so far per CPU) [ns] over the last window
-    steal: VecDeque<(u64, u64)>,
+    steal: Counter,
+}
+
+/// A growing count of nanoseconds (a process's CPU time, the machine's
+/// stolen time), sampled over the last [`WINDOW_NS`]: (time, count) \[ns\].
+#[derive(Clone, Debug, Default)]
+struct Counter(VecDeque<(u64, u64)>);
+
+impl Counter {
+    /// The count was `count` at `now_ns` (`None`: unknown, the history is
+    /// dropped); a count that went back (another process) starts a new one.
+    fn record(&mut self, now_ns: u64, count: Option<u64>) {
+        let Some(c) = count else {
+            self.0.clear();
+            return;
+        };
+        if self.0.back().is_some_and(|&(_, last)| c < last) {
+            self.0.clear();
+        }
+        self.0.push_back((now_ns, c));
+        while self
+            .0
+            .front()
+            .is_some_and(|&(at, _)| now_ns.saturating_sub(at) > WINDOW_NS)
+        {
+            self.0.pop_front();
+        }
+    }
+
+    /// How fast the count grew over the last `window_ns` of samples, in ns
+    /// per ns; `None` when the samples span less than half of that window
+    /// (or 50 ms).
+    fn rate(&self, window_ns: u64) -> Option<f64> {
+        let &(t1, c1) = self.0.back()?;
+        let &(t0, c0) = self
+            .0
+            .iter()
+            .find(|&&(t, _)| t1.saturating_sub(t) <= window_ns)?;
+        let span = t1.saturating_sub(t0);
+        if span < MIN_SPAN_NS.max(window_ns / 2) {
+            return None;
+        }
+        Some(c1.saturating_sub(c0) as f64 / span as f64)
+    }
 }
 
 /// A process's start-up (loading its configuration, model, files) is left
@@ -89,30 +132,16 @@ impl CpuUse {
     /// For `services` services.
     pub fn new(services: usize) -> CpuUse {
         CpuUse {
-            samples: vec![VecDeque::new(); services],
+            samples: vec![Counter::default(); services],
             totals: vec![Total::default(); services],
-            steal: VecDeque::new(),
+            steal: Counter::default(),
         }
     }
 
     /// The machine had lost `steal_ns` per CPU to its hypervisor at `now_ns`
     /// (`None`: unknown, the history is dropped).
     pub fn record_steal(&mut self, now_ns: u64, steal_ns: Option<u64>) {
-        let Some(t) = steal_ns else {
-            self.steal.clear();
-            return;
-        };
-        if self.steal.back().is_some_and(|&(_, last)| t < last) {
-            self.steal.clear();
-        }
-        self.steal.push_back((now_ns, t));
-        while self
-            .steal
-            .front()
-            .is_some_and(|&(at, _)| now_ns.saturating_sub(at) > WINDOW_NS)
-        {
-            self.steal.pop_front();
-        }
+        self.steal.record(now_ns, steal_ns);
     }
 
     /// The share of each CPU the hypervisor left the machine over the last
@@ -120,21 +149,9 @@ impl CpuUse {
     /// or not known). A process that had all of a CPU the machine had shows
     /// this share of the wall clock in its CPU time.
     pub fn available(&self, window_ns: u64) -> f64 {
-        let Some(&(t1, s1)) = self.steal.back() else {
-            return 1.0;
-        };
-        let Some(&(t0, s0)) = self
-            .steal
-            .iter()
-            .find(|&&(t, _)| t1.saturating_sub(t) <= window_ns)
-        else {
-            return 1.0;
-        };
-        let span = t1.saturating_sub(t0);
-        if span < MIN_SPAN_NS.max(window_ns / 2) {
-            return 1.0;
-        }
-        (1.0 - s1.saturating_sub(s0) as f64 / span as f64).clamp(0.25, 1.0)
+        self.steal
+            .rate(window_ns)
+            .map_or(1.0, |stolen| (1.0 - stolen).clamp(0.25, 1.0))
     }
 
     /// What service `index` used over the run so far, with its `budget`.
@@ -195,31 +212,15 @@ impl CpuUse {
     /// is not running; its history is dropped).
     pub fn record(&mut self, index: usize, now_ns: u64, cpu_ns: Option<u64>) {
         self.total(index, now_ns, cpu_ns);
-        let Some(s) = self.samples.get_mut(index) else {
-            return;
-        };
-        match cpu_ns {
-            None => s.clear(),
-            Some(t) => {
-                // a new process (restart) starts a new history
-                if s.back().is_some_and(|&(_, last)| t < last) {
-                    s.clear();
-                }
-                s.push_back((now_ns, t));
-                while s
-                    .front()
-                    .is_some_and(|&(at, _)| now_ns.saturating_sub(at) > WINDOW_NS)
-                {
-                    s.pop_front();
-                }
-            }
+        if let Some(s) = self.samples.get_mut(index) {
+            s.record(now_ns, cpu_ns);
         }
     }
 
     /// Service `index` was (re)started: its history is another process's.
     pub fn restarted(&mut self, index: usize) {
         if let Some(s) = self.samples.get_mut(index) {
-            s.clear();
+            s.0.clear();
         }
         if let Some(t) = self.totals.get_mut(index) {
             t.fold();
@@ -230,16 +231,7 @@ impl CpuUse {
     /// samples (1.0: a whole CPU); `None` when its samples span less than
     /// half of that window (or 50 ms).
     pub fn share(&self, index: usize, window_ns: u64) -> Option<f64> {
-        let s = self.samples.get(index)?;
-        let &(t1, c1) = s.back()?;
-        let &(t0, c0) = s
-            .iter()
-            .find(|&&(t, _)| t1.saturating_sub(t) <= window_ns)?;
-        let span = t1.saturating_sub(t0);
-        if span < MIN_SPAN_NS.max(window_ns / 2) {
-            return None;
-        }
-        Some(c1.saturating_sub(c0) as f64 / span as f64)
+        self.samples.get(index)?.rate(window_ns)
     }
 }
 
