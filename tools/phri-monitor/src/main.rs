@@ -349,6 +349,19 @@ fn channels_json(
         .collect()
 }
 
+/// Every channel's probe, their windows opened once all are open: opening
+/// thirty channels on a loaded machine can take longer than the fastest
+/// queue is deep (256 ms of robot/state), and what overflowed before the
+/// first read would be missing from a window without showing as a drop.
+fn open_windows(node: &IpcNode) -> Result<Vec<Box<dyn Probe>>, probe::ProbeError> {
+    let mut probes = probe::open_all(node)?;
+    for p in probes.iter_mut() {
+        p.poll(None)?;
+        p.stats_mut().reset();
+    }
+    Ok(probes)
+}
+
 fn poll_all(probes: &mut [Box<dyn Probe>]) -> Result<(), IpcError> {
     for p in probes.iter_mut() {
         p.poll(None)?;
@@ -364,14 +377,16 @@ fn f(v: &Value, key: &str, digits: usize) -> String {
 }
 
 fn list(node: &IpcNode, nodes: Vec<NodeInfo>, o: &Opts, sd: &Shutdown) -> Result {
-    let mut probes = probe::open_all(node)?;
+    let mut probes = open_windows(node)?;
     let t0 = Instant::now();
     let span = Duration::from_secs_f64(o.seconds.unwrap_or(1.0));
     while t0.elapsed() < span && !sd.requested() {
         std::thread::sleep(POLL);
         poll_all(&mut probes)?;
     }
+    // each window closes right after its own last read
     for p in probes.iter_mut() {
+        p.poll(None)?;
         p.stats_mut().close();
     }
     if o.json {
@@ -431,6 +446,10 @@ fn hz(node: &IpcNode, channel: &str, o: &Opts, sd: &Shutdown) -> Result {
             std::thread::sleep(POLL);
             p.poll(None)?;
         }
+        // the window closes at its last read, not after the counts
+        // (which take time on a busy host)
+        p.poll(None)?;
+        p.stats_mut().close();
         let mut v = channel_json(node, p.as_ref())?;
         v.as_object_mut()
             .unwrap()
@@ -495,7 +514,7 @@ fn cpu_budgets(prefix: &str) -> HashMap<String, f64> {
 
 impl Sampler {
     fn open(node: &IpcNode, prefix: &str) -> Result<Sampler> {
-        let probes = probe::open_all(node)?;
+        let probes = open_windows(node)?;
         let idx = |name: &str| {
             probes
                 .iter()
@@ -530,8 +549,11 @@ impl Sampler {
         st: &mut TopState,
         t_s: f64,
     ) -> Result<serde_json::Map<String, Value>, IpcError> {
+        // each window ends at its last read, not after the counts
         for p in self.probes.iter_mut() {
+            p.poll(None)?;
             p.stats_mut().trim(WINDOW_NS);
+            p.stats_mut().close();
         }
         let state: Option<JointState> = last(self.probes[self.i_state].as_ref());
         let status: Option<ControlStatus> = last(self.probes[self.i_status].as_ref());

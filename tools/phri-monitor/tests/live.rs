@@ -37,7 +37,9 @@ fn within(x: f64, nominal: f64, tol: f64) -> bool {
 /// longest interval at either end (two of 62 frames in a 2 s window: 3 %; more
 /// when a loaded machine held a frame back at an edge).
 /// The cell's own pace is its report's matter: under a full test suite on
-/// 2 vCPUs a robot loop fell 20-30 % behind, so `slack` is wide here.
+/// 2 vCPUs a robot loop fell 20-30 % behind on average and to half its pace
+/// for a second (`top --once` watches about one), so `slack` is wide here:
+/// what this test holds the monitor to is consistency, which is exact.
 fn rate_ok(c: &serde_json::Value, nominal: f64, slack: f64) -> bool {
     let rate = c["rate_hz"].as_f64().unwrap_or(0.0);
     let samples = c["samples"].as_f64().unwrap_or(0.0).max(1.0);
@@ -171,7 +173,7 @@ fn list_hz_and_top_on_a_live_cell() {
     );
     let ch = &list["channels"];
     assert!(
-        rate_ok(&ch["robot/state"], 1000.0, 0.5),
+        rate_ok(&ch["robot/state"], 1000.0, 0.6),
         "robot/state {}",
         ch["robot/state"]
     );
@@ -221,7 +223,7 @@ fn list_hz_and_top_on_a_live_cell() {
     ]));
     eprintln!("hz: {hz}");
     assert_eq!(hz["channel"], "robot/state");
-    assert!(rate_ok(&hz, 1000.0, 0.5), "{hz}");
+    assert!(rate_ok(&hz, 1000.0, 0.6), "{hz}");
     assert_eq!(hz["publishers"], 1, "{hz}");
     let mean = hz["mean_interval_ms"].as_f64().expect("mean interval");
     assert!(hz["max_interval_ms"].as_f64().expect("max interval") >= mean);
@@ -253,7 +255,7 @@ fn list_hz_and_top_on_a_live_cell() {
         phri_ipc::ALL.len()
     );
     assert!(
-        rate_ok(&top["channels"]["robot/state"], 1000.0, 0.5),
+        rate_ok(&top["channels"]["robot/state"], 1000.0, 0.6),
         "{top}"
     );
     // top --once: the dashboard as text, without a terminal
