@@ -12,6 +12,7 @@
 
 #![deny(missing_docs)]
 
+pub mod avoidance;
 pub mod check;
 pub mod collaboration;
 pub mod control;
@@ -41,6 +42,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use toml::{Table, Value};
 
+pub use avoidance::{AvoidanceConfig, AvoidanceLaw};
 pub use collaboration::{
     CollaborationConfig, Facing, GestureConfig, OnRequest, SkeletonConfig, SkeletonSource,
 };
@@ -119,6 +121,8 @@ pub struct Config {
     pub control: ControlConfig,
     /// `[ssm]`: speed and separation monitoring (ISO/TS 15066 5.5.4)
     pub ssm: SsmConfig,
+    /// `[avoidance]`: the law that evades what perception sees (the paper's or a control-barrier filter)
+    pub avoidance: AvoidanceConfig,
     /// `[record]`: what the recorder keeps of the depth frames
     pub record: RecordConfig,
     /// `[skeleton]`: the people a camera sees
@@ -552,6 +556,7 @@ impl Config {
             "dynamics",
             "control",
             "ssm",
+            "avoidance",
             "record",
             "skeleton",
             "gesture",
@@ -719,6 +724,7 @@ impl Config {
         self.dynamics.validate()?;
         self.control.validate()?;
         self.ssm.validate()?;
+        self.avoidance.validate()?;
         self.record.validate()?;
         self.skeleton.validate()?;
         self.gesture.validate()?;

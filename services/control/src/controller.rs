@@ -231,6 +231,7 @@ impl Controller {
                 return Err(ControlError::NoControlPoints);
             }
             c.resolver.set_ssm(cfg.ssm.enabled.then_some(&cfg.ssm));
+            c.resolver.set_law(&cfg.avoidance)?;
             c.set_control_points(&cfg.repulsion.points)?;
         }
         if cfg.collaboration.enabled {
@@ -693,7 +694,15 @@ impl Controller {
                 protective_stop::step(&self.reference, q, qd, gains, &mut self.accel)
             }
             ControlMode::Task | ControlMode::Slow => {
-                let c = self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee);
+                // under the barrier filter the path waits as much as the
+                // filter holds the end effector back, not by its repulsion
+                let c = match self.resolver.cbf_law() {
+                    false => self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee),
+                    true => {
+                        let scale = s.speed_scale * self.resolver.path_scale();
+                        self.task.step(dt, scale, &Vector3::zeros(), &self.ee)
+                    }
+                };
                 self.counters.waypoints_reached = self.task.waypoints_reached();
                 self.task_x_d = c.x_d;
                 Behaviour::Cartesian(c)
@@ -752,6 +761,8 @@ impl Controller {
             ControlMode::Task | ControlMode::Slow | ControlMode::Recover
         )
         .then(|| self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s);
+        self.resolver
+            .set_perception_age(self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s);
         let faults: Faults = if with_perception {
             self.resolver
                 .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh, ssm)

@@ -37,6 +37,9 @@ pub enum ControlError {
     /// `[control] avoidance` without repulsion workers or control points
     #[error("repulsion.points: control.avoidance needs at least one control point (the first is the end effector)")]
     NoControlPoints,
+    /// the control-barrier filter's solver could not be set up (`[avoidance] law = "cbf"`)
+    #[error("avoidance.law = \"cbf\": the filter's solver: {0}")]
+    Solver(#[from] phri_qp::QpError),
 }
 
 /// A message the controller refuses as an input: the channel and field at fault.

@@ -31,6 +31,7 @@
 
 pub mod avoidance;
 pub mod body_task;
+pub mod cbf;
 pub mod clik;
 pub mod collab;
 pub mod controller;

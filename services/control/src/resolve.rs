@@ -12,6 +12,7 @@ use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
 use phri_model::{Data, Model};
 
 use crate::avoidance::Avoidance;
+use crate::cbf::{CbfCounters, CbfFilter};
 use crate::clik::{Clik, ClikGains};
 use crate::error::ControlError;
 use crate::inputs::PerceptionView;
@@ -27,6 +28,9 @@ const SSM_UNBOUNDED_M_S: f64 = 5.0;
 /// A point approaching its obstacle slower than this is not moving toward
 /// it, for counting violations [m/s].
 const SSM_MOVING_M_S: f64 = 0.01;
+
+/// The time constant of the path's pace under the barrier filter \[s\].
+const PATH_SCALE_FILTER_S: f64 = 0.05;
 
 /// What speed and separation monitoring did, counted over the run.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -170,6 +174,13 @@ pub struct Resolver {
     ssm_was_violating: bool,
     /// ... of the standard's S_p
     ssm_was_violating_standard: bool,
+    /// the control-barrier filter (`None`: the paper's law)
+    cbf: Option<CbfFilter>,
+    /// the perception results' age this period \[s\] (capture → command)
+    perception_age_s: f64,
+    /// the share of the task's end-effector velocity the filter let through
+    /// in the last period, 0-1 (1 under the paper's law)
+    path_scale: f64,
 }
 
 impl Resolver {
@@ -195,7 +206,42 @@ impl Resolver {
             ssm_period: SsmPeriod::default(),
             ssm_was_violating: false,
             ssm_was_violating_standard: false,
+            cbf: None,
+            perception_age_s: 0.0,
+            path_scale: 1.0,
         }
+    }
+
+    /// The avoidance law of `[avoidance]`: the paper's (eqs. 19-20, the
+    /// default) or the control-barrier filter ([`crate::cbf`]).
+    pub fn set_law(&mut self, cfg: &phri_config::AvoidanceConfig) -> Result<(), ControlError> {
+        self.cbf = match cfg.law {
+            phri_config::AvoidanceLaw::Paper => None,
+            phri_config::AvoidanceLaw::Cbf => Some(CbfFilter::new(self.avoidance.n(), cfg)?),
+        };
+        Ok(())
+    }
+
+    /// The control-barrier filter is the law.
+    pub fn cbf_law(&self) -> bool {
+        self.cbf.is_some()
+    }
+
+    /// What the control-barrier filter did so far (zeros under the paper's law).
+    pub fn cbf_counters(&self) -> CbfCounters {
+        self.cbf.as_ref().map(|f| f.counters()).unwrap_or_default()
+    }
+
+    /// The perception results' age this period \[s\] (the filter's d_s).
+    pub fn set_perception_age(&mut self, age_s: f64) {
+        self.perception_age_s = age_s;
+    }
+
+    /// The share of the task's end-effector velocity the last period let
+    /// through, 0-1: the path's time slows by it under the filter (1 under
+    /// the paper's law, whose path slows by its own rule).
+    pub fn path_scale(&self) -> f64 {
+        self.path_scale
     }
 
     /// The control points of the repulsion workers, in their configured
@@ -299,6 +345,7 @@ impl Resolver {
             vmax,
         );
         let model_errors = u64::from(step.is_err());
+        self.path_scale = 1.0;
         reference.qd_ref.copy_from_slice(self.clik.velocity());
         Faults {
             model: model_errors,
@@ -362,6 +409,10 @@ impl Resolver {
         };
         let was_violating = self.begin_ssm_period(ssm);
         let period = &mut self.ssm_period;
+        let d_s = self.cbf.as_mut().map_or(0.0, |f| {
+            f.begin();
+            f.config().safe_distance_m(self.perception_age_s)
+        });
         if let Some(v) = perception {
             if let Some(m) = self.ssm.as_mut() {
                 m.observe(&v);
@@ -386,24 +437,12 @@ impl Resolver {
                     .and_then(|(m, t_r)| {
                         approach_bound(m, k, p, *t_r, period).map(|b| (m, *t_r, b))
                     });
-                let (inside, inside_standard) = match bound {
-                    None => (false, false),
-                    Some((m, t_r, bound)) => {
-                        let jacs = (&self.jac_ee, &mut self.jac_point);
-                        match point_jac((model, data), (k, frame, xyz), jacs) {
-                            Some(j) => {
-                                let qd_ref = &reference.qd_ref;
-                                let a = Approach { k, p, t_r, qd_ref };
-                                let limits = (&mut self.avoidance, &mut *period, &mut faults);
-                                separate(m, &a, j, bound, limits)
-                            }
-                            None => {
-                                faults.model += 1;
-                                (false, false)
-                            }
-                        }
-                    }
-                };
+                let (inside, inside_standard) = bound.map_or((false, false), |(m, t_r, bound)| {
+                    let (jacs, qd_ref) = ((&self.jac_ee, &mut self.jac_point), &reference.qd_ref);
+                    let a = Approach { k, p, t_r, qd_ref };
+                    let limits = (&mut self.avoidance, &mut *period, &mut faults);
+                    separate_point(m, (model, data), (frame, xyz), &a, jacs, bound, limits)
+                });
                 // a violation: approaching inside S_p for longer than the
                 // stop takes (S_p grants it T_s)
                 if let Some((m, _)) = monitor.as_mut() {
@@ -414,6 +453,16 @@ impl Resolver {
                 };
                 *f += (target - *f) * alpha;
                 let v_call = *f;
+                if let Some(filter) = self.cbf.as_mut() {
+                    // the filter's barrier replaces eq. 19's and eq. 20's repulsion
+                    if p.active != 0 && !behind_the_hand {
+                        let v_h = monitor.as_ref().and_then(|(m, _)| m.measured_speed(k));
+                        let jacs = (&self.jac_ee, &mut self.jac_point);
+                        let at = (k, frame, xyz);
+                        faults.model += add_barrier(filter, (model, data), at, p, (d_s, v_h), jacs);
+                    }
+                    continue;
+                }
                 if v_call.norm() < 1e-6 {
                     continue;
                 }
@@ -500,22 +549,40 @@ impl Resolver {
             true => f64::INFINITY,
             false => cfg.reference_accel_limit * dt,
         };
-        match self
+        let solved = self
             .avoidance
             .solve(&self.jac_ee, &xdot_task, &v_ee, c.speed_scale)
-        {
-            Ok(out) => {
+            .map_err(|_| ())
+            .and_then(|out| {
                 self.task_scale = out.scale;
-                for (r, &target) in reference.qd_ref.iter_mut().zip(out.qd) {
+                match self.cbf.as_mut() {
+                    None => Ok(out.qd),
+                    Some(f) => {
+                        let qd = f
+                            .solve(&self.jac_ee, out.qd, (out.qd_min, out.qd_max))
+                            .map_err(|_| ())?;
+                        // low-passed: the path's pace follows the filter's
+                        // braking, not its period-to-period changes
+                        let r = let_through(&self.jac_ee, out.qd, qd);
+                        self.path_scale +=
+                            (r - self.path_scale) * (dt / PATH_SCALE_FILTER_S).min(1.0);
+                        Ok(qd)
+                    }
+                }
+            });
+        match solved {
+            Ok(qd) => {
+                for (r, &target) in reference.qd_ref.iter_mut().zip(qd) {
                     *r += (target - *r).clamp(-dv, dv);
                 }
                 if self.ssm_period.stopping {
                     reference.qd_ref_prev.copy_from_slice(&reference.qd_ref);
                 }
             }
-            Err(_) => {
+            Err(()) => {
                 failed = 1;
                 self.task_scale = 0.0;
+                self.path_scale = 0.0;
                 for r in reference.qd_ref.iter_mut() {
                     *r -= r.clamp(-dv, dv);
                 }
@@ -525,6 +592,46 @@ impl Resolver {
             *q += v * dt;
         }
         failed
+    }
+}
+
+/// Control point `k` (at `xyz` \[m\] of link frame `frame`, repulsion
+/// result `p`) as a barrier row of `filter`, kept `d_s` \[m\] clear with
+/// the person approaching at `v_h` \[m/s\] (none: unmeasured); 1 when the
+/// model refused its Jacobian.
+fn add_barrier(
+    filter: &mut CbfFilter,
+    (model, data): (&Model, &mut Data),
+    (k, frame, xyz): (usize, usize, Vector3<f64>),
+    p: &phri_ipc::PointRepulsion,
+    (d_s, v_h): (f64, Option<f64>),
+    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
+) -> u64 {
+    match point_jac((model, data), (k, frame, xyz), jacs) {
+        Some(j) => {
+            let away = away_from_obstacle(p);
+            filter.add_point(k, j, &away, p.min_distance, d_s, v_h.unwrap_or(0.0));
+            0
+        }
+        None => 1,
+    }
+}
+
+/// The share of the nominal end-effector velocity (at `qd_nom`) that the
+/// filtered `qd` keeps along it, 0-1 (1 when the nominal is at rest).
+fn let_through(jac_ee: &Matrix6xX<f64>, qd_nom: &[f64], qd: &[f64]) -> f64 {
+    let v = |qd: &[f64]| -> Vector3<f64> {
+        let mut v = Vector3::zeros();
+        for (j, &w) in qd.iter().enumerate() {
+            v += Vector3::new(jac_ee[(0, j)], jac_ee[(1, j)], jac_ee[(2, j)]) * w;
+        }
+        v
+    };
+    let (nom, got) = (v(qd_nom), v(qd));
+    let n2 = nom.norm_squared();
+    match n2 > 1e-6 {
+        true => (got.dot(&nom) / n2).clamp(0.0, 1.0),
+        false => 1.0,
     }
 }
 
@@ -660,6 +767,27 @@ fn separate(
         Err(_) => faults.avoidance += 1,
     }
     (inside, inside_standard)
+}
+
+/// [`separate`] for control point `a.k` at `xyz` \[m\] of link frame
+/// `frame`, its Jacobian computed first (a refusal counted in `faults`:
+/// then neither inside).
+fn separate_point(
+    m: &mut SsmMonitor,
+    (model, data): (&Model, &mut Data),
+    (frame, xyz): (usize, Vector3<f64>),
+    a: &Approach<'_>,
+    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
+    bound: (f64, Vector3<f64>),
+    (avoidance, period, faults): (&mut Avoidance, &mut SsmPeriod, &mut Faults),
+) -> (bool, bool) {
+    match point_jac((model, data), (a.k, frame, xyz), jacs) {
+        Some(j) => separate(m, a, j, bound, (avoidance, period, faults)),
+        None => {
+            faults.model += 1;
+            (false, false)
+        }
+    }
 }
 
 /// Power and force limiting: the end effector's velocity `task + v_ee`

@@ -170,6 +170,15 @@ impl SsmMonitor {
         *b
     }
 
+    /// The person's measured approach toward control point `k` \[m/s\]
+    /// (none when `[ssm] human_speed` is ISO 13855's, which measures nothing).
+    pub fn measured_speed(&self, k: usize) -> Option<f64> {
+        match self.cfg.human_speed {
+            HumanSpeed::Measured => self.v_h.get(k).copied(),
+            HumanSpeed::Iso13855 => None,
+        }
+    }
+
     /// The person's speed toward point `k` at clearance `d` \[m\] \[m/s\].
     pub fn human_speed(&self, k: usize, d: f64) -> f64 {
         match self.cfg.human_speed {

@@ -7,6 +7,7 @@ mod common;
 
 mod arms;
 mod avoidance_pace;
+mod barrier;
 mod collaboration_limits;
 mod control;
 mod controller_restart;
