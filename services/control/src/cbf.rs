@@ -7,9 +7,9 @@
 //!
 //! ```text
 //! minimise   ½ (q̇ − q̇_nom)ᵀ W (q̇ − q̇_nom),   W = w_t J_eeᵀ J_ee + I
-//!            + ρ σ + ½ σ²
-//! subject to nᵢᵀ Jᵢ q̇ + σ ≥ −γ (dᵢ − d_s) + v_h,i   (one row per control point)
-//!            q̇_min ≤ q̇ ≤ q̇_max,  σ ≥ 0               (joint limits, SSM, speed scale)
+//!            + Σᵢ (ρ σᵢ + ½ σᵢ²)
+//! subject to nᵢᵀ Jᵢ q̇ + σᵢ ≥ −γ (dᵢ − d_s) + v_h,i   (one row per control point)
+//!            q̇_min ≤ q̇ ≤ q̇_max,  σᵢ ≥ 0              (joint limits, SSM, speed scale)
 //! ```
 //!
 //! `nᵢ` is the unit direction from the obstacle to the point, `Jᵢ` the
@@ -19,9 +19,9 @@
 //! an obstacle costs nothing; only the approach is braked, and with
 //! `w_t ≫ 1` the null space gives way before the end effector does.
 //!
-//! σ is one slack shared by every row, priced linearly at ρ
-//! ([`SLACK_PRICE`]): an exact penalty, so σ = 0 whenever the barriers can
-//! be kept, and where they cannot (an arm between a person's torso and a
+//! σᵢ is row i's slack, priced linearly at ρ ([`SLACK_PRICE`]): an exact
+//! penalty, so every σᵢ = 0 whenever the barriers can be kept, and where
+//! they cannot, only the rows that cannot be kept give (an arm between a person's torso and a
 //! hand reaching in, or a retreat faster than the joints allow) the
 //! solution still moves every point away as well as it can instead of
 //! freezing between them. Such periods are counted
@@ -66,11 +66,13 @@ pub struct CbfFilter {
     cfg: AvoidanceConfig,
     n: usize,
     ws: Workspace,
-    /// H over (q̇, σ): W and 1, (n+1)×(n+1) row-major
+    /// the rows' −nᵢᵀJᵢ, MAX_ROWS×n row-major
+    a: Vec<f64>,
+    /// H over (q̇, σ₁…σₘ): W and 1s, row-major
     h: Vec<f64>,
-    /// (−W q̇_nom, ρ)
+    /// (−W q̇_nom, ρ…ρ)
     g: Vec<f64>,
-    /// the rows' [−nᵢᵀJᵢ, −1] over (q̇, σ), MAX_ROWS×(n+1) row-major
+    /// the rows over (q̇, σ): [−nᵢᵀJᵢ, −eᵢ], row-major
     c: Vec<f64>,
     /// the bounds over (q̇, σ)
     lo: Vec<f64>,
@@ -92,12 +94,13 @@ impl CbfFilter {
         Ok(CbfFilter {
             cfg: cfg.clone(),
             n,
-            ws: Workspace::new(n + 1, MAX_ROWS, Settings::default())?,
-            h: vec![0.0; (n + 1) * (n + 1)],
-            g: vec![0.0; n + 1],
-            c: vec![0.0; MAX_ROWS * (n + 1)],
-            lo: vec![0.0; n + 1],
-            hi: vec![0.0; n + 1],
+            ws: Workspace::new(n + MAX_ROWS, MAX_ROWS, Settings::default())?,
+            a: vec![0.0; MAX_ROWS * n],
+            h: vec![0.0; (n + MAX_ROWS) * (n + MAX_ROWS)],
+            g: vec![0.0; n + MAX_ROWS],
+            c: vec![0.0; MAX_ROWS * (n + MAX_ROWS)],
+            lo: vec![0.0; n + MAX_ROWS],
+            hi: vec![0.0; n + MAX_ROWS],
             d: vec![0.0; MAX_ROWS],
             rows: 0,
             points: 0,
@@ -138,18 +141,17 @@ impl CbfFilter {
         d_s: f64,
         v_h: f64,
     ) -> bool {
-        let (n, m) = (self.n, self.n + 1);
+        let n = self.n;
         if self.rows >= MAX_ROWS || jac.ncols() != n || !(d.is_finite() && d_s.is_finite()) {
             return false;
         }
-        let row = &mut self.c[self.rows * m..(self.rows + 1) * m];
-        for (j, r) in row[..n].iter_mut().enumerate() {
+        let row = &mut self.a[self.rows * n..(self.rows + 1) * n];
+        for (j, r) in row.iter_mut().enumerate() {
             *r = -(away.x * jac[(0, j)] + away.y * jac[(1, j)] + away.z * jac[(2, j)]);
         }
-        if !row[..n].iter().all(|x| x.is_finite()) || row[..n].iter().all(|&x| x == 0.0) {
+        if !row.iter().all(|x| x.is_finite()) || row.iter().all(|&x| x == 0.0) {
             return false;
         }
-        row[n] = -1.0;
         self.d[self.rows] = self.cfg.gamma * (d - d_s) - v_h.max(0.0);
         self.rows += 1;
         if k < 64 {
@@ -175,38 +177,49 @@ impl CbfFilter {
             self.points_before = 0;
             return Ok(&self.qd);
         }
-        let (w, m) = (self.cfg.task_weight, n + 1);
-        self.h.fill(0.0);
+        // variables: the n joint velocities, then one slack per row
+        let (w, rows) = (self.cfg.task_weight, self.rows);
+        let m = n + rows;
+        self.h[..m * m].fill(0.0);
         for i in 0..n {
             for j in 0..n {
                 let jj: f64 = (0..3).map(|r| jac_ee[(r, i)] * jac_ee[(r, j)]).sum();
                 self.h[i * m + j] = w * jj + if i == j { 1.0 } else { 0.0 };
             }
         }
-        self.h[n * m + n] = 1.0;
+        for i in n..m {
+            self.h[i * m + i] = 1.0;
+        }
         for i in 0..n {
             self.g[i] = -(0..n).map(|j| self.h[i * m + j] * qd_nom[j]).sum::<f64>();
         }
-        self.g[n] = SLACK_PRICE;
+        self.g[n..m].fill(SLACK_PRICE);
+        self.c[..rows * m].fill(0.0);
+        for r in 0..rows {
+            self.c[r * m..r * m + n].copy_from_slice(&self.a[r * n..(r + 1) * n]);
+            self.c[r * m + n + r] = -1.0;
+        }
         self.lo[..n].copy_from_slice(lo);
         self.hi[..n].copy_from_slice(hi);
-        (self.lo[n], self.hi[n]) = (0.0, f64::INFINITY);
+        self.lo[n..m].fill(0.0);
+        self.hi[n..m].fill(f64::INFINITY);
         let start = match self.points == self.points_before {
             true => Start::Warm,
             false => Start::Cold,
         };
         let p = Problem {
             n: m,
-            h: &self.h,
-            g: &self.g,
-            c: &self.c[..self.rows * m],
-            d: &self.d[..self.rows],
-            bounds: Some((&self.lo, &self.hi)),
+            h: &self.h[..m * m],
+            g: &self.g[..m],
+            c: &self.c[..rows * m],
+            d: &self.d[..rows],
+            bounds: Some((&self.lo[..m], &self.hi[..m])),
         };
         match phri_qp::solve(&mut self.ws, &p, start) {
             Ok(s) => {
                 self.qd.copy_from_slice(&s.x[..n]);
-                self.counters.slack_periods += u64::from(s.x[n] > SLACK_NEEDED_M_S);
+                let slack = s.x[n..m].iter().any(|&x| x > SLACK_NEEDED_M_S);
+                self.counters.slack_periods += u64::from(slack);
                 let braking = s.active.iter().any(|&r| r < self.rows);
                 self.counters.braking_periods += u64::from(braking);
                 self.counters.max_iterations =

@@ -875,6 +875,13 @@ impl Controller {
         &self.counters
     }
 
+    /// What the control-barrier filter did so far (none under the paper's law).
+    pub fn cbf_counters(&self) -> Option<crate::cbf::CbfCounters> {
+        self.resolver
+            .cbf_law()
+            .then(|| self.resolver.cbf_counters())
+    }
+
     /// What speed and separation monitoring did so far.
     pub fn ssm_counters(&self) -> crate::resolve::SsmCounters {
         self.resolver.ssm_counters()

@@ -605,6 +605,15 @@ impl Cell {
     /// The run so far.
     pub fn summary(&self) -> CellSummary {
         let mut s = self.summary.summary(&self.sim, self.in_charge().counters());
+        if let Some(b) = self.in_charge().cbf_counters() {
+            let dt = self.link.period_ns() as f64 * 1e-9;
+            s.barrier = Some(summary::BarrierSummary {
+                braking_s: b.braking_periods as f64 * dt,
+                slack_s: b.slack_periods as f64 * dt,
+                failed_periods: b.infeasible_periods,
+                max_iterations: b.max_iterations,
+            });
+        }
         if self.pair.is_some() {
             let c = self.link.commanders();
             s.standby = Some(summary::StandbySummary {

@@ -55,6 +55,22 @@ pub struct CellSummary {
     pub ssm_violations: u64,
     /// the hot standby (null without it)
     pub standby: Option<StandbySummary>,
+    /// the control-barrier filter (`[avoidance] law = "cbf"`; null under the paper's law)
+    pub barrier: Option<BarrierSummary>,
+}
+
+/// What the control-barrier filter did in a lock-step run (the controller in charge's).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct BarrierSummary {
+    /// periods in which some barrier bound the motion \[s\]
+    pub braking_s: f64,
+    /// periods in which some barrier could not be kept within the joints'
+    /// bounds (its slack moved the point away as well as it could) \[s\]
+    pub slack_s: f64,
+    /// periods its solver failed (the reference braked to rest)
+    pub failed_periods: u64,
+    /// the most active-set changes of one solve
+    pub max_iterations: u64,
 }
 
 /// The hot standby's figures in a lock-step run (the robot link's).
