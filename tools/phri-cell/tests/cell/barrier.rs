@@ -16,35 +16,42 @@ fn at(offset: f64) -> CellOptions {
     }
 }
 
+/// `coexistence` for `seconds` under both laws with `opts`: the filter
+/// touches no one, the person came near (not vacuous) and no nearer than
+/// 3 cm; (the filter's waypoints, the paper's).
+fn both_laws(opts: &CellOptions, seconds: f64) -> (u64, u64) {
+    let offset = opts.human_time_offset_s;
+    let cbf = run("coexistence", seconds, opts, &[CBF]);
+    let paper = run("coexistence", seconds, opts, &[]);
+    eprintln!(
+        "offset {offset}: cbf {} waypoints, closest {:.3} m; paper {} waypoints, closest {:.3} m",
+        cbf.waypoints, cbf.min_distance_m, paper.waypoints, paper.min_distance_m
+    );
+    assert_eq!(
+        cbf.unintended_contacts, 0,
+        "offset {offset}: {:?}",
+        cbf.contacts
+    );
+    assert!(
+        cbf.min_distance_m < 0.15,
+        "offset {offset}: the person stayed {:.3} m away",
+        cbf.min_distance_m
+    );
+    assert!(
+        cbf.min_distance_m >= 0.03,
+        "offset {offset}: closest {:.3} m",
+        cbf.min_distance_m
+    );
+    (cbf.waypoints, paper.waypoints)
+}
+
 #[test]
 fn beside_a_person_seen_by_the_camera_the_barrier_filter_touches_no_one() {
     for offset in [0.0, -2.0] {
-        let cbf = run("coexistence", 30.0, &at(offset), &[CBF]);
-        let paper = run("coexistence", 30.0, &at(offset), &[]);
-        eprintln!(
-            "offset {offset}: cbf {} waypoints, closest {:.3} m; paper {} waypoints, closest {:.3} m",
-            cbf.waypoints, cbf.min_distance_m, paper.waypoints, paper.min_distance_m
-        );
-        assert_eq!(
-            cbf.unintended_contacts, 0,
-            "offset {offset}: {:?}",
-            cbf.contacts
-        );
+        let (cbf, paper) = both_laws(&at(offset), 30.0);
         assert!(
-            cbf.min_distance_m < 0.15,
-            "offset {offset}: the person stayed {:.3} m away",
-            cbf.min_distance_m
-        );
-        assert!(
-            cbf.min_distance_m >= 0.03,
-            "offset {offset}: closest {:.3} m",
-            cbf.min_distance_m
-        );
-        assert!(
-            cbf.waypoints >= paper.waypoints,
-            "offset {offset}: cbf {} waypoints, paper {}",
-            cbf.waypoints,
-            paper.waypoints
+            cbf >= paper,
+            "offset {offset}: cbf {cbf} waypoints, paper {paper}"
         );
     }
 }
@@ -60,33 +67,10 @@ fn with_perception_that_hides_nothing_the_barrier_filter_keeps_more_of_the_task_
             truth_perception: true,
             ..at(offset)
         };
-        let cbf = run("coexistence", 60.0, &opts, &[CBF]);
-        let paper = run("coexistence", 60.0, &opts, &[]);
-        eprintln!(
-            "offset {offset}: cbf {} waypoints, closest {:.3} m; paper {} waypoints, closest {:.3} m",
-            cbf.waypoints, cbf.min_distance_m, paper.waypoints, paper.min_distance_m
-        );
-        assert_eq!(
-            cbf.unintended_contacts, 0,
-            "offset {offset}: {:?}",
-            cbf.contacts
-        );
-        // not vacuous: the person came near the arm
+        let (cbf, paper) = both_laws(&opts, 60.0);
         assert!(
-            cbf.min_distance_m < 0.15,
-            "offset {offset}: the person stayed {:.3} m away",
-            cbf.min_distance_m
-        );
-        assert!(
-            cbf.min_distance_m >= 0.03,
-            "offset {offset}: closest {:.3} m",
-            cbf.min_distance_m
-        );
-        assert!(
-            cbf.waypoints > paper.waypoints,
-            "offset {offset}: cbf {} waypoints, paper {}",
-            cbf.waypoints,
-            paper.waypoints
+            cbf > paper,
+            "offset {offset}: cbf {cbf} waypoints, paper {paper}"
         );
     }
 }
