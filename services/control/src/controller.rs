@@ -754,15 +754,16 @@ impl Controller {
         fresh: Option<PerceptionView<'_>>,
     ) {
         let (model, data, rf, cfg) = (&self.model, &mut self.data, &mut self.reference, &self.cfg);
-        // speed and separation monitoring outside the collaboration, on the
-        // perception's age now (capture → this command)
+        // the perception's age now (capture → this command) [s]: the
+        // barrier filter's d_s, and speed and separation monitoring's T_r
+        // outside the collaboration
+        let age_s = self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s;
         let ssm = matches!(
             self.mode,
             ControlMode::Task | ControlMode::Slow | ControlMode::Recover
         )
-        .then(|| self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s);
-        self.resolver
-            .set_perception_age(self.safety.perception_age_ns as f64 * 1e-9 + self.params.period_s);
+        .then_some(age_s);
+        self.resolver.set_perception_age(age_s);
         let faults: Faults = if with_perception {
             self.resolver
                 .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh, ssm)

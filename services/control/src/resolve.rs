@@ -7,7 +7,7 @@
 //! obstacle in the task's null space; without perception, CLIK with a
 //! null-space posture.
 
-use nalgebra::{Matrix6xX, Vector3};
+use nalgebra::{DVectorView, Matrix6xX, Vector3};
 use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
 use phri_model::{Data, Model};
 
@@ -620,12 +620,9 @@ fn add_barrier(
 /// The share of the nominal end-effector velocity (at `qd_nom`) that the
 /// filtered `qd` keeps along it, 0-1 (1 when the nominal is at rest).
 fn let_through(jac_ee: &Matrix6xX<f64>, qd_nom: &[f64], qd: &[f64]) -> f64 {
+    // the linear rows times the joint velocities: a Vector3 on the stack
     let v = |qd: &[f64]| -> Vector3<f64> {
-        let mut v = Vector3::zeros();
-        for (j, &w) in qd.iter().enumerate() {
-            v += Vector3::new(jac_ee[(0, j)], jac_ee[(1, j)], jac_ee[(2, j)]) * w;
-        }
-        v
+        jac_ee.fixed_rows::<3>(0) * DVectorView::from_slice(qd, qd.len())
     };
     let (nom, got) = (v(qd_nom), v(qd));
     let n2 = nom.norm_squared();

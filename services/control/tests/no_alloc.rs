@@ -52,14 +52,23 @@ const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
 
 #[test]
 fn the_control_period_allocates_nothing_in_any_mode() {
-    for reaction in [
+    for (i, reaction) in [
         Reaction::Reflex,
         Reaction::Admittance,
         Reaction::Float,
         Reaction::Retreat,
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let mut cfg = Config::defaults();
         cfg.control.reaction = reaction;
+        // both avoidance laws, each through every mode: the paper's, and
+        // the control-barrier filter with its QP
+        let cbf = i % 2 == 1;
+        if cbf {
+            cfg.avoidance.law = phri_config::AvoidanceLaw::Cbf;
+        }
         // speed and separation monitoring on the 1 kHz path too, its
         // intrusion distance such that it bounds every point's approach
         cfg.ssm.enabled = true;
@@ -244,6 +253,14 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             "{reaction:?}: the monitor never bounded"
         );
         assert_eq!(ctl.counters().avoidance_errors, 0);
+        if cbf {
+            // not vacuous: the QP ran (it runs only with barrier rows)
+            let b = ctl.cbf_counters().expect("the barrier filter is the law");
+            assert!(
+                b.max_iterations > 0,
+                "{reaction:?}: the QP never ran: {b:?}"
+            );
+        }
     }
 }
 
