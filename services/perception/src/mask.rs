@@ -63,8 +63,103 @@ fn to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     (p - (a + ab * s)).norm()
 }
 
+/// An image window: columns `u0..=u1`, rows `v0..=v1` \[px\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Window {
+    u0: usize,
+    v0: usize,
+    u1: usize,
+    v1: usize,
+}
+
+/// The image window that every sphere of `spheres` (centre \[m\], base
+/// frame; radius \[m\]) projects into, clipped to the image (`None`: none
+/// is in front of the camera).
+fn window(k: &Intrinsics, pose: &CameraPose, spheres: &[(Vector3<f64>, f64)]) -> Option<Window> {
+    let mut w = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for &(p, r) in spheres {
+        let Some(px) = pose.project(k, &Point3::from(p)) else {
+            continue;
+        };
+        let grow = k.fx * r / (px.depth - r).max(0.1);
+        w = [
+            w[0].min(px.px - grow),
+            w[1].min(px.py - grow),
+            w[2].max(px.px + grow),
+            w[3].max(px.py + grow),
+        ];
+    }
+    w[0].is_finite().then(|| Window {
+        u0: w[0].floor().max(0.0) as usize,
+        v0: w[1].floor().max(0.0) as usize,
+        u1: (w[2].ceil().max(0.0) as usize).min((k.width as usize).saturating_sub(1)),
+        v1: (w[3].ceil().max(0.0) as usize).min((k.height as usize).saturating_sub(1)),
+    })
+}
+
+/// Each pixel of `win` with a reading: its 3-D point \[m\], base frame,
+/// and its depth \[mm\] to change.
+fn for_each_point(
+    k: &Intrinsics,
+    pose: &CameraPose,
+    depth: &mut [u16],
+    win: Window,
+    mut f: impl FnMut(Vector3<f64>, &mut u16),
+) {
+    let w = k.width as usize;
+    for v in win.v0..=win.v1 {
+        for u in win.u0..=win.u1 {
+            let d = &mut depth[v * w + u];
+            if *d == 0 {
+                continue;
+            }
+            let p = pose
+                .back_project(k, u as f64, v as f64, *d as f64 * 1e-3)
+                .coords;
+            f(p, d);
+        }
+    }
+}
+
+/// The hand refined from the points of `depth` within
+/// `refine_radius_m` of the tracked hand of `mask`: their centre, pushed
+/// back along their mean viewing ray by two thirds of the hand's radius
+/// (`None`: too few points).
+fn refine(
+    k: &Intrinsics,
+    pose: &CameraPose,
+    mask: &HandMask,
+    depth: &mut [u16],
+) -> Option<[f64; 3]> {
+    let hand = Vector3::from(mask.hand);
+    let win = window(k, pose, &[(hand, mask.refine_radius_m)])?;
+    let camera = pose.position().coords;
+    let (mut sum, mut rays, mut count) = (Vector3::zeros(), Vector3::zeros(), 0usize);
+    for_each_point(k, pose, depth, win, |p, _| {
+        if (p - hand).norm() <= mask.refine_radius_m {
+            sum += p;
+            rays += (p - camera).normalize();
+            count += 1;
+        }
+    });
+    (count >= MIN_REFINE_POINTS).then(|| {
+        let centre = sum / count as f64 + rays.normalize() * (mask.hand_radius_m * 2.0 / 3.0);
+        [centre.x, centre.y, centre.z]
+    })
+}
+
 /// Remove the region of `mask` from `depth` (millimetres, row-major, the
-/// camera `k` at `pose`), and refine the hand from what was there.
+/// camera `k` at `pose`), and refine the hand from what was there. The
+/// region is the sphere around the tracked hand and the capsule from it
+/// toward the elbow, and the sphere around the refined hand too: a
+/// tracker centimetres off (the simulated one's hand errs by up to 9 cm
+/// along the view) left the hand's near side, the side the robot comes
+/// to, in the frame, where it repelled the approach it was asked for.
 pub fn apply(k: &Intrinsics, pose: &CameraPose, mask: &HandMask, depth: &mut [u16]) -> Masked {
     let (w, h) = (k.width as usize, k.height as usize);
     let hand = Vector3::from(mask.hand);
@@ -82,59 +177,19 @@ pub fn apply(k: &Intrinsics, pose: &CameraPose, mask: &HandMask, depth: &mut [u1
         }
         _ => hand,
     };
-    // the window: both ends projected, grown by the radius in pixels at their depth
-    let mut window = (
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for p in [hand, tip] {
-        let Some(px) = pose.project(k, &Point3::from(p)) else {
-            continue;
-        };
-        let grow =
-            k.fx * (mask.radius_m.max(mask.refine_radius_m)) / (px.depth - mask.radius_m).max(0.1);
-        window.0 = window.0.min(px.px - grow);
-        window.1 = window.1.min(px.py - grow);
-        window.2 = window.2.max(px.px + grow);
-        window.3 = window.3.max(px.py + grow);
-    }
-    if !window.0.is_finite() {
-        return Masked::default();
-    }
-    let u0 = window.0.floor().max(0.0) as usize;
-    let v0 = window.1.floor().max(0.0) as usize;
-    let u1 = (window.2.ceil().max(0.0) as usize).min(w.saturating_sub(1));
-    let v1 = (window.3.ceil().max(0.0) as usize).min(h.saturating_sub(1));
-    let camera = pose.position().coords;
-    let (mut removed, mut count) = (0u32, 0usize);
-    let (mut sum, mut rays) = (Vector3::zeros(), Vector3::zeros());
-    for v in v0..=v1 {
-        for u in u0..=u1 {
-            let d = &mut depth[v * w + u];
-            if *d == 0 {
-                continue;
-            }
-            let p = pose
-                .back_project(k, u as f64, v as f64, *d as f64 * 1e-3)
-                .coords;
-            if (p - hand).norm() <= mask.refine_radius_m {
-                sum += p;
-                rays += (p - camera).normalize();
-                count += 1;
-            }
-            if to_segment(&p, &hand, &tip) <= mask.radius_m {
-                *d = 0;
-                removed += 1;
-            }
+    let refined = refine(k, pose, mask, depth);
+    let r = mask.radius_m;
+    // the refined hand's sphere (none: the tracked hand's again)
+    let near = refined.map_or(hand, Vector3::from);
+    let Some(win) = window(k, pose, &[(hand, r), (tip, r), (near, r)]) else {
+        return Masked { pixels: 0, refined };
+    };
+    let mut removed = 0u32;
+    for_each_point(k, pose, depth, win, |p, d| {
+        if to_segment(&p, &hand, &tip) <= r || (p - near).norm() <= r {
+            *d = 0;
+            removed += 1;
         }
-    }
-    let refined = (count >= MIN_REFINE_POINTS).then(|| {
-        let centre = sum / count as f64;
-        let back = rays.normalize() * (mask.hand_radius_m * 2.0 / 3.0);
-        let r = centre + back;
-        [r.x, r.y, r.z]
     });
     Masked {
         pixels: removed,
@@ -318,6 +373,38 @@ mod tests {
             (r - Vector3::from(right)).norm() < 0.015,
             "refined {r} vs {right:?}"
         );
+    }
+
+    #[test]
+    fn a_tracker_far_off_still_leaves_nothing_of_the_hand() {
+        // the tracked hand 9 cm beyond the hand along the camera's view,
+        // and 3 cm aside: the hand's near side lies outside the tracked
+        // sphere, inside the refined one
+        let right = Vector3::new(0.6, 0.3, 0.3);
+        let ball = |c: Vector3<f64>| Capsule::new(Point3::from(c), Point3::from(c), 0.045);
+        let (k, pose, mut depth) = scene(&[ball(right)]);
+        let view = (right - pose.position().coords).normalize();
+        let aside = view.cross(&Vector3::z()).normalize();
+        let tracked = right + view * 0.09 + aside * 0.03;
+        let mask = HandMask {
+            hand: [tracked.x, tracked.y, tracked.z],
+            elbow: None,
+            radius_m: 0.12,
+            forearm_m: 0.0,
+            refine_radius_m: 0.12,
+            hand_radius_m: 0.045,
+        };
+        // the tracked sphere alone would leave some of the hand
+        let mut outside = 0;
+        let all = window(&k, &pose, &[(right, 0.05)]).unwrap();
+        for_each_point(&k, &pose, &mut depth.clone(), all, |p, _| {
+            outside += usize::from((p - tracked).norm() > 0.12);
+        });
+        assert!(outside > 20, "{outside} pixels outside the tracked sphere");
+        let m = apply(&k, &pose, &mask, &mut depth);
+        assert!(depth.iter().all(|&d| d == 0), "{m:?}");
+        let r = Vector3::from(m.refined.expect("refined"));
+        assert!((r - right).norm() < 0.06, "refined {r} vs {right}");
     }
 
     #[test]
