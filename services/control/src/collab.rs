@@ -6,7 +6,7 @@
 //! | from | to | when |
 //! | --- | --- | --- |
 //! | idle | approach | a `begin`/`follow` request for a well-tracked hand, the robot neither reacting nor stopped |
-//! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within `slow_down_m` |
+//! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within [`FORCE_TOUCH_GAP_M`] |
 //! | contact | follow | the hand `follow_gap_m` farther than where it last pressed (‖F̂‖ ≥ `contact_force_n`) and ‖F̂‖ below `release_force_n`, both for `release_s` without a break |
 //! | follow | contact | as approach → contact |
 //! | approach, contact, follow | back off | ‖F̂‖ above the force limit |
@@ -23,6 +23,13 @@ use phri_config::CollaborationConfig;
 use phri_ipc::{CollabPart, CollabPhase, CollabReason, HriRequest, RequestKind};
 
 use crate::snapshot::snapshot_fields;
+
+/// A force counts as the touch only with the hand's surface this near \[m\]:
+/// depth places the hand to a few centimetres, and the residual of an arm
+/// approaching at `approach_speed` reads 4-5 N by itself (the FR3's, 22 cm
+/// from the hand on the depth trackers, was taken for a touch that never
+/// came, and the contact phase held there).
+pub const FORCE_TOUCH_GAP_M: f64 = 0.1;
 
 /// Least time in contact before the hand counts as moved away \[s\]: a
 /// contact is a touch, not one noisy sample.
@@ -342,7 +349,7 @@ impl CollabMachine {
         // it with the contact's hold would crush it)
         let touching = obs.gap_m <= self.cfg.contact_gap_m
             || (obs.force_n >= self.cfg.contact_force_n
-                && obs.gap_m <= self.cfg.slow_down_m
+                && obs.gap_m <= FORCE_TOUCH_GAP_M.min(self.cfg.slow_down_m)
                 && !obs.other_touch);
         match self.phase {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
