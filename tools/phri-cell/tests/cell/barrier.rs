@@ -94,3 +94,41 @@ fn a_hand_moving_into_the_elbow_is_evaded_under_the_barrier_filter() {
     }
     assert!(closest < 0.12, "the person stayed {closest:.3} m away");
 }
+
+/// A hand resting at the waypoint P2 (`hand-at-waypoint`, 11-23 s), seen
+/// by the camera, on each arm: the filter waits beside it or goes round it,
+/// never touches it, and the path goes on once the hand has gone. (The
+/// paper's law with perception that hides nothing touches the hand arriving
+/// on the FR3 and the Panda: BENCHMARKS.)
+#[test]
+fn a_hand_resting_at_a_waypoint_is_never_touched_and_the_task_resumes_when_it_leaves() {
+    for robot in ["lwr4", "fr3", "panda"] {
+        let arm = format!("robot.name=\"{robot}\"");
+        let mut c = crate::common::cell("hand-at-waypoint", &at(0.0), &[CBF, arm.as_str()]);
+        // the hand is gone at 24 s, the person steps back by 25 s
+        for _ in 0..25_000 {
+            c.tick().unwrap();
+        }
+        let during = c.summary();
+        for _ in 0..10_000 {
+            c.tick().unwrap();
+        }
+        let s = c.summary();
+        eprintln!(
+            "{robot}: closest {:.3} m at {:.1} s; {} waypoints by 25 s, {} by 35 s",
+            s.min_distance_m, s.min_distance_t_s, during.waypoints, s.waypoints
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        assert!(
+            s.min_distance_m < 0.25,
+            "{robot}: the hand stayed {:.3} m away",
+            s.min_distance_m
+        );
+        assert!(
+            s.waypoints >= during.waypoints + 3,
+            "{robot}: {} waypoints by 25 s, {} by 35 s",
+            during.waypoints,
+            s.waypoints
+        );
+    }
+}
