@@ -13,6 +13,8 @@
 //!
 //! Only the image window the region projects into is visited.
 
+use std::cell::Cell;
+
 use nalgebra::{Point3, Vector3};
 use phri_config::CollaborationConfig;
 use phri_depth::{CameraPose, Intrinsics};
@@ -103,23 +105,22 @@ fn window(k: &Intrinsics, pose: &CameraPose, spheres: &[(Vector3<f64>, f64)]) ->
 }
 
 /// Each pixel of `win` with a reading: its 3-D point \[m\], base frame,
-/// and its depth \[mm\] to change.
+/// and its depth \[mm\] (a cell: the removal clears it).
 fn for_each_point(
     k: &Intrinsics,
     pose: &CameraPose,
-    depth: &mut [u16],
+    depth: &[Cell<u16>],
     win: Window,
-    mut f: impl FnMut(Vector3<f64>, &mut u16),
+    mut f: impl FnMut(Vector3<f64>, &Cell<u16>),
 ) {
     let w = k.width as usize;
     for v in win.v0..=win.v1 {
         for u in win.u0..=win.u1 {
-            let d = &mut depth[v * w + u];
-            if *d == 0 {
+            let Some(d) = depth.get(v * w + u).filter(|d| d.get() != 0) else {
                 continue;
-            }
+            };
             let p = pose
-                .back_project(k, u as f64, v as f64, *d as f64 * 1e-3)
+                .back_project(k, u as f64, v as f64, d.get() as f64 * 1e-3)
                 .coords;
             f(p, d);
         }
@@ -134,7 +135,7 @@ fn refine(
     k: &Intrinsics,
     pose: &CameraPose,
     mask: &HandMask,
-    depth: &mut [u16],
+    depth: &[Cell<u16>],
 ) -> Option<[f64; 3]> {
     let hand = Vector3::from(mask.hand);
     let win = window(k, pose, &[(hand, mask.refine_radius_m)])?;
@@ -177,6 +178,7 @@ pub fn apply(k: &Intrinsics, pose: &CameraPose, mask: &HandMask, depth: &mut [u1
         }
         _ => hand,
     };
+    let depth = Cell::from_mut(depth).as_slice_of_cells();
     let refined = refine(k, pose, mask, depth);
     let r = mask.radius_m;
     // the refined hand's sphere (none: the tracked hand's again)
@@ -187,7 +189,7 @@ pub fn apply(k: &Intrinsics, pose: &CameraPose, mask: &HandMask, depth: &mut [u1
     let mut removed = 0u32;
     for_each_point(k, pose, depth, win, |p, d| {
         if to_segment(&p, &hand, &tip) <= r || (p - near).norm() <= r {
-            *d = 0;
+            d.set(0);
             removed += 1;
         }
     });
@@ -397,7 +399,8 @@ mod tests {
         // the tracked sphere alone would leave some of the hand
         let mut outside = 0;
         let all = window(&k, &pose, &[(right, 0.05)]).unwrap();
-        for_each_point(&k, &pose, &mut depth.clone(), all, |p, _| {
+        let cells = depth.iter().copied().map(Cell::new).collect::<Vec<_>>();
+        for_each_point(&k, &pose, &cells, all, |p, _| {
             outside += usize::from((p - tracked).norm() > 0.12);
         });
         assert!(outside > 20, "{outside} pixels outside the tracked sphere");
