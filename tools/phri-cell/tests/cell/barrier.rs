@@ -161,3 +161,25 @@ fn a_hand_thrust_into_the_path_at_1_m_s_is_never_touched() {
         }
     }
 }
+
+/// A hand held still on the path between P1 and P2 (`hand-on-path`),
+/// seen by the camera, on each arm: the filter stops short of it or goes
+/// round it and touches nothing. (The paper's law touches it on the Panda:
+/// BENCHMARKS.)
+#[test]
+fn a_hand_held_on_the_path_is_never_touched() {
+    for robot in ["lwr4", "fr3", "panda"] {
+        let arm = format!("robot.name=\"{robot}\"");
+        let s = run("hand-on-path", 24.0, &at(0.0), &[CBF, arm.as_str()]);
+        eprintln!(
+            "{robot}: closest {:.3} m at {:.2} s, {} waypoints",
+            s.min_distance_m, s.min_distance_t_s, s.waypoints
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        assert!(
+            s.min_distance_m < 0.15,
+            "{robot}: the hand stayed {:.3} m away",
+            s.min_distance_m
+        );
+    }
+}
