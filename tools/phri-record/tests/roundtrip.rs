@@ -121,6 +121,8 @@ fn record_read_back_and_plot() {
     let mut last_state_t = 0u64;
     // robot/state's sequence numbers as recorded
     let mut state_seqs: Vec<u64> = Vec::new();
+    // robot/stats' robot cycles as recorded
+    let mut stats_cycles: Vec<u64> = Vec::new();
     // the scene's topics: schema name, schema encoding, message encoding; a message of each
     let mut scene: BTreeMap<String, (String, String, String)> = BTreeMap::new();
     let mut scene_last: BTreeMap<String, Vec<u8>> = BTreeMap::new();
@@ -176,6 +178,9 @@ fn record_read_back_and_plot() {
                 m.sequence,
                 v["data"].as_str().expect("base64 data").to_string(),
             );
+        }
+        if topic == phri_ipc::ROBOT_STATS.name {
+            stats_cycles.push(v["cycles"].as_u64().expect("robot/stats cycles"));
         }
         if topic == phri_ipc::ROBOT_STATE.name {
             state_seqs.push(v["seq"].as_u64().expect("robot/state seq"));
@@ -240,12 +245,22 @@ fn record_read_back_and_plot() {
     }
     assert!(counts["perception/depth"] >= 5);
     // the robot's statistics every 100 of its periods (`STATS_EVERY`), by
-    // its own clock: as many as the states recorded allow, one at either end
-    // in flight
-    let stats = counts["robot/stats"];
+    // its own clock, none lost: as many inside the states' span (state n is
+    // the robot's cycle n) as it holds, one at either end in flight; the
+    // recorder may also hold one from before the first state it recorded
+    // (its subscriptions open one after another)
+    let inside = stats_cycles
+        .iter()
+        .filter(|&&c| c >= first && c <= last)
+        .count() as u64;
     assert!(
-        stats + 2 >= state / 100 && stats <= state / 100 + 2,
-        "robot/stats: {stats} messages beside robot/state's {state}"
+        stats_cycles.windows(2).all(|w| w[1] == w[0] + 100),
+        "robot/stats: cycles {stats_cycles:?}"
+    );
+    assert!(
+        inside + 1 >= (last - first) / 100 && inside <= (last - first) / 100 + 1,
+        "robot/stats: {inside} of {} messages inside robot/state's seq {first}..={last}: {stats_cycles:?}",
+        stats_cycles.len()
     );
     assert!(counts["supervisor/health"] >= 20);
 
