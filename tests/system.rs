@@ -815,7 +815,10 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
             .map(|e| e["t_s"].as_f64().unwrap())
             .collect()
     };
-    let both_t = exits("camera")[0];
+    // both killed: the first of their exits the supervisor reaped. It reaps
+    // an exit up to a round after the kill, and the stale-perception stop
+    // may come between the two (once here, 55 ms before the reaping)
+    let both_t = exits("camera")[0].min(*exits("camera-1").last().unwrap());
     let one_t = exits("camera-1")[0];
     let ingest_t = exits("perception")[0];
     assert!(one_t < ingest_t && ingest_t < both_t, "{}", r["events"]);
@@ -823,9 +826,9 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         .iter()
         .map(|e| e["t_s"].as_f64().unwrap())
         .collect();
-    // one camera down at a time: no stop
+    // one camera down at a time: no stop (the last of them 3 s before)
     assert!(
-        stops.iter().all(|&t| t >= both_t - 0.05),
+        stops.iter().all(|&t| t >= both_t - 0.3),
         "a protective stop with one camera left: {stops:?}, {}",
         r["events"]
     );
