@@ -134,3 +134,45 @@ impl RobotClock {
 /// the test should not be what costs a deadline ([`RobotClock::now`]).
 #[allow(dead_code)] // not every test file kills a controller
 pub type Charge = RobotClock;
+
+/// How many cells of one test file may run at once: `PHRI_TEST_CELLS`
+/// (default 1). A default cell takes about 0.4 of a core (BENCHMARKS), so
+/// deploy/test runs two side by side on 2 cores.
+#[allow(dead_code)]
+pub fn cells_at_once() -> usize {
+    std::env::var("PHRI_TEST_CELLS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&n| n >= 1)
+        .unwrap_or(1)
+}
+
+/// A place among the [`cells_at_once`] cells of this test process, held
+/// for as long as the guard lives.
+#[allow(dead_code)]
+pub struct CellSlot(());
+
+static SLOTS: std::sync::Mutex<usize> = std::sync::Mutex::new(0);
+static FREED: std::sync::Condvar = std::sync::Condvar::new();
+
+#[allow(dead_code)]
+impl CellSlot {
+    /// Waits for a free place.
+    pub fn take() -> CellSlot {
+        let limit = cells_at_once();
+        let mut used = SLOTS.lock().unwrap_or_else(|e| e.into_inner());
+        while *used >= limit {
+            used = FREED.wait(used).unwrap_or_else(|e| e.into_inner());
+        }
+        *used += 1;
+        CellSlot(())
+    }
+}
+
+impl Drop for CellSlot {
+    fn drop(&mut self) {
+        let mut used = SLOTS.lock().unwrap_or_else(|e| e.into_inner());
+        *used -= 1;
+        FREED.notify_one();
+    }
+}
