@@ -136,8 +136,8 @@ impl RobotClock {
 pub type Charge = RobotClock;
 
 /// How many cells of one test file may run at once: `PHRI_TEST_CELLS`
-/// (default 1). A default cell takes about 0.4 of a core (BENCHMARKS), so
-/// deploy/test runs two side by side on 2 cores.
+/// (default 1, as deploy/test runs them: two cells on 2 cores share one
+/// FIFO class for their torque loops and make each other's inputs stale).
 #[allow(dead_code)]
 pub fn cells_at_once() -> usize {
     std::env::var("PHRI_TEST_CELLS")
