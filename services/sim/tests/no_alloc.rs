@@ -1,12 +1,10 @@
 //! `Simulator::step`, `RobotLink::cycle` and the message adapters allocate
-//! nothing: counted with a global allocator (this file holds a single test so
-//! no other thread allocates meanwhile).
+//! nothing: counted with a global allocator (the test thread's own
+//! allocations).
 
 mod common;
 
-use std::sync::atomic::Ordering;
-
-use common::counting::{Counting, ALLOCATIONS};
+use common::counting::{allocations, Counting};
 
 use phri_config::{Scenario, SimConfig};
 use phri_ipc::{JointState, TorqueCommand, Truth, WorldState, Zeroed};
@@ -30,7 +28,7 @@ fn step_does_not_allocate() {
     let mut sim = Simulator::from_scenario(model, cfg, &sc, Some(1)).expect("sim");
     let tau = [0.0, 20.0, 0.0, 10.0, 0.0, 1.0, 0.0];
     let mut contacts = 0usize;
-    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let start = allocations();
     let t0 = std::time::Instant::now();
     for k in 0..16_000 {
         if k % 50 == 0 {
@@ -41,7 +39,7 @@ fn step_does_not_allocate() {
         contacts += sim.truth().contacts.len();
     }
     let elapsed = t0.elapsed();
-    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    let allocated = allocations() - start;
     println!(
         "16 000 steps with a human: {:.1} µs per step, {contacts} contacts seen",
         elapsed.as_secs_f64() * 1e6 / 16_000.0
@@ -51,13 +49,13 @@ fn step_does_not_allocate() {
 
     let mut empty =
         Simulator::new(common::model(), common::sim_config(), None, &[], None).expect("sim");
-    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let start = allocations();
     let t0 = std::time::Instant::now();
     for _ in 0..10_000 {
         empty.step(&[0.0; 7], false);
     }
     let elapsed = t0.elapsed();
-    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    let allocated = allocations() - start;
     println!(
         "10 000 steps without a human: {:.1} µs per step",
         elapsed.as_secs_f64() * 1e6 / 10_000.0
@@ -72,7 +70,7 @@ fn step_does_not_allocate() {
     let mut cmd = TorqueCommand::zeroed();
     cmd.dof = 7;
     let mut reports = 0usize;
-    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let start = allocations();
     for seq in 1..=10_000u64 {
         cmd.seq = seq;
         cmd.state_seq = if seq % 7 == 0 { seq - 1 } else { seq };
@@ -91,7 +89,7 @@ fn step_does_not_allocate() {
         fill_truth(&empty, seq + 1, seq, &mut truth);
         fill_world(&empty, seq + 1, seq, &mut world);
     }
-    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    let allocated = allocations() - start;
     println!(
         "10 000 link cycles: {} braked, {} missed, {reports} reports",
         link.stats().braked_cycles,

@@ -1,12 +1,10 @@
 //! Stepping through the person's actions (a wave, a raised foot, a scripted
 //! push on a link) allocates nothing: counted with a global allocator (this
-//! file holds a single test so no other thread allocates meanwhile).
+//! test thread's own allocations).
 
 mod common;
 
-use std::sync::atomic::Ordering;
-
-use common::counting::{Counting, ALLOCATIONS};
+use common::counting::{allocations, Counting};
 
 use phri_config::{Scenario, SimConfig};
 use phri_sim::Simulator;
@@ -39,7 +37,7 @@ fn stepping_through_waves_feet_and_pushes_does_not_allocate() {
         .as_slice()
         .to_vec();
     let mut pushed = 0usize;
-    let start = ALLOCATIONS.load(Ordering::Relaxed);
+    let start = allocations();
     for k in 0..9_000 {
         if k % 50 == 0 {
             sim.reset_state(&q).expect("pose");
@@ -47,7 +45,7 @@ fn stepping_through_waves_feet_and_pushes_does_not_allocate() {
         sim.step(&g, k % 3000 > 2700);
         pushed += sim.truth().contacts.iter().filter(|c| c.intended).count();
     }
-    let allocated = ALLOCATIONS.load(Ordering::Relaxed) - start;
+    let allocated = allocations() - start;
     assert!(pushed > 3000, "the run pushed ({pushed} contact steps)");
     assert_eq!(allocated, 0, "step allocated {allocated} times");
 }

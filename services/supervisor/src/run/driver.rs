@@ -198,7 +198,9 @@ impl Driver {
     /// Read the channels into the evaluation: the robot first, then the
     /// refused intruders and an operator's resume, then the rest.
     fn drain(&mut self, sup: &mut Supervision, now_ns: u64) -> Result<(), SupervisorError> {
-        self.ports.read_robot(&mut self.evaluation)?;
+        // what was read before a failed read is judged all the same: a
+        // stranger the robot named is never left out of the report
+        let robot = self.ports.read_robot(&mut self.evaluation);
         // commands the robot refused from a process this supervisor did not start
         let roster = sup.roster();
         let intruders = self
@@ -208,6 +210,7 @@ impl Driver {
         for reason in intruders {
             self.feed(sup, now_ns, Event::RobotIntruder(reason))?;
         }
+        robot?;
         if self.ports.read_requests(&mut self.evaluation)? {
             self.feed(sup, now_ns, Event::Resume)?;
         }
