@@ -1,14 +1,17 @@
 //! System tests: the real processes of the cell, started by the real
 //! supervisor, with processes really killed. Each run has its own iceoryx2
-//! prefix; at most `PHRI_TEST_CELLS` cells run at once (support::CellSlot).
+//! prefix; runs are serialised so that two cells never share the 2 cores.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
 mod support;
+
+static SERIAL: Mutex<()> = Mutex::new(());
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -179,7 +182,7 @@ fn wait(s: f64) {
 
 #[test]
 fn free_motion_cycles_without_false_detections() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // 3 waypoints take 9-10 s of the robot's time: 14 s leave room for a
     // loaded machine's slipped ticks
     let r = Cell::start("free", "free-motion", Some(14.0), &[]).finish();
@@ -208,7 +211,7 @@ fn free_motion_cycles_without_false_detections() {
 
 #[test]
 fn collisions_are_detected_within_the_bound_and_the_reaction_ends_them() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the detection and reaction layer alone: with avoidance on, the arm
     // evades these reaches in most phases of its cycle (phri-lockstep --sweep)
     let r = Cell::start("coll", "collision", None, &["control.avoidance=false"]).finish();
@@ -315,7 +318,7 @@ fn assert_judged(r: &Value) {
 
 #[test]
 fn a_stalled_supervisor_loses_no_contact_and_counts_what_it_lost() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // issue 10, reproduction 5: a supervisor stopped for 0.8 s overflows the
     // 256-deep sim/truth queue; contact episodes come on sim/contacts
     let cell = Cell::start("stall", "collision", None, &["control.avoidance=false"]);
@@ -356,7 +359,7 @@ fn a_stalled_supervisor_loses_no_contact_and_counts_what_it_lost() {
 
 #[test]
 fn killing_dynamics_means_protective_stop_restart_and_resume() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // one residual service ([control] standby = false): today's stop
     let cell = Cell::start(
         "kdyn",
@@ -391,7 +394,7 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
 
 #[test]
 fn killing_either_residual_service_causes_no_protective_stop() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("kdyn2", "free-motion", Some(14.0), &[]);
     wait(4.0);
     cell.kill("dynamics", libc::SIGKILL);
@@ -417,7 +420,7 @@ fn killing_either_residual_service_causes_no_protective_stop() {
 
 #[test]
 fn killing_the_controller_brakes_then_resumes_without_a_jump() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // one controller ([control] standby = false): today's brake and resume
     let cell = Cell::start(
         "kctl",
@@ -508,7 +511,7 @@ const MISSED_BY_THE_MACHINE: u64 = 2;
 
 #[test]
 fn killing_either_controller_costs_the_torque_loop_nothing() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("kstandby", "free-motion", Some(14.0), &[]);
     wait(1.0);
     let charge = support::Charge::watch(&cell.prefix);
@@ -560,7 +563,7 @@ fn killing_either_controller_costs_the_torque_loop_nothing() {
 
 #[test]
 fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_standby() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("stopctl", "free-motion", Some(12.0), &[]);
     wait(1.0);
     let charge = support::Charge::watch(&cell.prefix);
@@ -598,7 +601,7 @@ fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_sta
 
 #[test]
 fn both_controllers_killed_at_once_brake_and_resume_as_one_did_alone() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start(
         "kboth",
         "free-motion",
@@ -654,7 +657,7 @@ fn both_controllers_killed_at_once_brake_and_resume_as_one_did_alone() {
 
 #[test]
 fn sigint_stops_everything_and_leaves_nothing_behind() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("sigint", "free-motion", None, &[]);
     wait(3.0);
     let ctl = cell.pid_of("control");
@@ -682,7 +685,7 @@ fn sigint_stops_everything_and_leaves_nothing_behind() {
 
 #[test]
 fn coexistence_avoids_the_person_without_deadline_misses() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let r = Cell::start("coex", "coexistence", Some(24.0), &[]).finish();
     assert_no_unintended_contact(&r);
     assert!(r["min_distance_m"].as_f64().unwrap() > 0.0);
@@ -706,7 +709,7 @@ fn coexistence_avoids_the_person_without_deadline_misses() {
 
 #[test]
 fn a_person_walking_in_finds_the_arm_stopped_and_the_report_says_so() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // ISO/TS 15066 speed and separation monitoring: the person walks at
     // 1.6 m/s from 2 s and stands 7 cm in front of P2 from 3.45 s
     let r = Cell::start("walkin", "walk-in", Some(8.0), &["ssm.enabled=true"]).finish();
@@ -725,7 +728,7 @@ fn a_person_walking_in_finds_the_arm_stopped_and_the_report_says_so() {
 
 #[test]
 fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start(
         "kperc",
         "coexistence",
@@ -780,7 +783,7 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
 /// cameras at once is today's stale-perception stop.
 #[test]
 fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start_with(
         "deploy/two-cameras.toml",
         "kcam2",
@@ -863,7 +866,7 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
 /// is near and it is blind, then resumes; the torque loop never notices.
 #[test]
 fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the last fault's stop at about 19.5 s resumes about 2 s later: 26 s
     // leave a loaded machine's late fault command its margin
     let cell = Cell::start("dfault", "coexistence", Some(26.0), &[]);
@@ -923,7 +926,7 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
 /// rewind when the robot adapter crashes (the person is still at the robot).
 #[test]
 fn a_restarted_simulator_continues_the_scenario() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = Cell::start("simkill", "coexistence", Some(16.0), &[]);
     // the person's hand is in the end effector's path from t = 11 s (the
     // robot's clock)
@@ -981,7 +984,7 @@ fn alive(pid: i32) -> bool {
 
 #[test]
 fn a_supervisor_that_dies_leaves_the_cell_running_and_a_new_one_takes_it_over() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let mut cell = Cell::start("takeover", "free-motion", None, &[]);
     wait(3.0);
     let pids: Vec<(&str, i32)> = ["sim", "dynamics", "control"]
@@ -1058,7 +1061,7 @@ fn cell_start_of(pid: i32) -> u64 {
 /// restarted.
 #[test]
 fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the watched services of deploy/phri.toml and their deadlines
     // (heartbeat_timeout_ms, else the supervisor's)
     let loaded =
@@ -1157,7 +1160,7 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
 
 #[test]
 fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // one residual service: its silence is a protective stop
     let cell = Cell::start(
         "frozen",
@@ -1187,7 +1190,7 @@ fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
 
 #[test]
 fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // deploy/scenarios/collaboration.toml through the real services: the
     // camera's skeleton, phri-gesture's request, ingestion's mask and hand,
     // the controller's phases. 2 s past the scenario's 22: a cell whose
@@ -1301,7 +1304,7 @@ fn collaboration_with_real_processes_reaches_the_hand_and_touches_nothing_else()
 
 #[test]
 fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the robot approaches the waving hand from ~4.5 s; ingestion dies at ~6.5 s:
     // the robot must not keep approaching a hand it no longer sees
     let cell = Cell::start("collabkill", "collaboration", Some(14.0), &[]);
@@ -1335,7 +1338,7 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
 
 #[test]
 fn a_controller_frozen_in_contact_ends_the_collaboration_and_holds_while_the_hand_is_there() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the robot touches the held-out right hand from ~8-11 s; a hand stays
     // at the robot (within 5 cm) until the right one is lowered at
     // 15-15.5 s and the left one has pushed the wrist (15.5-16.5 s); the
@@ -1415,7 +1418,7 @@ fn collab_phase(cell: &Cell) -> Option<String> {
 
 #[test]
 fn killing_gesture_mid_collaboration_is_fail_safe() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the person waves 3-6 s, the robot approaches the hand from ~4.5 s;
     // phri-gesture dies 1.5 s into the approach (~6 s, the wave's end). The
     // collaboration runs on the tracked hand, not on the recogniser: the
@@ -1526,7 +1529,7 @@ fn voice_requests(c: &Value) -> Vec<&Value> {
 
 #[test]
 fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // deploy/scenarios/voice-collaboration.toml through the real services:
     // phri-mic plays the person's recorded speech into audio/mic on the
     // simulator's clock, phri-voice decodes it (pocketsphinx) and gates it
@@ -1643,7 +1646,7 @@ fn voice_collaboration_is_started_and_ended_by_voice_and_refuses_the_rest() {
 
 #[test]
 fn killing_the_voice_recogniser_mid_collaboration_costs_the_torque_loop_nothing() {
-    let _g = support::CellSlot::take();
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // phri-voice dies at ~12 s, in contact with the left hand; the supervisor
     // restarts it, the torque loop misses nothing, the collaboration goes on
     // on the tracked hand, and the restarted recogniser hears "end

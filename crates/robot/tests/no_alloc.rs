@@ -1,8 +1,7 @@
 //! Judging a command sample's sender and form (`RobotLink::admit`, what
 //! `RobotLink::poll` does per sample on the 1 kHz path) and deciding the
 //! period allocate nothing: counted with a global allocator (per thread:
-//! the test harness's other threads, such as its notice of a test running
-//! past 60 s on a loaded machine, do not count).
+//! the test harness's other threads do not count).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

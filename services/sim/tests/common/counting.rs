@@ -1,7 +1,6 @@
 //! A counting global allocator for the no-allocation tests: each such test
 //! file declares `#[global_allocator] static GLOBAL: Counting = Counting;`.
-//! It counts per thread, so the test harness's other threads (its notice of
-//! a test running past 60 s, on a loaded machine) do not count.
+//! It counts per thread, so the test harness's other threads do not count.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
