@@ -98,6 +98,11 @@ pub const COLLAB_STATE: Channel<CollabState> =
     Channel::new("collab/state", Qos::CONTROLLERS, false);
 /// [`SsmStatus`] from the controller in charge, 1 kHz: speed and separation monitoring.
 pub const CONTROL_SSM: Channel<SsmStatus> = Channel::new("control/ssm", Qos::CONTROLLERS, false);
+/// [`BarrierStatus`] from the controller in charge, 1 kHz while the
+/// control-barrier filter runs (`[avoidance] law = "cbf"`; nothing under the
+/// paper's law): what the filter did.
+pub const CONTROL_BARRIER: Channel<BarrierStatus> =
+    Channel::new("control/barrier", Qos::CONTROLLERS, false);
 /// [`AudioChunk`]s from the microphone (a capture driver, a recording, or
 /// the simulated cell's scripted speech), 50 Hz, deeply queued: the
 /// recogniser loses no audio while it decodes. Wakes: new chunk.
@@ -276,11 +281,12 @@ pub const ALL: &[&str] = &[
     ROS2_REQUESTS.name,
     CAMERA_STATUS.name,
     AUDIO_MIC_STATUS.name,
+    CONTROL_BARRIER.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
 /// fault, a contact, a request, a collaboration, an arm outside the cell, a
-/// roster past one health message): monitors and tests must not
+/// roster past one health message, the barrier filter chosen): monitors and tests must not
 /// expect traffic on them.
 pub const ON_DEMAND: &[&str] = &[
     FAULT_DEPTH.name,
@@ -295,6 +301,7 @@ pub const ON_DEMAND: &[&str] = &[
     DYNAMICS_RESIDUAL_STANDBY.name,
     ROS2_REQUESTS.name,
     SUPERVISOR_HEALTH_MORE.name,
+    CONTROL_BARRIER.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -339,6 +346,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(ROS2_REQUESTS);
     v.message(CAMERA_STATUS);
     v.message(AUDIO_MIC_STATUS);
+    v.message(CONTROL_BARRIER);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

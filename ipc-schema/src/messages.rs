@@ -1079,6 +1079,48 @@ pub struct SsmStatus {
 
 impl Zeroed for SsmStatus {}
 
+/// The control-barrier safety filter (`[avoidance] law = "cbf"`) from the
+/// controller in charge, one per command while that law runs (none under
+/// the paper's law): what the filter did this period and in total since the
+/// controller started (a restarted controller counts anew).
+#[derive(Debug, Clone, Copy, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+#[type_name("phri::BarrierStatus")]
+pub struct BarrierStatus {
+    /// sequence number
+    pub seq: u64,
+    /// publish time [ns, CLOCK_MONOTONIC]
+    pub stamp_ns: u64,
+    /// measurement time of the state answered [ns, robot clock]
+    pub state_stamp_ns: u64,
+    /// 1: a barrier changed the motion this period (some control point's
+    /// approach was braked)
+    #[serde(with = "crate::json::flag")]
+    pub braking: u32,
+    /// 1: no motion within the joints' bounds kept every barrier this
+    /// period: the slack moved the points away as well as it could
+    #[serde(with = "crate::json::flag")]
+    pub slack: u32,
+    /// 1: the solver failed this period: the reference braked to rest
+    #[serde(with = "crate::json::flag")]
+    pub failed: u32,
+    /// padding, not in the JSON view
+    #[serde(skip)]
+    pub _pad: u32,
+    /// periods the filter ran
+    pub periods: u64,
+    /// periods a barrier changed the motion
+    pub braking_periods: u64,
+    /// periods that needed the slack
+    pub slack_periods: u64,
+    /// periods the solver failed
+    pub failed_periods: u64,
+    /// the most active-set changes of one solve
+    pub max_iterations: u64,
+}
+
+impl Zeroed for BarrierStatus {}
+
 /// Bytes of a controller's behaviour state in [`ControlBehaviour`].
 pub const BEHAVIOUR_BYTES: usize = 8192;
 
@@ -1230,6 +1272,7 @@ message!(AudioChunk, published: |m| Some(m.published_ns), counted: [samples => p
 message!(Utterance, published: |m| Some(m.decoded_ns));
 message!(CollabState, published: |m| Some(m.stamp_ns), counted: [n_forces => forces]);
 message!(SsmStatus, published: |m| Some(m.stamp_ns));
+message!(BarrierStatus, published: |m| Some(m.stamp_ns));
 message!(ControlBehaviour, published: |m| Some(m.stamp_ns));
 message!(CommanderStats, published: |m| Some(m.stamp_ns));
 message!(InputAudit, published: |m| Some(m.stamp_ns), stream: |m| m.service.iter().fold(0u64, |a, &b| a.wrapping_mul(31).wrapping_add(u64::from(b))));

@@ -127,6 +127,7 @@ pub const PORTS: &[Ports] = &[
             CONTROL_STATUS.name,
             COLLAB_STATE.name,
             CONTROL_SSM.name,
+            CONTROL_BARRIER.name,
             INPUT_AUDIT.name,
         ],
         &[
@@ -247,6 +248,7 @@ pub const PORTS: &[Ports] = &[
             DYNAMICS_RESIDUAL_STANDBY.name,
             CONTROL_STATUS.name,
             CONTROL_SSM.name,
+            CONTROL_BARRIER.name,
             COLLAB_STATE.name,
             CAMERA_DEPTH.name,
             CAMERA_STATUS.name,

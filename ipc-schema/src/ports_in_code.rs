@@ -149,6 +149,7 @@ const CONSTANTS: &[(&str, &str)] = constants![
     HRI_REQUEST,
     COLLAB_STATE,
     CONTROL_SSM,
+    CONTROL_BARRIER,
     AUDIO_MIC,
     VOICE_UTTERANCE,
     INPUT_AUDIT,

@@ -37,6 +37,7 @@ fn type_names_sizes_and_alignments_are_the_published_ones() {
     check::<Utterance>("phri::Utterance", 128);
     // 8 bytes larger: the violations of the standard's own S_p
     check::<SsmStatus>("phri::SsmStatus", 96);
+    check::<BarrierStatus>("phri::BarrierStatus", 80);
     check::<ControlBehaviour>("phri::ControlBehaviour", 8232);
     // 40 bytes larger: the commands refused per slot (a stranger's, malformed)
     check::<CommanderStats>("phri::CommanderStats", 144);

@@ -59,7 +59,9 @@ pub use error::{ControlError, InputError};
 pub use inputs::{
     CollabInput, ControlInput, InputGate, PerceptionView, RepulsionInputs, ResidualView,
 };
-pub use outputs::{write_collab_state, write_messages, write_ssm_status, Stamps};
+pub use outputs::{
+    write_barrier_status, write_collab_state, write_messages, write_ssm_status, Stamps,
+};
 pub use phri_config::{AvoidanceParams, ControlConfig};
 pub use phri_ipc::{ControlMode, Reaction};
 pub use snapshot::{SnapshotError, BEHAVIOUR_BYTES};

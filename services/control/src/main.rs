@@ -1,6 +1,6 @@
 //! `phri-control`: answers every `robot/state` with a `robot/command` (the only
-//! publisher that channel accepts), a `control/status`, a `collab/state` and a
-//! `control/ssm`;
+//! publisher that channel accepts), a `control/status`, a `collab/state`, a
+//! `control/ssm` and, under the barrier filter, a `control/barrier`;
 //! reads the collaboration's `hri/request`, `perception/skeleton` and
 //! `perception/hand` besides; with several cameras, every camera's
 //! `perception/C/repulsion`, `perception/C/skeleton` (merged) and

@@ -1,8 +1,10 @@
 //! The one conversion from a step's result to the cell's messages:
-//! `robot/command`, `control/status`, `collab/state` and `control/ssm`, for
-//! `main.rs` and the lock-step cell.
+//! `robot/command`, `control/status`, `collab/state`, `control/ssm` and
+//! `control/barrier`, for `main.rs` and the lock-step cell.
 
-use phri_ipc::{CollabState, ControlStatus, JointState, SsmStatus, TorqueCommand, Zeroed};
+use phri_ipc::{
+    BarrierStatus, CollabState, ControlStatus, JointState, SsmStatus, TorqueCommand, Zeroed,
+};
 
 use crate::controller::Controller;
 
@@ -147,4 +149,38 @@ pub fn write_ssm_status(
         human_speed_m_s: p.human_speed_m_s,
         reaction_s: p.reaction_s,
     };
+}
+
+/// Fill `control/barrier` for the period that answered `state` (`seq`
+/// numbers it, `stamp_ns` [ns, CLOCK_MONOTONIC] is its publish time) from
+/// the control-barrier filter's counts, `out` holding the message of this
+/// controller's last period in charge (or zeroed): this period's flags are
+/// the counts that grew since. Every field is written; false (and `out` as
+/// it was) under the paper's law, which publishes nothing.
+pub fn write_barrier_status(
+    ctl: &Controller,
+    state: &JointState,
+    seq: u64,
+    stamp_ns: u64,
+    out: &mut BarrierStatus,
+) -> bool {
+    let Some(c) = ctl.cbf_counters() else {
+        return false;
+    };
+    let grew = |now: u64, before: u64| u32::from(now > before);
+    *out = BarrierStatus {
+        seq,
+        stamp_ns,
+        state_stamp_ns: state.stamp_ns,
+        braking: grew(c.braking_periods, out.braking_periods),
+        slack: grew(c.slack_periods, out.slack_periods),
+        failed: grew(c.infeasible_periods, out.failed_periods),
+        _pad: 0,
+        periods: c.periods,
+        braking_periods: c.braking_periods,
+        slack_periods: c.slack_periods,
+        failed_periods: c.infeasible_periods,
+        max_iterations: c.max_iterations,
+    };
+    true
 }

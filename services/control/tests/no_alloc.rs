@@ -11,8 +11,9 @@ use std::collections::BTreeSet;
 use nalgebra::Vector3;
 use phri_config::{Config, PerJoint, ResidualConfig};
 use phri_control::{
-    write_collab_state, write_messages, write_ssm_status, CollabInput, ControlInput, ControlMode,
-    Controller, Reaction, RepulsionInputs, ResidualView, Stamps, BEHAVIOUR_BYTES,
+    write_barrier_status, write_collab_state, write_messages, write_ssm_status, CollabInput,
+    ControlInput, ControlMode, Controller, Reaction, RepulsionInputs, ResidualView, Stamps,
+    BEHAVIOUR_BYTES,
 };
 use phri_estimation::ResidualObserver;
 use phri_ipc::{
@@ -105,6 +106,10 @@ fn the_control_period_allocates_nothing_in_any_mode() {
         // end effector and asks, every 100 ms until accepted, to collaborate
         let mut collab = CollabState::zeroed();
         let mut ssm = phri_ipc::SsmStatus::zeroed();
+        // `control/barrier`: one per period under the filter, none otherwise;
+        // its flags summed over the run
+        let mut barrier = phri_ipc::BarrierStatus::zeroed();
+        let (mut barrier_msgs, mut flags_sum) = (0u64, [0u64; 3]);
         let mut request = HriRequest::zeroed();
         request.source = RequestSource::Cli as u32;
         request.kind = RequestKind::Follow as u32;
@@ -222,6 +227,12 @@ fn the_control_period_allocates_nothing_in_any_mode() {
             write_messages(&ctl, &state, k, stamps, &mut cmd, &mut status);
             write_collab_state(&ctl, &state, k, stamp + 1, &mut collab);
             write_ssm_status(&ctl, &state, k, stamp + 1, &mut ssm);
+            if write_barrier_status(&ctl, &state, k, stamp + 1, &mut barrier) {
+                barrier_msgs += 1;
+                flags_sum[0] += u64::from(barrier.braking);
+                flags_sum[1] += u64::from(barrier.slack);
+                flags_sum[2] += u64::from(barrier.failed);
+            }
             step_allocs += allocations() - before;
 
             tau.copy_from_slice(&cmd.tau[..7]);
@@ -260,6 +271,23 @@ fn the_control_period_allocates_nothing_in_any_mode() {
                 b.max_iterations > 0,
                 "{reaction:?}: the QP never ran: {b:?}"
             );
+            // every period's message, its flags adding up to the counts
+            assert_eq!(barrier_msgs, 11_500);
+            assert_eq!(
+                flags_sum,
+                [b.braking_periods, b.slack_periods, b.infeasible_periods],
+                "{barrier:?}"
+            );
+            assert_eq!(
+                (
+                    barrier.periods,
+                    barrier.braking_periods,
+                    barrier.max_iterations
+                ),
+                (b.periods, b.braking_periods, b.max_iterations)
+            );
+        } else {
+            assert_eq!(barrier_msgs, 0, "the paper's law publishes no barrier");
         }
     }
 }

@@ -6,6 +6,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::barrier_report::BarrierEval;
 use crate::box_report::BoxEval;
 use crate::collab_report::CollabEvaluator;
 use crate::cpu::CpuReport;
@@ -30,6 +31,8 @@ pub struct Evaluation {
     pub residuals: ResidualPair,
     /// the inputs the services refused
     pub audits: AuditLog,
+    /// the control-barrier filter
+    pub barrier: BarrierEval,
     /// the configured reaction to a collision, as the events name it
     pub reaction: &'static str,
 }
@@ -45,7 +48,17 @@ impl Evaluation {
             standby: StandbyEvaluator::new(standby),
             residuals: ResidualPair::new(standby),
             audits: AuditLog::default(),
+            barrier: BarrierEval::new(plan.loaded.config.sim.dt_s),
             reaction: plan.reaction().name(),
+        }
+    }
+
+    /// A `control/barrier` message: the filter's figures, and an event for
+    /// a failed solve or an episode of slack.
+    pub fn on_barrier(&mut self, m: &phri_ipc::BarrierStatus) {
+        let t_s = self.eval.time_s(m.stamp_ns);
+        if let Some(e) = self.barrier.on_status(m, t_s) {
+            self.eval.event(m.stamp_ns, e.kind(), "control", e.detail());
         }
     }
 
@@ -80,11 +93,15 @@ impl Evaluation {
         for line in inputs.degraded() {
             self.eval.degrade(line);
         }
+        if let Some(line) = self.barrier.degraded() {
+            self.eval.degrade(line);
+        }
         let mut report = self.eval.report(end_ns, plan.scenario_name(), services);
         report.inputs = inputs;
         report.cpu = cpu;
         report.control = self.standby.report();
         report.dynamics = self.residuals.report();
+        report.barrier = self.barrier.report();
         report.robot = plan.robot_report();
         self.boxes.fill(&mut report);
         (

@@ -15,6 +15,7 @@
 
 #![deny(missing_docs)]
 
+pub mod barrier_report;
 pub mod box_report;
 pub mod camera_report;
 pub mod collab_report;

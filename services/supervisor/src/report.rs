@@ -259,6 +259,9 @@ pub struct Report {
     pub control: crate::standby_report::ControlReport,
     /// the residual services: the hot standby's beside the first
     pub dynamics: crate::standby_report::DynamicsReport,
+    /// the control-barrier filter (`[avoidance] law = "cbf"`; null under
+    /// the paper's law)
+    pub barrier: Option<crate::barrier_report::BarrierReport>,
 }
 
 /// `iso_ts_15066` in the report: every contact judged against its body
@@ -1465,6 +1468,7 @@ impl Evaluator {
             summary: String::new(),
             inputs: Default::default(),
             control: Default::default(),
+            barrier: None,
             dynamics: Default::default(),
             evaluation: Evaluation {
                 truth_samples_lost: self.truth_lost,

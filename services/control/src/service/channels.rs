@@ -1,12 +1,13 @@
 //! The controller's channels in the cell: what it reads each period and
 //! what it publishes, opened in one place.
 
-use phri_ipc::{CollabState, ControlStatus, SsmStatus, TorqueCommand};
+use phri_ipc::{BarrierStatus, CollabState, ControlStatus, SsmStatus, TorqueCommand};
 use phri_ipc::{
     ControlBehaviour, HandObservation, HriRequest, IpcError, IpcNode, JointState, LatestReader,
     Publisher, Queue, RepulsionResult, Residual, Skeleton, Subscriber, COLLAB_STATE,
-    CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR, CONTROL_STATUS, DYNAMICS_RESIDUAL,
-    DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND, ROBOT_COMMAND_STANDBY, ROBOT_STATE,
+    CONTROL_BARRIER, CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR, CONTROL_STATUS,
+    DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE,
 };
 
 use crate::standby::Slot;
@@ -43,6 +44,8 @@ pub struct OutputChannels {
     pub collab: Publisher<CollabState>,
     /// `control/ssm`
     pub ssm: Publisher<SsmStatus>,
+    /// `control/barrier` (under `[avoidance] law = "cbf"`)
+    pub barrier: Publisher<BarrierStatus>,
 }
 
 /// Opens the channels of the controller in `slot` on `node`, for `cameras`
@@ -88,6 +91,7 @@ pub fn open(
         .collect::<Result<Vec<_>, _>>()?;
     let collab = COLLAB_STATE.publisher(node)?;
     let ssm = CONTROL_SSM.publisher(node)?;
+    let barrier = CONTROL_BARRIER.publisher(node)?;
     let inputs = InputChannels {
         states,
         residuals,
@@ -104,6 +108,7 @@ pub fn open(
         status,
         collab,
         ssm,
+        barrier,
     };
     Ok((inputs, outputs))
 }

@@ -2,13 +2,15 @@
 //! by the controller in charge (the command by whichever the role says).
 
 use phri_ipc::{
-    CollabState, ControlBehaviour, ControlStatus, IpcError, JointState, SsmStatus, TorqueCommand,
-    Zeroed,
+    BarrierStatus, CollabState, ControlBehaviour, ControlStatus, IpcError, JointState, SsmStatus,
+    TorqueCommand, Zeroed,
 };
 
 use super::channels::OutputChannels;
 use crate::standby::{save_behaviour, Duty};
-use crate::{write_collab_state, write_messages, write_ssm_status, Controller, Stamps};
+use crate::{
+    write_barrier_status, write_collab_state, write_messages, write_ssm_status, Controller, Stamps,
+};
 
 /// The buffers of the messages the controller publishes.
 pub struct Messages {
@@ -16,6 +18,7 @@ pub struct Messages {
     status: ControlStatus,
     collab_state: CollabState,
     ssm_status: SsmStatus,
+    barrier_status: BarrierStatus,
     /// this controller's behaviour state, for the other one
     behaviour: Box<ControlBehaviour>,
 }
@@ -27,6 +30,7 @@ impl Default for Messages {
             status: ControlStatus::zeroed(),
             collab_state: CollabState::zeroed(),
             ssm_status: SsmStatus::zeroed(),
+            barrier_status: BarrierStatus::zeroed(),
             behaviour: Box::new(ControlBehaviour::zeroed()),
         }
     }
@@ -71,8 +75,9 @@ impl Messages {
         Ok(())
     }
 
-    /// In charge, publishes the status, the collaboration's and SSM's state
-    /// and (with a standby) the behaviour state; otherwise keeps the
+    /// In charge, publishes the status, the collaboration's and SSM's state,
+    /// the barrier filter's (under that law) and (with a standby) the
+    /// behaviour state; otherwise keeps the
     /// publishers of the one in charge connected, ready to take charge.
     pub fn rest(
         &mut self,
@@ -86,6 +91,7 @@ impl Messages {
             out.status.update_connections();
             out.collab.update_connections();
             out.ssm.update_connections();
+            out.barrier.update_connections();
             out.behaviour.update_connections();
             return Ok(());
         }
@@ -96,6 +102,9 @@ impl Messages {
         out.collab.publish(&self.collab_state)?;
         write_ssm_status(controller, state, seq, now(), &mut self.ssm_status);
         out.ssm.publish(&self.ssm_status)?;
+        if write_barrier_status(controller, state, seq, now(), &mut self.barrier_status) {
+            out.barrier.publish(&self.barrier_status)?;
+        }
         if period.with_standby
             && save_behaviour(controller, state, seq, now(), &mut self.behaviour).is_ok()
         {

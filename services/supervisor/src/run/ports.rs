@@ -5,8 +5,8 @@
 use phri_ipc::liveness::{self, Beat, Watched};
 use phri_ipc::{
     FrameSubscriber, Health, IpcError, IpcNode, Publisher, Queue, Subscriber, Zeroed, COLLAB_STATE,
-    CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH,
-    SUPERVISOR_HEALTH,
+    CONTROL_BARRIER, CONTROL_SSM, CONTROL_STATUS, DYNAMICS_RESIDUAL, ROBOT_STATS, SIM_CONTACTS,
+    SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 
 use crate::evaluation::Evaluation;
@@ -31,6 +31,7 @@ pub struct Ports {
     skeletons: Vec<Subscriber<phri_ipc::Skeleton>>,
     collab: Subscriber<phri_ipc::CollabState>,
     ssm: Subscriber<phri_ipc::SsmStatus>,
+    barrier: Subscriber<phri_ipc::BarrierStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
     /// what the ROS 2 bridge did with `/phri/request`
     bridge_requests: Subscriber<phri_ipc::BridgeRequests>,
@@ -79,6 +80,7 @@ impl Ports {
                 .collect::<Result<_, _>>()?,
             collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
             ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
+            barrier: CONTROL_BARRIER.subscriber(node, Queue::Drain)?,
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             bridge_requests: phri_ipc::ROS2_REQUESTS.subscriber(node, Queue::Drain)?,
             camera_status: phri_ipc::CAMERA_STATUS.subscriber(node, Queue::Drain)?,
@@ -111,7 +113,7 @@ impl Ports {
     }
 
     /// A round's first reading: the robot, contacts, the collaboration, the
-    /// protective separation, the commanders.
+    /// protective separation, the barrier filter, the commanders.
     pub fn read_robot(&mut self, ev: &mut Evaluation) -> Result<(), IpcError> {
         self.stats.drain(|m| ev.eval.on_stats(m))?;
         self.contacts.drain(|m| ev.eval.on_contact_event(m))?;
@@ -123,6 +125,7 @@ impl Ports {
             ev.collab.on_state(m);
         })?;
         self.ssm.drain(|m| ev.eval.on_ssm(m))?;
+        self.barrier.drain(|m| ev.on_barrier(m))?;
         self.commanders.drain(|m| {
             ev.standby.on_commanders(m, ev.eval.time_s(m.stamp_ns));
             ev.boxes.on_commanders(m);
@@ -190,6 +193,7 @@ impl Ports {
         let _ = self.contacts.drain(|m| ev.eval.on_contact_event(m));
         let _ = self.collab.drain(|m| ev.collab.on_state(m));
         let _ = self.ssm.drain(|m| ev.eval.on_ssm(m));
+        let _ = self.barrier.drain(|m| ev.on_barrier(m));
         let _ = self.requests.drain(|m| ev.collab.on_request(m));
         let _ = self.bridge_requests.drain(|m| ev.collab.on_bridge(m));
         let _ = self.camera_status.drain(|m| ev.eval.on_camera_status(m));
