@@ -166,8 +166,9 @@ impl StreamClock {
     /// at `done_ns` with `delay` frames still buffered: the capture time of
     /// its first frame, and when the block's end is due if the device ran
     /// ahead of the wall clock by more than `slack_ns` (wait until then). A
-    /// read that comes late by up to 100 ms keeps the stream's own time;
-    /// later, the time is measured afresh.
+    /// read that comes late by up to 100 ms, or early by up to `slack_ns`,
+    /// keeps the stream's own time, moved by 1/32 of the difference; beyond
+    /// either, the time is measured afresh.
     pub fn block(
         &mut self,
         first: u64,
@@ -188,8 +189,11 @@ impl StreamClock {
                 self.anchor = Some((first, nominal));
                 return (nominal, Some(end as u64));
             }
+            // late < 0: the block's data was there before the stream's
+            // clock put it (a paced recording read after a late wake-up, or
+            // a device a little faster than the wall clock)
             let late = measured as f64 - nominal;
-            if (0.0..=LATE_READ_NS).contains(&late) {
+            if (-(slack_ns as f64)..=LATE_READ_NS).contains(&late) {
                 let t = (nominal + late * LATE_READ_SLEW) as u64;
                 self.anchor = Some((first, t));
                 return (t, None);
@@ -508,6 +512,11 @@ mod tests {
         // a reader held up 8 ms: the stream's time, all but 1/32 of it
         let (t2, wait) = c.block(640, 320, rate, 1_048_000_000, 0, 5_000_000);
         assert_eq!((t2, wait), (1_020_250_000, None));
+        // a paced recording's reader that woke 15 ms after the block's end
+        // was due: the block is 5 ms "early" against the stream's time,
+        // which keeps all but 1/32 of it (no step back)
+        let (t2b, wait) = c.block(960, 320, rate, 1_055_250_000, 0, 5_000_000);
+        assert_eq!((t2b, wait), (1_040_250_000 - 156_250, None));
         // held up past 100 ms: measured afresh
         let (t3, _) = c.block(960, 320, rate, 1_200_000_000, 0, 5_000_000);
         assert_eq!(t3, 1_180_000_000);
