@@ -206,10 +206,19 @@ class Seen:
         steady = (self.arrivals[b - 1] - self.arrivals[a]) / 1e9 if b - a > 1 else 0.0
         stamps = sorted(self.stamps)
         stamped = (stamps[-1] - stamps[0]) / 1e9 if n > 1 else 0.0
+        window = sorted(self.stamps[a:b])
         return {
             "count": n,
             "rate_hz": (n - 1) / span if span > 0 else None,
             "steady_rate_hz": (b - a - 1) / steady if steady > 0 else None,
+            # that stretch by the messages' stamps: how many arrived, and
+            # the first and last stamp [ns, ROS time], so that a reader can
+            # count what was published in the same span
+            "steady": {
+                "count": b - a,
+                "first_stamp_ns": window[0] if window else None,
+                "last_stamp_ns": window[-1] if window else None,
+            },
             "silences": sum(1 for i in range(1, n) if self.arrivals[i] - self.arrivals[i - 1] > 200_000_000),
             # the rate the messages were published at, from their stamps
             "stamped_rate_hz": (n - 1) / stamped if stamped > 0 else None,
