@@ -94,6 +94,9 @@ struct Eye {
     frame: Vec<u16>,
     filtered: Vec<u16>,
     results: Vec<RepulsionResult>,
+    /// sends nothing (a killed or silent camera process): no capture, no
+    /// skeleton, no results
+    dark: bool,
 }
 
 /// Every camera of a cell, stepped together.
@@ -141,6 +144,7 @@ impl Perception {
                 frame: vec![0; pixels],
                 filtered: vec![0; pixels],
                 results: Vec::with_capacity(workers.len()),
+                dark: false,
                 workers,
                 camera,
             });
@@ -158,6 +162,20 @@ impl Perception {
         self.eyes.len()
     }
 
+    /// Camera `camera` sends nothing while `dark` (its process killed or
+    /// silent): from the next capture on, no frame, skeleton or result of it
+    /// until it is lit again. Out of range: nothing.
+    pub fn set_dark(&mut self, camera: usize, dark: bool) {
+        if let Some(e) = self.eyes.get_mut(camera) {
+            e.dark = dark;
+        }
+    }
+
+    /// Whether some camera is not dark ([`Perception::set_dark`]).
+    pub fn any_lit(&self) -> bool {
+        self.eyes.iter().any(|e| !e.dark)
+    }
+
     /// Every camera captures `world` at `now_ns` (robot clock, also its
     /// capture wall time), and its tracker finds the people of that frame
     /// (`frame_period_s` apart; the tracker on depth removes the robot at
@@ -170,7 +188,11 @@ impl Perception {
         frame_period_s: f64,
         history: &StateHistory,
     ) -> Result<&Skeleton, PipelineError> {
+        let mut merged = false;
         for (i, eye) in self.eyes.iter_mut().enumerate() {
+            if eye.dark {
+                continue;
+            }
             eye.header = FrameHeader::zeroed();
             eye.camera
                 .step(world, now_ns, &mut eye.frame, &mut eye.header)
@@ -188,10 +210,16 @@ impl Perception {
                     &mut eye.skeleton,
                 ),
             }
-            match i {
-                0 => self.skeleton = eye.skeleton,
-                _ => merge_views(&mut self.skeleton, &eye.skeleton),
+            match merged {
+                false => self.skeleton = eye.skeleton,
+                true => merge_views(&mut self.skeleton, &eye.skeleton),
             }
+            merged = true;
+        }
+        if !merged {
+            // every camera dark: nobody seen (a tracker's skeleton of no
+            // frame; the readers' age checks see it never published again)
+            self.skeleton = Skeleton::zeroed();
         }
         Ok(&self.skeleton)
     }
@@ -213,12 +241,20 @@ impl Perception {
         ready_ns: u64,
     ) -> Result<Option<HandObservation>, PipelineError> {
         let part = collaborating_part(collab, ready_ns);
-        let capture_ns = self.eyes.first().map_or(0, |e| e.header.capture_ns);
+        let capture_ns = self
+            .eyes
+            .iter()
+            .find(|e| !e.dark)
+            .map_or(0, |e| e.header.capture_ns);
         let mask = self
             .mask_hold
             .mask(Some(&self.skeleton), part, &self.collab, capture_ns);
         let mut hands = [None; phri_ipc::MAX_CAMERAS];
         for (i, eye) in self.eyes.iter_mut().enumerate() {
+            eye.results.clear();
+            if eye.dark {
+                continue;
+            }
             eye.ingest.set_mask(mask);
             let outcome = eye
                 .ingest
@@ -239,7 +275,6 @@ impl Perception {
                     ready_ns,
                 ));
             }
-            eye.results.clear();
             for w in eye.workers.iter_mut() {
                 let msg = w
                     .respond(&eye.header, &eye.filtered)

@@ -58,6 +58,8 @@ pub enum CellError {
     },
     #[error("perception latency must be a finite number ≥ 0 ms, got {0}")]
     Latency(f64),
+    #[error("outage of camera {camera}: the cell has {cameras} camera(s) ([[camera]])")]
+    NoSuchCamera { camera: usize, cameras: usize },
 }
 
 fn step_err(service: &'static str) -> impl Fn(&dyn std::fmt::Display) -> CellError {
@@ -220,6 +222,16 @@ impl Cell {
         } else {
             None
         };
+        for o in &opts.outages {
+            if let Down::Camera(camera) = o.service {
+                if camera >= cfg.cameras.len() {
+                    return Err(CellError::NoSuchCamera {
+                        camera,
+                        cameras: cfg.cameras.len(),
+                    });
+                }
+            }
+        }
         let voice = if loaded.scenario.voice.is_empty() {
             None
         } else {
@@ -344,6 +356,12 @@ impl Cell {
         }
     }
 
+    /// Per camera of `[[camera]]`: the point-periods its distance was the
+    /// fused one (empty with one camera's cell counted as `[0]`).
+    pub fn cameras_gave(&self) -> &[u64] {
+        self.repulsion.gave()
+    }
+
     /// The hot standby's controller, if it runs.
     pub fn standby(&self) -> Option<&Controller> {
         self.pair.as_ref().map(|p| &p.standby)
@@ -392,7 +410,16 @@ impl Cell {
         };
         let now = self.t_ns;
         p.history.push_state(&self.state);
-        if now >= p.next_capture_ns {
+        let now_s = now as f64 * 1e-9;
+        for c in 0..p.cameras.cameras() {
+            let dark = self
+                .outages
+                .iter()
+                .any(|o| o.service == Down::Camera(c) && now_s >= o.from_s && now_s < o.to_s);
+            p.cameras.set_dark(c, dark);
+        }
+        // every camera dark: no frame at all (none in flight is lost)
+        if now >= p.next_capture_ns && p.cameras.any_lit() {
             p.next_capture_ns = now + p.period_ns;
             fill_world(&self.sim, self.seq, now, &mut p.world);
             let ready_ns = now + p.latency_ns;

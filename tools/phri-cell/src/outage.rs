@@ -13,6 +13,10 @@ pub enum Down {
     Control,
     /// no command from the hot standby (`robot/command/standby`)
     Standby,
+    /// one camera of `[[camera]]` (by index) sends nothing, as a killed
+    /// `camera` (index 0) or `camera-I` process: neither its frames' results
+    /// nor its skeletons reach anyone; the other cameras go on
+    Camera(usize),
 }
 
 impl Down {
@@ -35,22 +39,34 @@ pub struct Outage {
 /// An outage that is not `SERVICE:FROM:TO`.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "outage: expected perception|dynamics|control|standby:FROM:TO (seconds, FROM ≤ TO), got '{0}'"
+    "outage: expected perception|dynamics|control|standby|camera|camera-I:FROM:TO (seconds, FROM ≤ TO, I a camera's index 1-3), got '{0}'"
 )]
 pub struct OutageError(pub String);
 
 impl std::str::FromStr for Outage {
     type Err = OutageError;
-    /// `perception:FROM:TO`, `dynamics:FROM:TO`, `control:FROM:TO` or `standby:FROM:TO` (seconds)
+    /// `perception:FROM:TO`, `dynamics:FROM:TO`, `control:FROM:TO`,
+    /// `standby:FROM:TO`, `camera:FROM:TO` (the first camera) or
+    /// `camera-I:FROM:TO` (seconds)
     fn from_str(s: &str) -> Result<Outage, OutageError> {
         let bad = || OutageError(s.to_string());
         let mut it = s.split(':');
         let name = it.next().ok_or_else(bad)?;
-        let service = Down::ALL
-            .iter()
-            .find(|(_, n)| *n == name)
-            .map(|(d, _)| *d)
-            .ok_or_else(bad)?;
+        let camera = match name {
+            "camera" => Some(0),
+            _ => name
+                .strip_prefix("camera-")
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|i| (1..phri_ipc::MAX_CAMERAS).contains(i)),
+        };
+        let service = match camera {
+            Some(i) => Down::Camera(i),
+            None => Down::ALL
+                .iter()
+                .find(|(_, n)| *n == name)
+                .map(|(d, _)| *d)
+                .ok_or_else(bad)?,
+        };
         let mut num = || {
             it.next()
                 .and_then(|x| x.trim().parse::<f64>().ok())
@@ -65,5 +81,34 @@ impl std::str::FromStr for Outage {
             from_s,
             to_s,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_camera_s_outage_names_its_process() {
+        let o: Outage = "camera-1:11:11.75".parse().unwrap();
+        assert_eq!(
+            o,
+            Outage {
+                service: Down::Camera(1),
+                from_s: 11.0,
+                to_s: 11.75
+            }
+        );
+        let o: Outage = "camera:2:3".parse().unwrap();
+        assert_eq!(o.service, Down::Camera(0));
+        for bad in [
+            "camera-0:1:2",
+            "camera-4:1:2",
+            "camera-x:1:2",
+            "camera-1:2:1",
+            "cam:1:2",
+        ] {
+            assert!(bad.parse::<Outage>().is_err(), "{bad}");
+        }
     }
 }

@@ -114,7 +114,8 @@ fn outages_while_the_person_steps_in_stop_the_arm_without_contact() {
 #[test]
 fn malformed_outages_are_refused_with_the_format() {
     for bad in [
-        "camera:1:2",
+        "camera-9:1:2",
+        "cameras:1:2",
         "perception:2:1",
         "dynamics:x:2",
         "perception:1",
@@ -123,7 +124,7 @@ fn malformed_outages_are_refused_with_the_format() {
     ] {
         let e = bad.parse::<Outage>().unwrap_err().to_string();
         assert!(
-            e.contains("perception|dynamics|control|standby:FROM:TO"),
+            e.contains("perception|dynamics|control|standby|camera|camera-I:FROM:TO"),
             "{bad}: {e}"
         );
     }

@@ -5,7 +5,7 @@
 //!
 //!   phri-lockstep --scenario coexistence [--duration S] [--config deploy/phri.toml]
 //!                 [--set section.key=value ...] [--offset S ...] [--sweep FROM,TO,STEP]
-//!                 [--latency-ms MS] [--outage perception|dynamics|control|standby:FROM:TO ...]
+//!                 [--latency-ms MS] [--outage perception|dynamics|control|standby|camera|camera-I:FROM:TO ...]
 //!                 [--no-perception] [--trace FILE [--trace-every-ms MS]]
 //!   phri-lockstep completions bash|zsh|fish
 
@@ -59,7 +59,7 @@ struct Cli {
     /// Capture → repulsion results at the controller \[ms\] (default 6.5: the multi-process cell's p99 before the vector lanes; 4.3-4.5 ms since, so the default errs late)
     #[arg(long = "latency-ms", value_name = "MS", allow_negative_numbers = true)]
     latency_ms: Option<f64>,
-    /// A service outage in simulated time \[s\], `perception|dynamics|control|standby:FROM:TO` (repeatable; `control` is the first controller, `standby` the hot standby)
+    /// A service outage in simulated time \[s\], `perception|dynamics|control|standby|camera|camera-I:FROM:TO` (repeatable; `control` is the first controller, `standby` the hot standby, `camera` the first camera, `camera-I` camera I of `[[camera]]`)
     #[arg(long, value_name = "SERVICE:FROM:TO")]
     outage: Vec<Outage>,
     /// Run without the camera and perception
