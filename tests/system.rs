@@ -784,12 +784,22 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
 #[test]
 fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    // under the control-barrier filter: the paper's law halts the arm once
+    // SNS scales its task to nothing, repulsion included, and the camera
+    // left alone can put it in a shadow (distance 0-4 cm) where the
+    // stepping-in hand is not told apart; the hand then walks into the
+    // halted arm (the lock-step cell's `camera` outage at offset 1 s: 1.7
+    // cm; here once, 128 N, 50 ms after camera-1's restart, on a fresh
+    // clone's loaded machine). The filter's slack moves it away instead
+    // (6.9-7.0 cm there; here 4.6-7.6 cm in 6 runs, 3 beside CPU hogs).
+    // What this test is about, the cameras' processes dying and coming
+    // back, is the same under either law
     let cell = Cell::start_with(
         "deploy/two-cameras.toml",
         "kcam2",
         "coexistence",
         Some(22.0),
-        &["supervisor.restart_backoff_min_ms=400"],
+        &["supervisor.restart_backoff_min_ms=400", "avoidance.law=cbf"],
     );
     // the person's hand is in the end effector's path from t = 10 s (the
     // robot's clock)
