@@ -88,8 +88,8 @@ fn bad_command_lines_are_one_line_naming_the_flag() {
             vec!["--offset", "soon"],
         ),
         (
-            vec!["--scenario", "elbow", "--outage", "camera:1:2"],
-            vec!["--outage", "camera:1:2"],
+            vec!["--scenario", "elbow", "--outage", "camera-9:1:2"],
+            vec!["--outage", "camera-9:1:2"],
         ),
         (
             vec!["--config", &c, "--scenario", "elbow", "--sweep", "-4,0"],
