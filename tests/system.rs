@@ -849,12 +849,16 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         r["events"]
     );
     assert!(r["protective_stop_causes"]["stale_perception"].as_u64() >= Some(1));
-    // each camera answered the fusion while the other was down
+    // each camera answered the fusion while the other was down: alone for
+    // the other's 0.4 s back-off and start-up, it won every decision of
+    // about 0.5 s of a 22 s run of two cameras' answers, over 1 % of them
+    // (besides, each wins where its bound is the larger: the mirror 4.9-12
+    // % under the barrier filter, more under the paper's law)
     let cams = r["perception"]["cameras"].as_array().unwrap();
     assert_eq!(cams.len(), 2);
     for c in cams {
         assert!(c["frames"].as_u64().unwrap() > 300, "{c}");
-        assert!(c["fused_share"].as_f64().unwrap() > 0.05, "{c}");
+        assert!(c["fused_share"].as_f64().unwrap() > 0.01, "{c}");
     }
     assert!(events(&r, "brake", "sim").is_empty());
     // the kills cost the torque loop no deadline: none missed once the task
