@@ -1670,8 +1670,10 @@ fn commands_from_a_process_the_supervisor_did_not_start_are_never_applied() {
         refused["stranger_pids"]
             .as_array()
             .is_some_and(|a| a.iter().any(|p| p == me)),
-        "{}",
-        r["robot"]
+        "{}\ndegraded: {}\nintruder events: {:?}\nsupervisor: {err}",
+        r["robot"],
+        r["degraded"],
+        events(&r, "intruder", "")
     );
     let named = events(&r, "intruder", "").into_iter().any(|e| {
         e["detail"]
