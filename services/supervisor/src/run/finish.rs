@@ -7,6 +7,7 @@ use phri_runtime::now_ns;
 use super::driver::Driver;
 use super::ipc;
 use super::report_file::ReportFile;
+use crate::evaluation::Evaluation;
 use crate::process::cpu_time_ns;
 use crate::report::Report;
 use crate::supervision::{Ending, Event, Supervision};
@@ -53,8 +54,12 @@ pub fn finish(
         sup.step(now, Event::CpuTime { index, cpu_ns }, &mut none);
     }
     let cpu = sup.cpu().report(sup.roster());
+    let ours: Vec<u32> = (0..sup.roster().len())
+        .filter_map(|i| sup.roster().get(i).pid)
+        .collect();
     cell.stop(sup.roster());
     ports.read_after_stop(&mut evaluation);
+    judge_last_strangers(sup, &mut evaluation, &ours);
     let report = evaluation.report(plan, end, services, cpu, sup.realtime().report());
     ipc::close(node, Some(ports), &prefix);
     cell.remove_state();
@@ -69,6 +74,27 @@ pub fn finish(
     match stop_reason {
         Some(reason) => Err(SupervisorError::Degraded(reason)),
         None => Ok(()),
+    }
+}
+
+/// The strangers the robot named only in what it said as it stopped (a
+/// command refused in its last `robot/commanders`, read after the rounds
+/// ended), judged as a round judges them: an intruder event and a degraded
+/// line each, never left out of the report. `ours`: the pids of the
+/// services this supervisor ran before it stopped them.
+fn judge_last_strangers(sup: &mut Supervision, evaluation: &mut Evaluation, ours: &[u32]) {
+    let late = evaluation
+        .boxes
+        .intruders(|pid| !ours.contains(&(pid as u32)));
+    for reason in late {
+        let mut out = Vec::new();
+        sup.step(now_ns(), Event::RobotIntruder(reason), &mut out);
+        for action in &out {
+            if let crate::supervision::Action::Warn(line) = action {
+                tracing::warn!("{line}");
+            }
+            evaluation.apply(action);
+        }
     }
 }
 
