@@ -10,7 +10,7 @@ use super::report_file::ReportFile;
 use crate::evaluation::Evaluation;
 use crate::process::cpu_time_ns;
 use crate::report::Report;
-use crate::supervision::{Ending, Event, Supervision};
+use crate::supervision::{Action, Ending, Event, Supervision};
 use crate::{Plan, SupervisorError};
 
 /// End the run `sup` supervised through `driver`: stop the cell, clean up,
@@ -82,20 +82,26 @@ pub fn finish(
 /// ended), judged as a round judges them: an intruder event and a degraded
 /// line each, never left out of the report. `ours`: the pids of the
 /// services this supervisor ran before it stopped them.
-fn judge_last_strangers(sup: &mut Supervision, evaluation: &mut Evaluation, ours: &[u32]) {
+/// Returns the supervision's actions, each applied to the report.
+fn judge_last_strangers(
+    sup: &mut Supervision,
+    evaluation: &mut Evaluation,
+    ours: &[u32],
+) -> Vec<Action> {
     let late = evaluation
         .boxes
         .intruders(|pid| !ours.contains(&(pid as u32)));
+    let mut out = Vec::new();
     for reason in late {
-        let mut out = Vec::new();
         sup.step(now_ns(), Event::RobotIntruder(reason), &mut out);
-        for action in &out {
-            if let crate::supervision::Action::Warn(line) = action {
-                tracing::warn!("{line}");
-            }
-            evaluation.apply(action);
-        }
     }
+    for action in &out {
+        if let Action::Warn(line) = action {
+            tracing::warn!("{line}");
+        }
+        evaluation.apply(action);
+    }
+    out
 }
 
 /// The run in one line.
@@ -113,4 +119,69 @@ fn summary(report: &Report) {
         report.false_detections,
         report.summary
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::realtime::{RealtimeWatch, Wanted};
+    use crate::supervision::Setup;
+    use phri_ipc::{CommanderStats, Zeroed};
+
+    /// The default cell's plan, supervised from t = 0.
+    fn cell() -> (Plan, Supervision) {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let plan = Plan::load(&root.join("deploy/phri.toml"), None, &[], None).unwrap();
+        let sup = Supervision::new(Setup {
+            sup: plan.loaded.config.supervisor.clone(),
+            wanted: plan
+                .services
+                .iter()
+                .map(|_| Wanted {
+                    priority: 0,
+                    cpus: vec![],
+                })
+                .collect(),
+            services: plan.services.clone(),
+            realtime: RealtimeWatch::new(None),
+            online: 2,
+            require_rt: false,
+            t0_ns: 0,
+            duration_s: None,
+            robot_clock: true,
+        });
+        (plan, sup)
+    }
+
+    #[test]
+    fn a_stranger_named_only_as_the_robot_stopped_is_an_intruder_in_the_report() {
+        let (plan, mut sup) = cell();
+        let mut evaluation = Evaluation::new(&plan, 0);
+        // the robot's last robot/commanders, read after the services stopped
+        let mut c = CommanderStats::zeroed();
+        c.seq = 40;
+        c.refused_stranger = [1, 0];
+        c.stranger_pid = 4242;
+        evaluation.boxes.on_commanders(&c);
+        let out = judge_last_strangers(&mut sup, &mut evaluation, &[77, 78]);
+        let recorded = out.iter().any(|a| {
+            matches!(a, Action::Record { kind: "intruder", service, detail, .. }
+                if service == "robot" && detail.contains("pid 4242"))
+        });
+        assert!(recorded, "{out:?}");
+        assert!(
+            out.iter().any(|a| matches!(a, Action::Degrade(_))),
+            "{out:?}"
+        );
+        // judged once over the run
+        assert!(judge_last_strangers(&mut sup, &mut evaluation, &[77, 78]).is_empty());
+        // one of the supervisor's own services, whose pid the robot learned
+        // late, is no intruder
+        let mut c = CommanderStats::zeroed();
+        c.seq = 41;
+        c.refused_stranger = [2, 0];
+        c.stranger_pid = 77;
+        evaluation.boxes.on_commanders(&c);
+        assert!(judge_last_strangers(&mut sup, &mut evaluation, &[77, 78]).is_empty());
+    }
 }
