@@ -836,9 +836,12 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         .iter()
         .map(|e| e["t_s"].as_f64().unwrap())
         .collect();
-    // one camera down at a time: no stop (the last of them 3 s before)
+    // one camera down at a time: no stop (the last of them 3 s before).
+    // Before the first kill both cameras run: a stop there is start-up's
+    // (once on a fresh clone, at 1.5 s: the first frames late with the
+    // person near), not this test's
     assert!(
-        stops.iter().all(|&t| t >= both_t - 0.3),
+        stops.iter().all(|&t| t < one_t || t >= both_t - 0.3),
         "a protective stop with one camera left: {stops:?}, {}",
         r["events"]
     );
