@@ -405,18 +405,15 @@ impl Cell {
     /// ([`phri_perception::Perception`], the steps the binaries run); deliver
     /// what is ready.
     fn perceive(&mut self) -> Result<(), CellError> {
+        let dark: [bool; phri_ipc::MAX_CAMERAS] =
+            std::array::from_fn(|c| self.down(Down::Camera(c)));
         let Some(p) = self.perception.as_mut() else {
             return Ok(());
         };
         let now = self.t_ns;
         p.history.push_state(&self.state);
-        let now_s = now as f64 * 1e-9;
-        for c in 0..p.cameras.cameras() {
-            let dark = self
-                .outages
-                .iter()
-                .any(|o| o.service == Down::Camera(c) && now_s >= o.from_s && now_s < o.to_s);
-            p.cameras.set_dark(c, dark);
+        for (c, &d) in dark.iter().enumerate() {
+            p.cameras.set_dark(c, d);
         }
         // every camera dark: no frame at all (none in flight is lost)
         if now >= p.next_capture_ns && p.cameras.any_lit() {

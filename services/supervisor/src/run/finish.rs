@@ -124,7 +124,6 @@ fn summary(report: &Report) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::realtime::{RealtimeWatch, Wanted};
     use crate::supervision::Setup;
     use phri_ipc::{CommanderStats, Zeroed};
 
@@ -132,24 +131,10 @@ mod tests {
     fn cell() -> (Plan, Supervision) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         let plan = Plan::load(&root.join("deploy/phri.toml"), None, &[], None).unwrap();
-        let sup = Supervision::new(Setup {
-            sup: plan.loaded.config.supervisor.clone(),
-            wanted: plan
-                .services
-                .iter()
-                .map(|_| Wanted {
-                    priority: 0,
-                    cpus: vec![],
-                })
-                .collect(),
-            services: plan.services.clone(),
-            realtime: RealtimeWatch::new(None),
-            online: 2,
-            require_rt: false,
-            t0_ns: 0,
-            duration_s: None,
-            robot_clock: true,
-        });
+        let sup = Supervision::new(Setup::unscheduled(
+            plan.loaded.config.supervisor.clone(),
+            plan.services.clone(),
+        ));
         (plan, sup)
     }
 

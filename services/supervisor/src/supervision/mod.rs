@@ -72,6 +72,34 @@ pub struct Setup {
     pub robot_clock: bool,
 }
 
+#[cfg(test)]
+impl Setup {
+    /// For tests: `services` under `sup`, every one on the normal
+    /// scheduler, on 2 CPUs, from t = 0, on the simulator's clock.
+    pub(crate) fn unscheduled(
+        sup: SupervisorConfig,
+        services: Vec<(String, ServiceSpec)>,
+    ) -> Setup {
+        Setup {
+            sup,
+            wanted: services
+                .iter()
+                .map(|_| Wanted {
+                    priority: 0,
+                    cpus: vec![],
+                })
+                .collect(),
+            services,
+            realtime: RealtimeWatch::new(None),
+            online: 2,
+            require_rt: false,
+            t0_ns: 0,
+            duration_s: None,
+            robot_clock: true,
+        }
+    }
+}
+
 /// Where the machine is in a sequence of steps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Stage {

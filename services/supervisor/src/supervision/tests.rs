@@ -29,23 +29,7 @@ fn setup() -> Setup {
         ),
         ("worker".to_string(), spec("phri-worker", None, &[])),
     ];
-    Setup {
-        sup: defaults.supervisor.clone(),
-        wanted: services
-            .iter()
-            .map(|_| Wanted {
-                priority: 0,
-                cpus: vec![],
-            })
-            .collect(),
-        services,
-        realtime: RealtimeWatch::new(None),
-        online: 2,
-        require_rt: false,
-        t0_ns: 0,
-        duration_s: None,
-        robot_clock: true,
-    }
+    Setup::unscheduled(defaults.supervisor.clone(), services)
 }
 
 /// A test's cell: the machine and the pids it handed out.
