@@ -5,7 +5,6 @@
 
 use super::*;
 use crate::process::DEADMAN_TEXT;
-use crate::realtime::RealtimeWatch;
 
 const MS: u64 = 1_000_000;
 const S: u64 = 1_000_000_000;
