@@ -364,7 +364,7 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
     let cell = Cell::start(
         "kdyn",
         "free-motion",
-        Some(12.0),
+        Some(10.0),
         &["control.standby=false"],
     );
     wait(5.0);
@@ -395,7 +395,7 @@ fn killing_dynamics_means_protective_stop_restart_and_resume() {
 #[test]
 fn killing_either_residual_service_causes_no_protective_stop() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("kdyn2", "free-motion", Some(14.0), &[]);
+    let cell = Cell::start("kdyn2", "free-motion", Some(11.0), &[]);
     wait(4.0);
     cell.kill("dynamics", libc::SIGKILL);
     wait(4.0);
@@ -425,7 +425,7 @@ fn killing_the_controller_brakes_then_resumes_without_a_jump() {
     let cell = Cell::start(
         "kctl",
         "free-motion",
-        Some(12.0),
+        Some(9.0),
         &[
             "supervisor.restart_backoff_min_ms=300",
             "control.standby=false",
@@ -512,7 +512,7 @@ const MISSED_BY_THE_MACHINE: u64 = 2;
 #[test]
 fn killing_either_controller_costs_the_torque_loop_nothing() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("kstandby", "free-motion", Some(14.0), &[]);
+    let cell = Cell::start("kstandby", "free-motion", Some(11.0), &[]);
     wait(1.0);
     let charge = support::Charge::watch(&cell.prefix);
     // the controller in charge dies, twice: the other answers the same period
@@ -564,7 +564,7 @@ fn killing_either_controller_costs_the_torque_loop_nothing() {
 #[test]
 fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_standby() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("stopctl", "free-motion", Some(12.0), &[]);
+    let cell = Cell::start("stopctl", "free-motion", Some(10.5), &[]);
     wait(1.0);
     let charge = support::Charge::watch(&cell.prefix);
     wait(3.0);
@@ -605,7 +605,7 @@ fn both_controllers_killed_at_once_brake_and_resume_as_one_did_alone() {
     let cell = Cell::start(
         "kboth",
         "free-motion",
-        Some(12.0),
+        Some(9.0),
         &["supervisor.restart_backoff_min_ms=300"],
     );
     wait(5.0);
@@ -1182,7 +1182,7 @@ fn a_frozen_process_is_detected_by_its_heartbeat_killed_and_restarted() {
     let cell = Cell::start(
         "frozen",
         "free-motion",
-        Some(10.0),
+        Some(8.0),
         &["control.standby=false"],
     );
     wait(4.0);
@@ -1324,7 +1324,7 @@ fn killing_ingestion_during_an_approach_ends_the_collaboration_safely() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // the robot approaches the waving hand from ~4.5 s; ingestion dies at ~6.5 s:
     // the robot must not keep approaching a hand it no longer sees
-    let cell = Cell::start("collabkill", "collaboration", Some(14.0), &[]);
+    let cell = Cell::start("collabkill", "collaboration", Some(11.0), &[]);
     cell.pid_of("perception");
     let clock = support::RobotClock::watch(&cell.prefix);
     clock.wait_until(6.5);
@@ -1445,7 +1445,7 @@ fn killing_gesture_mid_collaboration_is_fail_safe() {
     // collaboration runs on the tracked hand, not on the recogniser: the
     // supervisor restarts it, nothing unsafe happens, and the restarted
     // recogniser (which sees at most the wave's tail) asks nothing again
-    let cell = Cell::start("gestkill", "collaboration", Some(15.0), &[]);
+    let cell = Cell::start("gestkill", "collaboration", Some(13.0), &[]);
     cell.pid_of("gesture");
     // (the robot's clock, which a loaded machine puts behind the wall clock)
     let deadline = Instant::now() + Duration::from_secs(30);
