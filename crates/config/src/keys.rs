@@ -126,6 +126,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("repulsion.points.link", "", "the link the control point is fixed on"),
     d("repulsion.points.xyz", "m", "the control point in the link frame"),
     d("repulsion.points.radius", "m", "the link's radius around the point (subtracted from distances)"),
+    d("repulsion.points.law", "", "the one avoidance law the point serves (`paper` or `cbf`); absent: both"),
     d("dynamics.gain", "1/s", "the residual's gain K_I: one for every joint, or one per joint"),
     d("dynamics.velocity_cutoff_hz", "Hz", "cut-off of the velocity estimate from positions"),
     d("dynamics.contact_threshold", "Nm", "|r_i| above: contact; per joint (robot file)"),

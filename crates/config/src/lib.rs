@@ -635,6 +635,11 @@ impl Config {
         config.control.avoidance_params.v_max_repulsion = config.repulsion.params.v_max;
         config.cameras = vec![config.camera.clone()];
         config.apply_camera_sources();
+        let law = config.avoidance.law;
+        config
+            .repulsion
+            .points
+            .retain(|p| p.law.is_none_or(|l| l == law));
         Ok(config)
     }
 

@@ -109,6 +109,8 @@ fn code_keys() -> BTreeSet<String> {
     for k in ["heartbeat", "heartbeat_timeout_ms", "cpu_budget"] {
         keys.insert(format!("{SERVICE_PREFIX}{k}"));
     }
+    // a control point's law: absent from every file's point but one
+    keys.insert("repulsion.points.law".into());
     let capsule = CapsuleConfig {
         link: String::new(),
         a: [0.0; 3],

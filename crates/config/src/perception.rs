@@ -4,6 +4,7 @@
 use phri_depth::{CameraPose, Intrinsics, RenderOptions, RepulsionParams, SelfFilterParams};
 use serde::{Deserialize, Serialize};
 
+use crate::avoidance::AvoidanceLaw;
 use crate::check::{finite, non_negative, positive, within};
 use crate::error::Invalid;
 
@@ -241,6 +242,11 @@ pub struct PointConfig {
     pub xyz: [f64; 3],
     /// radius of the link around the point \[m\] (subtracted from distances)
     pub radius: f64,
+    /// the one avoidance law this point serves (`[avoidance] law`); absent:
+    /// both. A point of the other law is dropped when the configuration is
+    /// typed, so that no worker, controller or report sees it
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law: Option<AvoidanceLaw>,
 }
 
 /// `[repulsion]`: the repulsion workers and their control points.

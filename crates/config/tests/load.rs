@@ -535,3 +535,30 @@ fn cpu_budgets_are_shares_of_a_core_within_the_machine() {
         assert!(e.contains("services.sim.cpu_budget"), "{e}");
     }
 }
+
+#[test]
+fn a_control_point_of_one_law_exists_only_under_that_law() {
+    let names = |sets: &[&str]| -> Vec<String> {
+        let l = load(sets).unwrap_or_else(|e| panic!("{e}"));
+        l.config.validate().unwrap();
+        l.config.repulsion.points.into_iter().map(|p| p.name).collect()
+    };
+    // the Panda's link-7 point serves the barrier filter only
+    let paper = names(&["robot.name=panda"]);
+    let cbf = names(&["robot.name=panda", "avoidance.law=cbf"]);
+    assert!(!paper.iter().any(|n| n == "link7_low"), "{paper:?}");
+    assert_eq!(cbf.last().map(String::as_str), Some("link7_low"), "{cbf:?}");
+    // every other point in the same order under both
+    assert_eq!(paper[..], cbf[..cbf.len() - 1]);
+    // the arms without such a point: the same points under both laws
+    for arm in ["robot.name=lwr4", "robot.name=fr3"] {
+        assert_eq!(names(&[arm]), names(&[arm, "avoidance.law=cbf"]), "{arm}");
+    }
+    // a law that is none is refused, naming the key
+    let text = "[[repulsion.points]]\nname = \"p\"\nlink = \"lwr_link_7\"\n\
+                xyz = [0.0, 0.0, 0.0]\nradius = 0.1\nlaw = \"fast\"\n";
+    let e = Loaded::load_text(text, &deploy(), None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("repulsion.points") && e.contains("fast"), "{e}");
+}

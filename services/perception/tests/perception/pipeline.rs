@@ -30,6 +30,7 @@ fn repulsion_config() -> RepulsionConfig {
             link: "lwr_flange".into(),
             xyz: [0.0; 3],
             radius: 0.05,
+            law: None,
         }],
         ..Config::defaults().repulsion
     }
