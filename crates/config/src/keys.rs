@@ -79,6 +79,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("sim.ft_sensor", "", "simulate a wrist F/T sensor (enables the modified residual, eq. 8)"),
     d("sim.forces_to", "", "hybrid cell with a simulated outside arm: where the person's contact forces go (UDP ip:port); \"\": nowhere"),
     d("sim.q0", "rad", "initial posture, one per joint"),
+    d("sim.human_offset_s", "s", "the person's script runs this far ahead of the robot's clock: meet the person later in the scenario (its [human] keyframes; voice lines keep the robot's clock)"),
     d("camera.source", "", "sim (renders the simulated cell), freenect (a Kinect v1), ros2 (a ROS 2 depth camera), replay (recorded frames) (`--camera`)"),
     d("camera.rate_hz", "Hz", "frames per second (sim and replay; a real camera runs at its own)"),
     d("camera.latency_ms", "ms", "extra capture → publish delay on top of rendering (to mimic a slower sensor)"),

@@ -43,6 +43,11 @@ pub struct SimConfig {
     /// `ip:port`) to act on an arm that is itself simulated outside
     /// (franka-sim: `deploy/franka-sim/serve.py --forces-port`); "": nowhere
     pub forces_to: String,
+    /// the person's script runs this far ahead of the simulator's clock
+    /// \[s\]: the cell meets the person at that point of the scenario (the
+    /// `[human]` keyframes; the scenario's voice lines keep the robot's
+    /// clock). `phri-lockstep --offset` adds its own to it
+    pub human_offset_s: f64,
 }
 
 impl SimConfig {
@@ -57,6 +62,7 @@ impl SimConfig {
             ));
         }
         non_negative(S, "encoder_resolution_rad", self.encoder_resolution_rad)?;
+        within(S, "human_offset_s", self.human_offset_s, -3600.0, 3600.0)?;
         self.viscous_friction.check("sim.viscous_friction")?;
         self.coulomb_friction.check("sim.coulomb_friction")?;
         positive(S, "coulomb_smoothing_rad_s", self.coulomb_smoothing_rad_s)?;

@@ -241,7 +241,8 @@ pub enum ArmResume {
 /// Restarted inside a running cell that started at `cell_start_ns` (it is
 /// `now_ns`): the world went on without us, so the person continues where the
 /// predecessor's script was (its snapshot's script time plus the time since;
-/// without a snapshot, the time since the cell started), and the arm stands,
+/// without a snapshot, `[sim] human_offset_s` plus the time since the cell
+/// started), and the arm stands,
 /// at rest, where the predecessor last saved it in `snapshot` (if given,
 /// fresh and fitting).
 pub fn resume(
@@ -251,7 +252,8 @@ pub fn resume(
     snapshot: Option<&Path>,
 ) -> Resumed {
     let behind_s = now_ns.saturating_sub(cell_start_ns) as f64 * 1e-9;
-    let mut scenario_s = behind_s;
+    // the configured offset of the person's script, then the time since
+    let mut scenario_s = sim.config().human_offset_s + behind_s;
     let arm = match snapshot {
         None => ArmResume::Initial,
         Some(path) => match load_fresh(path, sim.model().nv(), cell_start_ns, now_ns) {

@@ -73,7 +73,8 @@ fn step_err(service: &'static str) -> impl Fn(&dyn std::fmt::Display) -> CellErr
 #[derive(Clone, Debug)]
 pub struct CellOptions {
     /// the human script runs this far ahead of the robot \[s\] (negative: the
-    /// person arrives later, meeting the arm at another phase of its cycle)
+    /// person arrives later, meeting the arm at another phase of its cycle),
+    /// on top of `[sim] human_offset_s`
     pub human_time_offset_s: f64,
     /// capture → repulsion results at the controller \[ms\]
     pub perception_latency_ms: f64,
@@ -180,7 +181,7 @@ impl Cell {
         let mut sim =
             Simulator::from_scenario(model.clone(), cfg.sim.clone(), &loaded.scenario, None)
                 .map_err(|e| step_err("sim")(&e))?;
-        sim.set_human_time_offset(opts.human_time_offset_s);
+        sim.set_human_time_offset(cfg.sim.human_offset_s + opts.human_time_offset_s);
         let period_ns = (cfg.sim.dt_s * 1e9).round() as u64;
         let link = RobotLink::new(n, period_ns).map_err(|e| step_err("sim")(&e))?;
         let dynamics = DynamicsStep::new(model.clone(), &cfg.dynamics)

@@ -243,7 +243,7 @@ impl Simulator {
             robot,
             rng,
             t: 0.0,
-            human_time_offset: 0.0,
+            human_time_offset: cfg.human_offset_s,
             qd: vec![0.0; n],
             tau_cmd: vec![0.0; n],
             noise: vec![0.0; n],
@@ -347,10 +347,11 @@ impl Simulator {
     }
 
     /// Run the human script `offset_s` \[s\] ahead of the simulation clock
-    /// (negative: behind). A restarted simulator uses it to continue the
-    /// scenario where the cell is, rather than replaying the person from the
-    /// start; lock-step sweeps use it to meet the person at another phase of
-    /// the robot's cycle. Non-finite values count as 0.
+    /// (negative: behind; at first `[sim] human_offset_s`). A restarted
+    /// simulator uses it to continue the scenario where the cell is, rather
+    /// than replaying the person from the start; lock-step sweeps use it to
+    /// meet the person at another phase of the robot's cycle. Non-finite
+    /// values count as 0.
     pub fn set_human_time_offset(&mut self, offset_s: f64) {
         self.human_time_offset = if offset_s.is_finite() { offset_s } else { 0.0 };
     }

@@ -56,3 +56,36 @@ fn the_person_continues_from_the_predecessor_s_script_time() {
     let r = snapshot::resume(&mut none, start, now, None);
     assert!((none.human_time_s() - 20.0).abs() < 1e-9, "{r:?}");
 }
+
+#[test]
+fn a_configured_offset_of_the_person_s_script_carries_into_a_restart() {
+    use phri_config::SimConfig;
+    let cfg = SimConfig {
+        human_offset_s: 5.0,
+        ..common::sim_config()
+    };
+    let offset = || Simulator::new(common::model(), cfg.clone(), None, &[], Some(1)).unwrap();
+    // a fresh simulator meets the person 5 s into the script
+    let mut fresh = offset();
+    assert!((fresh.human_time_s() - 5.0).abs() < 1e-9);
+    fresh.step(&[0.0; 7], true);
+    assert!((fresh.human_time_s() - 5.001).abs() < 1e-9);
+    // restarted 20 s into the cell without a snapshot: 25 s into the script
+    let (start, now) = (100 * S, 120 * S);
+    let mut restarted = offset();
+    let r = snapshot::resume(&mut restarted, start, now, None);
+    assert!((r.scenario_s - 25.0).abs() < 1e-9, "{r:?}");
+    assert!((restarted.human_time_s() - 25.0).abs() < 1e-9);
+    // a snapshot's script time already holds the offset
+    let path = run_dir("offset");
+    let s = ArmSnapshot {
+        version: snapshot::VERSION,
+        stamp_ns: now,
+        q: cfg.q0.clone(),
+        scenario_s: 24.0,
+    };
+    snapshot::save(&path, &s).unwrap();
+    let mut resumed = offset();
+    let r = snapshot::resume(&mut resumed, start, now, Some(&path));
+    assert!((r.scenario_s - 24.0).abs() < 1e-9, "{r:?}");
+}

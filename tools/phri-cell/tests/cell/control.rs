@@ -300,3 +300,22 @@ fn avoidance_with_nothing_near_keeps_the_task() {
     assert_eq!(with.detections, 0);
     assert_eq!(with.protective_stop_s, 0.0);
 }
+
+/// `[sim] human_offset_s` (the process cell's way to meet the person later
+/// in the scenario) is the lock-step cell's `--offset`: the same run, and
+/// the two add up.
+#[test]
+fn the_configured_offset_of_the_person_is_the_lock_step_offset() {
+    let summary = |offset: f64, sets: &[&str]| {
+        let opts = CellOptions {
+            human_time_offset_s: offset,
+            ..Default::default()
+        };
+        serde_json::to_string(&common::run("coexistence", 6.0, &opts, sets)).unwrap()
+    };
+    let by_option = summary(6.0, &[]);
+    assert_eq!(by_option, summary(0.0, &["sim.human_offset_s=6"]));
+    assert_eq!(by_option, summary(2.0, &["sim.human_offset_s=4"]));
+    // and it is an offset: without it the person is elsewhere
+    assert_ne!(by_option, summary(0.0, &[]));
+}
