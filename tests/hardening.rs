@@ -1362,8 +1362,12 @@ fn forged_repulsion_results_are_refused_and_reported() {
             &[
                 "--scenario",
                 "coexistence",
+                // the person's script from 5 s: the hand in the path from
+                // the run's 6 s to its end
+                "--set",
+                "sim.human_offset_s=5",
                 "--duration",
-                "18",
+                "13",
                 "--report",
                 &report_path.to_string_lossy(),
             ],

@@ -13,6 +13,12 @@ mod support;
 
 static SERIAL: Mutex<()> = Mutex::new(());
 
+/// The tests of the `coexistence` scenario meet its person 5 s into the
+/// script: walking across 1.4 m from the base, 5 s before the hand is in
+/// the end effector's path (`[sim] human_offset_s`). The walk from the
+/// script's start, 1.8 m to the side, is 5 s of cell the tests do not need
+const OFFSET: &str = "sim.human_offset_s=5";
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../..")
@@ -686,12 +692,14 @@ fn sigint_stops_everything_and_leaves_nothing_behind() {
 #[test]
 fn coexistence_avoids_the_person_without_deadline_misses() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let r = Cell::start("coex", "coexistence", Some(24.0), &[]).finish();
+    // the person's script from 5 s (OFFSET): walking up, then the whole
+    // visit, the hand held in the path until it steps back at 24 s (19 s)
+    let r = Cell::start("coex", "coexistence", Some(19.0), &[OFFSET]).finish();
     assert_no_unintended_contact(&r);
     assert!(r["min_distance_m"].as_f64().unwrap() > 0.0);
     let p = &r["perception"];
     assert!(
-        p["frames"].as_u64().unwrap() >= 24 * 25,
+        p["frames"].as_u64().unwrap() >= 19 * 25,
         "frames {}",
         p["frames"]
     );
@@ -703,7 +711,7 @@ fn coexistence_avoids_the_person_without_deadline_misses() {
     let cycles = r["torque_loop"]["cycles"].as_u64().unwrap();
     assert!(r["torque_loop"]["missed_deadlines"].as_u64().unwrap() * 100 <= cycles);
     assert_eq!(r["false_detections"], 0);
-    // the person blocks the path from t = 8 s: the task moved before, and waits, not collides
+    // the person blocks the path from t = 3 s: the task moved before, and waits, not collides
     assert!(r["task"]["waypoints_reached"].as_u64().unwrap() >= 1);
 }
 
@@ -732,13 +740,13 @@ fn killing_ingestion_and_a_worker_stops_safely_near_the_person_and_resumes() {
     let cell = Cell::start(
         "kperc",
         "coexistence",
-        Some(20.0),
-        &["supervisor.restart_backoff_min_ms=400"],
+        Some(15.0),
+        &["supervisor.restart_backoff_min_ms=400", OFFSET],
     );
-    // the person's hand is in the end effector's path from t = 10 s (the
-    // robot's clock)
+    // the person's hand is in the end effector's path from t = 5 s (the
+    // robot's clock; the script's 10 s)
     let clock = support::RobotClock::watch(&cell.prefix);
-    clock.wait_until(13.0);
+    clock.wait_until(8.0);
     drop(clock);
     cell.kill("perception", libc::SIGKILL);
     cell.kill("repulsion1", libc::SIGKILL);
@@ -798,13 +806,17 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
         "deploy/two-cameras.toml",
         "kcam2",
         "coexistence",
-        Some(22.0),
-        &["supervisor.restart_backoff_min_ms=400", "avoidance.law=cbf"],
+        Some(17.0),
+        &[
+            "supervisor.restart_backoff_min_ms=400",
+            "avoidance.law=cbf",
+            OFFSET,
+        ],
     );
-    // the person's hand is in the end effector's path from t = 10 s (the
-    // robot's clock)
+    // the person's hand is in the end effector's path from t = 5 s (the
+    // robot's clock; the script's 10 s)
     let clock = support::RobotClock::watch(&cell.prefix);
-    clock.wait_until(11.0);
+    clock.wait_until(6.0);
     drop(clock);
     cell.kill("camera-1", libc::SIGKILL);
     wait(3.0);
@@ -854,7 +866,7 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
     assert!(r["protective_stop_causes"]["stale_perception"].as_u64() >= Some(1));
     // each camera answered the fusion while the other was down: alone for
     // the other's 0.4 s back-off and start-up, it won every decision of
-    // about 0.5 s of a 22 s run of two cameras' answers, over 1 % of them
+    // about 0.5 s of a 17 s run of two cameras' answers, over 1 % of them
     // (besides, each wins where its bound is the larger: the mirror 4.9-12
     // % under the barrier filter, more under the paper's law)
     let cams = r["perception"]["cameras"].as_array().unwrap();
@@ -884,9 +896,9 @@ fn one_camera_killed_leaves_the_other_s_distances_and_both_killed_stop_safely() 
 #[test]
 fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    // the last fault's stop at about 19.5 s resumes about 2 s later: 26 s
+    // the last fault's stop at about 14.5 s resumes about 2 s later: 21 s
     // leave a loaded machine's late fault command its margin
-    let cell = Cell::start("dfault", "coexistence", Some(26.0), &[]);
+    let cell = Cell::start("dfault", "coexistence", Some(21.0), &[OFFSET]);
     let fault = |args: &[&str]| {
         let out = Command::new(bin("phri-fault"))
             .arg("--run-dir")
@@ -901,16 +913,16 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
             String::from_utf8_lossy(&out.stderr)
         );
     };
-    // the person's hand is in the end effector's path from t = 11 s (the
-    // robot's clock), each fault 3 s after the last on that clock: a stop
-    // and its resume take about 2 s however far the machine's load puts the
-    // robot behind the wall clock
+    // the person's hand is in the end effector's path from t = 6 s (the
+    // robot's clock; the script's 11 s), each fault 3 s after the last on
+    // that clock: a stop and its resume take about 2 s however far the
+    // machine's load puts the robot behind the wall clock
     let clock = support::RobotClock::watch(&cell.prefix);
-    clock.wait_until(12.5);
+    clock.wait_until(7.5);
     fault(&["corrupt", "size", "--frames", "30"]);
-    clock.wait_until(15.5);
+    clock.wait_until(10.5);
     fault(&["corrupt", "stale", "--frames", "30"]);
-    clock.wait_until(18.5);
+    clock.wait_until(13.5);
     // late beyond the controller's 100 ms, yet frequent enough not to look frozen
     fault(&["delay", "150", "--for", "1.5"]);
     drop(clock);
@@ -944,11 +956,11 @@ fn corrupt_and_late_depth_frames_stop_safely_and_cost_no_deadline() {
 #[test]
 fn a_restarted_simulator_continues_the_scenario() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let cell = Cell::start("simkill", "coexistence", Some(16.0), &[]);
-    // the person's hand is in the end effector's path from t = 11 s (the
-    // robot's clock)
+    let cell = Cell::start("simkill", "coexistence", Some(11.0), &[OFFSET]);
+    // the person's hand is in the end effector's path from t = 6 s (the
+    // robot's clock; the script's 11 s)
     let clock = support::RobotClock::watch(&cell.prefix);
-    clock.wait_until(12.5);
+    clock.wait_until(7.5);
     drop(clock);
     cell.kill("sim", libc::SIGKILL);
     wait(1.5);
@@ -971,7 +983,7 @@ fn a_restarted_simulator_continues_the_scenario() {
         .as_f64()
         .or_else(|| v["msg"]["min_distance"].as_f64())
         .unwrap_or_else(|| panic!("no min_distance in {text:?}"));
-    // at the start of the script the person stands 1.8 m to the side
+    // at the start of the run the person walks past 1.4 m from the base
     assert!(
         d < 0.5,
         "after the restart the person is {d} m away: the scenario rewound"
@@ -984,7 +996,7 @@ fn a_restarted_simulator_continues_the_scenario() {
         r["contacts"]
     );
     // and the arm stood where it was (saved every 10 ms; the scenario's
-    // initial configuration is far from where the arm is at 12.5 s)
+    // initial configuration is far from where the arm is at 7.5 s)
     let restarts = r["sim_restarts"].as_array().expect("sim_restarts");
     assert_eq!(restarts.len(), 1, "{restarts:?}");
     let jump = restarts[0]["arm_jump_rad"].as_f64().unwrap();
