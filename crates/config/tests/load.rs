@@ -541,7 +541,12 @@ fn a_control_point_of_one_law_exists_only_under_that_law() {
     let names = |sets: &[&str]| -> Vec<String> {
         let l = load(sets).unwrap_or_else(|e| panic!("{e}"));
         l.config.validate().unwrap();
-        l.config.repulsion.points.into_iter().map(|p| p.name).collect()
+        l.config
+            .repulsion
+            .points
+            .into_iter()
+            .map(|p| p.name)
+            .collect()
     };
     // the Panda's link-7 point serves the barrier filter only
     let paper = names(&["robot.name=panda"]);
