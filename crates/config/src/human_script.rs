@@ -112,6 +112,10 @@ pub struct Keyframe {
     pub right_foot: Option<[f64; 3]>,
     /// left-foot (ankle) target \[m\], robot base frame; `None`: standing
     pub left_foot: Option<[f64; 3]>,
+    /// forward lean of the upper body (torso, head, shoulders) about the
+    /// hips \[rad\]: 0 upright, positive bowing forward (at most
+    /// [`HumanScript::MAX_LEAN_RAD`]), negative leaning back; `None`: upright
+    pub lean: Option<f64>,
     /// a hand waves from this keyframe until the next
     pub wave: Option<Wave>,
     /// a hand pushes a robot link from this keyframe until the next
@@ -189,6 +193,12 @@ impl HumanScript {
     /// Default floor height \[m\]: the robot stands on a 0.8 m table.
     pub const DEFAULT_FLOOR_Z: f64 = -0.8;
 
+    /// The most a person bows forward \[rad\] (the torso horizontal).
+    pub const MAX_LEAN_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+    /// The most a person leans back \[rad\].
+    pub const MAX_BACK_LEAN_RAD: f64 = 0.5;
+
     /// Most keyframes a script may have (the deployed ones have at most 15;
     /// the simulator searches them every period).
     pub const MAX_KEYFRAMES: usize = 10_000;
@@ -242,6 +252,19 @@ impl HumanScript {
                     index,
                     field: "left_foot",
                 });
+            }
+            if let Some(lean) = k.lean {
+                if !(-Self::MAX_BACK_LEAN_RAD..=Self::MAX_LEAN_RAD).contains(&lean) {
+                    return Err(ScriptError::Invalid {
+                        index,
+                        field: "lean",
+                        reason: format!(
+                            "{lean} rad is not in [-{}, {}] rad",
+                            Self::MAX_BACK_LEAN_RAD,
+                            Self::MAX_LEAN_RAD
+                        ),
+                    });
+                }
             }
             check_actions(index, k)?;
             if index > 0 {

@@ -193,6 +193,7 @@ struct RawKeyframe {
     left_hand: Option<[f64; 3]>,
     right_foot: Option<[f64; 3]>,
     left_foot: Option<[f64; 3]>,
+    lean: Option<f64>,
     wave: Option<RawWave>,
     push: Option<RawPush>,
 }
@@ -404,6 +405,7 @@ fn keyframe(
         left_hand: k.left_hand,
         right_foot: k.right_foot,
         left_foot: k.left_foot,
+        lean: k.lean,
         wave,
         push,
     })

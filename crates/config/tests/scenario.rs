@@ -417,3 +417,26 @@ fn wave_scenario_loads() {
     assert_eq!(held, vec![7.0, 10.0]);
     assert!(h.end_time() <= 12.0);
 }
+
+#[test]
+fn a_lean_is_read_and_one_out_of_range_is_refused_by_key() {
+    let k1 = |lean: &str| {
+        format!("{HEAD}{K0}[[human.keyframe]]\nt = 1.0\nbase = [1.0, 0.0, 0.0]\nlean = {lean}\n")
+    };
+    let sc = Scenario::from_str(&k1("0.9")).expect("a lean");
+    let ks = sc.human.expect("a human").keyframes().to_vec();
+    assert_eq!((ks[0].lean, ks[1].lean), (None, Some(0.9)));
+    let lean_over = Scenario::from_file(scenario_path("lean-over.toml")).expect("lean-over.toml");
+    assert!(lean_over
+        .human
+        .expect("a person")
+        .keyframes()
+        .iter()
+        .any(|k| k.lean == Some(0.9)));
+    for bad in ["1.6", "-0.6", "nan", "inf"] {
+        let e = parse_err(&k1(bad)).to_string();
+        assert!(e.contains("keyframe[1].lean"), "{bad}: {e}");
+    }
+    let e = parse_err(&k1("\"deep\"")).to_string();
+    assert!(e.contains("lean"), "{e}");
+}

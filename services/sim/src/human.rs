@@ -104,12 +104,15 @@ pub mod body {
     pub const R_SHIN: f64 = 0.055;
 }
 
-/// The human's frame: origin on the floor, unit forward and left axes.
+/// The human's frame: origin on the floor, unit forward and left axes, and
+/// the upper body's forward lean about the hips (its sine and cosine).
 #[derive(Clone, Copy)]
 struct Frame {
     o: Vector3<f64>,
     fwd: Vector3<f64>,
     left: Vector3<f64>,
+    lean_sin: f64,
+    lean_cos: f64,
 }
 
 impl Frame {
@@ -119,12 +122,40 @@ impl Frame {
             o: Vector3::new(base[0], base[1], floor_z),
             fwd: Vector3::new(c, s, 0.0),
             left: Vector3::new(-s, c, 0.0),
+            lean_sin: 0.0,
+            lean_cos: 1.0,
+        }
+    }
+
+    /// The same frame with the upper body leaning `lean` \[rad\] forward.
+    fn leaning(self, lean: f64) -> Frame {
+        let (lean_sin, lean_cos) = lean.sin_cos();
+        Frame {
+            lean_sin,
+            lean_cos,
+            ..self
         }
     }
 
     /// A point given in the human frame (forward, left, up) \[m\].
     fn point(&self, x: f64, y: f64, z: f64) -> Vector3<f64> {
         self.o + self.fwd * x + self.left * y + Vector3::z() * z
+    }
+
+    /// A point of the upper body given in the upright human frame
+    /// (forward, left, up) \[m\], turned with the lean about the hips'
+    /// axis (left, at the pelvis' height).
+    fn upper(&self, x: f64, y: f64, z: f64) -> Vector3<f64> {
+        if self.lean_sin == 0.0 {
+            // upright: exactly the standing body's point
+            return self.point(x, y, z);
+        }
+        let up = z - body::PELVIS_Z;
+        self.point(
+            x * self.lean_cos + up * self.lean_sin,
+            y,
+            body::PELVIS_Z - x * self.lean_sin + up * self.lean_cos,
+        )
     }
 }
 
@@ -170,7 +201,7 @@ fn arm_joints(
     target: Option<Vector3<f64>>,
 ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
     use body::*;
-    let shoulder = frame.point(0.0, side * SHOULDER_Y, SHOULDER_Z);
+    let shoulder = frame.upper(0.0, side * SHOULDER_Y, SHOULDER_Z);
     let target = target.unwrap_or_else(|| hang_point(frame, side));
     // elbow in the plane of the arm and a hint pointing down and outwards;
     // reaching along the hint, the elbow bends backwards instead
@@ -222,7 +253,12 @@ fn arm_segments(
 /// Where a hanging hand is \[m\], base frame.
 fn hang_point(frame: &Frame, side: f64) -> Vector3<f64> {
     use body::*;
-    frame.point(HANG[0], side * (SHOULDER_Y + HANG[1]), SHOULDER_Z + HANG[2])
+    if frame.lean_sin == 0.0 {
+        return frame.point(HANG[0], side * (SHOULDER_Y + HANG[1]), SHOULDER_Z + HANG[2]);
+    }
+    // the arm hangs from the shoulder whatever the lean
+    let shoulder = frame.upper(0.0, side * SHOULDER_Y, SHOULDER_Z);
+    shoulder + frame.fwd * HANG[0] + frame.left * (side * HANG[1]) + Vector3::z() * HANG[2]
 }
 
 /// Where the ankle of a straight standing leg is \[m\], base frame.
@@ -267,6 +303,8 @@ pub struct ActivePush<'s> {
 /// Interpolated pose inputs at one instant.
 struct Interpolated {
     base: [f64; 3],
+    /// the upper body's forward lean \[rad\]
+    lean: f64,
     hands: [Option<Vector3<f64>>; 2],
     feet: [Option<Vector3<f64>>; 2],
 }
@@ -336,7 +374,7 @@ impl Human {
         use body::*;
         let t = self.script.script_time(t);
         let ip = self.interpolate(t);
-        let fl = Frame::new(ip.base, self.script.floor_z());
+        let fl = Frame::new(ip.base, self.script.floor_z()).leaning(ip.lean);
         // the wave acting now, with its blend factor and time since it started
         let wave = self.script.interval_at(t).and_then(|(i, start, end)| {
             let w = self.script.keyframes()[i].wave?;
@@ -350,14 +388,14 @@ impl Human {
         };
         set(
             BodyPart::Head,
-            fl.point(0.0, 0.0, HEAD[0]),
-            fl.point(0.0, 0.0, HEAD[1]),
+            fl.upper(0.0, 0.0, HEAD[0]),
+            fl.upper(0.0, 0.0, HEAD[1]),
             R_HEAD,
         );
         set(
             BodyPart::Torso,
-            fl.point(0.0, 0.0, TORSO[0]),
-            fl.point(0.0, 0.0, TORSO[1]),
+            fl.upper(0.0, 0.0, TORSO[0]),
+            fl.upper(0.0, 0.0, TORSO[1]),
             R_TORSO,
         );
         set(
@@ -457,6 +495,7 @@ impl Human {
         let last = &ks[ks.len() - 1];
         let single = |k: &Keyframe| Interpolated {
             base: k.base,
+            lean: k.lean.unwrap_or(0.0),
             hands: [k.right_hand.map(v3), k.left_hand.map(v3)],
             feet: [k.right_foot.map(v3), k.left_foot.map(v3)],
         };
@@ -479,7 +518,11 @@ impl Human {
         // a missing target stands for the rest position (hanging hand,
         // standing foot) at that keyframe, so the blend is continuous; two
         // missing targets rest on the blended body
-        let (f0, f1) = (Frame::new(k0.base, floor_z), Frame::new(k1.base, floor_z));
+        let lean = |k: &Keyframe| k.lean.unwrap_or(0.0);
+        let (f0, f1) = (
+            Frame::new(k0.base, floor_z).leaning(lean(k0)),
+            Frame::new(k1.base, floor_z).leaning(lean(k1)),
+        );
         let blend = |h0: Option<[f64; 3]>,
                      h1: Option<[f64; 3]>,
                      rest: fn(&Frame, f64) -> Vector3<f64>,
@@ -494,6 +537,7 @@ impl Human {
         };
         Interpolated {
             base,
+            lean: lerp(lean(k0), lean(k1)),
             hands: [
                 blend(k0.right_hand, k1.right_hand, hang_point, -1.0),
                 blend(k0.left_hand, k1.left_hand, hang_point, 1.0),
@@ -543,6 +587,57 @@ mod tests {
 
     fn script(ks: Vec<Keyframe>) -> HumanScript {
         HumanScript::new(-0.8, ks).expect("valid script")
+    }
+
+    /// `lean` bows the torso, the head and the shoulders about the hips'
+    /// axis; the pelvis and the legs stay, the hanging hands hang from the
+    /// bowed shoulders, and a script without the key is the upright body.
+    #[test]
+    fn a_lean_bows_the_upper_body_about_the_hips_and_leaves_the_legs() {
+        use body::*;
+        let upright = Keyframe {
+            t: 0.0,
+            base: [1.0, 0.0, std::f64::consts::PI],
+            ..Keyframe::default()
+        };
+        let bowed = Keyframe {
+            t: 1.0,
+            lean: Some(0.9),
+            ..upright.clone()
+        };
+        let mut h = Human::new(script(vec![upright.clone(), bowed]));
+        let stand = h.pose_at(0.0).to_vec();
+        let half = h.pose_at(0.5).to_vec();
+        let bow = h.pose_at(1.0).to_vec();
+        let mut plain = Human::new(script(vec![upright]));
+        assert_eq!(plain.pose_at(0.0), &stand[..]);
+        let of = |caps: &[HumanCapsule], p: BodyPart| caps[p as usize];
+        // facing -x (yaw π): the head's top moves towards the robot by
+        // h sin(lean) and down by h (1 - cos(lean)), h its height above the hips
+        let h_top = HEAD[1] - PELVIS_Z;
+        for (caps, lean) in [(&half, 0.45f64), (&bow, 0.9)] {
+            let (top0, top) = (of(&stand, BodyPart::Head).b, of(caps, BodyPart::Head).b);
+            assert!((top0.x - top.x - h_top * lean.sin()).abs() < 1e-9, "{lean}");
+            assert!((top0.z - top.z - h_top * (1.0 - lean.cos())).abs() < 1e-9);
+            assert!((top.y - top0.y).abs() < 1e-12);
+        }
+        for p in [
+            BodyPart::Pelvis,
+            BodyPart::ThighLeft,
+            BodyPart::ShinLeft,
+            BodyPart::ThighRight,
+            BodyPart::ShinRight,
+        ] {
+            assert_eq!(of(&stand, p), of(&bow, p), "{p:?}");
+        }
+        // the bowed torso keeps its length; the hands hang below the shoulders
+        let len = |c: HumanCapsule| (c.b - c.a).norm();
+        let torso = of(&bow, BodyPart::Torso);
+        assert!((len(torso) - (TORSO[1] - TORSO[0])).abs() < 1e-9);
+        let shoulder = of(&bow, BodyPart::UpperArmRight).a;
+        let hand = of(&bow, BodyPart::HandRight).b;
+        assert!(shoulder.z - hand.z > 0.5, "{shoulder} {hand}");
+        assert!(shoulder.x < of(&stand, BodyPart::UpperArmRight).a.x - 0.3);
     }
 
     /// The capsules are indexed by the part's wire number: `ALL` must be in that order.

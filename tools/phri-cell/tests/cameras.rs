@@ -233,3 +233,36 @@ fn the_mirrored_wave_on_the_depth_trackers_is_seen_by_two_cameras_and_not_by_one
         assert!(modes.ends_with(&["recover", "task"]), "{robot}: {modes:?}");
     }
 }
+
+/// A person bowing over the arm from behind the second camera
+/// (`lean-over`): that camera sees the person's back with the arm hidden
+/// behind it, the paper's camera the gap between them. Under the barrier
+/// filter, on every arm, nobody is touched (closest 1.6-7.8 cm at this
+/// phase, the hardest of -2, 0 and 2 s). The paper's law touches the bowing
+/// person at this phase on the LWR-IV, the FR3 and the Panda (BENCHMARKS).
+#[test]
+fn a_person_bowing_over_the_arm_from_behind_the_second_camera_is_never_touched() {
+    let file = common::deploy().with_file_name("two-cameras.toml");
+    for robot in ["lwr4", "fr3", "panda"] {
+        let arm = format!("robot.name={robot}");
+        let l = Loaded::load(&file, Some("lean-over"), &["avoidance.law=cbf", &arm]).unwrap();
+        let mut c = common::cell_of(&l, &CellOptions::default());
+        // walks in 3-8 s, bows 8-10 s, holds to 16 s, straightens by 18 s
+        for _ in 0..19_000 {
+            c.tick().unwrap();
+        }
+        let s = c.summary();
+        eprintln!(
+            "{robot}: closest {:.3} m at {:.1} s, {} waypoints",
+            s.min_distance_m, s.min_distance_t_s, s.waypoints
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        // the bow came near: this is a hard case, not a person far away
+        assert!(s.min_distance_m < 0.12, "{robot}: {}", s.min_distance_m);
+        assert!(
+            s.waypoints >= 2,
+            "{robot}: the task went on: {}",
+            s.waypoints
+        );
+    }
+}
