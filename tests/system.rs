@@ -14,9 +14,10 @@ mod support;
 static SERIAL: Mutex<()> = Mutex::new(());
 
 /// The tests of the `coexistence` scenario meet its person 5 s into the
-/// script: walking across 1.4 m from the base, 5 s before the hand is in
-/// the end effector's path (`[sim] human_offset_s`). The walk from the
-/// script's start, 1.8 m to the side, is 5 s of cell the tests do not need
+/// script: walking across 1 m in front of the base and 1.4 m to its side,
+/// 5 s before the hand moves into the end effector's path (`[sim]
+/// human_offset_s`). The walk from the script's start, 1.8 m to the side,
+/// is 5 s of cell the tests do not need
 const OFFSET: &str = "sim.human_offset_s=5";
 
 fn repo() -> PathBuf {
@@ -983,7 +984,8 @@ fn a_restarted_simulator_continues_the_scenario() {
         .as_f64()
         .or_else(|| v["msg"]["min_distance"].as_f64())
         .unwrap_or_else(|| panic!("no min_distance in {text:?}"));
-    // at the start of the run the person walks past 1.4 m from the base
+    // a script started over would put the person back where the run began:
+    // 1 m in front of the base and 1.4 m to its side
     assert!(
         d < 0.5,
         "after the restart the person is {d} m away: the scenario rewound"
