@@ -128,6 +128,16 @@ pub struct Repulsion {
     pub obstacle_point: Option<Point3<f64>>,
     /// number of pixels in the surveillance region (the `O ∈ S` of eq. 17)
     pub pixels_considered: usize,
+    /// clearance between the point's sphere and the nearest surface the
+    /// camera saw, every pixel at its own depth (no occlusion rule) \[m\]:
+    /// observed surfaces are real, so this bounds the true clearance from
+    /// above (to the sensor's noise) where `min_distance` bounds it from
+    /// below. Pixels of the scan's window only (the region's back half as
+    /// the image shows it: surfaces up to about ρ away); `INFINITY` when
+    /// none lies there
+    pub surface_distance: f64,
+    /// that surface point, base frame \[m\]; `None` with no pixel
+    pub surface_point: Option<Point3<f64>>,
 }
 
 impl Repulsion {
@@ -138,6 +148,8 @@ impl Repulsion {
         center_distance: f64::INFINITY,
         obstacle_point: None,
         pixels_considered: 0,
+        surface_distance: f64::INFINITY,
+        surface_point: None,
     };
 }
 
@@ -346,7 +358,13 @@ impl DepthSpaceDistance {
         };
         let mut sums = lanes::Sums::new();
         lanes::scan(self.lanes, &lp, &window, &mut sums);
-        let lanes::Nearest { count, best2, best } = sums.nearest();
+        let lanes::Nearest {
+            count,
+            best2,
+            best,
+            surface2,
+            surface,
+        } = sums.nearest();
         let sum = sums.total();
         if count == 0 {
             return Ok(Repulsion::NONE);
@@ -367,6 +385,13 @@ impl DepthSpaceDistance {
             center_distance,
             obstacle_point: Some(self.pose.to_base(&o_cam)),
             pixels_considered: count,
+            surface_distance: (surface2.sqrt() - radius).max(0.0),
+            surface_point: surface2.is_finite().then(|| {
+                let (su, sv) = surface;
+                let sd = f64::from(frame[sv * w + su]) * scale;
+                self.pose
+                    .to_base(&Point3::new(self.xn[su] * sd, self.yn[sv] * sd, sd))
+            }),
         })
     }
 }

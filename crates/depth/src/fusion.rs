@@ -15,6 +15,15 @@
 //! is the repulsive vector of the camera that gives it, at the magnitude of
 //! the fused distance (eq. 16).
 //!
+//! One space escapes that rule: what the robot hides from a camera. Its
+//! pixels are removed before the scan, so a person behind the arm reads as
+//! free to that camera, whose bound can then exceed the truth. What any
+//! camera saw is really there, so the nearest surface seen over all the
+//! cameras ([`Repulsion::surface_distance`]) bounds the truth from above:
+//! each camera's bound is capped by it ([`capped_by_surfaces`]) before the
+//! largest is taken, which makes the fused distance the nearest observed
+//! surface over all cameras against the largest shadow bound.
+//!
 //! Frames: base frame of the robot, metres. Nothing here allocates.
 
 use nalgebra::{Point3, Vector3};
@@ -117,6 +126,52 @@ impl CameraView {
     }
 }
 
+/// The nearest surface any camera saw from a point of interest.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeenSurface {
+    /// clearance from the point's sphere to it \[m\]
+    pub clearance: f64,
+    /// the surface point, base frame \[m\]
+    pub point: Point3<f64>,
+}
+
+/// One camera's `bound` \[m\] of `at` and its `repulsion`, capped by
+/// `surface`, the nearest surface any fresh camera saw from the point (what
+/// the robot hid from this camera another may have seen). When the cap
+/// binds, the answer is that surface's: its distance, the obstacle point
+/// and a repulsion pointing away from it at eq. 16's magnitude. Since
+/// `max_c min(b_c, s) = min(max_c b_c, s)`, capping every camera's bound
+/// and then fusing ([`fuse`]) gives the nearest surface against the largest
+/// bound. A NaN bound counts as 0.
+pub fn capped_by_surface(
+    bound: f64,
+    repulsion: &Repulsion,
+    at: &PointOfInterest,
+    surface: Option<SeenSurface>,
+    params: &RepulsionParams,
+) -> (f64, Repulsion) {
+    let bound = if bound.is_nan() { 0.0 } else { bound };
+    let Some(s) = surface.filter(|s| s.clearance < bound) else {
+        return (bound, *repulsion);
+    };
+    let away = at.position - s.point;
+    let norm = away.norm();
+    let v_call = match norm > 0.0 && norm.is_finite() {
+        true => away * (params.magnitude(s.clearance) / norm),
+        false => Vector3::zeros(),
+    };
+    let capped = Repulsion {
+        v_call,
+        min_distance: s.clearance,
+        center_distance: s.clearance + at.radius,
+        obstacle_point: Some(s.point),
+        pixels_considered: repulsion.pixels_considered,
+        surface_distance: s.clearance,
+        surface_point: Some(s.point),
+    };
+    (s.clearance, capped)
+}
+
 /// The fused answer for one point of interest.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fused {
@@ -136,6 +191,8 @@ impl Fused {
             center_distance: 0.0,
             obstacle_point: None,
             pixels_considered: 0,
+            surface_distance: f64::INFINITY,
+            surface_point: None,
         },
         camera: None,
     };
@@ -263,6 +320,51 @@ mod tests {
     }
 
     #[test]
+    fn a_surface_nearer_than_the_bound_caps_it_and_gives_the_direction() {
+        let params = RepulsionParams::default();
+        let at = PointOfInterest::new(Point3::new(1.0, 0.0, 1.0), 0.05);
+        let seen = Repulsion {
+            v_call: Vector3::new(0.0, 0.1, 0.0),
+            min_distance: 0.2,
+            center_distance: 0.25,
+            obstacle_point: Some(Point3::new(1.0, -0.25, 1.0)),
+            pixels_considered: 7,
+            surface_distance: 0.2,
+            surface_point: Some(Point3::new(1.0, -0.25, 1.0)),
+        };
+        // another camera saw a surface 0.1 m away along +x
+        let nearer = SeenSurface {
+            clearance: 0.1,
+            point: Point3::new(1.15, 0.0, 1.0),
+        };
+        let (bound, r) = capped_by_surface(0.2, &seen, &at, Some(nearer), &params);
+        assert_eq!(bound, 0.1);
+        assert_eq!(r.min_distance, 0.1);
+        assert!((r.center_distance - 0.15).abs() < 1e-12);
+        assert_eq!(r.obstacle_point, Some(nearer.point));
+        assert!((r.v_call.norm() - params.magnitude(0.1)).abs() < 1e-12);
+        assert!(r.v_call.x < 0.0 && r.v_call.y.abs() < 1e-12);
+        // a farther surface (or none) leaves the answer as it was
+        let farther = SeenSurface {
+            clearance: 0.3,
+            ..nearer
+        };
+        assert_eq!(
+            capped_by_surface(0.2, &seen, &at, Some(farther), &params),
+            (0.2, seen)
+        );
+        assert_eq!(
+            capped_by_surface(0.2, &seen, &at, None, &params),
+            (0.2, seen)
+        );
+        // a NaN bound counts as touching: nothing caps it further
+        assert_eq!(
+            capped_by_surface(f64::NAN, &seen, &at, Some(nearer), &params).0,
+            0.0
+        );
+    }
+
+    #[test]
     fn the_largest_bound_wins_with_its_cameras_direction_at_its_magnitude() {
         let params = RepulsionParams::default();
         let a = Repulsion {
@@ -271,6 +373,8 @@ mod tests {
             center_distance: 0.1,
             obstacle_point: Some(Point3::new(0.0, -0.1, 0.0)),
             pixels_considered: 10,
+            surface_distance: 0.3,
+            surface_point: None,
         };
         let b = Repulsion {
             v_call: Vector3::new(-0.1, 0.0, 0.0),
@@ -278,6 +382,8 @@ mod tests {
             center_distance: 0.25,
             obstacle_point: Some(Point3::new(0.25, 0.0, 0.0)),
             pixels_considered: 5,
+            surface_distance: 0.2,
+            surface_point: None,
         };
         // b's view bounds it at 0.15: still more than a's 0.05
         let f = fuse([(0.05, &a), (0.15, &b)], &params);

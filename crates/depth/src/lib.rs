@@ -12,7 +12,8 @@
 //! - [`distance`]: [`DepthSpaceDistance`], distances and repulsive vectors
 //!   (eqs. 15-18) for points of interest on the robot.
 //! - [`fusion`]: [`CameraView`] and [`fuse`], distances fused across several
-//!   cameras, each a lower bound of the truth.
+//!   cameras, each a lower bound of the truth, capped by the nearest surface
+//!   any camera saw.
 //! - [`png`](mod@png): 16-bit grayscale depth PNGs.
 //! - [`kinect`]: the Kinect v1's 11-bit disparity and millimetres.
 //!
@@ -41,7 +42,7 @@ pub use camera::{CameraPose, Intrinsics, PixelDepth};
 pub use distance::{DepthSpaceDistance, PixelWindow, PointOfInterest, Repulsion, RepulsionParams};
 pub use error::{DepthError, DepthPngError};
 pub use flying::FlyingPixels;
-pub use fusion::{fuse, CameraView, Fused};
+pub use fusion::{capped_by_surface, fuse, CameraView, Fused, SeenSurface};
 pub use noise::sigma_z;
 pub use png::{decode_depth_png, encode_depth_png, read_depth_png, write_depth_png};
 pub use render::{RenderOptions, Renderer, LABEL_NONE};

@@ -24,6 +24,7 @@ pub mod repulsion;
 pub mod robot;
 pub mod skeleton;
 pub mod source;
+pub mod surfaces;
 pub mod tracker;
 
 pub use camera::{CameraError, CameraSim, HeaderError};
@@ -34,4 +35,5 @@ pub use live::{CameraOut, CameraStamps, DropCause, RobotClock};
 pub use pipeline::{Perception, PipelineError};
 pub use repulsion::{RepulsionError, Worker};
 pub use source::{RateLimited, Ticks};
+pub use surfaces::SeenSurfaces;
 pub use tracker::{DepthTracker, TrackerError};

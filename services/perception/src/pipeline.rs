@@ -22,6 +22,7 @@ use crate::ingest::{FrameError, Ingest, StateHistory};
 use crate::mask::{collaborating_part, hand_observation, MaskHold};
 use crate::repulsion::{RepulsionError, Worker};
 use crate::skeleton::{merge_views, SkeletonTracker};
+use crate::surfaces::SeenSurfaces;
 use crate::tracker::{DepthTracker, TrackerError};
 
 /// Why a perception step failed, by the service whose step it was.
@@ -102,6 +103,8 @@ struct Eye {
 /// Every camera of a cell, stepped together.
 pub struct Perception {
     eyes: Vec<Eye>,
+    /// per worker, with several cameras: the surfaces every camera showed it
+    seen: Vec<SeenSurfaces>,
     /// the trackers' skeletons merged, the first camera's first
     skeleton: Skeleton,
     mask_hold: MaskHold,
@@ -149,8 +152,15 @@ impl Perception {
                 camera,
             });
         }
+        let seen = match several {
+            true => (0..config.repulsion.workers)
+                .map(|_| SeenSurfaces::for_cell(config))
+                .collect(),
+            false => Vec::new(),
+        };
         Ok(Perception {
             eyes,
+            seen,
             skeleton: Skeleton::zeroed(),
             mask_hold: MaskHold::default(),
             collab: config.collaboration.clone(),
@@ -275,10 +285,12 @@ impl Perception {
                     ready_ns,
                 ));
             }
-            for w in eye.workers.iter_mut() {
-                let msg = w
-                    .respond(&eye.header, &eye.filtered)
-                    .map_err(|source| PipelineError::Repulsion { camera: i, source })?;
+            for (k, w) in eye.workers.iter_mut().enumerate() {
+                let msg = match self.seen.get_mut(k) {
+                    Some(seen) => w.respond_among(&eye.header, &eye.filtered, i, seen),
+                    None => w.respond(&eye.header, &eye.filtered),
+                }
+                .map_err(|source| PipelineError::Repulsion { camera: i, source })?;
                 msg.published_ns = ready_ns;
                 eye.results.push(*msg);
             }

@@ -3,18 +3,22 @@
 //! `perception/repulsion` message that carries them. In a cell of several
 //! cameras each camera's answer is a lower bound of the true distance only
 //! over the space that camera watches: a worker then bounds it by the view
-//! too ([`Worker::bounded_by`], [`phri_depth::fusion`]), and the controller
-//! takes, per point, the largest of the fresh cameras' bounds.
+//! too ([`Worker::bounded_by`], [`phri_depth::fusion`]) and caps it by the
+//! nearest surface any camera saw ([`SeenSurfaces`], [`Worker::respond_among`]),
+//! and the controller takes, per point, the largest of the fresh cameras'
+//! bounds.
 
 use nalgebra::{Point3, Vector3};
 use phri_config::{Invalid, RepulsionConfig};
 use phri_depth::{
-    fuse, CameraView, DepthError, DepthSpaceDistance, PointOfInterest, RepulsionParams,
+    capped_by_surface, fuse, CameraView, DepthError, DepthSpaceDistance, PointOfInterest,
+    RepulsionParams, SeenSurface,
 };
 use phri_ipc::{FrameHeader, PointRepulsion, RepulsionResult, Zeroed, MAX_POINTS_PER_WORKER};
 use phri_model::{Data, Model, ModelError};
 
 use crate::camera::{header_camera, HeaderError};
+use crate::surfaces::SeenSurfaces;
 
 /// Why a worker could not be built or could not answer a frame.
 #[derive(Debug, thiserror::Error)]
@@ -163,6 +167,32 @@ impl Worker {
         header: &FrameHeader,
         frame: &[u16],
     ) -> Result<&[PointRepulsion], RepulsionError> {
+        self.answer(header, frame, None)
+    }
+
+    /// [`Worker::step`] for camera `camera` of several, sharing `seen` with
+    /// this worker's answers for the others: the surfaces this frame shows
+    /// are recorded there, and each bound is capped by the nearest surface
+    /// any camera saw from the point in frames captured near this one
+    /// ([`capped_by_surface`]): where another camera saw a surface nearer
+    /// than this one's bound, the answer is that surface's. Only for a worker [`Worker::bounded_by`] its
+    /// camera; otherwise as [`Worker::step`].
+    pub fn step_among(
+        &mut self,
+        header: &FrameHeader,
+        frame: &[u16],
+        camera: usize,
+        seen: &mut SeenSurfaces,
+    ) -> Result<&[PointRepulsion], RepulsionError> {
+        self.answer(header, frame, Some((camera, seen)))
+    }
+
+    fn answer(
+        &mut self,
+        header: &FrameHeader,
+        frame: &[u16],
+        mut among: Option<(usize, &mut SeenSurfaces)>,
+    ) -> Result<&[PointRepulsion], RepulsionError> {
         let n = self.model.nv();
         let seq = header.seq;
         if header.dof as usize != n || n > header.q.len() {
@@ -190,14 +220,25 @@ impl Worker {
         let Some((_, dist)) = self.distance.as_ref() else {
             return Ok(&self.out[..0]);
         };
-        for (slot, &(index, frame_id, xyz, radius)) in self.out.iter_mut().zip(&self.points) {
+        for (k, (slot, &(index, frame_id, xyz, radius))) in
+            self.out.iter_mut().zip(&self.points).enumerate()
+        {
             let p = phri_model::frame_placement(&self.model, &self.data, frame_id).apply(&xyz);
             let poi = PointOfInterest::new(Point3::from(p), radius);
             let mut r = dist
                 .repulsion(frame, &poi)
                 .map_err(|source| RepulsionError::Depth { seq, source })?;
             if let Some(view) = self.view.as_ref() {
-                let bound = view.bound(&poi, &r, self.params.rho);
+                let mut bound = view.bound(&poi, &r, self.params.rho);
+                if let Some((camera, seen)) = among.as_mut() {
+                    let own = r.surface_point.map(|point| SeenSurface {
+                        clearance: r.surface_distance,
+                        point,
+                    });
+                    seen.record(*camera, header.capture_ns, k, own);
+                    let nearest = seen.nearest(k, header.capture_ns);
+                    (bound, r) = capped_by_surface(bound, &r, &poi, nearest, &self.params);
+                }
                 r = fuse([(bound, &r)], &self.params).repulsion;
             }
             *slot = PointRepulsion {
@@ -223,6 +264,22 @@ impl Worker {
         frame: &[u16],
     ) -> Result<&mut RepulsionResult, RepulsionError> {
         let n = self.step(header, frame)?.len();
+        Ok(self.message(header, n))
+    }
+
+    /// [`Worker::respond`] with [`Worker::step_among`]'s answers.
+    pub fn respond_among(
+        &mut self,
+        header: &FrameHeader,
+        frame: &[u16],
+        camera: usize,
+        seen: &mut SeenSurfaces,
+    ) -> Result<&mut RepulsionResult, RepulsionError> {
+        let n = self.step_among(header, frame, camera, seen)?.len();
+        Ok(self.message(header, n))
+    }
+
+    fn message(&mut self, header: &FrameHeader, n: usize) -> &mut RepulsionResult {
         let m = &mut self.msg;
         m.n_points = n as u32;
         m.points[..n].copy_from_slice(&self.out[..n]);
@@ -232,6 +289,6 @@ impl Worker {
         m.frame_capture_wall_ns = header.capture_wall_ns;
         m.compute_ns = 0;
         m.published_ns = 0;
-        Ok(m)
+        m
     }
 }

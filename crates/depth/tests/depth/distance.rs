@@ -173,6 +173,16 @@ fn occluded_point_uses_the_point_of_interest_depth() {
     assert_eq!(rep.pixels_considered, sphere_pixels);
     // while the Cartesian distance to the sphere is about 0.9 m: conservative
     assert!(analytic(&sphere, &p) > 0.89);
+    // the surface the camera saw is its front half: its silhouette, about
+    // 1.5 − r²/1.5 m deep and r wide, is the nearest of it to P (1.012 m),
+    // more than the sphere's hidden back (0.9 m)
+    let silhouette = (1.0f64 + 0.1 * 0.1 / 1.5).hypot(0.1) - radius;
+    assert!(
+        (rep.surface_distance - silhouette).abs() < 3e-3,
+        "{} {silhouette}",
+        rep.surface_distance
+    );
+    assert!(rep.surface_distance > analytic(&sphere, &p) - radius);
     // the obstacle behind P instead (nothing in front): the plain distance
     let behind = Capsule::sphere(pose.back_project(&K, pu, pv, 2.8), 0.1);
     let frame = render_ideal(pose, &[behind], &[], None);
@@ -184,6 +194,24 @@ fn occluded_point_uses_the_point_of_interest_depth() {
         "{}",
         rep.center_distance
     );
+    // nothing hidden: the surface seen is the nearest obstacle point
+    assert_eq!(rep.surface_distance, rep.min_distance);
+}
+
+/// The clearance from `poi`'s sphere to the nearest valid pixel of the
+/// whole image, each at its own depth \[m\].
+fn brute_force_surface(frame: &[u16], pose: &CameraPose, poi: &PointOfInterest) -> f64 {
+    let mut best = f64::INFINITY;
+    for v in 0..K.height as usize {
+        for u in 0..K.width as usize {
+            let raw = frame[v * K.width as usize + u];
+            if raw != 0 {
+                let o = pose.back_project(&K, u as f64, v as f64, f64::from(raw) * 1e-3);
+                best = best.min((o - poi.position).norm());
+            }
+        }
+    }
+    (best - poi.radius).max(0.0)
 }
 
 #[test]
@@ -334,7 +362,7 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
         };
         points.push(PointOfInterest::new(pose.back_project(&K, u, v, d), r));
     }
-    let mut nonempty = 0;
+    let (mut nonempty, mut near) = (0, 0);
     for poi in &points {
         let rep = dist.repulsion(&frame, poi).unwrap();
         let (best, count, v) = brute_force(&frame, &pose, &prm, poi, 0.001);
@@ -344,9 +372,26 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
             // same rules, same pixels; only the floating-point evaluation differs
             assert!((rep.center_distance - best).abs() < 1e-12);
             assert!((rep.v_call - v).norm() < 1e-9 * prm.v_max);
+            // the surface seen: never nearer than the whole image's nearest
+            // pixel, and that pixel when it is near (the window holds it)
+            let all = brute_force_surface(&frame, &pose, poi);
+            assert!(
+                rep.surface_distance >= all - 1e-9,
+                "{} {all}",
+                rep.surface_distance
+            );
+            if all < 0.1 {
+                assert!(
+                    (rep.surface_distance - all).abs() < 1e-9,
+                    "{} {all}",
+                    rep.surface_distance
+                );
+                near += 1;
+            }
         }
     }
     assert!(nonempty > 20);
+    assert!(near > 3, "{near}");
 }
 
 #[test]

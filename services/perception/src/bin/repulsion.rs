@@ -4,15 +4,16 @@
 //! answered on `perception/repulsion`, camera C's `perception/C/depth` on
 //! `perception/C/repulsion`, each with the frame's sequence and the
 //! processing time. With several cameras each answer is bounded by what its
-//! camera watches ([`Worker::bounded_by`]). A camera that stops sending
-//! frames delays none of the others' answers.
+//! camera watches ([`Worker::bounded_by`]) and capped by the nearest surface
+//! any camera showed the worker ([`Worker::respond_among`]). A camera that
+//! stops sending frames delays none of the others' answers.
 
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use phri_ipc::{wait_any, FrameSubscriber, Publisher, Queue, RepulsionResult};
-use phri_perception::Worker;
+use phri_perception::{SeenSurfaces, Worker};
 use phri_runtime::{now_ns, ServiceContext};
 
 /// The worker's own flag.
@@ -68,6 +69,8 @@ fn body() -> Result<(), Box<dyn Error>> {
             errors: 0,
         });
     }
+    // with several cameras: the surfaces each showed this worker's points
+    let mut seen = (served.len() > 1).then(|| SeenSurfaces::for_cell(cfg));
     ctx.start_deadman()?;
     let mut beat = ctx.beat(&node)?;
     ctx.go_realtime();
@@ -84,7 +87,14 @@ fn body() -> Result<(), Box<dyn Error>> {
             };
             let t0 = now_ns();
             let header = *frame.user_header();
-            let msg = match s.worker.respond(frame.user_header(), frame.payload()) {
+            let answer = match seen.as_mut() {
+                Some(seen) => {
+                    s.worker
+                        .respond_among(frame.user_header(), frame.payload(), camera, seen)
+                }
+                None => s.worker.respond(frame.user_header(), frame.payload()),
+            };
+            let msg = match answer {
                 Ok(msg) => msg,
                 Err(e) => {
                     s.errors += 1;

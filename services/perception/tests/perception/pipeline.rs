@@ -281,3 +281,81 @@ fn injected_faults_reach_ingestion_as_the_frames_they_describe() {
     assert!(capture(Some(DepthFaultKind::Noise), 4).is_ok());
     assert!(capture(None, 5).is_ok());
 }
+
+/// A camera's frame of the ball world at Q0 as ingestion filters it, with
+/// its header: `azimuth` \[rad\] around the base as `[camera]` places it.
+fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Vec<u16>) {
+    let model = model();
+    let cfg = CameraConfig {
+        render: RenderOptions::ideal(),
+        azimuth_rad: azimuth,
+        ..Config::defaults().camera
+    };
+    let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
+    let mut frame = vec![0u16; camera.pixels()];
+    let mut header = FrameHeader::zeroed();
+    camera.step(w, 0, &mut frame, &mut header).unwrap();
+    let mut history = StateHistory::new(7, 10);
+    history.push(w.stamp_ns, &Q0);
+    let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
+    let mut filtered = vec![0u16; frame.len()];
+    ingest
+        .step(
+            &mut header,
+            &frame,
+            &history,
+            w.stamp_ns + 5_000_000,
+            &mut filtered,
+        )
+        .unwrap();
+    (cfg, header, filtered)
+}
+
+#[test]
+fn what_one_camera_saw_caps_what_the_robot_hid_from_another() {
+    let model = model();
+    let p = ee(&model);
+    let (cfg_a, _, _) = filtered_view(0.6, &world(p));
+    let camera = cfg_a.pose().unwrap().position().coords;
+    let across = (p - camera).cross(&Vector3::z()).normalize();
+    let w = world(p + across * 0.25);
+    // the paper's camera sees the ball: 0.25 − 0.08 − 0.05 = 0.12 m
+    let (cfg_a, header_a, frame_a) = filtered_view(0.6, &w);
+    // the mirror sees nothing near (as if the arm hid the ball from it)
+    let (cfg_b, header_b, frame_b) = filtered_view(-0.6, &w);
+    let empty = vec![0u16; frame_b.len()];
+    let worker = |cfg: &CameraConfig| {
+        Worker::new(model.clone(), &repulsion_config(), 0)
+            .unwrap()
+            .bounded_by(cfg)
+            .unwrap()
+    };
+    let (mut a, mut b) = (worker(&cfg_a), worker(&cfg_b));
+    let alone = b.step(&header_b, &empty).unwrap()[0].min_distance;
+    assert!(alone > 0.3, "{alone}");
+    let mut seen = phri_perception::SeenSurfaces::new(2, 50_000_000);
+    let by_a = a.step_among(&header_a, &frame_a, 0, &mut seen).unwrap()[0];
+    assert!((by_a.min_distance - 0.12).abs() < 0.01, "{by_a:?}");
+    let capped = b.step_among(&header_b, &empty, 1, &mut seen).unwrap()[0];
+    assert!(
+        (capped.min_distance - by_a.min_distance).abs() < 0.005,
+        "{capped:?} against {by_a:?}"
+    );
+    // the answer is the surface the paper's camera saw: an obstacle point,
+    // and a repulsion away from it at eq. 16's magnitude of that distance
+    assert_eq!(capped.active, 1);
+    let away = Vector3::from(capped.position) - Vector3::from(capped.obstacle);
+    let v = Vector3::from(capped.v_call);
+    let params = repulsion_config().params;
+    assert!((v.norm() - params.magnitude(capped.min_distance)).abs() < 1e-9);
+    assert!(v.normalize().dot(&away.normalize()) > 1.0 - 1e-9);
+    assert!((away.norm() - 0.05 - capped.min_distance).abs() < 1e-9);
+    // what the mirror saw itself still counts as it did
+    let own = b.step_among(&header_b, &frame_b, 1, &mut seen).unwrap()[0];
+    assert!(own.min_distance <= by_a.min_distance + 0.005, "{own:?}");
+    // the paper's camera's surfaces from a frame too long before: not used
+    let mut late = header_b;
+    late.capture_ns += 60_000_000;
+    let uncapped = b.step_among(&late, &empty, 1, &mut seen).unwrap()[0];
+    assert_eq!(uncapped.min_distance, alone);
+}
