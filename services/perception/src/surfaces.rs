@@ -35,12 +35,20 @@ impl SeenSurfaces {
         }
     }
 
-    /// For the cameras of `config`: frames captured within `[control]
-    /// perception_max_age_ms` of each other share their surfaces (older
-    /// perception the controller counts as stale anyway).
+    /// For the cameras of `config`: frames captured within 1.5 frame
+    /// periods of the slowest camera of each other share their surfaces
+    /// (cameras that run free are at most one period apart; a hand at
+    /// 1.6 m/s moves 8 cm in 50 ms), and never more than `[control]
+    /// perception_max_age_ms` (older perception is stale anyway).
     pub fn for_cell(config: &phri_config::Config) -> SeenSurfaces {
-        let apart_ms = config.control.perception_max_age_ms.max(0.0);
-        SeenSurfaces::new(config.cameras.len(), (apart_ms * 1e6) as u64)
+        let period_s = config
+            .cameras
+            .iter()
+            .map(|c| 1.0 / c.rate_hz)
+            .fold(0.0, f64::max);
+        let stale_s = config.control.perception_max_age_ms * 1e-3;
+        let apart_s = (1.5 * period_s).min(stale_s).max(0.0);
+        SeenSurfaces::new(config.cameras.len(), (apart_s * 1e9) as u64)
     }
 
     /// Records the nearest surface camera `camera` saw from the worker's

@@ -125,6 +125,47 @@ fn the_mirrored_wave_is_seen_by_two_cameras_and_not_by_one() {
     assert_eq!(modes.last(), Some(&"task"), "{modes:?}");
 }
 
+/// The mirrored safe and voice collaborations with the mirrored pair:
+/// `safe-collaboration-mirrored` (the left hand waves and is reached while
+/// the right crosses the approach) touches the left hand twice, as its
+/// mirror touches the right, and the push on the wrist ends it;
+/// `voice-collaboration-mirrored` ("follow the right hand") reaches the
+/// right hand and "end collaboration" ends it. Nobody is touched otherwise.
+#[test]
+fn the_mirrored_safe_and_voice_collaborations_reach_the_other_hand() {
+    let file = common::deploy().with_file_name("two-cameras.toml");
+    for (scenario, hand, touches) in [
+        ("safe-collaboration-mirrored", "hand_left", 2),
+        ("voice-collaboration-mirrored", "hand_right", 1),
+    ] {
+        let l = Loaded::load(&file, Some(scenario), &[]).unwrap();
+        let mut c = common::cell_of(&l, &CellOptions::default());
+        for _ in 0..20_000 {
+            c.tick().unwrap();
+        }
+        let s = c.summary();
+        assert_eq!(s.unintended_contacts, 0, "{scenario}: {:?}", s.contacts);
+        // touches: the hand's contacts, apart by more than 0.5 s
+        let mut starts: Vec<f64> = s
+            .contacts
+            .iter()
+            .filter(|k| k.intended && k.part == hand)
+            .map(|k| k.t_start_s)
+            .collect();
+        starts.sort_by(f64::total_cmp);
+        let apart = starts.windows(2).filter(|w| w[1] - w[0] > 0.5).count();
+        let reached = if starts.is_empty() { 0 } else { apart + 1 };
+        assert!(
+            reached >= touches,
+            "{scenario}: {reached} touches: {:?}",
+            s.contacts
+        );
+        let modes: Vec<&str> = s.modes.iter().map(|m| m.1.as_str()).collect();
+        assert!(modes.contains(&"contact"), "{scenario}: {modes:?}");
+        assert_eq!(modes.last(), Some(&"task"), "{scenario}: {modes:?}");
+    }
+}
+
 /// `safe-collaboration` with the mirrored pair: the other camera still sees
 /// the right hand while the crossing left arm hides it from the first, so
 /// the approach goes on while the left hand is raised across the arm's
