@@ -57,30 +57,11 @@ fn world(centre: Vector3<f64>) -> WorldState {
 }
 
 fn pipeline(centre: Vector3<f64>) -> (phri_ipc::PointRepulsion, u32) {
-    let model = model();
-    let cfg = CameraConfig {
-        render: RenderOptions::ideal(),
-        ..Config::defaults().camera
-    };
-    let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
-    let mut frame = vec![0u16; camera.pixels()];
-    let mut header = FrameHeader::zeroed();
     let w = world(centre);
-    camera.step(&w, 0, &mut frame, &mut header).unwrap();
+    let azimuth = Config::defaults().camera.azimuth_rad;
+    let (_, header, filtered, removed) = filtered_view(azimuth, &w);
     assert_eq!(header.capture_ns, w.stamp_ns);
-    let mut history = StateHistory::new(7, 10);
-    history.push(w.stamp_ns, &Q0);
-    let mut ingest = Ingest::new(model.clone(), &ingest_config()).unwrap();
-    let mut filtered = vec![0u16; frame.len()];
-    let out = ingest
-        .step(
-            &mut header,
-            &frame,
-            &history,
-            w.stamp_ns + 5_000_000,
-            &mut filtered,
-        )
-        .unwrap();
+    let model = model();
     let mut worker = Worker::new(model, &repulsion_config(), 0).unwrap();
     let results = worker.step(&header, &filtered).unwrap().to_vec();
     let ee_result = results.iter().find(|r| r.point == 0).copied().unwrap();
@@ -93,7 +74,7 @@ fn pipeline(centre: Vector3<f64>) -> (phri_ipc::PointRepulsion, u32) {
     );
     assert_eq!((msg.worker, msg.workers, msg.seq), (0, 1, 1));
     assert_eq!(msg.points[0].min_distance, ee_result.min_distance);
-    (ee_result, out.removed)
+    (ee_result, removed)
 }
 
 #[test]
@@ -283,8 +264,9 @@ fn injected_faults_reach_ingestion_as_the_frames_they_describe() {
 }
 
 /// A camera's frame of the ball world at Q0 as ingestion filters it, with
-/// its header: `azimuth` \[rad\] around the base as `[camera]` places it.
-fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Vec<u16>) {
+/// its configuration, header and the robot's pixels removed: `azimuth`
+/// \[rad\] around the base as `[camera]` places it.
+fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Vec<u16>, u32) {
     let model = model();
     let cfg = CameraConfig {
         render: RenderOptions::ideal(),
@@ -299,7 +281,7 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
     history.push(w.stamp_ns, &Q0);
     let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
     let mut filtered = vec![0u16; frame.len()];
-    ingest
+    let out = ingest
         .step(
             &mut header,
             &frame,
@@ -308,21 +290,21 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
             &mut filtered,
         )
         .unwrap();
-    (cfg, header, filtered)
+    (cfg, header, filtered, out.removed)
 }
 
 #[test]
 fn what_one_camera_saw_caps_what_the_robot_hid_from_another() {
     let model = model();
     let p = ee(&model);
-    let (cfg_a, _, _) = filtered_view(0.6, &world(p));
+    let (cfg_a, ..) = filtered_view(0.6, &world(p));
     let camera = cfg_a.pose().unwrap().position().coords;
     let across = (p - camera).cross(&Vector3::z()).normalize();
     let w = world(p + across * 0.25);
     // the paper's camera sees the ball: 0.25 − 0.08 − 0.05 = 0.12 m
-    let (cfg_a, header_a, frame_a) = filtered_view(0.6, &w);
+    let (cfg_a, header_a, frame_a, _) = filtered_view(0.6, &w);
     // the mirror sees nothing near (as if the arm hid the ball from it)
-    let (cfg_b, header_b, frame_b) = filtered_view(-0.6, &w);
+    let (cfg_b, header_b, frame_b, _) = filtered_view(-0.6, &w);
     let empty = vec![0u16; frame_b.len()];
     let worker = |cfg: &CameraConfig| {
         Worker::new(model.clone(), &repulsion_config(), 0)
