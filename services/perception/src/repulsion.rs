@@ -175,8 +175,9 @@ impl Worker {
     /// are recorded there, and each bound is capped by the nearest surface
     /// any camera saw from the point in frames captured near this one
     /// ([`capped_by_surface`]): where another camera saw a surface nearer
-    /// than this one's bound, the answer is that surface's. Only for a worker [`Worker::bounded_by`] its
-    /// camera; otherwise as [`Worker::step`].
+    /// than this one's bound, the answer is that surface's. Only for a
+    /// worker [`Worker::bounded_by`] its camera; otherwise as
+    /// [`Worker::step`].
     pub fn step_among(
         &mut self,
         header: &FrameHeader,
