@@ -286,11 +286,9 @@ impl Perception {
                 ));
             }
             for (k, w) in eye.workers.iter_mut().enumerate() {
-                let msg = match self.seen.get_mut(k) {
-                    Some(seen) => w.respond_among(&eye.header, &eye.filtered, i, seen),
-                    None => w.respond(&eye.header, &eye.filtered),
-                }
-                .map_err(|source| PipelineError::Repulsion { camera: i, source })?;
+                let msg = w
+                    .respond_among(&eye.header, &eye.filtered, i, self.seen.get_mut(k))
+                    .map_err(|source| PipelineError::Repulsion { camera: i, source })?;
                 msg.published_ns = ready_ns;
                 eye.results.push(*msg);
             }

@@ -268,15 +268,17 @@ impl Worker {
         Ok(self.message(header, n))
     }
 
-    /// [`Worker::respond`] with [`Worker::step_among`]'s answers.
+    /// [`Worker::respond`] with [`Worker::step_among`]'s answers when the
+    /// cell shares its cameras' surfaces (`seen`), as [`Worker::respond`]
+    /// without.
     pub fn respond_among(
         &mut self,
         header: &FrameHeader,
         frame: &[u16],
         camera: usize,
-        seen: &mut SeenSurfaces,
+        seen: Option<&mut SeenSurfaces>,
     ) -> Result<&mut RepulsionResult, RepulsionError> {
-        let n = self.step_among(header, frame, camera, seen)?.len();
+        let n = self.answer(header, frame, seen.map(|s| (camera, s)))?.len();
         Ok(self.message(header, n))
     }
 

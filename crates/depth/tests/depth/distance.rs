@@ -199,14 +199,19 @@ fn occluded_point_uses_the_point_of_interest_depth() {
 }
 
 /// The clearance from `poi`'s sphere to the nearest valid pixel of the
-/// whole image, each at its own depth \[m\].
-fn brute_force_surface(frame: &[u16], pose: &CameraPose, poi: &PointOfInterest) -> f64 {
+/// whole image (intrinsics `k`), each at its own depth \[m\].
+fn brute_force_surface(
+    k: &Intrinsics,
+    frame: &[u16],
+    pose: &CameraPose,
+    poi: &PointOfInterest,
+) -> f64 {
     let mut best = f64::INFINITY;
-    for v in 0..K.height as usize {
-        for u in 0..K.width as usize {
-            let raw = frame[v * K.width as usize + u];
+    for v in 0..k.height as usize {
+        for u in 0..k.width as usize {
+            let raw = frame[v * k.width as usize + u];
             if raw != 0 {
-                let o = pose.back_project(&K, u as f64, v as f64, f64::from(raw) * 1e-3);
+                let o = pose.back_project(k, u as f64, v as f64, f64::from(raw) * 1e-3);
                 best = best.min((o - poi.position).norm());
             }
         }
@@ -374,7 +379,7 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
             assert!((rep.v_call - v).norm() < 1e-9 * prm.v_max);
             // the surface seen: never nearer than the whole image's nearest
             // pixel, and that pixel when it is near (the window holds it)
-            let all = brute_force_surface(&frame, &pose, poi);
+            let all = brute_force_surface(&K, &frame, &pose, poi);
             assert!(
                 rep.surface_distance >= all - 1e-9,
                 "{} {all}",
@@ -392,6 +397,73 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
     }
     assert!(nonempty > 20);
     assert!(near > 3, "{near}");
+}
+
+/// The surface seen on the real Kinect v1 frames of
+/// `../shared/data/kinect-person/` (a person at 0.7-2 m, the background
+/// removed; the nominal intrinsics f = 580 px, c = (320, 240)): at points
+/// around the person, the scan's nearest surface is never nearer than the
+/// whole frame's nearest pixel, and is that pixel when it is near.
+#[test]
+fn the_surface_seen_on_real_kinect_frames_is_the_nearest_pixel() {
+    let k = Intrinsics {
+        width: 640,
+        height: 480,
+        fx: 580.0,
+        fy: 580.0,
+        cx: 320.0,
+        cy: 240.0,
+    };
+    let pose = CameraPose::paper_default();
+    let dist = DepthSpaceDistance::new(k, pose, params(), 0.001).unwrap();
+    let dir =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/kinect-person");
+    let mut rng = SmallRng::seed_from_u64(11);
+    let (mut frames, mut near) = (0, 0);
+    for name in [
+        "depth-data-1028894671",
+        "depth-data-1064898470",
+        "depth-data-1166565565",
+    ] {
+        let bytes = std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let frame: Vec<u16> = bytes
+            .chunks_exact(2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+            .collect();
+        assert_eq!(frame.len(), k.pixel_count(), "{name}");
+        frames += 1;
+        let valid: Vec<usize> = (0..frame.len()).filter(|&i| frame[i] != 0).collect();
+        assert!(valid.len() > 10_000, "{name}: {} pixels", valid.len());
+        for _ in 0..15 {
+            // beside a pixel of the person: off its surface by up to 15 cm
+            let i = valid[rng.gen_range(0..valid.len())];
+            let (u, v) = ((i % 640) as f64, (i / 640) as f64);
+            let o = pose.back_project(&k, u, v, f64::from(frame[i]) * 1e-3);
+            let off = Vector3::new(
+                rng.gen_range(-0.15..0.15),
+                rng.gen_range(-0.15..0.15),
+                rng.gen_range(-0.15..0.15),
+            );
+            let poi = PointOfInterest::new(o + off, rng.gen_range(0.0..0.06));
+            let rep = dist.repulsion(&frame, &poi).unwrap();
+            let all = brute_force_surface(&k, &frame, &pose, &poi);
+            assert!(
+                rep.surface_distance >= all - 1e-9,
+                "{name}: {} {all}",
+                rep.surface_distance
+            );
+            if all < 0.1 {
+                assert!(
+                    (rep.surface_distance - all).abs() < 1e-9,
+                    "{name}: {} {all}",
+                    rep.surface_distance
+                );
+                near += 1;
+            }
+        }
+    }
+    assert_eq!(frames, 3);
+    assert!(near > 20, "{near}");
 }
 
 #[test]

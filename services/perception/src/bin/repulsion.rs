@@ -87,13 +87,8 @@ fn body() -> Result<(), Box<dyn Error>> {
             };
             let t0 = now_ns();
             let header = *frame.user_header();
-            let answer = match seen.as_mut() {
-                Some(seen) => {
-                    s.worker
-                        .respond_among(frame.user_header(), frame.payload(), camera, seen)
-                }
-                None => s.worker.respond(frame.user_header(), frame.payload()),
-            };
+            let (h, f) = (frame.user_header(), frame.payload());
+            let answer = s.worker.respond_among(h, f, camera, seen.as_mut());
             let msg = match answer {
                 Ok(msg) => msg,
                 Err(e) => {
