@@ -20,7 +20,7 @@
 //! free to that camera, whose bound can then exceed the truth. What any
 //! camera saw is really there, so the nearest surface seen over all the
 //! cameras ([`Repulsion::surface_distance`]) bounds the truth from above:
-//! each camera's bound is capped by it ([`capped_by_surfaces`]) before the
+//! each camera's bound is capped by it ([`capped_by_surface`]) before the
 //! largest is taken, which makes the fused distance the nearest observed
 //! surface over all cameras against the largest shadow bound.
 //!
