@@ -14,9 +14,7 @@
 
 mod common;
 
-use nalgebra::Vector3;
 use phri_cell::CellOptions;
-use phri_ipc::CollabPhase;
 
 #[test]
 #[ignore]
@@ -38,58 +36,22 @@ fn collaboration_figures() {
                 ..CellOptions::default()
             };
             let mut c = common::cell_of(&l, &opts);
-            let (mut errors, mut switches, mut touches) = (Vec::new(), 0, 0);
-            let mut last_touch: Option<f64> = None;
-            let mut phase = CollabPhase::Idle;
+            let mut fig = common::CollabFigures::default();
             for _ in 0..(l.scenario.duration_s * 1000.0).round() as usize {
                 c.tick().unwrap();
-                let t = c.time_ns() as f64 * 1e-9;
-                let col = c.controller.collaboration().unwrap();
-                let now = col.phase();
-                if matches!(
-                    (phase, now),
-                    (CollabPhase::Contact, CollabPhase::Follow)
-                        | (CollabPhase::Follow, CollabPhase::Contact)
-                ) {
-                    switches += 1;
-                }
-                phase = now;
-                let hand = col.machine().part().body_part();
-                let mut f = Vector3::zeros();
-                let mut touching = false;
-                for k in c.sim.truth().contacts.iter() {
-                    if k.intended && Some(k.part) == hand {
-                        f += k.force;
-                        touching = true;
-                    }
-                }
-                if touching {
-                    if last_touch.is_none_or(|l| t - l > 0.5) {
-                        touches += 1;
-                    }
-                    last_touch = Some(t);
-                }
-                if now == CollabPhase::Contact && f.norm() >= 5.0 {
-                    if let Some(e) = col.estimate().filter(|e| e.observable[0]) {
-                        errors.push((e.forces[0] - f).norm() / f.norm());
-                    }
-                }
+                fig.observe(&c);
             }
-            errors.sort_by(f64::total_cmp);
-            let p = |q: f64| {
-                errors
-                    .get(((errors.len().max(1) - 1) as f64 * q).round() as usize)
-                    .map_or(f64::NAN, |x| x * 100.0)
-            };
             let s = c.summary();
             let m = c.controller.collaboration().unwrap().machine();
             eprintln!(
-                "{scenario} offset {offset:+.1} s: touches {touches} (episodes {}), switches {switches}, \
+                "{scenario} offset {offset:+.1} s: touches {} (episodes {}), switches {}, \
                  F̂ error p50 {:.1} % p95 {:.1} % ({} samples), ended {:?} at {:?}, unintended {}",
+                fig.touches,
                 s.contacts.iter().filter(|e| e.intended).count(),
-                p(0.5),
-                p(0.95),
-                errors.len(),
+                fig.switches,
+                fig.error_pct(0.5),
+                fig.error_pct(0.95),
+                fig.errors.len(),
                 m.reason(),
                 m.phase(),
                 s.unintended_contacts

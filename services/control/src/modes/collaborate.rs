@@ -1108,10 +1108,15 @@ impl Collaboration {
         // `contact_speed` (the new touch at 0.14 m/s: 60-71 N on the hand).
         // The first approach keeps its lead: the arm comes from afar, and
         // near a hand held out beside the body the lead is what carries
-        // the end effector through the body points' repulsion to the touch
+        // the end effector through the body points' repulsion to the touch.
+        // The lead shrinks with the gap as depth gives it, not by the
+        // touch's depth error as the speed does: that gap reaches 0 with the
+        // hand still cm away, where a lead of a few mm no longer carried
+        // the end effector through the body's repulsion (safe-collaboration:
+        // the follow held 5-10 cm off the moved hand and never touched it)
         let max_lead = match phase {
             CollabPhase::Follow => {
-                let near = (gap.max(0.0) / self.cfg.slow_down_m).min(1.0);
+                let near = (self.near_gap.max(0.0) / self.cfg.slow_down_m).min(1.0);
                 MIN_NEAR_LEAD_M + (MAX_LEAD_M - MIN_NEAR_LEAD_M) * near
             }
             _ => MAX_LEAD_M,

@@ -83,3 +83,65 @@ pub fn parts_to_links(c: &Cell, parts: &[&str], links: &[&str]) -> f64 {
     }
     d
 }
+
+/// A collaboration's figures as the report grades them, gathered period by
+/// period: touches of the collaborative hand (its contacts with any link,
+/// apart < 0.5 s merged, as `collaboration.contacts_intended`), contact ↔
+/// follow switches, and F̂'s error ‖F̂ − F‖/‖F‖ over the contact phase's
+/// observable samples with ‖F‖ ≥ 5 N (as `collaboration.force_error`).
+#[derive(Debug, Default)]
+pub struct CollabFigures {
+    pub touches: usize,
+    pub switches: usize,
+    /// F̂'s relative errors, one per sample counted
+    pub errors: Vec<f64>,
+    last_touch: Option<f64>,
+    phase: Option<phri_ipc::CollabPhase>,
+}
+
+impl CollabFigures {
+    /// Take in the period `c` just stepped.
+    pub fn observe(&mut self, c: &Cell) {
+        use phri_ipc::CollabPhase;
+        let Some(col) = c.controller.collaboration() else {
+            return;
+        };
+        let t = c.time_ns() as f64 * 1e-9;
+        let now = col.phase();
+        if matches!(
+            (self.phase, now),
+            (Some(CollabPhase::Contact), CollabPhase::Follow)
+                | (Some(CollabPhase::Follow), CollabPhase::Contact)
+        ) {
+            self.switches += 1;
+        }
+        self.phase = Some(now);
+        let hand = col.machine().part().body_part();
+        let (mut f, mut touching) = (nalgebra::Vector3::zeros(), false);
+        for k in c.sim.truth().contacts.iter() {
+            if k.intended && Some(k.part) == hand {
+                f += k.force;
+                touching = true;
+            }
+        }
+        if touching {
+            if self.last_touch.is_none_or(|l| t - l > 0.5) {
+                self.touches += 1;
+            }
+            self.last_touch = Some(t);
+        }
+        if now == CollabPhase::Contact && f.norm() >= 5.0 {
+            if let Some(e) = col.estimate().filter(|e| e.observable[0]) {
+                self.errors.push((e.forces[0] - f).norm() / f.norm());
+            }
+        }
+    }
+
+    /// F̂'s error at quantile `q` \[%\] (NaN without samples).
+    pub fn error_pct(&self, q: f64) -> f64 {
+        let mut e = self.errors.clone();
+        e.sort_by(f64::total_cmp);
+        e.get(((e.len().max(1) - 1) as f64 * q).round() as usize)
+            .map_or(f64::NAN, |x| x * 100.0)
+    }
+}
