@@ -763,7 +763,8 @@ impl Controller {
             ControlMode::Task | ControlMode::Slow | ControlMode::Recover
         )
         .then_some(age_s);
-        self.resolver.set_perception_age(age_s);
+        self.resolver
+            .set_perception_age(age_s, dt, c.collab_hand.is_some());
         let faults: Faults = if with_perception {
             self.resolver
                 .avoid(model, data, rf, c, dt, cfg, &self.posture, fresh, ssm)

@@ -106,8 +106,8 @@ snapshot_fields!(SsmPeriod {
 
 /// What the resolver carries from one period to the next: per control
 /// point the filtered repulsion and the behind-the-hand hysteresis, the
-/// task scale, and speed and separation monitoring (the monitor, when
-/// configured, after a byte saying it is). CLIK, SNS, the body task and
+/// task scale, speed and separation monitoring (the monitor, when
+/// configured, after a byte saying it is) and the perception ages d_s holds. CLIK, SNS, the body task and
 /// the Jacobians keep nothing between periods.
 impl Snapshot for Resolver {
     fn save(&self, w: &mut Writer<'_>) {
@@ -122,6 +122,8 @@ impl Snapshot for Resolver {
         self.ssm_period.save(w);
         self.ssm_was_violating.save(w);
         self.ssm_was_violating_standard.save(w);
+        let h = &self.age_hold;
+        [h.now, h.before, h.since_s].save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.v_call_filtered.load(r);
@@ -137,7 +139,29 @@ impl Snapshot for Resolver {
         self.ssm_period.load(r);
         self.ssm_was_violating.load(r);
         self.ssm_was_violating_standard.load(r);
+        let mut h = [0.0; 3];
+        h.load(r);
+        self.age_hold = AgeHold {
+            now: h[0],
+            before: h[1],
+            since_s: h[2],
+        };
     }
+}
+
+/// While collaborating, d_s's perception age is the largest of this long's
+/// two last spans \[s\]: at 30 Hz, the age just before a frame.
+pub const AGE_HOLD_S: f64 = 0.05;
+
+/// The largest perception ages of the current span and the one before.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct AgeHold {
+    /// the current span's largest age \[s\]
+    now: f64,
+    /// the span before's \[s\]
+    before: f64,
+    /// time into the current span \[s\]
+    since_s: f64,
 }
 
 /// Failures met while resolving, counted (each leaves the fail-safe it always had).
@@ -176,8 +200,10 @@ pub struct Resolver {
     ssm_was_violating_standard: bool,
     /// the control-barrier filter (`None`: the paper's law)
     cbf: Option<CbfFilter>,
-    /// the perception results' age this period \[s\] (capture → command)
+    /// d_s's perception age \[s\] (capture → command)
     perception_age_s: f64,
+    /// the largest perception ages of the last two spans of [`AGE_HOLD_S`]
+    age_hold: AgeHold,
     /// the share of the task's end-effector velocity the filter let through
     /// in the last period, 0-1 (1 under the paper's law)
     path_scale: f64,
@@ -208,6 +234,7 @@ impl Resolver {
             ssm_was_violating_standard: false,
             cbf: None,
             perception_age_s: 0.0,
+            age_hold: AgeHold::default(),
             path_scale: 1.0,
         }
     }
@@ -232,9 +259,34 @@ impl Resolver {
         self.cbf.as_ref().map(|f| f.counters()).unwrap_or_default()
     }
 
-    /// The perception results' age this period \[s\] (the filter's d_s).
-    pub fn set_perception_age(&mut self, age_s: f64) {
-        self.perception_age_s = age_s;
+    /// The perception results' age this period \[s\], `dt` \[s\] after the
+    /// last; `collaborating`: a collaboration's reference (approach,
+    /// contact, follow). d_s takes the age itself, which grows by a frame
+    /// period between frames and falls back at each, except while
+    /// collaborating: then the largest age of the last [`AGE_HOLD_S`] to
+    /// 2 × [`AGE_HOLD_S`]. A d_s rising and falling with the frames 30
+    /// times a second (5 cm at 1.6 m/s) made the barrier push and release
+    /// as often next to the person, and the end effector bounced on the
+    /// hand it held (45-104 contact episodes where the person makes 2, F̂
+    /// 40 % off).
+    pub fn set_perception_age(&mut self, age_s: f64, dt: f64, collaborating: bool) {
+        let h = &mut self.age_hold;
+        if !age_s.is_finite() {
+            *h = AgeHold::default();
+            self.perception_age_s = age_s;
+            return;
+        }
+        h.since_s += dt.max(0.0);
+        if h.since_s >= AGE_HOLD_S {
+            h.before = h.now;
+            h.now = 0.0;
+            h.since_s = 0.0;
+        }
+        h.now = h.now.max(age_s);
+        self.perception_age_s = match collaborating {
+            true => h.now.max(h.before),
+            false => age_s,
+        };
     }
 
     /// The share of the task's end-effector velocity the last period let
