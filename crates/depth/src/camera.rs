@@ -70,6 +70,18 @@ impl Intrinsics {
         cy: 239.5,
     };
 
+    /// The Kinect v1's nominal intrinsics at 640×480 that the real frames
+    /// of `../shared/data/kinect-person/` are read with (their README):
+    /// f = 580 px, c = (320, 240).
+    pub const KINECT_NOMINAL: Intrinsics = Intrinsics {
+        width: 640,
+        height: 480,
+        fx: 580.0,
+        fy: 580.0,
+        cx: 320.0,
+        cy: 240.0,
+    };
+
     /// Checks sizes (non-zero, at most 2^15 per side) and that the focal
     /// lengths are positive and the principal point finite.
     pub fn validate(&self) -> Result<(), DepthError> {

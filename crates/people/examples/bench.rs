@@ -101,14 +101,7 @@ fn main() {
                 .collect()
         })
         .collect();
-    let kinect580 = Intrinsics {
-        width: 640,
-        height: 480,
-        fx: 580.0,
-        fy: 580.0,
-        cx: 320.0,
-        cy: 240.0,
-    };
+    let kinect580 = Intrinsics::KINECT_NOMINAL;
     if real.is_empty() {
         println!("no real frames in {}", dir.display());
     } else {

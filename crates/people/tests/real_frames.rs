@@ -10,14 +10,7 @@ use phri_people::{Intrinsics, Joint, Person, Tracker, TrackerConfig, MAX_PEOPLE}
 use serde::Deserialize;
 
 /// The Kinect v1's nominal intrinsics (the data's README).
-const K: Intrinsics = Intrinsics {
-    width: 640,
-    height: 480,
-    fx: 580.0,
-    fy: 580.0,
-    cx: 320.0,
-    cy: 240.0,
-};
+const K: Intrinsics = Intrinsics::KINECT_NOMINAL;
 const TOLERANCE_M: f64 = 0.10;
 
 #[derive(Deserialize)]

@@ -107,8 +107,9 @@ snapshot_fields!(SsmPeriod {
 /// What the resolver carries from one period to the next: per control
 /// point the filtered repulsion and the behind-the-hand hysteresis, the
 /// task scale, speed and separation monitoring (the monitor, when
-/// configured, after a byte saying it is) and the perception ages d_s holds. CLIK, SNS, the body task and
-/// the Jacobians keep nothing between periods.
+/// configured, after a byte saying it is) and the perception ages d_s
+/// holds. CLIK, SNS, the body task and the Jacobians keep nothing between
+/// periods.
 impl Snapshot for Resolver {
     fn save(&self, w: &mut Writer<'_>) {
         self.v_call_filtered.save(w);
@@ -122,8 +123,7 @@ impl Snapshot for Resolver {
         self.ssm_period.save(w);
         self.ssm_was_violating.save(w);
         self.ssm_was_violating_standard.save(w);
-        let h = &self.age_hold;
-        [h.now, h.before, h.since_s].save(w);
+        self.age_hold.save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.v_call_filtered.load(r);
@@ -139,13 +139,7 @@ impl Snapshot for Resolver {
         self.ssm_period.load(r);
         self.ssm_was_violating.load(r);
         self.ssm_was_violating_standard.load(r);
-        let mut h = [0.0; 3];
-        h.load(r);
-        self.age_hold = AgeHold {
-            now: h[0],
-            before: h[1],
-            since_s: h[2],
-        };
+        self.age_hold.load(r);
     }
 }
 
@@ -162,6 +156,32 @@ struct AgeHold {
     before: f64,
     /// time into the current span \[s\]
     since_s: f64,
+}
+
+snapshot_fields!(AgeHold {
+    now,
+    before,
+    since_s
+});
+
+impl AgeHold {
+    /// Take in `age_s` \[s\], `dt` \[s\] after the last: the largest age of
+    /// the current span and the one before (a non-finite age starts over
+    /// and is returned as it is).
+    fn push(&mut self, age_s: f64, dt: f64) -> f64 {
+        if !age_s.is_finite() {
+            *self = AgeHold::default();
+            return age_s;
+        }
+        self.since_s += dt.max(0.0);
+        if self.since_s >= AGE_HOLD_S {
+            self.before = self.now;
+            self.now = 0.0;
+            self.since_s = 0.0;
+        }
+        self.now = self.now.max(age_s);
+        self.now.max(self.before)
+    }
 }
 
 /// Failures met while resolving, counted (each leaves the fail-safe it always had).
@@ -270,21 +290,9 @@ impl Resolver {
     /// hand it held (45-104 contact episodes where the person makes 2, F̂
     /// 40 % off).
     pub fn set_perception_age(&mut self, age_s: f64, dt: f64, collaborating: bool) {
-        let h = &mut self.age_hold;
-        if !age_s.is_finite() {
-            *h = AgeHold::default();
-            self.perception_age_s = age_s;
-            return;
-        }
-        h.since_s += dt.max(0.0);
-        if h.since_s >= AGE_HOLD_S {
-            h.before = h.now;
-            h.now = 0.0;
-            h.since_s = 0.0;
-        }
-        h.now = h.now.max(age_s);
+        let held = self.age_hold.push(age_s, dt);
         self.perception_age_s = match collaborating {
-            true => h.now.max(h.before),
+            true => held,
             false => age_s,
         };
     }
@@ -999,6 +1007,31 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_held_age_is_the_frames_largest_and_follows_a_faster_camera() {
+        let mut h = AgeHold::default();
+        // 30 Hz frames 6.5 ms after capture: the age runs 6.5-39.8 ms
+        let age = |t_ms: u64, period_ms: f64| 6.5e-3 + (t_ms as f64 % period_ms) * 1e-3;
+        let mut held = Vec::new();
+        for t in 0..1000u64 {
+            held.push(h.push(age(t, 33.3), 1e-3));
+        }
+        // after the first 100 ms, steady at the age just before a frame
+        let (lo, hi) = held[100..]
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(lo > 0.0385 && hi < 0.0399, "{lo} {hi}");
+        // a camera at 60 Hz: within 100 ms the held age is its own
+        for t in 0..100u64 {
+            h.push(age(t, 16.7), 1e-3);
+        }
+        let now = h.push(age(100, 16.7), 1e-3);
+        assert!(now < 0.0235, "{now}");
+        // a non-finite age passes through and starts over
+        assert!(h.push(f64::NAN, 1e-3).is_nan());
+        assert_eq!(h, AgeHold::default());
+    }
 
     /// The LWR-IV at a bent pose: the end effector's speed toward a hand
     /// 0.4 m ahead of it along +y under a collaboration's reference that

@@ -219,6 +219,26 @@ fn brute_force_surface(
     (best - poi.radius).max(0.0)
 }
 
+/// The scan's surface seen (`rep`) against the whole image's nearest
+/// pixel `all` \[m\] (of `what`): never nearer, and that pixel when it lies
+/// within 10 cm (the scan's window holds it); whether it did.
+fn surface_is_the_nearest_pixel(rep: &Repulsion, all: f64, what: &str) -> bool {
+    assert!(
+        rep.surface_distance >= all - 1e-9,
+        "{what}: {} {all}",
+        rep.surface_distance
+    );
+    let near = all < 0.1;
+    if near {
+        assert!(
+            (rep.surface_distance - all).abs() < 1e-9,
+            "{what}: {} {all}",
+            rep.surface_distance
+        );
+    }
+    near
+}
+
 #[test]
 fn repulsion_points_away_from_the_obstacle() {
     let pose = front_camera();
@@ -380,19 +400,7 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
             // the surface seen: never nearer than the whole image's nearest
             // pixel, and that pixel when it is near (the window holds it)
             let all = brute_force_surface(&K, &frame, &pose, poi);
-            assert!(
-                rep.surface_distance >= all - 1e-9,
-                "{} {all}",
-                rep.surface_distance
-            );
-            if all < 0.1 {
-                assert!(
-                    (rep.surface_distance - all).abs() < 1e-9,
-                    "{} {all}",
-                    rep.surface_distance
-                );
-                near += 1;
-            }
+            near += usize::from(surface_is_the_nearest_pixel(&rep, all, "synthetic"));
         }
     }
     assert!(nonempty > 20);
@@ -406,14 +414,7 @@ fn windowed_computation_equals_a_brute_force_scan_of_the_whole_image() {
 /// whole frame's nearest pixel, and is that pixel when it is near.
 #[test]
 fn the_surface_seen_on_real_kinect_frames_is_the_nearest_pixel() {
-    let k = Intrinsics {
-        width: 640,
-        height: 480,
-        fx: 580.0,
-        fy: 580.0,
-        cx: 320.0,
-        cy: 240.0,
-    };
+    let k = Intrinsics::KINECT_NOMINAL;
     let pose = CameraPose::paper_default();
     let dist = DepthSpaceDistance::new(k, pose, params(), 0.001).unwrap();
     let dir =
@@ -447,19 +448,7 @@ fn the_surface_seen_on_real_kinect_frames_is_the_nearest_pixel() {
             let poi = PointOfInterest::new(o + off, rng.gen_range(0.0..0.06));
             let rep = dist.repulsion(&frame, &poi).unwrap();
             let all = brute_force_surface(&k, &frame, &pose, &poi);
-            assert!(
-                rep.surface_distance >= all - 1e-9,
-                "{name}: {} {all}",
-                rep.surface_distance
-            );
-            if all < 0.1 {
-                assert!(
-                    (rep.surface_distance - all).abs() < 1e-9,
-                    "{name}: {} {all}",
-                    rep.surface_distance
-                );
-                near += 1;
-            }
+            near += usize::from(surface_is_the_nearest_pixel(&rep, all, name));
         }
     }
     assert_eq!(frames, 3);
