@@ -24,6 +24,11 @@ use crate::{Controller, SnapshotError};
 /// A behaviour adopted this many states back at most keeps a standby in sync.
 pub const SYNC_STATES: u64 = 2;
 
+/// A standby that rests ([`Standby::may_rest`]) still steps in full one
+/// state in this many, so that the robot keeps comparing the two answers
+/// (the report's `both_answered` and `max_answer_diff_nm`).
+pub const FULL_STEP_EVERY: u64 = 64;
+
 /// Which command slot a controller answers on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Slot {
@@ -98,6 +103,20 @@ impl Standby {
 }
 
 impl Standby {
+    /// May this controller rest through `state` (`[control] standby_rests`):
+    /// take its inputs, but neither adopt, step nor answer? Only when it is
+    /// not in charge, the robot is not braked, the one in charge has
+    /// already answered this very state (`peer_answered`: its behaviour
+    /// after `state` is here) and the state is not one of every
+    /// [`FULL_STEP_EVERY`]. Its answer would not be applied anyway; when the
+    /// one in charge has not answered by the time it looks, it steps as
+    /// always, adopting the behaviour of the state before, and takes over in
+    /// the same period if that answer never comes.
+    pub fn may_rest(&self, state: &JointState, peer_answered: bool) -> bool {
+        let braked = state.status & robot_status::BRAKING != 0;
+        peer_answered && !braked && !self.in_charge(state) && state.seq % FULL_STEP_EVERY != 0
+    }
+
     /// Before the step of `state`: adopt `behaviour` (the newest the peer
     /// left) when it is the one of the state before and this controller is
     /// not in charge. `Ok(true)`: adopted; a refused one changes nothing.
@@ -374,6 +393,24 @@ mod tests {
         assert!(inbox.after_state(1).is_some() && inbox.after_state(2).is_some());
         inbox.push(&b(3));
         assert!(inbox.after_state(2).is_some() && inbox.after_state(1).is_none());
+    }
+
+    #[test]
+    fn a_standby_rests_only_through_states_the_one_in_charge_answered() {
+        let b = Standby::new(Slot::Standby);
+        assert!(b.may_rest(&state(10, 0), true));
+        // the one in charge has not answered yet: step, ready to take over
+        assert!(!b.may_rest(&state(10, 0), false));
+        // one state in FULL_STEP_EVERY is stepped: the answers stay compared
+        assert!(!b.may_rest(&state(FULL_STEP_EVERY, 0), true));
+        assert!(b.may_rest(&state(FULL_STEP_EVERY + 1, 0), true));
+        // braked (anyone may answer) or in charge: never
+        assert!(!b.may_rest(&state(11, robot_status::BRAKING), true));
+        assert!(!b.may_rest(&state(11, robot_status::STANDBY_IN_CHARGE), true));
+        // the first slot rests once the standby is in charge
+        let first = Standby::new(Slot::First);
+        assert!(first.may_rest(&state(11, robot_status::STANDBY_IN_CHARGE), true));
+        assert!(!first.may_rest(&state(11, 0), true));
     }
 
     #[test]

@@ -552,8 +552,11 @@ impl Cell {
             self.requests.clear();
             return Ok(());
         };
+        let in_charge = pair.in_charge(&self.state);
+        // the one not in charge rests through a state the one in charge answers
+        let steps = [0, 1].map(|slot| up[slot] && !pair.slots.rests(slot, &self.state, up));
         for slot in 0..2 {
-            if up[slot] {
+            if steps[slot] {
                 let controller = match slot {
                     0 => &mut self.controller,
                     _ => &mut pair.standby,
@@ -561,9 +564,8 @@ impl Cell {
                 pair.slots.adopt(slot, controller, &self.state);
             }
         }
-        let in_charge = pair.in_charge(&self.state);
         for slot in 0..2 {
-            if !up[slot] {
+            if !steps[slot] {
                 continue;
             }
             let controller = match slot {

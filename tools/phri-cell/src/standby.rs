@@ -1,9 +1,11 @@
 //! The hot standby in lock-step: a second controller answers every state
 //! on command slot 1 (`robot/command/standby`), as `phri-control --standby`
-//! does. Each period both adopt the behaviour the controller in charge left
-//! after the state before (the rule of [`phri_control::standby`]), then both
-//! step; the robot link applies the answer of the one in charge, or the
-//! other's in the same period.
+//! does. Each period the one in charge steps; the other adopts the
+//! behaviour the controller in charge left after the state before (the rule
+//! of [`phri_control::standby`]) and steps too, or rests through a state
+//! the one in charge answers (`[control] standby_rests`); the robot link
+//! applies the answer of the one in charge, or the other's in the same
+//! period.
 
 use phri_control::standby::{inputs_fresh, save_behaviour, Slot, Standby};
 use phri_control::Controller;
@@ -64,6 +66,15 @@ impl Slots {
         self.roles[slot] = Standby::new(kind);
         self.commands[slot] = None;
         self.behaviours[slot].state_seq = 0;
+    }
+
+    /// Does slot `slot` rest through `state` (`[control] standby_rests`,
+    /// [`Standby::may_rest`])? `up`: which slots run; the one in charge,
+    /// when it runs, answers the state before the other looks.
+    pub fn rests(&self, slot: usize, state: &JointState, up: [bool; 2]) -> bool {
+        let peer = 1 - slot;
+        let peer_answers = up[peer] && self.roles[peer].in_charge(state);
+        self.control.standby_rests && self.roles[slot].may_rest(state, peer_answers)
     }
 
     /// Before slot `slot`'s step of `state`: adopt the other slot's behaviour

@@ -1,5 +1,6 @@
 //! The hot standby in lock-step: a second controller answers every state
-//! and adopts the behaviour of the one in charge, so that stopping,
+//! the one in charge has not answered when it looks (by default it rests
+//! through the others) and adopts the behaviour of the one in charge, so that stopping,
 //! killing or restarting either controller costs the arm nothing. The
 //! measure is physical: the arm's true joint trajectory with the fault is
 //! the trajectory without it, and the robot link missed no deadline.
@@ -8,6 +9,7 @@ mod common;
 
 use common::{cell, loaded};
 use phri_cell::{Cell, CellOptions, CellSummary, Down, Outage};
+use phri_control::standby::FULL_STEP_EVERY;
 use phri_control::Controller;
 use phri_ipc::ControlMode;
 
@@ -83,8 +85,15 @@ fn fresh_controller(scenario: &str, sets: &[&str]) -> Controller {
 
 #[test]
 fn a_stopped_controller_costs_the_arm_nothing_on_either_arm() {
-    for robot in ["robot.name=lwr4", "robot.name=fr3"] {
-        let sets = [robot];
+    // the standby resting through the states the one in charge answers
+    // (the default) and stepping every state
+    for (robot, rests) in [
+        ("robot.name=lwr4", "control.standby_rests=true"),
+        ("robot.name=fr3", "control.standby_rests=true"),
+        ("robot.name=lwr4", "control.standby_rests=false"),
+    ] {
+        let sets = [robot, rests];
+        let robot = format!("{robot} {rests}");
         let reference = run("coexistence", &sets, 7.0, &standby_opts(&[]), |_, _| {});
         // the first controller stops for 0.5 s (SIGSTOP), the standby stops for 0.3 s later
         let outages = [(Down::Control, 3.0, 3.5), (Down::Standby, 5.0, 5.3)];
@@ -118,12 +127,22 @@ fn a_stopped_controller_costs_the_arm_nothing_on_either_arm() {
             gap < 1e-9,
             "{robot}: the arm moved as without the fault ({gap:e} rad)"
         );
-        // the stopped one rejoined as the standby: both answered after it woke
-        assert!(
-            s.both_answered > 6000 - 500 - 300 - 100,
-            "{robot}: {}",
-            s.both_answered
-        );
+        // the stopped one rejoined as the standby: both answered after it
+        // woke, every state or (resting) one in FULL_STEP_EVERY
+        let both = 6000 - 500 - 300 - 100;
+        let both = match rests.ends_with("true") {
+            true => both / FULL_STEP_EVERY - 2,
+            false => both,
+        };
+        assert!(s.both_answered > both, "{robot}: {}", s.both_answered);
+        if rests.ends_with("true") {
+            // and rested through the rest
+            assert!(
+                s.both_answered < 2 * both + 100,
+                "{robot}: {}",
+                s.both_answered
+            );
+        }
         assert_eq!(faulted.cell.mode(), ControlMode::Task);
         assert!(faulted.summary.waypoints >= 1);
     }

@@ -99,13 +99,18 @@ impl ControlService {
                 return Ok(());
             }
         };
+        if self.role.with_standby {
+            self.role.receive(outputs, gate)?;
+            if self.control.standby_rests && self.role.may_rest(state) {
+                return Ok(());
+            }
+        }
         if gathered.requests_lost {
             self.controller.requests_lost();
         }
         if self.role.with_standby {
             let seq = &mut self.seq;
-            self.role
-                .adopt(&mut self.controller, outputs, gate, state, seq, log)?;
+            self.role.adopt(&mut self.controller, state, seq, log);
         }
         self.controller.step(&gathered.input);
         self.seq += 1;
@@ -136,23 +141,34 @@ impl ControlService {
 }
 
 impl Role {
-    /// The hot standby: the behaviour the one in charge left after the
-    /// state before, adopted when this controller is not in charge.
-    fn adopt(
-        &mut self,
-        controller: &mut Controller,
-        outputs: &OutputChannels,
-        gate: &InputGate,
-        state: &JointState,
-        seq: &mut u64,
-        log: &Deferred<Note>,
-    ) -> Result<(), IpcError> {
+    /// The other controller's behaviour states published since the last
+    /// period, those of the controller the supervisor started.
+    fn receive(&mut self, outputs: &OutputChannels, gate: &InputGate) -> Result<(), IpcError> {
         let inbox = &mut self.inbox;
         outputs.peer_behaviour.drain_from(|pid, b| {
             if gate.behaviour(pid) {
                 inbox.push(b);
             }
         })?;
+        Ok(())
+    }
+
+    /// Rest through `state`: the one in charge has answered it already
+    /// ([`Standby::may_rest`]).
+    fn may_rest(&self, state: &JointState) -> bool {
+        let answered = self.inbox.after_state(state.seq).is_some();
+        self.standby.may_rest(state, answered)
+    }
+
+    /// The hot standby: the behaviour the one in charge left after the
+    /// state before, adopted when this controller is not in charge.
+    fn adopt(
+        &mut self,
+        controller: &mut Controller,
+        state: &JointState,
+        seq: &mut u64,
+        log: &Deferred<Note>,
+    ) {
         let before = self.inbox.after_state(state.seq.saturating_sub(1));
         match self.standby.adopt(controller, state, before) {
             // one numbering of the messages, whoever is in charge
@@ -165,7 +181,6 @@ impl Role {
                 }
             }
         }
-        Ok(())
     }
 
     /// What this controller publishes after stepping `state`: everything
