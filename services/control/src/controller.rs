@@ -322,19 +322,19 @@ impl Controller {
     /// the bytes written. Allocates nothing. What it holds and leaves out:
     /// [`snapshot`].
     pub fn save_behaviour(&self, buf: &mut [u8]) -> Result<usize, SnapshotError> {
-        let layout = self.behaviour_layout();
         let have = buf.len();
+        // one pass: the header's place first, filled once the length is known
         let mut w = Writer::new(buf);
-        snapshot::write_header(&mut w, &layout);
+        snapshot::write_header(&mut w, &Layout::BLANK);
         self.save_state(&mut w);
-        debug_assert_eq!(w.len(), layout.bytes);
-        match w.overflowed() {
-            true => Err(SnapshotError::BufferTooSmall {
-                need: w.len(),
-                have,
-            }),
-            false => Ok(w.len()),
+        let (len, overflowed) = (w.len(), w.overflowed());
+        if overflowed {
+            return Err(SnapshotError::BufferTooSmall { need: len, have });
         }
+        let layout = self.layout_of(len);
+        debug_assert_eq!(layout, self.behaviour_layout());
+        snapshot::write_header(&mut Writer::new(buf), &layout);
+        Ok(len)
     }
 
     /// Adopt a peer's behaviour state (saved by a controller of the same
@@ -354,14 +354,13 @@ impl Controller {
     /// pass) and a fingerprint of the sizes the configuration sets.
     fn behaviour_layout(&self) -> Layout {
         let mut count = Writer::new(&mut []);
-        let blank = Layout {
-            dof: 0,
-            bytes: 0,
-            fingerprint: 0,
-        };
-        snapshot::write_header(&mut count, &blank);
+        snapshot::write_header(&mut count, &Layout::BLANK);
         self.save_state(&mut count);
-        let bytes = count.len();
+        self.layout_of(count.len())
+    }
+
+    /// The layout of a snapshot of `bytes` bytes of this configuration.
+    fn layout_of(&self, bytes: usize) -> Layout {
         let sizes = [
             self.n as u64,
             self.resolver.control_points() as u64,

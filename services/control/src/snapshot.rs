@@ -548,6 +548,15 @@ pub(crate) struct Layout {
     pub fingerprint: u64,
 }
 
+impl Layout {
+    /// A header's place, before the length is known (a counting pass).
+    pub const BLANK: Layout = Layout {
+        dof: 0,
+        bytes: 0,
+        fingerprint: 0,
+    };
+}
+
 /// FNV-1a over the values' little-endian bytes.
 pub(crate) fn fingerprint(values: &[u64]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
