@@ -1,6 +1,6 @@
 //! The hot standby in lock-step: a second controller answers every state
-//! the one in charge has not answered when it looks (by default it rests
-//! through the others) and adopts the behaviour of the one in charge, so that stopping,
+//! (with `[control] standby_rests`, only those the one in charge has not
+//! answered when it looks) and adopts the behaviour of the one in charge, so that stopping,
 //! killing or restarting either controller costs the arm nothing. The
 //! measure is physical: the arm's true joint trajectory with the fault is
 //! the trajectory without it, and the robot link missed no deadline.
@@ -86,7 +86,7 @@ fn fresh_controller(scenario: &str, sets: &[&str]) -> Controller {
 #[test]
 fn a_stopped_controller_costs_the_arm_nothing_on_either_arm() {
     // the standby resting through the states the one in charge answers
-    // (the default) and stepping every state
+    // and stepping every state (the default)
     for (robot, rests) in [
         ("robot.name=lwr4", "control.standby_rests=true"),
         ("robot.name=fr3", "control.standby_rests=true"),

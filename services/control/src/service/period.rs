@@ -102,6 +102,9 @@ impl ControlService {
         if self.role.with_standby {
             self.role.receive(outputs, gate)?;
             if self.control.standby_rests && self.role.may_rest(state) {
+                // resting is not in charge: a controller stopped in charge
+                // and resumed as the standby lowers its priority here too
+                self.role.set_priority(false);
                 return Ok(());
             }
         }
@@ -127,15 +130,7 @@ impl ControlService {
         };
         let c = &self.controller;
         self.messages.command(c, state, period, outputs)?;
-        if let Some(p) = self
-            .role
-            .rank
-            .as_mut()
-            .and_then(|r| r.change(period.duty.in_charge))
-        {
-            // refused: the priority stays (the supervisor's watch reports it)
-            let _ = phri_runtime::rt::set_fifo_priority(p);
-        }
+        self.role.set_priority(period.duty.in_charge);
         self.messages.rest(c, state, period, outputs)
     }
 }
@@ -151,6 +146,15 @@ impl Role {
             }
         })?;
         Ok(())
+    }
+
+    /// With the standby, the loop's priority of the role, `in_charge` or
+    /// not (one system call per change).
+    fn set_priority(&mut self, in_charge: bool) {
+        if let Some(p) = self.rank.as_mut().and_then(|r| r.change(in_charge)) {
+            // refused: the priority stays (the supervisor's watch reports it)
+            let _ = phri_runtime::rt::set_fifo_priority(p);
+        }
     }
 
     /// Rest through `state`: the one in charge has answered it already
