@@ -46,9 +46,8 @@ pub const SIM_TRUTH: Channel<Truth> = Channel::new("sim/truth", Qos::ONE_PUBLISH
 pub const DYNAMICS_RESIDUAL: Channel<Residual> =
     Channel::new("dynamics/residual", Qos::ONE_PUBLISHER, true);
 /// [`Residual`] from the hot standby's dynamics service (the same observer
-/// over the same states), one per state, published in batches every 2 ms
-/// (every 0.5 ms while `dynamics/residual` is behind): the controller takes
-/// the fresher of the two. Wakes: new residual.
+/// over the same states), 1 kHz: the controller takes the fresher of the
+/// two. Wakes: new residual.
 pub const DYNAMICS_RESIDUAL_STANDBY: Channel<Residual> =
     Channel::new("dynamics/residual/standby", Qos::ONE_PUBLISHER, true);
 /// [`ControlStatus`] from the controller in charge, 1 kHz (the standby's

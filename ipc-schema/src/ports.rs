@@ -118,8 +118,7 @@ pub const PORTS: &[Ports] = &[
         "phri-dynamics",
         When::Flag("--standby"),
         &[DYNAMICS_RESIDUAL_STANDBY.name],
-        // whether the first residual service keeps up (the standby's pace)
-        &[DYNAMICS_RESIDUAL.name],
+        &[],
     ),
     ports(
         "phri-control",

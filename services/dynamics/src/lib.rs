@@ -6,8 +6,6 @@
 
 #![deny(missing_docs)]
 
-pub mod standby;
-
 use phri_config::ResidualConfig;
 use phri_estimation::{ResidualError, ResidualObserver};
 use phri_ipc::{residual_flags, robot_status, JointState, Residual, Zeroed};

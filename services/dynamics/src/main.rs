@@ -1,9 +1,7 @@
 //! `phri-dynamics`: wakes on `robot/state`, steps [`DynamicsStep`] over every
 //! queued state and publishes the last residual on `dynamics/residual`
-//! (`--standby`: the hot standby's, on `dynamics/residual/standby`; the
-//! controller takes the fresher of the two. It steps every state too, but
-//! looks for them at the pace of [`phri_dynamics::standby`] and publishes
-//! the residual of each).
+//! (`--standby`: on `dynamics/residual/standby`, the hot standby's; the
+//! controller takes the fresher of the two).
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -52,14 +50,7 @@ fn body() -> Result<(), Box<dyn Error>> {
         return Ok(());
     }
     let node = ctx.node()?;
-    // the standby does not wake on every state: it looks at its own pace
-    let (states, mut first) = match standby {
-        false => (ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?, None),
-        true => (
-            ROBOT_STATE.subscriber(&node, Queue::Drain)?,
-            Some(DYNAMICS_RESIDUAL.latest_reader(&node)?),
-        ),
-    };
+    let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
     let channel = match standby {
         false => DYNAMICS_RESIDUAL,
         true => DYNAMICS_RESIDUAL_STANDBY,
@@ -74,38 +65,18 @@ fn body() -> Result<(), Box<dyn Error>> {
     ctx.go_realtime();
 
     let mut bad_samples = 0u64;
-    let mut newest_seq = 0u64;
-    let mut sent = Ok(());
     while !ctx.shutdown.requested() {
-        match first.as_mut() {
-            // a wake-up without a sample (timeout, signal) just loops
-            None => {
-                let _ = states.wait(Duration::from_millis(50));
-            }
-            Some(first) => {
-                first.update()?;
-                std::thread::sleep(phri_dynamics::standby::pause(first.get(), newest_seq));
-            }
-        }
+        // a wake-up without a sample (timeout, signal) just loops
+        let _ = states.wait(Duration::from_millis(50));
         beat.beat(now_ns());
         let mut fresh = None;
         states.drain_from(|pid, s| {
             if !owners.admit(phri_ipc::Owned::ROBOT_STATE, pid).accepted() {
                 return;
             }
-            // the standby publishes the residual of every state it read
-            if let (true, Some(compute_ns)) = (standby, fresh) {
-                fresh = None;
-                if sent.is_ok() {
-                    sent = residuals.publish(step.seal(now_ns(), compute_ns));
-                }
-            }
             let t0 = now_ns();
             match step.step(s) {
-                Ok(r) => {
-                    newest_seq = r.state_seq;
-                    fresh = Some(now_ns() - t0);
-                }
+                Ok(_) => fresh = Some(now_ns() - t0),
                 Err(e) => {
                     bad_samples += 1;
                     if bad_samples.is_power_of_two() {
@@ -117,7 +88,6 @@ fn body() -> Result<(), Box<dyn Error>> {
                 }
             }
         })?;
-        std::mem::replace(&mut sent, Ok(()))?;
         if let Some(compute_ns) = fresh {
             residuals.publish(step.seal(now_ns(), compute_ns))?;
         }

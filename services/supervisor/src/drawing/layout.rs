@@ -131,7 +131,7 @@ pub const PLACES: &[Place] = &[
     place(
         "dynamics",
         &["dynamics", "dynamics_standby"],
-        Rect::new(C1, 76.0, 150.0, 80.0),
+        Rect::new(C1, 76.0, 150.0, 60.0),
         "momentum residual",
     ),
     place(
