@@ -1,7 +1,7 @@
 //! The hot standby in lock-step: a second controller answers every state
 //! (with `[control] standby_rests`, only those the one in charge has not
-//! answered when it looks) and adopts the behaviour of the one in charge, so that stopping,
-//! killing or restarting either controller costs the arm nothing. The
+//! answered when it looks) and adopts the behaviour of the one in charge,
+//! so that stopping, killing or restarting either controller costs the arm nothing. The
 //! measure is physical: the arm's true joint trajectory with the fault is
 //! the trajectory without it, and the robot link missed no deadline.
 
