@@ -18,7 +18,7 @@
 
 use nalgebra::Vector3;
 
-/// Pixels per run.
+/// Pixels per run (the distance scan's and the renderer's capsule pass).
 pub(crate) const RUN: usize = 16;
 
 /// `a b + c`: fused (one rounding) with `FMA`, else a product and a sum.

@@ -216,6 +216,21 @@ pub(crate) fn camera_box_rect(
     PixelRect::from_bounds(intrinsics, u0, u1, v0, v1)
 }
 
+/// A ray's entry into a capsule as [`RayCapsule::cylinder_entry`] and
+/// [`RayCapsule::end_entry`] find it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Entry {
+    /// depth of the entry \[m\] (when `hit`)
+    pub t: f64,
+    /// the ray enters the capsule at `t`
+    pub hit: bool,
+    /// the ray misses the capsule
+    pub miss: bool,
+    /// the ray meets the infinite cylinder beyond an end of the capsule
+    /// ([`RayCapsule::end_entry`] tells)
+    pub beyond_end: bool,
+}
+
 /// A capsule in the camera frame, prepared for rays through the optical centre.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct RayCapsule {
@@ -314,9 +329,102 @@ impl RayCapsule {
         sphere_roots(q, self.b.x * x + self.b.y * y + self.b.z, self.sb_c)
     }
 
+    /// The ray factors `x` of the row `y` whose rays `t (x, y, 1)` may enter
+    /// the capsule, as `[lo, hi]`: outside it [`RayCapsule::entry`] is `None`
+    /// (the ray misses the infinite cylinder). `(−∞, ∞)` when the row is not
+    /// bounded this way (a sphere, a camera inside the cylinder, a row
+    /// whose misses are not one interval's complement); `lo > hi` when
+    /// every ray of the row misses. Along a row, the cylinder's
+    /// discriminant of [`RayCapsule::entry`] is a quadratic in `x`; its
+    /// roots are exact but for rounding (the caller widens the interval).
+    pub fn row_candidates(&self, y: f64) -> (f64, f64) {
+        const ALL: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
+        if !(self.k > 0.0 && self.cyl_c > 0.0) {
+            return ALL;
+        }
+        // bard = p1 x + p0, ard = r1 x + r0, half_b = m1 x + m0,
+        // qa = k q − bard² = e2 x² + e1 x + e0 with q = x² + y² + 1
+        let (p1, p0) = (self.ba.x, self.ba.y * y + self.ba.z);
+        let (r1, r0) = (self.a.x, self.a.y * y + self.a.z);
+        let (m1, m0) = (-self.k * r1 + self.aba * p1, -self.k * r0 + self.aba * p0);
+        let (e2, e1, e0) = (
+            self.k - p1 * p1,
+            -2.0 * p1 * p0,
+            self.k * (y * y + 1.0) - p0 * p0,
+        );
+        // h = half_b² − qa cyl_c = a x² + b x + c
+        let a = m1 * m1 - self.cyl_c * e2;
+        let b = 2.0 * m1 * m0 - self.cyl_c * e1;
+        let c = m0 * m0 - self.cyl_c * e0;
+        if !(a < 0.0) {
+            return ALL;
+        }
+        let disc = b * b - 4.0 * a * c;
+        if disc < -1e-9 * (b * b + (4.0 * a * c).abs()) {
+            return (f64::INFINITY, f64::NEG_INFINITY);
+        }
+        // a < 0: h ≥ 0 between the roots (the stable pair of formulas)
+        let s = disc.max(0.0).sqrt();
+        let q = -0.5 * (b + s.copysign(b));
+        let (x1, x2) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
+        (x1.min(x2), x1.max(x2))
+    }
+
+    /// [`RayCapsule::entry`]'s first step for the ray `t (x, y, 1)`, of the
+    /// same arithmetic without branches, so that a run of pixels
+    /// vectorises: its entry `t` into the infinite cylinder; `hit` when
+    /// that is the capsule's entry (`entry` is `Some(t)`), `miss` when the
+    /// ray misses the cylinder (`entry` is `None`), `beyond_end` when it
+    /// meets the cylinder beyond an end ([`RayCapsule::end_entry`] tells);
+    /// none of them: the ray runs along the axis (ask `entry`).
+    #[inline(always)]
+    pub fn cylinder_entry(&self, x: f64, y: f64) -> Entry {
+        let q = x * x + y * y + 1.0;
+        let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
+        let ard = self.a.x * x + self.a.y * y + self.a.z;
+        let qa = self.k * q - bard * bard;
+        let slanted = (self.k > 0.0) & (qa > 1e-12 * self.k * q);
+        let half_b = -self.k * ard + bard * self.aba;
+        let h = half_b * half_b - qa * self.cyl_c;
+        let t = (-half_b - h.sqrt()) / qa;
+        let s = t * bard - self.aba;
+        let meets = slanted & (h >= 0.0);
+        let body = (s >= 0.0) & (s <= self.k);
+        Entry {
+            t,
+            hit: meets & body,
+            miss: slanted & (h < 0.0),
+            beyond_end: meets & !body,
+        }
+    }
+
+    /// [`RayCapsule::entry`]'s second step, without branches: for a slanted
+    /// ray that meets the infinite cylinder beyond an end (`beyond_end` of
+    /// [`RayCapsule::cylinder_entry`], whose `t` is `cylinder_t`), its
+    /// entry into that end's sphere, or a miss.
+    #[inline(always)]
+    pub fn end_entry(&self, x: f64, y: f64, cylinder_t: f64) -> Entry {
+        let q = x * x + y * y + 1.0;
+        let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
+        let s = cylinder_t * bard - self.aba;
+        let before = s < 0.0;
+        let ma = self.a.x * x + self.a.y * y + self.a.z;
+        let mb = self.b.x * x + self.b.y * y + self.b.z;
+        let m = if before { ma } else { mb };
+        let c = if before { self.sa_c } else { self.sb_c };
+        let disc = m * m - q * c;
+        let hit = !(disc < 0.0);
+        Entry {
+            t: (m - disc.sqrt()) / q,
+            hit,
+            miss: !hit,
+            beyond_end: false,
+        }
+    }
+
     /// Depth where the ray `t (x, y, 1)` enters the capsule (may be ≤ 0 when
     /// the capsule reaches behind the camera), or `None` if it misses.
-    #[inline]
+    #[inline(always)]
     pub fn entry(&self, x: f64, y: f64) -> Option<f64> {
         let q = x * x + y * y + 1.0;
         if self.k > 0.0 {
@@ -476,5 +584,53 @@ impl RayCapsule {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{CameraPose, Intrinsics};
+    use nalgebra::Point3;
+
+    /// Every ray that enters a capsule lies within its row's candidates, for
+    /// capsules of every orientation around and in front of the camera.
+    #[test]
+    fn every_entering_ray_is_a_row_candidate() {
+        let k = Intrinsics::default();
+        let pose = CameraPose::paper_default();
+        let (xn, yn) = (k.column_factors(), k.row_factors());
+        let mut lcg = crate::lanes::test_sequence(7);
+        let mut uniform =
+            move |lo: f64, hi: f64| lo + (hi - lo) * ((lcg() >> 11) as f64 / (1u64 << 53) as f64);
+        let (mut hits, mut pruned, mut bounded) = (0usize, 0usize, 0usize);
+        for _ in 0..300 {
+            let a = Point3::new(uniform(-1.0, 1.5), uniform(-1.2, 1.2), uniform(0.0, 1.8));
+            let b = a + nalgebra::Vector3::new(
+                uniform(-0.6, 0.6),
+                uniform(-0.6, 0.6),
+                uniform(-0.6, 0.6),
+            );
+            let capsule = Capsule::new(a, b, uniform(0.01, 0.15));
+            let rc = RayCapsule::new(&capsule, &pose, 0.0);
+            for (v, &y) in yn.iter().enumerate().step_by(3) {
+                let (lo, hi) = rc.row_candidates(y);
+                bounded += usize::from(lo.is_finite() || lo > hi);
+                for &x in xn.iter().step_by(2) {
+                    let inside = x >= lo && x <= hi;
+                    if rc.entry(x, y).is_some() {
+                        hits += 1;
+                        assert!(inside, "row {v}: x {x} outside [{lo}, {hi}]");
+                    } else if !inside {
+                        pruned += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            hits > 10_000 && pruned > hits,
+            "{hits} hits, {pruned} pruned"
+        );
+        assert!(bounded > 0);
     }
 }
