@@ -560,31 +560,12 @@ struct Draw<'a> {
     v1: usize,
 }
 
-impl Draw<'_> {
-    /// The columns of row `y` (offsets into `xn`) whose rays may enter the
-    /// capsule ([`RayCapsule::row_candidates`], widened by two pixels for
-    /// rounding); empty when none may.
-    fn columns(&self, y: f64) -> std::ops::Range<usize> {
-        let (lo, hi) = self.rc.row_candidates(y);
-        if lo > hi {
-            return 0..0;
-        }
-        let cols = self.xn.len() as f64;
-        let first = (lo * self.fx + self.cx).floor() - 2.0 - self.u0 as f64;
-        let last = (hi * self.fx + self.cx).ceil() + 2.0 - self.u0 as f64;
-        // ±∞ clamp to the rectangle; NaN never arises from finite roots
-        let start = first.clamp(0.0, cols) as usize;
-        let end = (last + 1.0).clamp(0.0, cols) as usize;
-        start..end.max(start)
-    }
-}
-
 by_lanes! {
     /// Draws one capsule into the z-buffer and the labels.
     fn draw_capsule(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) -> () = draw_any;
 }
 
-/// [`draw_capsule`] over each row's candidate columns ([`Draw::columns`])
+/// [`draw_capsule`] over each row's candidate columns ([`RayCapsule::columns`])
 /// in runs of [`RUN`] pixels: a run whose every ray is hidden by a nearer
 /// surface, misses the capsule or enters it in front of the near plane
 /// ([`RayCapsule::cylinder_entry`], [`RayCapsule::end_entry`], in lanes)
@@ -595,7 +576,7 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
     let cols = d.xn.len();
     for v in d.v0..=d.v1 {
         let y = d.yn[v];
-        let span = d.columns(y);
+        let span = d.rc.columns(y, d.fx, d.cx, d.u0, cols);
         let start = v * d.width + d.u0;
         let zrow = &mut zbuf[start..start + cols];
         let lrow = &mut labels[start..start + cols];

@@ -5,6 +5,8 @@
 //! `x_n = (p_x − c_x)/f_x`, `y_n = (p_y − c_y)/f_y`; because the direction's z
 //! component is 1, the ray parameter `t` *is* the depth of the point it reaches.
 
+use std::ops::Range;
+
 use nalgebra::{Point3, Vector3};
 
 use crate::camera::{CameraPose, Intrinsics};
@@ -368,6 +370,24 @@ impl RayCapsule {
         let q = -0.5 * (b + s.copysign(b));
         let (x1, x2) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
         (x1.min(x2), x1.max(x2))
+    }
+
+    /// The columns of row `y` whose rays may enter the capsule, as offsets
+    /// into the `cols` columns from `u0` on ([`RayCapsule::row_candidates`],
+    /// widened by two pixels for rounding; `fx`, `cx` the intrinsics'
+    /// focal length and principal point along x \[px\]); empty when none may.
+    pub fn columns(&self, y: f64, fx: f64, cx: f64, u0: usize, cols: usize) -> Range<usize> {
+        let (lo, hi) = self.row_candidates(y);
+        if lo > hi {
+            return 0..0;
+        }
+        let n = cols as f64;
+        let first = (lo * fx + cx).floor() - 2.0 - u0 as f64;
+        let last = (hi * fx + cx).ceil() + 2.0 - u0 as f64;
+        // ±∞ clamp to the columns; NaN never arises from finite roots
+        let start = first.clamp(0.0, n) as usize;
+        let end = (last + 1.0).clamp(0.0, n) as usize;
+        start..end.max(start)
     }
 
     /// [`RayCapsule::entry`]'s first step for the ray `t (x, y, 1)`, of the
