@@ -16,7 +16,7 @@ use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
 use crate::lanes::{self, by_lanes, Lanes, RUN};
 use crate::noise::{draws, normal_index, pixel_bits, sigma_z, NormalSource, TABLE_SIZE};
-use crate::shapes::{camera_box_bounds, Aabb, Capsule, PixelRect, RayCapsule};
+use crate::shapes::{camera_box_bounds, Aabb, Capsule, CapsulePixels, PixelRect, RayCapsule};
 
 /// Surfaces nearer than this \[m\] block the view but give no reading.
 pub(crate) const NEAR_M: f64 = 1e-3;
@@ -414,17 +414,11 @@ impl Renderer {
         let rc = RayCapsule::new(capsule, &self.pose, 0.0);
         let rect = rc.pixel_rect(&self.intrinsics, NEAR_M)?;
         let draw = Draw {
-            rc: &rc,
+            at: CapsulePixels::new(&rc, &rect, &self.xn, &self.yn),
             z_min: rc.depth_range().0,
             label,
-            xn: &self.xn[rect.u0..=rect.u1],
-            yn: &self.yn,
             fx: self.intrinsics.fx,
             cx: self.intrinsics.cx,
-            width: self.intrinsics.width as usize,
-            u0: rect.u0,
-            v0: rect.v0,
-            v1: rect.v1,
         };
         draw_capsule(self.lanes, &draw, &mut self.zbuf, &mut self.labels);
         Some(rect)
@@ -542,22 +536,15 @@ impl Renderer {
     }
 }
 
-/// One capsule to draw over its pixel rectangle: rows `v0..=v1`, columns
-/// from `u0` on, as many as `xn` (their ray factors).
+/// One capsule to draw over its pixel rectangle.
 struct Draw<'a> {
-    rc: &'a RayCapsule,
+    at: CapsulePixels<'a>,
     /// the capsule's nearest depth \[m\]: a pixel already nearer is kept
     z_min: f64,
     label: u16,
-    xn: &'a [f64],
-    yn: &'a [f64],
     /// the intrinsics' focal length and principal point along x \[px\]
     fx: f64,
     cx: f64,
-    width: usize,
-    u0: usize,
-    v0: usize,
-    v1: usize,
 }
 
 by_lanes! {
@@ -573,11 +560,12 @@ by_lanes! {
 /// are drawn pixel by pixel ([`RayCapsule::entry`]).
 #[inline(always)]
 fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
-    let cols = d.xn.len();
-    for v in d.v0..=d.v1 {
-        let y = d.yn[v];
-        let span = d.rc.columns(y, d.fx, d.cx, d.u0, cols);
-        let start = v * d.width + d.u0;
+    let p = &d.at;
+    let cols = p.xn.len();
+    for v in p.v0..=p.v1 {
+        let y = p.yn[v];
+        let span = p.rc.columns(y, d.fx, d.cx, p.u0, cols);
+        let start = v * p.width + p.u0;
         let zrow = &mut zbuf[start..start + cols];
         let lrow = &mut labels[start..start + cols];
         for c in span.clone().step_by(RUN) {
@@ -585,7 +573,7 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
             // in lanes: the runs whose rays are all hidden, miss the
             // capsule or enter it in front of the near plane through its
             // cylinder (most of its image) or, in a second pass, an end
-            let xs: [f64; RUN] = lanes::load(&d.xn[..span.end], c);
+            let xs: [f64; RUN] = lanes::load(&p.xn[..span.end], c);
             let zs: [f64; RUN] = lanes::load(&zrow[..span.end], c);
             let mut t = [0.0f64; RUN];
             let mut hit = [false; RUN];
@@ -593,7 +581,7 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
             let mut miss = [false; RUN];
             let (mut skip, mut settled) = (true, true);
             for i in 0..RUN {
-                let e = d.rc.cylinder_entry(xs[i], y);
+                let e = p.rc.cylinder_entry(xs[i], y);
                 let hidden = (i >= n) | (zs[i] <= d.z_min);
                 t[i] = e.t;
                 miss[i] = e.miss;
@@ -608,7 +596,7 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
             if !settled && open.iter().any(|&o| o) {
                 settled = true;
                 for i in 0..RUN {
-                    let e = d.rc.end_entry(xs[i], y, t[i]);
+                    let e = p.rc.end_entry(xs[i], y, t[i]);
                     let hidden = (i >= n) | (zs[i] <= d.z_min);
                     let first = if open[i] {
                         e.miss | (e.hit & (e.t > NEAR_M))
@@ -631,19 +619,19 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
                 }
                 continue;
             }
-            let (zs, xs) = (&mut zrow[c..c + n], &d.xn[c..c + n]);
+            let (zs, xs) = (&mut zrow[c..c + n], &p.xn[c..c + n]);
             for (i, (z, &x)) in zs.iter_mut().zip(xs).enumerate() {
                 if *z <= d.z_min {
                     continue; // something nearer than the whole capsule
                 }
-                let Some(t) = d.rc.entry(x, y) else {
+                let Some(t) = p.rc.entry(x, y) else {
                     continue;
                 };
                 let t = if t > NEAR_M {
                     t
                 } else {
                     // the capsule reaches behind the near plane: blocks the view
-                    match d.rc.interval(x, y) {
+                    match p.rc.interval(x, y) {
                         Some((_, t_out)) if t_out > NEAR_M => NEAR_M,
                         _ => continue,
                     }
@@ -841,17 +829,11 @@ mod tests {
                 }
             }
             let draw = Draw {
-                rc: &rc,
+                at: CapsulePixels::new(&rc, &rect, &xn, &yn),
                 z_min,
                 label: 9,
-                xn: &xn[rect.u0..=rect.u1],
-                yn: &yn,
                 fx: k.fx,
                 cx: k.cx,
-                width: w,
-                u0: rect.u0,
-                v0: rect.v0,
-                v1: rect.v1,
             };
             for lanes in Lanes::available() {
                 let mut z = z0.clone();

@@ -20,7 +20,7 @@ use crate::error::{check_frame, DepthError};
 use crate::lanes::{by_lanes, load, store, Lanes};
 use crate::noise::sigma_z;
 use crate::render::NEAR_M;
-use crate::shapes::{Capsule, RayCapsule};
+use crate::shapes::{Capsule, CapsulePixels, RayCapsule};
 
 /// Parameters of the self-filter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -138,7 +138,6 @@ impl SelfFilter {
             }
         }
         let p = self.params;
-        let w = self.intrinsics.width as usize;
         let mut removed = 0;
         for capsule in robot_capsules {
             let rc = RayCapsule::new(capsule, &self.pose, p.margin_m);
@@ -146,14 +145,8 @@ impl SelfFilter {
                 continue;
             };
             let region = Region {
-                rc: &rc,
+                at: CapsulePixels::new(&rc, &rect, &self.xn, &self.yn),
                 params: &p,
-                xn: &self.xn[rect.u0..=rect.u1],
-                yn: &self.yn,
-                width: w,
-                u0: rect.u0,
-                v0: rect.v0,
-                v1: rect.v1,
             };
             removed += remove(self.lanes, &region, frame);
         }
@@ -164,17 +157,10 @@ impl SelfFilter {
 /// Pixels per run of [`remove_any`].
 const RUN: usize = 16;
 
-/// One capsule's pixel rectangle: rows `v0..=v1`, columns from `u0` (as
-/// many as `xn`, their ray factors).
+/// One capsule's pixel rectangle, and the filter's parameters.
 struct Region<'a> {
-    rc: &'a RayCapsule,
+    at: CapsulePixels<'a>,
     params: &'a SelfFilterParams,
-    xn: &'a [f64],
-    yn: &'a [f64],
-    width: usize,
-    u0: usize,
-    v0: usize,
-    v1: usize,
 }
 
 by_lanes! {
@@ -189,17 +175,17 @@ by_lanes! {
 #[inline(always)]
 fn remove_any(region: &Region<'_>, frame: &mut [u16]) -> usize {
     let p = region.params;
-    let (z_min, z_max) = region.rc.depth_range();
-    let cols = region.xn.len();
+    let (z_min, z_max) = region.at.rc.depth_range();
+    let cols = region.at.xn.len();
     let mut removed = 0;
-    for v in region.v0..=region.v1 {
-        let y = region.yn[v];
-        let start = v * region.width + region.u0;
+    for v in region.at.v0..=region.at.v1 {
+        let y = region.at.yn[v];
+        let start = v * region.at.width + region.at.u0;
         let row = &mut frame[start..start + cols];
         for c in (0..cols).step_by(RUN) {
             // a short last run is padded with no reading
             let mut raw: [u16; RUN] = load(row, c);
-            let xs: [f64; RUN] = load(region.xn, c);
+            let xs: [f64; RUN] = load(region.at.xn, c);
             let mut d = [0.0f64; RUN];
             let mut tol = [0.0f64; RUN];
             let mut near = [false; RUN];
@@ -211,7 +197,7 @@ fn remove_any(region: &Region<'_>, frame: &mut [u16]) -> usize {
             if near.iter().any(|&n| n) {
                 let mut gone = 0usize;
                 for i in 0..RUN {
-                    let (t_in, t_out) = region.rc.interval_lanes(xs[i], y);
+                    let (t_in, t_out) = region.at.rc.interval_lanes(xs[i], y);
                     let on = near[i] & (d[i] >= t_in - tol[i]) & (d[i] <= t_out + tol[i]);
                     raw[i] = if on { 0 } else { raw[i] };
                     gone += usize::from(on);

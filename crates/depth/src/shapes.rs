@@ -218,6 +218,36 @@ pub(crate) fn camera_box_rect(
     PixelRect::from_bounds(intrinsics, u0, u1, v0, v1)
 }
 
+/// A capsule over its pixel rectangle in a frame `width` pixels wide: rows
+/// `v0..=v1`, columns from `u0` on, as many as `xn` (their ray factors
+/// `(u − c_x)/f_x`); `yn` every row's factor. What a per-pixel pass over
+/// one capsule reads.
+pub(crate) struct CapsulePixels<'a> {
+    pub rc: &'a RayCapsule,
+    pub xn: &'a [f64],
+    pub yn: &'a [f64],
+    pub width: usize,
+    pub u0: usize,
+    pub v0: usize,
+    pub v1: usize,
+}
+
+impl<'a> CapsulePixels<'a> {
+    /// `rc` over `rect` of a frame whose columns' and rows' ray factors are
+    /// `xn` and `yn` (the whole frame's).
+    pub fn new(rc: &'a RayCapsule, rect: &PixelRect, xn: &'a [f64], yn: &'a [f64]) -> Self {
+        CapsulePixels {
+            rc,
+            xn: &xn[rect.u0..=rect.u1],
+            yn,
+            width: xn.len(),
+            u0: rect.u0,
+            v0: rect.v0,
+            v1: rect.v1,
+        }
+    }
+}
+
 /// A ray's entry into a capsule as [`RayCapsule::cylinder_entry`] and
 /// [`RayCapsule::end_entry`] find it.
 #[derive(Debug, Clone, Copy)]
