@@ -553,11 +553,8 @@ by_lanes! {
 }
 
 /// [`draw_capsule`] over each row's candidate columns ([`RayCapsule::columns`])
-/// in runs of [`RUN`] pixels: a run whose every ray is hidden by a nearer
-/// surface, misses the capsule or enters it in front of the near plane
-/// ([`RayCapsule::cylinder_entry`], [`RayCapsule::end_entry`], in lanes)
-/// is settled in lanes; the others
-/// are drawn pixel by pixel ([`RayCapsule::entry`]).
+/// in runs of [`RUN`] pixels: a run that [`settle_run`] settles in lanes is
+/// drawn from its depths; the others pixel by pixel ([`visible_entry`]).
 #[inline(always)]
 fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
     let p = &d.at;
@@ -570,78 +567,105 @@ fn draw_any(d: &Draw<'_>, zbuf: &mut [f64], labels: &mut [u16]) {
         let lrow = &mut labels[start..start + cols];
         for c in span.clone().step_by(RUN) {
             let n = RUN.min(span.end - c);
-            // in lanes: the runs whose rays are all hidden, miss the
-            // capsule or enter it in front of the near plane through its
-            // cylinder (most of its image) or, in a second pass, an end
             let xs: [f64; RUN] = lanes::load(&p.xn[..span.end], c);
             let zs: [f64; RUN] = lanes::load(&zrow[..span.end], c);
             let mut t = [0.0f64; RUN];
-            let mut hit = [false; RUN];
-            let mut open = [false; RUN];
-            let mut miss = [false; RUN];
-            let (mut skip, mut settled) = (true, true);
-            for i in 0..RUN {
-                let e = p.rc.cylinder_entry(xs[i], y);
-                let hidden = (i >= n) | (zs[i] <= d.z_min);
-                t[i] = e.t;
-                miss[i] = e.miss;
-                hit[i] = !hidden & e.hit;
-                open[i] = !hidden & e.beyond_end;
-                skip &= hidden | e.miss;
-                settled &= hidden | e.miss | (e.hit & (e.t > NEAR_M));
-            }
-            if skip {
-                continue;
-            }
-            if !settled && open.iter().any(|&o| o) {
-                settled = true;
-                for i in 0..RUN {
-                    let e = p.rc.end_entry(xs[i], y, t[i]);
-                    let hidden = (i >= n) | (zs[i] <= d.z_min);
-                    let first = if open[i] {
-                        e.miss | (e.hit & (e.t > NEAR_M))
-                    } else {
-                        hidden | miss[i] | (hit[i] & (t[i] > NEAR_M))
-                    };
-                    // a lane neither open nor settled by the first pass
-                    // (along the axis, or behind the near plane) stays open
-                    settled &= first;
-                    t[i] = if open[i] { e.t } else { t[i] };
-                    hit[i] |= open[i] & e.hit;
-                }
-            }
-            if settled {
-                for i in 0..n {
-                    if hit[i] & (t[i] < zs[i]) {
-                        zrow[c + i] = t[i];
-                        lrow[c + i] = d.label;
+            let mut drawn = [false; RUN];
+            match settle_run(p.rc, &xs, &zs, n, y, d.z_min, &mut t, &mut drawn) {
+                Run::Missed => continue,
+                Run::Settled => {}
+                Run::Scalar => {
+                    for i in 0..n {
+                        let e = (zs[i] > d.z_min).then(|| visible_entry(p.rc, xs[i], y));
+                        (t[i], drawn[i]) = e.flatten().map_or((0.0, false), |e| (e, true));
                     }
                 }
-                continue;
             }
-            let (zs, xs) = (&mut zrow[c..c + n], &p.xn[c..c + n]);
-            for (i, (z, &x)) in zs.iter_mut().zip(xs).enumerate() {
-                if *z <= d.z_min {
-                    continue; // something nearer than the whole capsule
-                }
-                let Some(t) = p.rc.entry(x, y) else {
-                    continue;
-                };
-                let t = if t > NEAR_M {
-                    t
-                } else {
-                    // the capsule reaches behind the near plane: blocks the view
-                    match p.rc.interval(x, y) {
-                        Some((_, t_out)) if t_out > NEAR_M => NEAR_M,
-                        _ => continue,
-                    }
-                };
-                if t < *z {
-                    *z = t;
+            for i in 0..n {
+                if drawn[i] & (t[i] < zs[i]) {
+                    zrow[c + i] = t[i];
                     lrow[c + i] = d.label;
                 }
             }
         }
+    }
+}
+
+/// What [`settle_run`] made of a run of pixels.
+enum Run {
+    /// every ray is hidden or misses the capsule
+    Missed,
+    /// per ray, the depth it enters the capsule at and whether it is drawn
+    /// there (in front of the near plane, not hidden behind the capsule's
+    /// nearest depth; not yet compared with the z-buffer), written out
+    Settled,
+    /// some ray runs along the axis or enters behind the near plane: the
+    /// scalar rule ([`visible_entry`])
+    Scalar,
+}
+
+/// The first `n` rays `t (xs[i], y, 1)` of a run, over the depths `zs`
+/// already drawn, in lanes: settled when every ray is hidden behind
+/// `z_min` (the capsule's nearest depth), misses the capsule or enters it
+/// in front of the near plane through its cylinder (most of its image) or,
+/// in a second pass, an end sphere. Settled, each ray's depth and whether
+/// it is drawn there go to `t` and `hit`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // a run's inputs and its two outputs, in lanes
+fn settle_run(
+    rc: &RayCapsule,
+    xs: &[f64; RUN],
+    zs: &[f64; RUN],
+    n: usize,
+    y: f64,
+    z_min: f64,
+    t: &mut [f64; RUN],
+    hit: &mut [bool; RUN],
+) -> Run {
+    let mut open = [false; RUN];
+    // per lane: decided by the first pass (`open`: beyond an end, not yet)
+    let mut done = [false; RUN];
+    let mut missed = true;
+    for i in 0..RUN {
+        let e = rc.cylinder_entry(xs[i], y);
+        let hidden = (i >= n) | (zs[i] <= z_min);
+        t[i] = e.t;
+        hit[i] = !hidden & e.hit;
+        open[i] = !hidden & e.beyond_end;
+        done[i] = hidden | e.miss | (e.hit & (e.t > NEAR_M));
+        missed &= hidden | e.miss;
+    }
+    if missed {
+        return Run::Missed;
+    }
+    if !done.iter().all(|&d| d) && open.iter().any(|&o| o) {
+        for i in 0..RUN {
+            let e = rc.end_entry(xs[i], y, t[i]);
+            done[i] |= open[i] & (e.miss | (e.hit & (e.t > NEAR_M)));
+            t[i] = if open[i] { e.t } else { t[i] };
+            hit[i] |= open[i] & e.hit;
+        }
+    }
+    match done.iter().all(|&d| d) {
+        true => Run::Settled,
+        false => Run::Scalar,
+    }
+}
+
+/// The depth at which the ray `t (x, y, 1)` shows the capsule `rc`: its
+/// entry, or the near plane where the capsule reaches behind it (and on
+/// past it); `None` when the ray misses or the capsule lies wholly behind
+/// the near plane along it.
+#[inline(always)]
+fn visible_entry(rc: &RayCapsule, x: f64, y: f64) -> Option<f64> {
+    let t = rc.entry(x, y)?;
+    if t > NEAR_M {
+        return Some(t);
+    }
+    // the capsule reaches behind the near plane: blocks the view
+    match rc.interval(x, y) {
+        Some((_, t_out)) if t_out > NEAR_M => Some(NEAR_M),
+        _ => None,
     }
 }
 

@@ -426,7 +426,8 @@ impl RayCapsule {
     /// that is the capsule's entry (`entry` is `Some(t)`), `miss` when the
     /// ray misses the cylinder (`entry` is `None`), `beyond_end` when it
     /// meets the cylinder beyond an end ([`RayCapsule::end_entry`] tells);
-    /// none of them: the ray runs along the axis (ask `entry`).
+    /// none of them: the ray runs along the axis, or the capsule is a
+    /// sphere (`entry` tells).
     #[inline(always)]
     pub fn cylinder_entry(&self, x: f64, y: f64) -> Entry {
         let q = x * x + y * y + 1.0;
@@ -474,6 +475,10 @@ impl RayCapsule {
 
     /// Depth where the ray `t (x, y, 1)` enters the capsule (may be ≤ 0 when
     /// the capsule reaches behind the camera), or `None` if it misses.
+    /// Branching: a missed ray costs no square root (the renderer's scalar
+    /// rule; [`RayCapsule::cylinder_entry`] and [`RayCapsule::end_entry`]
+    /// are its branch-free steps, of the same arithmetic, checked bit for
+    /// bit against it by the renderer's tests).
     #[inline(always)]
     pub fn entry(&self, x: f64, y: f64) -> Option<f64> {
         let q = x * x + y * y + 1.0;
