@@ -108,6 +108,10 @@ impl Evaluation {
             report.robot.max_joint_step_rad,
             report.robot.max_joint_step_t_s,
         ) = self.eval.max_joint_step();
+        (
+            report.robot.max_restart_step_rad,
+            report.robot.max_restart_step_t_s,
+        ) = self.eval.max_restart_step();
         report.collaboration = self
             .collab
             .report(report.contacts.iter().map(|c| (c.intended, c.peak_force_n)));

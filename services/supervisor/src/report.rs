@@ -181,11 +181,19 @@ pub struct RobotReport {
     pub box_errors: Vec<crate::box_report::BoxErrorReport>,
     /// the control box's automatic error recoveries the adapter ran
     pub box_recoveries: u64,
-    /// the largest change of a true joint position from one period to the
-    /// next over the run \[rad\]: a jump (after a restart, a stop) shows here
+    /// the largest change of a true joint position from one robot state to
+    /// the next of the same robot process over the run \[rad\]: a jump (after
+    /// a stop, after a controller's takeover or a resume) shows here
     pub max_joint_step_rad: f64,
     /// ... when it came \[s\] (null: no step measured)
     pub max_joint_step_t_s: Option<f64>,
+    /// the largest change of a true joint position across a restart of the
+    /// robot's process (its first state against its predecessor's last)
+    /// \[rad\]: how far the arm moved while nothing of phri served it (a real
+    /// arm's control box holds it on its own then)
+    pub max_restart_step_rad: f64,
+    /// ... when it came \[s\] (null: no restart)
+    pub max_restart_step_t_s: Option<f64>,
     /// what the robot refused: the control box's states, commands not from
     /// the slot's controller or malformed (`box_report`)
     pub refused: crate::box_report::RobotRefused,
@@ -492,9 +500,13 @@ pub struct Evaluator {
     truth_seq: u64,
     truth_q: Vec<f64>,
     sim_restarts: Vec<SimRestart>,
-    /// largest change of a true joint position between consecutive truths [rad]
+    /// largest change of a true joint position between consecutive states
+    /// of one robot process [rad], and when [s]
     max_joint_step: f64,
     max_joint_step_t: Option<f64>,
+    /// ... across a restart of the robot's process [rad], and when [s]
+    max_restart_step: f64,
+    max_restart_step_t: Option<f64>,
     /// the robot state of the newest truth, and the arm there [rad]
     state_seq: u64,
     state_q: Vec<f64>,
@@ -592,6 +604,8 @@ impl Evaluator {
             sim_restarts: Vec::new(),
             max_joint_step: 0.0,
             max_joint_step_t: None,
+            max_restart_step: 0.0,
+            max_restart_step_t: None,
             state_seq: 0,
             state_q: Vec::new(),
             cameras: crate::camera_report::CamerasEval::new(DEFAULT_PERCEPTION_MAX_AGE_NS),
@@ -786,10 +800,16 @@ impl Evaluator {
         });
     }
 
-    /// The largest change of a true joint position from one period to the
-    /// next \[rad\], and when it came \[s\].
+    /// The largest change of a true joint position from one robot state to
+    /// the next of the same robot process \[rad\], and when it came \[s\].
     pub fn max_joint_step(&self) -> (f64, Option<f64>) {
         (self.max_joint_step, self.max_joint_step_t)
+    }
+
+    /// The largest change of a true joint position across a restart of the
+    /// robot's process \[rad\], and when it came \[s\].
+    pub fn max_restart_step(&self) -> (f64, Option<f64>) {
+        (self.max_restart_step, self.max_restart_step_t)
     }
 
     /// A `sim/truth` sample: the contact episodes and their peak forces, the
@@ -814,19 +834,24 @@ impl Evaluator {
                 arm_jump_rad: jump,
             });
         }
-        // the arm's step from one robot state to the next, or across a
-        // restart of the robot (its first state against its predecessor's
-        // last); truths between two states, or across lost states, are no step
+        // the arm's step from one robot state to the next, and apart from
+        // it across a restart of the robot (its first state against its
+        // predecessor's last); truths between two states, or across lost
+        // states, are no step
         if m.state_seq != self.state_seq {
-            let robot_step = m.state_seq == self.state_seq + 1 || m.state_seq < self.state_seq;
-            if robot_step && self.state_q.len() == n {
+            let restart = m.state_seq < self.state_seq;
+            if (restart || m.state_seq == self.state_seq + 1) && self.state_q.len() == n {
                 let step = m.q[..n]
                     .iter()
                     .zip(&self.state_q)
                     .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-                if step > self.max_joint_step || self.max_joint_step_t.is_none() {
-                    self.max_joint_step = step;
-                    self.max_joint_step_t = Some(t);
+                let (max, at) = if restart {
+                    (&mut self.max_restart_step, &mut self.max_restart_step_t)
+                } else {
+                    (&mut self.max_joint_step, &mut self.max_joint_step_t)
+                };
+                if step > *max || at.is_none() {
+                    (*max, *at) = (step, Some(t));
                 }
             }
             self.state_seq = m.state_seq;
@@ -1562,7 +1587,7 @@ mod tests {
     }
 
     #[test]
-    fn the_largest_joint_step_is_kept_between_consecutive_robot_states_and_across_restarts() {
+    fn the_largest_joint_step_is_kept_between_consecutive_robot_states_and_apart_across_restarts() {
         let mut e = eval();
         let e_at = |e: &mut Evaluator, seq: u64, state: u64, q3: f64| {
             let mut m = truth(seq, 0.0, 0.0);
@@ -1577,12 +1602,18 @@ mod tests {
         // a truth between two states (the same state again), then states lost
         e_at(&mut e, 5, 4, 0.0035);
         e_at(&mut e, 6, 9, 0.02);
-        // the robot restarted: its first state against its predecessor's last
+        assert_eq!(e.max_restart_step(), (0.0, None));
+        // the robot restarted: its first state against its predecessor's
+        // last, counted apart
         e_at(&mut e, 7, 1, 0.0205);
         assert!((e.max_joint_step().0 - 0.002).abs() < 1e-12);
-        e_at(&mut e, 8, 2, 0.0205);
-        e_at(&mut e, 9, 1, 0.0305);
+        assert!((e.max_restart_step().0 - 0.0005).abs() < 1e-12);
+        e_at(&mut e, 8, 2, 0.0235);
+        e_at(&mut e, 9, 1, 0.0335);
         let (step, at) = e.max_joint_step();
+        assert!((step - 0.003).abs() < 1e-12, "{step}");
+        assert!((at.unwrap() - 0.008).abs() < 1e-9);
+        let (step, at) = e.max_restart_step();
         assert!((step - 0.01).abs() < 1e-12, "{step}");
         assert!((at.unwrap() - 0.009).abs() < 1e-9);
     }
