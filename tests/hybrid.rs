@@ -253,14 +253,15 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     // the new adapter and the takeover start from the measured arm
     let step = r["robot"]["max_joint_step_rad"].as_f64().unwrap();
     assert!(step <= 0.01, "a joint jumped {step} rad");
-    // while no adapter served it (about 1.2 s), franka-sim noticed the lost
+    // while no adapter served it (1.2-2.5 s), franka-sim noticed the lost
     // client and held the arm where it was (a position servo, as the real
-    // box's own controller takes the joints back): 0.007-0.009 rad alone,
-    // 0.011 rad once under the whole suite's load; a box that let the arm
-    // coast on would be off by several times that
+    // box's own controller takes the joints back): 0.005-0.011 rad alone or
+    // beside the lock-step tests, 0.015-0.033 rad beside a disk writer that
+    // slows franka-sim's noticing; an arm left to coast on at its 0.3-0.5
+    // rad/s would be off by several times the bound
     let drift = r["robot"]["max_restart_step_rad"].as_f64().unwrap();
     assert!(
-        drift > 0.0 && drift <= 0.03,
+        drift > 0.0 && drift <= 0.1,
         "the arm moved {drift} rad while no adapter served it"
     );
     // the controller held the arm while the adapter was away and resumed
