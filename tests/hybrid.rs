@@ -257,8 +257,8 @@ fn killing_the_adapter_or_the_controller_mid_motion_costs_no_jump() {
     // client and held the arm where it was (a position servo, as the real
     // box's own controller takes the joints back): 0.005-0.011 rad alone or
     // beside the lock-step tests, 0.015-0.033 rad beside a disk writer that
-    // slows franka-sim's noticing; an arm left to coast on at its 0.3-0.5
-    // rad/s would be off by several times the bound
+    // slows franka-sim's noticing; an arm left to coast on at up to 1 rad/s
+    // (its 0.0011 rad per state) would be off by ten times the bound
     let drift = r["robot"]["max_restart_step_rad"].as_f64().unwrap();
     assert!(
         drift > 0.0 && drift <= 0.1,
