@@ -496,6 +496,8 @@ pub struct Evaluator {
     /// answered first [ns], and the true joints at that state (its reference)
     resyncs: Vec<(Resync, u64, Vec<f64>)>,
     seen_status: bool,
+    /// the publication time of the last status taken [ns, CLOCK_MONOTONIC]
+    status_stamp_ns: u64,
     /// the newest truth: sequence number and true joint positions
     truth_seq: u64,
     truth_q: Vec<f64>,
@@ -599,6 +601,7 @@ impl Evaluator {
             stop_seen: None,
             resyncs: Vec::new(),
             seen_status: false,
+            status_stamp_ns: 0,
             truth_seq: 0,
             truth_q: Vec::new(),
             sim_restarts: Vec::new(),
@@ -974,6 +977,13 @@ impl Evaluator {
     /// stops and their causes, mode changes as events (`reaction_name`: the
     /// configured reaction, for the `reaction` event), controller restarts.
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
+        // published before the last one taken: a controller stopped in
+        // charge that, resumed as the standby, finishes the period it was
+        // stopped in (its number would read as a restart that never was)
+        if self.seen_status && m.stamp_ns < self.status_stamp_ns {
+            return;
+        }
+        self.status_stamp_ns = m.stamp_ns;
         // one time base: the status's publish time (CLOCK_MONOTONIC); its pair
         // of stamps maps the robot's clock (truth, residual) onto it
         if m.state_stamp_ns > 0 && m.stamp_ns > 0 {
@@ -2202,6 +2212,35 @@ mod tests {
     /// A protective stop a service caused (its input went stale) degrades
     /// the run; one a `stop` request caused is the person's word: clean.
     #[test]
+    fn a_status_published_before_the_last_taken_is_no_controller_restart() {
+        let status = |seq: u64, stamp_ms: u64| {
+            let mut m = ControlStatus::zeroed();
+            m.seq = seq;
+            m.stamp_ns = stamp_ms * 1_000_000;
+            m.state_stamp_ns = m.stamp_ns;
+            m.mode = ControlMode::Task as u32;
+            m
+        };
+        let mut e = eval();
+        for seq in 1..=5 {
+            e.on_status(&status(seq, seq * 10), "reflex");
+        }
+        // the controller stopped in charge at its status 3 finishes that
+        // period once resumed, after the standby's 4 and 5
+        e.on_status(&status(3, 35), "reflex");
+        e.on_status(&status(6, 60), "reflex");
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert!(r.resyncs.is_empty(), "{:?}", r.resyncs);
+        // the start's own
+        let syncs = r.events.iter().filter(|e| e.kind == "sync").count();
+        assert_eq!(syncs, 1, "{:?}", r.events);
+        // a restarted controller (published later, numbered from 1 again) is one
+        e.on_status(&status(1, 70), "reflex");
+        let r = e.report(1_000_000_000, "x", BTreeMap::new());
+        assert_eq!(r.resyncs.len(), 1);
+    }
+
+    #[test]
     fn protective_stops_are_told_apart_by_cause() {
         let bounds = StaleBounds {
             residual_ns: 5_000_000,
@@ -2272,13 +2311,19 @@ mod tests {
         // a restarted controller (its status sequence starts again) holds on
         // fresh inputs before its task: its hold, not a request; once it ran
         // its task, a stop on fresh inputs is a request again
+        // (published after its predecessor's last)
+        let restarted = |seq: u64, mode: ControlMode| {
+            let mut m = status(seq, mode, 1, 30);
+            m.stamp_ns += 600_000_000;
+            m
+        };
         let mut e = seeing(bounds);
         e.on_status(&status(500, ControlMode::Contact, 1, 30), "reflex");
-        e.on_status(&status(3, ControlMode::Sync, 1, 30), "reflex");
-        e.on_status(&status(4, ControlMode::ProtectiveStop, 1, 30), "reflex");
-        e.on_status(&status(5, ControlMode::Recover, 1, 30), "reflex");
-        e.on_status(&status(6, ControlMode::Task, 1, 30), "reflex");
-        e.on_status(&status(7, ControlMode::ProtectiveStop, 1, 30), "reflex");
+        e.on_status(&restarted(3, ControlMode::Sync), "reflex");
+        e.on_status(&restarted(4, ControlMode::ProtectiveStop), "reflex");
+        e.on_status(&restarted(5, ControlMode::Recover), "reflex");
+        e.on_status(&restarted(6, ControlMode::Task), "reflex");
+        e.on_status(&restarted(7, ControlMode::ProtectiveStop), "reflex");
         let r = e.report(1_000_000_000, "x", BTreeMap::new());
         assert_eq!(r.protective_stop_causes["controller_restart"], 1);
         assert_eq!(r.protective_stop_causes["request"], 1);

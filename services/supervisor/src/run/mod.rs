@@ -10,6 +10,7 @@ pub mod checks;
 pub mod driver;
 pub mod finish;
 pub mod ipc;
+pub mod ordered;
 pub mod ports;
 pub mod procfs;
 pub mod publishers;

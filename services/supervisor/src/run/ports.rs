@@ -9,6 +9,7 @@ use phri_ipc::{
     SIM_TRUTH, SUPERVISOR_HEALTH,
 };
 
+use super::ordered::Ordered;
 use crate::evaluation::Evaluation;
 use crate::Roster;
 
@@ -22,16 +23,17 @@ pub struct Ports {
     truth: Subscriber<phri_ipc::Truth>,
     contacts: Subscriber<phri_ipc::ContactEvent>,
     residual: Subscriber<phri_ipc::Residual>,
-    status: Subscriber<phri_ipc::ControlStatus>,
+    /// the controller in charge's, in publication order (two take turns)
+    status: Ordered<phri_ipc::ControlStatus>,
     /// per camera: its frames, its ingestion's, its repulsion results
     frames: Vec<FrameSubscriber>,
     filtered: Vec<FrameSubscriber>,
     repulsion: Vec<Subscriber<phri_ipc::RepulsionResult>>,
     /// per camera: its skeletons (their latency from the frame's arrival)
     skeletons: Vec<Subscriber<phri_ipc::Skeleton>>,
-    collab: Subscriber<phri_ipc::CollabState>,
-    ssm: Subscriber<phri_ipc::SsmStatus>,
-    barrier: Subscriber<phri_ipc::BarrierStatus>,
+    collab: Ordered<phri_ipc::CollabState>,
+    ssm: Ordered<phri_ipc::SsmStatus>,
+    barrier: Ordered<phri_ipc::BarrierStatus>,
     requests: Subscriber<phri_ipc::HriRequest>,
     /// what the ROS 2 bridge did with `/phri/request`
     bridge_requests: Subscriber<phri_ipc::BridgeRequests>,
@@ -61,7 +63,7 @@ impl Ports {
             truth: SIM_TRUTH.subscriber(node, Queue::Drain)?,
             contacts: SIM_CONTACTS.subscriber(node, Queue::Drain)?,
             residual: DYNAMICS_RESIDUAL.subscriber(node, Queue::Drain)?,
-            status: CONTROL_STATUS.subscriber(node, Queue::Drain)?,
+            status: Ordered::new(CONTROL_STATUS.subscriber(node, Queue::Drain)?),
             frames: cameras
                 .iter()
                 .map(|c| c.depth.frame_subscriber(node, Queue::Latest))
@@ -78,9 +80,9 @@ impl Ports {
                 .iter()
                 .map(|c| c.skeleton.subscriber(node, Queue::Drain))
                 .collect::<Result<_, _>>()?,
-            collab: COLLAB_STATE.subscriber(node, Queue::Drain)?,
-            ssm: CONTROL_SSM.subscriber(node, Queue::Drain)?,
-            barrier: CONTROL_BARRIER.subscriber(node, Queue::Drain)?,
+            collab: Ordered::new(COLLAB_STATE.subscriber(node, Queue::Drain)?),
+            ssm: Ordered::new(CONTROL_SSM.subscriber(node, Queue::Drain)?),
+            barrier: Ordered::new(CONTROL_BARRIER.subscriber(node, Queue::Drain)?),
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             bridge_requests: phri_ipc::ROS2_REQUESTS.subscriber(node, Queue::Drain)?,
             camera_status: phri_ipc::CAMERA_STATUS.subscriber(node, Queue::Drain)?,
@@ -117,15 +119,18 @@ impl Ports {
     pub fn read_robot(&mut self, ev: &mut Evaluation) -> Result<(), IpcError> {
         self.stats.drain(|m| ev.eval.on_stats(m))?;
         self.contacts.drain(|m| ev.eval.on_contact_event(m))?;
-        self.collab.drain(|m| {
-            if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
-                let source = phri_ipc::RequestSource::name_of(m.request_source);
-                ev.eval.stop_requested_by(source, m.request_seq);
-            }
-            ev.collab.on_state(m);
-        })?;
-        self.ssm.drain(|m| ev.eval.on_ssm(m))?;
-        self.barrier.drain(|m| ev.on_barrier(m))?;
+        self.collab.drain(
+            |m| m.stamp_ns,
+            |m| {
+                if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
+                    let source = phri_ipc::RequestSource::name_of(m.request_source);
+                    ev.eval.stop_requested_by(source, m.request_seq);
+                }
+                ev.collab.on_state(m);
+            },
+        )?;
+        self.ssm.drain(|m| m.stamp_ns, |m| ev.eval.on_ssm(m))?;
+        self.barrier.drain(|m| m.stamp_ns, |m| ev.on_barrier(m))?;
         self.commanders.drain(|m| {
             ev.standby.on_commanders(m, ev.eval.time_s(m.stamp_ns));
             ev.boxes.on_commanders(m);
@@ -164,7 +169,8 @@ impl Ports {
         self.standby_residual
             .drain(|m| ev.residuals.on_residual(1, m))?;
         let reaction = ev.reaction;
-        self.status.drain(|m| ev.eval.on_status(m, reaction))?;
+        self.status
+            .drain(|m| m.stamp_ns, |m| ev.eval.on_status(m, reaction))?;
         for camera in 0..self.frames.len() {
             let (Some(frames), Some(filtered), Some(results)) = (
                 self.frames.get(camera),
@@ -191,9 +197,9 @@ impl Ports {
     /// (errors ignored: the run is over).
     pub fn read_last(&mut self, ev: &mut Evaluation) {
         let _ = self.contacts.drain(|m| ev.eval.on_contact_event(m));
-        let _ = self.collab.drain(|m| ev.collab.on_state(m));
-        let _ = self.ssm.drain(|m| ev.eval.on_ssm(m));
-        let _ = self.barrier.drain(|m| ev.on_barrier(m));
+        let _ = self.collab.drain(|m| m.stamp_ns, |m| ev.collab.on_state(m));
+        let _ = self.ssm.drain(|m| m.stamp_ns, |m| ev.eval.on_ssm(m));
+        let _ = self.barrier.drain(|m| m.stamp_ns, |m| ev.on_barrier(m));
         let _ = self.requests.drain(|m| ev.collab.on_request(m));
         let _ = self.bridge_requests.drain(|m| ev.collab.on_bridge(m));
         let _ = self.camera_status.drain(|m| ev.eval.on_camera_status(m));
@@ -205,7 +211,9 @@ impl Ports {
         });
         let _ = self.residual.drain(|m| ev.eval.on_residual(m));
         let reaction = ev.reaction;
-        let _ = self.status.drain(|m| ev.eval.on_status(m, reaction));
+        let _ = self
+            .status
+            .drain(|m| m.stamp_ns, |m| ev.eval.on_status(m, reaction));
         let _ = self.stats.drain(|m| ev.eval.on_stats(m));
     }
 
