@@ -468,6 +468,28 @@ fn takeovers(r: &Value) -> &Vec<Value> {
     r["control"]["takeovers"].as_array().unwrap()
 }
 
+/// Takeover `k` of run `r` was seamless: the two controllers answered the
+/// states both answered alike (the standby steps as the one in charge
+/// would), and the takeover changed the torque no more than 2 Nm or, when
+/// more, no more than the controller in charge itself changes it from one
+/// period to the next in the same run. (Its joint reference rides SNS's
+/// acceleration bounds at phases of the path: a reference acceleration
+/// switching by 10 rad/s² between periods is 10-15 Nm at the shoulder, in
+/// 0.7 % of free motion's periods; a takeover in such a period, 1 in 100-200
+/// in a SIGSTOP stress, measured 2.3-4.3 Nm. A standby stepping from a stale
+/// reference or from its sync mode would be 50 Nm and more off.)
+fn assert_seamless(r: &Value, k: &Value) {
+    let c = &r["control"];
+    assert!(c["both_answered"].as_u64().unwrap() > 0, "{c}");
+    assert!(c["max_answer_diff_nm"].as_f64().unwrap() <= 0.01, "{c}");
+    let own = c["max_period_step_nm"].as_f64().unwrap_or(0.0);
+    let diff = k["command_diff_nm"].as_f64().unwrap();
+    assert!(
+        diff < 2.0 || diff <= own,
+        "{k}: the controller's own steps {own} Nm"
+    );
+}
+
 /// The restart of `service` (its first), the report's time \[s\].
 fn restarted_at(r: &Value, service: &str) -> f64 {
     let e = events(r, "restart", service);
@@ -551,14 +573,16 @@ fn killing_either_controller_costs_the_torque_loop_nothing() {
         });
         let took = took.unwrap_or_else(|| panic!("no takeover for {killed}: {}", r["control"]));
         // one period's change of a computed torque, not a jump
-        assert!(took["command_diff_nm"].as_f64().unwrap() < 2.0, "{took}");
+        assert_seamless(&r, took);
         nothing_missed(
             &r,
             took["t_s"].as_f64().unwrap() - 0.1,
             back - took["t_s"].as_f64().unwrap() + 1.0,
         );
     }
-    assert!(r["control"]["max_takeover_diff_nm"].as_f64().unwrap() < 2.0);
+    for k in t {
+        assert_seamless(&r, k);
+    }
     assert_eq!(restarts(&r, "control") + restarts(&r, "control_standby"), 2);
     for s in ["control", "control_standby"] {
         assert_eq!(r["services"][s]["alive_at_end"], true, "{s}");
@@ -596,7 +620,7 @@ fn a_controller_stopped_half_a_second_is_replaced_at_once_and_rejoins_as_the_sta
     eprintln!("stopped {stopped:?}; control: {}", r["control"]);
     assert!(takeovers(&r).len() >= 2, "{}", r["control"]);
     for k in takeovers(&r) {
-        assert!(k["command_diff_nm"].as_f64().unwrap() < 2.0, "{k}");
+        assert_seamless(&r, k);
         nothing_missed(&r, k["t_s"].as_f64().unwrap() - 0.1, 0.8);
     }
     for s in ["control", "control_standby"] {
