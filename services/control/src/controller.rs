@@ -350,6 +350,31 @@ impl Controller {
         snapshot::load_checked(self, body, Controller::load_state)
     }
 
+    /// Follow a peer's path history from its behaviour state (`bytes`, as
+    /// [`Controller::adopt_behaviour`] takes it) without adopting the rest:
+    /// its newest entry is taken when it is the one after this controller's
+    /// ([`PathHistory::follow`]). What a hot standby resting through the
+    /// periods the one in charge answers does with each behaviour it
+    /// receives, so that after taking over, a retreat walks back the same
+    /// entries. A malformed snapshot is refused and changes nothing.
+    /// Allocates nothing.
+    pub fn follow_behaviour(&mut self, bytes: &[u8]) -> Result<(), SnapshotError> {
+        let n = self.n;
+        let body = snapshot::any_body(bytes, n as u32)?;
+        let mut r = Reader::new(body);
+        let pushes = r.u64();
+        let s = r.f64();
+        let mut q = [0.0; MAX_DOF];
+        for x in q[..n].iter_mut() {
+            *x = r.f64();
+        }
+        r.finish_prefix(snapshot::HEADER_BYTES)?;
+        if s.is_finite() && q[..n].iter().all(|x| x.is_finite()) {
+            self.history.follow(pushes, s, &q[..n]);
+        }
+        Ok(())
+    }
+
     /// The snapshot's layout for this configuration: its length (a counting
     /// pass) and a fingerprint of the sizes the configuration sets.
     fn behaviour_layout(&self) -> Layout {
@@ -378,8 +403,17 @@ impl Controller {
     }
 
     /// The behaviour state, in the order [`Controller::load_state`] reads it.
+    /// It begins with the path history's record (for
+    /// [`Controller::follow_behaviour`], whatever the layout after it).
     fn save_state(&self, w: &mut Writer<'_>) {
         let n = self.n;
+        // the path history: its count of pushes, its newest entry
+        w.u64(self.history.pushes());
+        let (s, q) = self.history.newest().unwrap_or((0.0, &[]));
+        w.f64(s);
+        for i in 0..n {
+            w.f64(q.get(i).copied().unwrap_or(0.0));
+        }
         self.mode.save(w);
         self.t.save(w);
         self.last_stamp.save(w);
@@ -419,6 +453,14 @@ impl Controller {
     /// Load what [`Controller::save_state`] wrote (nothing stored on a dry run).
     fn load_state(&mut self, r: &mut Reader<'_>) {
         let n = self.n;
+        let pushes = r.u64();
+        // the newest entry: the follower's (this history holds it already)
+        for _ in 0..=n {
+            r.f64();
+        }
+        if r.applying() {
+            self.history.set_pushes(pushes);
+        }
         self.mode.load(r);
         self.t.load(r);
         self.last_stamp.load(r);

@@ -12,6 +12,9 @@ pub struct PathHistory {
     head: usize,
     /// entries held (at most `cap`), the newest in the slot before `head`
     len: usize,
+    /// entries pushed since the start (a peer's count tells which of its
+    /// entries this history holds: [`PathHistory::follow`])
+    pushes: u64,
 }
 
 impl PathHistory {
@@ -24,6 +27,7 @@ impl PathHistory {
             data: vec![0.0; cap * (n + 1)],
             head: 0,
             len: 0,
+            pushes: 0,
         }
     }
 
@@ -39,6 +43,44 @@ impl PathHistory {
         self.data[at + 1..at + 1 + self.n].copy_from_slice(q);
         self.head = (self.head + 1) % self.cap;
         self.len = (self.len + 1).min(self.cap);
+        self.pushes += 1;
+    }
+
+    /// Entries pushed since the start.
+    pub fn pushes(&self) -> u64 {
+        self.pushes
+    }
+
+    /// Set the count of entries pushed (a peer's, adopted with its state).
+    pub fn set_pushes(&mut self, pushes: u64) {
+        self.pushes = pushes;
+    }
+
+    /// Mirror a peer's history from its newest entry (`s` \[s\], `q`
+    /// \[rad\]) and its count of entries pushed: the entry is taken when it
+    /// is the one after this history's newest; one already held changes
+    /// nothing; after entries missed (or a peer that started afresh) the
+    /// history holds that entry alone, for entries are one period apart. A
+    /// hot standby resting through the periods its peer answers keeps the
+    /// same entries this way, so that a retreat after its takeover walks the
+    /// path back at the path's own pace.
+    pub fn follow(&mut self, pushes: u64, s: f64, q: &[f64]) {
+        if pushes == self.pushes || pushes == 0 || q.len() != self.n {
+            return;
+        }
+        if pushes != self.pushes + 1 {
+            self.len = 0;
+        }
+        self.push(s, q);
+        self.pushes = pushes;
+    }
+
+    /// The newest entry: path time \[s\] and reference \[rad\] (`None`: empty).
+    pub fn newest(&self) -> Option<(f64, &[f64])> {
+        (self.len > 0).then(|| {
+            let at = ((self.head + self.cap - 1) % self.cap) * (self.n + 1);
+            (self.data[at], &self.data[at + 1..at + 1 + self.n])
+        })
     }
 
     /// Entries held.
@@ -102,6 +144,39 @@ mod tests {
         assert_eq!(q, [35.0]);
         // clamped to the oldest held (2)
         assert_eq!(h.at(10.0, &mut q), Some(2.0));
+    }
+
+    #[test]
+    fn a_follower_holds_the_peer_s_entries_one_period_apart() {
+        let (mut peer, mut follower) = (PathHistory::new(1, 8), PathHistory::new(1, 8));
+        let mut q = [0.0];
+        for k in 0..5 {
+            peer.push(k as f64, &[10.0 * k as f64]);
+            let (s, newest) = peer.newest().unwrap();
+            let newest = [newest[0]];
+            follower.follow(peer.pushes(), s, &newest);
+            // the same message twice (or the follower's own step of it)
+            follower.follow(peer.pushes(), s, &newest);
+        }
+        assert_eq!((follower.available(), follower.pushes()), (5, 5));
+        for back in 0..5 {
+            assert_eq!(
+                follower.at(back as f64, &mut q),
+                peer.at(back as f64, &mut q)
+            );
+        }
+        // two entries missed: never a history with a gap, walked back as if
+        // its entries were one period apart
+        peer.push(5.0, &[50.0]);
+        peer.push(6.0, &[60.0]);
+        peer.push(7.0, &[70.0]);
+        follower.follow(peer.pushes(), 7.0, &[70.0]);
+        assert_eq!((follower.available(), follower.pushes()), (1, 8));
+        assert_eq!(follower.at(3.0, &mut q), Some(7.0));
+        // a peer that started afresh
+        follower.follow(1, 0.5, &[1.0]);
+        assert_eq!((follower.available(), follower.pushes()), (1, 1));
+        assert_eq!(follower.newest().map(|(s, _)| s), Some(0.5));
     }
 
     #[test]

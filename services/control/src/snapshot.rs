@@ -333,6 +333,14 @@ impl<'a> Reader<'a> {
         })
     }
 
+    /// The end of reading a snapshot's beginning: no fault so far.
+    pub fn finish_prefix(&self, offset: usize) -> Result<(), SnapshotError> {
+        match self.fault {
+            Some(at) => Err(SnapshotError::Malformed { at: offset + at }),
+            None => Ok(()),
+        }
+    }
+
     /// The end of a load: no fault, and every byte read.
     fn finish(&self, offset: usize) -> Result<(), SnapshotError> {
         match (self.fault, self.remaining()) {
@@ -578,19 +586,17 @@ pub(crate) fn write_header(w: &mut Writer<'_>, layout: &Layout) {
     w.u64(layout.fingerprint);
 }
 
-/// Check `bytes`' header against the receiver's `own` layout: the
-/// snapshot's body, `bytes[HEADER_BYTES..own.bytes]` (trailing bytes, e.g.
-/// of a fixed-size message array, are ignored).
-pub(crate) fn check_header<'b>(bytes: &'b [u8], own: &Layout) -> Result<&'b [u8], SnapshotError> {
-    let short = |need| SnapshotError::Truncated {
-        need,
-        have: bytes.len(),
-    };
+/// The header of `bytes` checked for its magic, version and `dof` joints:
+/// the snapshot's length and fingerprint as it states them.
+fn stated_layout(bytes: &[u8], dof: u32) -> Result<(usize, u64), SnapshotError> {
     if bytes.len() < HEADER_BYTES {
-        return Err(short(HEADER_BYTES));
+        return Err(SnapshotError::Truncated {
+            need: HEADER_BYTES,
+            have: bytes.len(),
+        });
     }
     let mut r = Reader::new(&bytes[..HEADER_BYTES]);
-    let (magic, version, len, dof, fp) = (r.u32(), r.u32(), r.u32(), r.u32(), r.u64());
+    let (magic, version, len, got, fp) = (r.u32(), r.u32(), r.u32(), r.u32(), r.u64());
     if magic != MAGIC {
         return Err(SnapshotError::Magic { got: magic });
     }
@@ -600,13 +606,17 @@ pub(crate) fn check_header<'b>(bytes: &'b [u8], own: &Layout) -> Result<&'b [u8]
             got: version,
         });
     }
-    if dof != own.dof {
-        return Err(SnapshotError::Dof {
-            expected: own.dof,
-            got: dof,
-        });
+    if got != dof {
+        return Err(SnapshotError::Dof { expected: dof, got });
     }
-    let len = len as usize;
+    Ok((len as usize, fp))
+}
+
+/// Check `bytes`' header against the receiver's `own` layout: the
+/// snapshot's body, `bytes[HEADER_BYTES..own.bytes]` (trailing bytes, e.g.
+/// of a fixed-size message array, are ignored).
+pub(crate) fn check_header<'b>(bytes: &'b [u8], own: &Layout) -> Result<&'b [u8], SnapshotError> {
+    let (len, fp) = stated_layout(bytes, own.dof)?;
     if len != own.bytes || fp != own.fingerprint {
         return Err(SnapshotError::Layout {
             expected: own.fingerprint,
@@ -615,8 +625,23 @@ pub(crate) fn check_header<'b>(bytes: &'b [u8], own: &Layout) -> Result<&'b [u8]
             got_bytes: len,
         });
     }
-    if bytes.len() < len {
-        return Err(short(len));
+    body_within(bytes, len)
+}
+
+/// The body of a snapshot of `dof` joints whatever its layout (its length
+/// as its header states it): for what every layout begins with.
+pub(crate) fn any_body(bytes: &[u8], dof: u32) -> Result<&[u8], SnapshotError> {
+    let (len, _) = stated_layout(bytes, dof)?;
+    body_within(bytes, len)
+}
+
+/// `bytes[HEADER_BYTES..len]`, if `bytes` holds that much.
+fn body_within(bytes: &[u8], len: usize) -> Result<&[u8], SnapshotError> {
+    if bytes.len() < len || len < HEADER_BYTES {
+        return Err(SnapshotError::Truncated {
+            need: len.max(HEADER_BYTES),
+            have: bytes.len(),
+        });
     }
     Ok(&bytes[HEADER_BYTES..len])
 }

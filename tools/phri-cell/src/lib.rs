@@ -588,6 +588,15 @@ impl Cell {
                 self.status = status;
             }
         }
+        // the one not in charge keeps the path history of the behaviour the
+        // one in charge left (as phri-control does with each it receives)
+        for slot in (0..2).filter(|&s| up[s] && s != in_charge) {
+            let controller = match slot {
+                0 => &mut self.controller,
+                _ => &mut pair.standby,
+            };
+            pair.slots.follow(slot, controller, &self.state);
+        }
         self.command = pair.slots.commands[in_charge];
         self.requests.clear();
         Ok(())

@@ -89,6 +89,20 @@ impl Slots {
         }
     }
 
+    /// After the period of `state`: slot `slot`, not in charge, follows the
+    /// path history of the behaviour the other left after this state, if
+    /// it left one ([`Controller::follow_behaviour`]).
+    pub fn follow(&mut self, slot: usize, controller: &mut Controller, state: &JointState) {
+        let b = &self.behaviours[1 - slot];
+        if b.state_seq != state.seq || state.seq == 0 {
+            return;
+        }
+        let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
+        if controller.follow_behaviour(bytes).is_err() {
+            self.refused += 1;
+        }
+    }
+
     /// After slot `slot`'s step of `state`, answered by `cmd`: keep the
     /// command if it is to be sent, the behaviour if in charge.
     pub fn answered(

@@ -84,6 +84,36 @@ fn fresh_controller(scenario: &str, sets: &[&str]) -> Controller {
 }
 
 #[test]
+fn a_retreat_just_after_a_takeover_walks_the_path_back_as_without_the_fault() {
+    // the person strikes the arm at 5.6 s; the first controller stops at
+    // 5.4 s: the standby, resting through the states answered before (or
+    // stepping every state), takes over and retreats along the path's
+    // history, which it kept from the behaviours it received
+    for rests in ["control.standby_rests=true", "control.standby_rests=false"] {
+        let sets = [
+            "control.avoidance=false",
+            "control.reaction=\"retreat\"",
+            rests,
+        ];
+        let reference = run("collision", &sets, 7.5, &standby_opts(&[]), |_, _| {});
+        let outages = [(Down::Control, 5.4, 6.5)];
+        let faulted = run("collision", &sets, 7.5, &standby_opts(&outages), |_, _| {});
+        let s = faulted.summary.standby.clone().expect("the standby ran");
+        assert_eq!(s.takeovers, 1, "{rests}");
+        assert_eq!(s.missed_deadlines, 0, "{rests}");
+        assert!(
+            faulted.summary.detections > 0,
+            "{rests}: the strike was detected"
+        );
+        let gap = largest_gap(&reference, &faulted);
+        assert!(
+            gap < 1e-9,
+            "{rests}: the arm moved as without the fault ({gap:e} rad)"
+        );
+    }
+}
+
+#[test]
 fn a_stopped_controller_costs_the_arm_nothing_on_either_arm() {
     // the standby resting through the states the one in charge answers
     // and stepping every state (the default)

@@ -100,7 +100,8 @@ impl ControlService {
             }
         };
         if self.role.with_standby {
-            self.role.receive(outputs, gate)?;
+            let follow = (!in_charge).then_some(&mut self.controller);
+            self.role.receive(outputs, gate, follow, log)?;
             if self.control.standby_rests && self.role.may_rest(state) {
                 // resting is not in charge: a controller stopped in charge
                 // and resumed as the standby lowers its priority here too
@@ -137,13 +138,30 @@ impl ControlService {
 
 impl Role {
     /// The other controller's behaviour states published since the last
-    /// period, those of the controller the supervisor started.
-    fn receive(&mut self, outputs: &OutputChannels, gate: &InputGate) -> Result<(), IpcError> {
-        let inbox = &mut self.inbox;
+    /// period, those of the controller the supervisor started; not in
+    /// charge, `follow` keeps the path history of each ([`Controller::follow_behaviour`]).
+    fn receive(
+        &mut self,
+        outputs: &OutputChannels,
+        gate: &InputGate,
+        mut follow: Option<&mut Controller>,
+        log: &Deferred<Note>,
+    ) -> Result<(), IpcError> {
+        let (inbox, refused) = (&mut self.inbox, &mut self.refused);
         outputs.peer_behaviour.drain_from(|pid, b| {
-            if gate.behaviour(pid) {
-                inbox.push(b);
+            if !gate.behaviour(pid) {
+                return;
             }
+            if let Some(c) = follow.as_deref_mut() {
+                let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
+                if let Err(error) = c.follow_behaviour(bytes) {
+                    if count_and_log(refused) {
+                        let count = *refused;
+                        log.post(Note::Behaviour { error, count });
+                    }
+                }
+            }
+            inbox.push(b);
         })?;
         Ok(())
     }

@@ -666,6 +666,10 @@ fn truncated_and_malformed_snapshots_are_refused_and_change_nothing() {
                 have: len - 1
             }
         );
+        // following the path history reads the record the snapshot begins
+        // with, and refuses a snapshot cut short as well
+        assert!(b.follow_behaviour(&bytes[..len - 1]).is_err());
+        assert!(b.follow_behaviour(&bytes[..10]).is_err());
         let e = b.adopt_behaviour(&bytes[..10]).unwrap_err();
         assert_eq!(
             e,
@@ -686,12 +690,14 @@ fn truncated_and_malformed_snapshots_are_refused_and_change_nothing() {
             b.adopt_behaviour(&bad),
             Err(SnapshotError::Version { got: 77, .. })
         ));
-        // the mode, the first value: no such mode
+        // the mode, the first value after the path history's record (its
+        // pushes, path time and n joints): no such mode
+        let mode_at = HEADER_BYTES + 8 * (2 + b.model().nv());
         let mut bad = bytes.to_vec();
-        bad[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&99u32.to_le_bytes());
+        bad[mode_at..mode_at + 4].copy_from_slice(&99u32.to_le_bytes());
         assert_eq!(
             b.adopt_behaviour(&bad),
-            Err(SnapshotError::Malformed { at: HEADER_BYTES })
+            Err(SnapshotError::Malformed { at: mode_at })
         );
         // the last values: the restart hold's tag (1 + judged, near, clear_since's
         // tag and value): a fault after everything else was read
