@@ -58,11 +58,12 @@ pub struct ControlConfig {
     /// state too, adopting the behaviour of the one in charge, and takes
     /// over in the same period when that one misses; false: one controller
     pub standby: bool,
-    /// true: the controller not in charge rests through a state the one in
-    /// charge has already answered when it looks (takes its inputs, neither
+    /// true (the default): the controller not in charge rests through a
+    /// state the one in charge has already answered when it looks (takes its
+    /// inputs and the path history of the behaviours it receives, neither
     /// steps nor answers; one state in 64 it steps all the same, to compare
-    /// the answers); it still takes over in the same period. False (the
-    /// default): it steps and answers every state
+    /// the answers); it still takes over in the same period. False: it
+    /// steps and answers every state
     pub standby_rests: bool,
     /// resume the task once the residual stayed below the contact level for `resume_quiet_s`
     pub resume: bool,

@@ -162,7 +162,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("control.retreat_ramp_s", "s", "retreat: its time law ramps over this"),
     d("control.reaction_min_s", "s", "react at least this long"),
     d("control.standby", "", "a hot standby controller and residual take over in the same period; false: one controller"),
-    d("control.standby_rests", "", "true: the controller not in charge skips its step of a state the one in charge already answered (one in 64 stepped all the same); not yet the default"),
+    d("control.standby_rests", "", "true: the controller not in charge skips its step of a state the one in charge already answered (one in 64 stepped all the same; it keeps the path history of the behaviours it receives); false: it steps every state"),
     d("control.resume", "", "resume the task when the residual is quiet ..."),
     d("control.resume_quiet_s", "s", "... for this long"),
     d("control.residual_max_age_ms", "ms", "older residual: protective stop"),
