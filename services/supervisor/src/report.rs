@@ -496,8 +496,9 @@ pub struct Evaluator {
     /// answered first [ns], and the true joints at that state (its reference)
     resyncs: Vec<(Resync, u64, Vec<f64>)>,
     seen_status: bool,
-    /// the publication time of the last status taken [ns, CLOCK_MONOTONIC]
-    status_stamp_ns: u64,
+    /// the last status taken: its publication time [ns, CLOCK_MONOTONIC]
+    /// and its state's time [ns, the robot's clock]
+    status_stamps: (u64, u64),
     /// the newest truth: sequence number and true joint positions
     truth_seq: u64,
     truth_q: Vec<f64>,
@@ -601,7 +602,7 @@ impl Evaluator {
             stop_seen: None,
             resyncs: Vec::new(),
             seen_status: false,
-            status_stamp_ns: 0,
+            status_stamps: (0, 0),
             truth_seq: 0,
             truth_q: Vec::new(),
             sim_restarts: Vec::new(),
@@ -977,13 +978,16 @@ impl Evaluator {
     /// stops and their causes, mode changes as events (`reaction_name`: the
     /// configured reaction, for the `reaction` event), controller restarts.
     pub fn on_status(&mut self, m: &ControlStatus, reaction_name: &str) {
-        // published before the last one taken: a controller stopped in
-        // charge that, resumed as the standby, finishes the period it was
-        // stopped in (its number would read as a restart that never was)
-        if self.seen_status && m.stamp_ns < self.status_stamp_ns {
+        // published before the last one taken, or answering an older state:
+        // a controller stopped in charge that, resumed as the standby,
+        // finishes the period it was stopped in (its number would read as a
+        // restart that never was; the robot's clock goes on across restarts)
+        let stamps = (m.stamp_ns, m.state_stamp_ns);
+        let (last, last_state) = self.status_stamps;
+        if self.seen_status && (stamps.0 < last || stamps.1 < last_state) {
             return;
         }
-        self.status_stamp_ns = m.stamp_ns;
+        self.status_stamps = stamps;
         // one time base: the status's publish time (CLOCK_MONOTONIC); its pair
         // of stamps maps the robot's clock (truth, residual) onto it
         if m.state_stamp_ns > 0 && m.stamp_ns > 0 {
@@ -2226,8 +2230,12 @@ mod tests {
             e.on_status(&status(seq, seq * 10), "reflex");
         }
         // the controller stopped in charge at its status 3 finishes that
-        // period once resumed, after the standby's 4 and 5
+        // period once resumed, after the standby's 4 and 5; or it was
+        // stopped before its step was done and publishes it late
         e.on_status(&status(3, 35), "reflex");
+        let mut late = status(3, 30);
+        late.stamp_ns = 55_000_000;
+        e.on_status(&late, "reflex");
         e.on_status(&status(6, 60), "reflex");
         let r = e.report(1_000_000_000, "x", BTreeMap::new());
         assert!(r.resyncs.is_empty(), "{:?}", r.resyncs);
@@ -2311,10 +2319,11 @@ mod tests {
         // a restarted controller (its status sequence starts again) holds on
         // fresh inputs before its task: its hold, not a request; once it ran
         // its task, a stop on fresh inputs is a request again
-        // (published after its predecessor's last)
+        // (published after its predecessor's last, answering later states)
         let restarted = |seq: u64, mode: ControlMode| {
             let mut m = status(seq, mode, 1, 30);
             m.stamp_ns += 600_000_000;
+            m.state_stamp_ns += 600_000_000;
             m
         };
         let mut e = seeing(bounds);
