@@ -1172,6 +1172,28 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
     }
     let r = cell.finish();
     let at_ns = |e: &Value| t0 + (e["t_s"].as_f64().unwrap() * 1e9) as u64;
+    // the supervisor's own stalls (it did not run) within [from, to] [ns]:
+    // what it noticed then, it noticed that much late (under the whole
+    // suite's load, once 3.2 s right after a kill)
+    let stalls: Vec<(u64, u64)> = events(&r, "stall", "supervisor")
+        .iter()
+        .map(|e| {
+            let ms: u64 = e["detail"]
+                .as_str()
+                .unwrap()
+                .trim_end_matches(" ms")
+                .parse()
+                .unwrap();
+            (at_ns(e), ms * 1_000_000)
+        })
+        .collect();
+    let stalled_within = |from: u64, to: u64| -> u64 {
+        stalls
+            .iter()
+            .filter(|&&(end, ns)| end + 1 > from && end.saturating_sub(ns) <= to)
+            .map(|&(_, ns)| ns)
+            .sum()
+    };
     // a service beats from its own loop once its last beat is a quarter of
     // its deadline old: a loop slower than 1 kHz (the camera's and
     // perception's, one pass per frame) beats up to one pass later, so its
@@ -1190,8 +1212,9 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
             "{service}: stopped, noticed after {:.1} ms (deadline {deadline_ms} ms)",
             silent as f64 * 1e-6
         );
+        let late = stalled_within(stopped_ns, noticed);
         assert!(
-            silent + beat + frame_ns >= deadline && silent <= deadline + beat,
+            silent + beat + frame_ns >= deadline && silent <= deadline + beat + late,
             "{service}: noticed {silent} ns after it stopped, deadline {deadline} ns"
         );
         let exit = events(&r, "exit", service)
@@ -1205,7 +1228,7 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
         );
         // reaped by its parent at the next round, well before its deadline
         assert!(
-            exit - killed_ns <= deadline + beat,
+            exit - killed_ns <= deadline + beat + stalled_within(killed_ns, exit),
             "{service}: death noticed {} ns late",
             exit - killed_ns
         );

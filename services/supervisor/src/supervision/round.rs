@@ -50,10 +50,12 @@ impl Supervision {
     /// The channels are read: a stall is judged, then what is due is gathered.
     pub(super) fn gather(&mut self, now_ns: u64, out: &mut Vec<Action>) {
         if self.stalled_ns > STALL_NS {
+            let ms = self.stalled_ns / 1_000_000;
             out.push(Action::Warn(format!(
-                "stalled for {} ms: heartbeats judged afresh",
-                self.stalled_ns / 1_000_000
+                "stalled for {ms} ms: heartbeats judged afresh"
             )));
+            // in the report: what the supervisor noticed late meanwhile is its own delay
+            self.record(out, now_ns, "stall", "supervisor", &format!("{ms} ms"));
             if let Some(reason) =
                 verdict::on_stall(&mut self.roster, self.stalled_ns, self.deadman_ns, now_ns)
             {

@@ -526,6 +526,7 @@ fn a_stall_of_the_supervisor_is_not_the_services_and_past_the_dead_man_holds() {
         ["stalled for 300 ms: heartbeats judged afresh"]
     );
     assert!(kills(&stalled).is_empty());
+    assert_eq!(records(&stalled), [("stall", "supervisor")]);
     // longer than the dead-man's time: the cell stopped itself, and holds
     let deadman_ns = (c.sup.roster().config().deadman_s * 1e9) as u64;
     let t = t + 310 * MS + deadman_ns + S;
@@ -533,7 +534,10 @@ fn a_stall_of_the_supervisor_is_not_the_services_and_past_the_dead_man_holds() {
     let w = warns(&held);
     assert!(w[0].starts_with("stalled for"), "{w:?}");
     assert!(w[1].starts_with("dead-man: no supervisor for"), "{w:?}");
-    assert_eq!(records(&held), [("deadman", "supervisor")]);
+    assert_eq!(
+        records(&held),
+        [("stall", "supervisor"), ("deadman", "supervisor")]
+    );
     assert!(c.sup.roster().held());
     assert!(c.sup.running(t));
 }
