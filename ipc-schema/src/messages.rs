@@ -1155,6 +1155,14 @@ pub struct ControlBehaviour {
 
 impl Zeroed for ControlBehaviour {}
 
+impl ControlBehaviour {
+    /// The behaviour state's bytes: the first `len` of `bytes` (all of them
+    /// when `len` says more).
+    pub fn snapshot(&self) -> &[u8] {
+        &self.bytes[..(self.len as usize).min(self.bytes.len())]
+    }
+}
+
 /// Which controller commanded the robot, from the robot adapter (the
 /// simulator or a real arm's): 10 Hz and at every takeover, cumulative
 /// since the adapter started. Slot 0 is the controller on `robot/command`,

@@ -114,7 +114,10 @@ impl Standby {
     /// the same period if that answer never comes.
     pub fn may_rest(&self, state: &JointState, peer_answered: bool) -> bool {
         let braked = state.status & robot_status::BRAKING != 0;
-        peer_answered && !braked && !self.in_charge(state) && state.seq % FULL_STEP_EVERY != 0
+        peer_answered
+            && !braked
+            && !self.in_charge(state)
+            && !state.seq.is_multiple_of(FULL_STEP_EVERY)
     }
 
     /// Before the step of `state`: adopt `behaviour` (the newest the peer
@@ -131,8 +134,7 @@ impl Standby {
         else {
             return Ok(false);
         };
-        let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
-        controller.adopt_behaviour(bytes)?;
+        controller.adopt_behaviour(b.snapshot())?;
         self.adopted(state);
         Ok(true)
     }

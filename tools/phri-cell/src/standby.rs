@@ -97,8 +97,7 @@ impl Slots {
         if b.state_seq != state.seq || state.seq == 0 {
             return;
         }
-        let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
-        if controller.follow_behaviour(bytes).is_err() {
+        if controller.follow_behaviour(b.snapshot()).is_err() {
             self.refused += 1;
         }
     }

@@ -153,8 +153,7 @@ impl Role {
                 return;
             }
             if let Some(c) = follow.as_deref_mut() {
-                let bytes = &b.bytes[..(b.len as usize).min(b.bytes.len())];
-                if let Err(error) = c.follow_behaviour(bytes) {
+                if let Err(error) = c.follow_behaviour(b.snapshot()) {
                     if count_and_log(refused) {
                         let count = *refused;
                         log.post(Note::Behaviour { error, count });

@@ -11,30 +11,29 @@ use phri_ipc::{IpcError, Message, Subscriber};
 /// A subscriber and the buffer a drain is sorted in (grown once, kept).
 pub struct Ordered<T: Message> {
     subscriber: Subscriber<T>,
+    /// a sample's publication time [ns]
+    stamp: fn(&T) -> u64,
     buffer: Vec<T>,
 }
 
 impl<T: Message> Ordered<T> {
-    /// Reads `subscriber` in publication order.
-    pub fn new(subscriber: Subscriber<T>) -> Ordered<T> {
+    /// Reads `subscriber` in the order of `stamp` (each sample's
+    /// publication time).
+    pub fn new(subscriber: Subscriber<T>, stamp: fn(&T) -> u64) -> Ordered<T> {
         Ordered {
             subscriber,
+            stamp,
             buffer: Vec::new(),
         }
     }
 
-    /// Hand every queued sample to `f` in the order of `stamp` (each
-    /// sample's publication time; samples stamped alike keep the order
-    /// they came in); returns how many.
-    pub fn drain(
-        &mut self,
-        stamp: impl Fn(&T) -> u64,
-        mut f: impl FnMut(&T),
-    ) -> Result<usize, IpcError> {
+    /// Hand every queued sample to `f` in publication order (samples
+    /// stamped alike keep the order they came in); returns how many.
+    pub fn drain(&mut self, mut f: impl FnMut(&T)) -> Result<usize, IpcError> {
         self.buffer.clear();
         let buffer = &mut self.buffer;
         let n = self.subscriber.drain(|m| buffer.push(*m))?;
-        in_stamp_order(buffer, stamp);
+        in_stamp_order(buffer, self.stamp);
         self.buffer.iter().for_each(&mut f);
         Ok(n)
     }

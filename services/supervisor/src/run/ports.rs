@@ -63,7 +63,9 @@ impl Ports {
             truth: SIM_TRUTH.subscriber(node, Queue::Drain)?,
             contacts: SIM_CONTACTS.subscriber(node, Queue::Drain)?,
             residual: DYNAMICS_RESIDUAL.subscriber(node, Queue::Drain)?,
-            status: Ordered::new(CONTROL_STATUS.subscriber(node, Queue::Drain)?),
+            status: Ordered::new(CONTROL_STATUS.subscriber(node, Queue::Drain)?, |m| {
+                m.stamp_ns
+            }),
             frames: cameras
                 .iter()
                 .map(|c| c.depth.frame_subscriber(node, Queue::Latest))
@@ -80,9 +82,11 @@ impl Ports {
                 .iter()
                 .map(|c| c.skeleton.subscriber(node, Queue::Drain))
                 .collect::<Result<_, _>>()?,
-            collab: Ordered::new(COLLAB_STATE.subscriber(node, Queue::Drain)?),
-            ssm: Ordered::new(CONTROL_SSM.subscriber(node, Queue::Drain)?),
-            barrier: Ordered::new(CONTROL_BARRIER.subscriber(node, Queue::Drain)?),
+            collab: Ordered::new(COLLAB_STATE.subscriber(node, Queue::Drain)?, |m| m.stamp_ns),
+            ssm: Ordered::new(CONTROL_SSM.subscriber(node, Queue::Drain)?, |m| m.stamp_ns),
+            barrier: Ordered::new(CONTROL_BARRIER.subscriber(node, Queue::Drain)?, |m| {
+                m.stamp_ns
+            }),
             requests: phri_ipc::HRI_REQUEST.subscriber(node, Queue::Drain)?,
             bridge_requests: phri_ipc::ROS2_REQUESTS.subscriber(node, Queue::Drain)?,
             camera_status: phri_ipc::CAMERA_STATUS.subscriber(node, Queue::Drain)?,
@@ -119,18 +123,15 @@ impl Ports {
     pub fn read_robot(&mut self, ev: &mut Evaluation) -> Result<(), IpcError> {
         self.stats.drain(|m| ev.eval.on_stats(m))?;
         self.contacts.drain(|m| ev.eval.on_contact_event(m))?;
-        self.collab.drain(
-            |m| m.stamp_ns,
-            |m| {
-                if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
-                    let source = phri_ipc::RequestSource::name_of(m.request_source);
-                    ev.eval.stop_requested_by(source, m.request_seq);
-                }
-                ev.collab.on_state(m);
-            },
-        )?;
-        self.ssm.drain(|m| m.stamp_ns, |m| ev.eval.on_ssm(m))?;
-        self.barrier.drain(|m| m.stamp_ns, |m| ev.on_barrier(m))?;
+        self.collab.drain(|m| {
+            if m.request_kind == phri_ipc::RequestKind::Stop as u32 && m.request_accepted != 0 {
+                let source = phri_ipc::RequestSource::name_of(m.request_source);
+                ev.eval.stop_requested_by(source, m.request_seq);
+            }
+            ev.collab.on_state(m);
+        })?;
+        self.ssm.drain(|m| ev.eval.on_ssm(m))?;
+        self.barrier.drain(|m| ev.on_barrier(m))?;
         self.commanders.drain(|m| {
             ev.standby.on_commanders(m, ev.eval.time_s(m.stamp_ns));
             ev.boxes.on_commanders(m);
@@ -169,8 +170,7 @@ impl Ports {
         self.standby_residual
             .drain(|m| ev.residuals.on_residual(1, m))?;
         let reaction = ev.reaction;
-        self.status
-            .drain(|m| m.stamp_ns, |m| ev.eval.on_status(m, reaction))?;
+        self.status.drain(|m| ev.eval.on_status(m, reaction))?;
         for camera in 0..self.frames.len() {
             let (Some(frames), Some(filtered), Some(results)) = (
                 self.frames.get(camera),
@@ -197,9 +197,9 @@ impl Ports {
     /// (errors ignored: the run is over).
     pub fn read_last(&mut self, ev: &mut Evaluation) {
         let _ = self.contacts.drain(|m| ev.eval.on_contact_event(m));
-        let _ = self.collab.drain(|m| m.stamp_ns, |m| ev.collab.on_state(m));
-        let _ = self.ssm.drain(|m| m.stamp_ns, |m| ev.eval.on_ssm(m));
-        let _ = self.barrier.drain(|m| m.stamp_ns, |m| ev.on_barrier(m));
+        let _ = self.collab.drain(|m| ev.collab.on_state(m));
+        let _ = self.ssm.drain(|m| ev.eval.on_ssm(m));
+        let _ = self.barrier.drain(|m| ev.on_barrier(m));
         let _ = self.requests.drain(|m| ev.collab.on_request(m));
         let _ = self.bridge_requests.drain(|m| ev.collab.on_bridge(m));
         let _ = self.camera_status.drain(|m| ev.eval.on_camera_status(m));
@@ -211,9 +211,7 @@ impl Ports {
         });
         let _ = self.residual.drain(|m| ev.eval.on_residual(m));
         let reaction = ev.reaction;
-        let _ = self
-            .status
-            .drain(|m| m.stamp_ns, |m| ev.eval.on_status(m, reaction));
+        let _ = self.status.drain(|m| ev.eval.on_status(m, reaction));
         let _ = self.stats.drain(|m| ev.eval.on_stats(m));
     }
 
