@@ -8,13 +8,16 @@
 //! vector instructions: the occlusion rule, `‖D‖²`, the region test and every
 //! pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of its own ([`exp`],
 //! fused multiply-adds where the compilation has them), where the scalar
-//! code called the C library's once per pixel. Each lane keeps its own count
-//! and nearest pixel ([`Sums`]), merged once per point ([`Sums::nearest`]):
-//! no horizontal step per run. The timing test's 8 points on a crowded frame
-//! (every pixel in front of every point, AVX-512): 1.56 ms per frame with a
-//! horizontal minimum per run and no fused steps, 0.93 ms with them. Each
-//! lane also keeps the nearest pixel at its own depth (the surface seen,
-//! for the fusion of several cameras): about a fifth more per pixel.
+//! code called the C library's once per pixel. Each lane keeps its own
+//! count and its row's smallest distances with a vector minimum, never a
+//! conditional store; the row that holds the smallest, then its pixel, are
+//! found once per row and once per point ([`Sums::end_row`], [`find`]).
+//! A conditional store per lane (a masked store, and the next run's load
+//! that waited for it) had been half of the scan's time: the timing test's
+//! 8 points on a crowded frame (every pixel in front of every point, AVX2,
+//! an AMD EPYC virtual machine) 7.0 → 3.8 ms a frame, the human + robot
+//! scene 1.21 → 0.65 ms. Each lane also keeps the nearest pixel at its own
+//! depth (the surface seen, for the fusion of several cameras).
 
 use nalgebra::Vector3;
 
@@ -94,7 +97,8 @@ pub(crate) struct Point {
 }
 
 /// Running sums of one point's scan, per lane (a lane holds every
-/// `RUN`-th pixel of a row: no horizontal step per run).
+/// `RUN`-th pixel of a row: no horizontal step per run), and what the scan
+/// found.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Sums {
     /// Σ of `−D k` per lane (eq. 17's sum before its direction is taken)
@@ -103,17 +107,19 @@ pub(crate) struct Sums {
     pub z: [f64; RUN],
     /// pixels in the region
     count: [u64; RUN],
-    /// smallest `‖D‖²` so far, and its pixel's column, row and depth `d_o`
-    /// (the first of the lane's scan order at that value)
-    low: [f64; RUN],
-    low_u: [u64; RUN],
-    low_v: [u64; RUN],
-    low_d: [f64; RUN],
-    /// smallest squared distance to a pixel at its own depth (no occlusion
-    /// rule): the nearest surface seen \[m²\], and its pixel as
-    /// `row << 32 | column` (one select per pixel: the scan's cost)
-    surface: [f64; RUN],
-    surface_at: [u64; RUN],
+    /// the row's smallest `‖D‖²` per lane (∞: none in the region)
+    row_low: [f64; RUN],
+    /// the row's smallest squared distance per lane to a pixel at its own
+    /// depth (no occlusion rule) \[m²\]
+    row_surface: [f64; RUN],
+    /// the smallest `‖D‖²` and the first row that holds it
+    low: f64,
+    low_row: usize,
+    /// the nearest surface seen \[m²\] and the first row that holds it
+    surface: f64,
+    surface_row: usize,
+    /// what the scan found, once it is done
+    found: Nearest,
 }
 
 /// What a scan found: eq. (17)'s pixel count, the nearest pixel.
@@ -140,12 +146,19 @@ impl Sums {
             y: [0.0; RUN],
             z: [0.0; RUN],
             count: [0; RUN],
-            low: [f64::INFINITY; RUN],
-            low_u: [0; RUN],
-            low_v: [0; RUN],
-            low_d: [0.0; RUN],
-            surface: [f64::INFINITY; RUN],
-            surface_at: [0; RUN],
+            row_low: [f64::INFINITY; RUN],
+            row_surface: [f64::INFINITY; RUN],
+            low: f64::INFINITY,
+            low_row: 0,
+            surface: f64::INFINITY,
+            surface_row: 0,
+            found: Nearest {
+                count: 0,
+                best2: f64::INFINITY,
+                best: (0, 0, 0.0),
+                surface2: f64::INFINITY,
+                surface: (0, 0),
+            },
         }
     }
 
@@ -161,47 +174,69 @@ impl Sums {
     /// The count and the nearest pixel over every lane: the smallest
     /// `‖D‖²`, at a tie the first of the scan order (row, then column).
     pub fn nearest(&self) -> Nearest {
-        let mut n = Nearest {
-            count: self.count.iter().sum::<u64>() as usize,
-            best2: f64::INFINITY,
-            best: (0, 0, 0.0),
-            surface2: f64::INFINITY,
-            surface: (0, 0),
-        };
-        let mut seen_at = u64::MAX;
-        for i in 0..RUN {
-            let here = self.surface_at[i];
-            if self.surface[i] < n.surface2 || (self.surface[i] == n.surface2 && here < seen_at) {
-                n.surface2 = self.surface[i];
-                seen_at = here;
-                n.surface = ((here & 0xffff_ffff) as usize, (here >> 32) as usize);
-            }
+        self.found
+    }
+
+    /// The end of row `v`: its lanes' smallest values against the scan's.
+    #[inline(always)]
+    fn end_row(&mut self, v: usize) {
+        let low = self.row_low.iter().fold(f64::INFINITY, |m, &x| min(m, x));
+        if low < self.low {
+            self.low = low;
+            self.low_row = v;
         }
-        let mut at = (u64::MAX, u64::MAX);
-        for i in 0..RUN {
-            let here = (self.low_v[i], self.low_u[i]);
-            if self.low[i] < n.best2 || (self.low[i] == n.best2 && here < at) {
-                n.best2 = self.low[i];
-                at = here;
-                n.best = (here.1 as usize, here.0 as usize, self.low_d[i]);
-            }
+        let surface = self
+            .row_surface
+            .iter()
+            .fold(f64::INFINITY, |m, &x| min(m, x));
+        if surface < self.surface {
+            self.surface = surface;
+            self.surface_row = v;
         }
-        n
+        self.row_low = [f64::INFINITY; RUN];
+        self.row_surface = [f64::INFINITY; RUN];
     }
 }
 
-/// One full run: depths `raw` (units), column factors `xs` (`(u − c_x)/f_x`),
-/// row factor `y`; `u` is the run's first column, `v` its row.
+/// The smaller of two values that are never NaN (one vector instruction).
 #[inline(always)]
-fn run<const FMA: bool>(
-    p: &Point,
-    raw: &[u16; RUN],
-    xs: &[f64; RUN],
-    y: f64,
-    u: usize,
-    v: usize,
-    s: &mut Sums,
-) {
+fn min(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// One pixel of a point's scan: depth `d` \[m\] (0: no reading, `raw` its
+/// raw value), column factor `x`, row factor `y`. Returns `‖D‖²` with the
+/// occlusion rule, the depth used `d_o`, `D`, whether the pixel is in the
+/// region, and its squared distance at its own depth (∞ without a reading).
+#[inline(always)]
+fn pixel(p: &Point, raw: u16, x: f64, y: f64) -> (f64, f64, [f64; 3], bool, f64) {
+    let d = f64::from(raw) * p.scale;
+    // occlusion: worst case at P's depth
+    let d_used = if d < p.d_p { p.d_p } else { d };
+    let ex = x * d_used - p.x;
+    let ey = y * d_used - p.y;
+    let ez = d_used - p.d_p;
+    let m = ex * ex + ey * ey + ez * ez;
+    // the surface as seen: the pixel at its own depth
+    let (sx, sy, sz) = (x * d - p.x, y * d - p.y, d - p.d_p);
+    let seen = sx * sx + sy * sy + sz * sz;
+    let seen = if raw != 0 { seen } else { f64::INFINITY };
+    let ins = (raw != 0) & (d <= p.d_far) & (m <= p.reach2);
+    (m, d_used, [ex, ey, ez], ins, seen)
+}
+
+/// One full run: depths `raw` (units), column factors `xs` (`(u − c_x)/f_x`),
+/// row factor `y`. Each lane keeps the row's smallest values with a
+/// minimum, never a conditional store (a masked store, and the load of the
+/// next run that waited for it, were most of the scan's time); the row and
+/// then the pixel that holds them are found once, at the end
+/// ([`Sums::end_row`], [`find`]).
+#[inline(always)]
+fn run<const FMA: bool>(p: &Point, raw: &[u16; RUN], xs: &[f64; RUN], y: f64, s: &mut Sums) {
     let mut n2 = [0.0f64; RUN];
     let mut dx = [0.0f64; RUN];
     let mut dy = [0.0f64; RUN];
@@ -209,27 +244,9 @@ fn run<const FMA: bool>(
     let mut inside = [false; RUN];
     let mut any = false;
     for i in 0..RUN {
-        let d = f64::from(raw[i]) * p.scale;
-        // occlusion: worst case at P's depth
-        let d_used = if d < p.d_p { p.d_p } else { d };
-        let ex = xs[i] * d_used - p.x;
-        let ey = y * d_used - p.y;
-        let ez = d_used - p.d_p;
-        let m = ex * ex + ey * ey + ez * ez;
-        // the surface as seen: the pixel at its own depth
-        let (sx, sy, sz) = (xs[i] * d - p.x, y * d - p.y, d - p.d_p);
-        let seen = sx * sx + sy * sy + sz * sz;
-        let nearer_seen = (raw[i] != 0) & (seen < s.surface[i]);
-        s.surface[i] = if nearer_seen { seen } else { s.surface[i] };
-        let here = ((v as u64) << 32) | (u + i) as u64;
-        s.surface_at[i] = if nearer_seen { here } else { s.surface_at[i] };
-        let ins = (raw[i] != 0) & (d <= p.d_far) & (m <= p.reach2);
-        // the lane's nearest: strictly nearer, so the first of its scan order
-        let nearer = ins & (m < s.low[i]);
-        s.low[i] = if nearer { m } else { s.low[i] };
-        s.low_u[i] = if nearer { (u + i) as u64 } else { s.low_u[i] };
-        s.low_v[i] = if nearer { v as u64 } else { s.low_v[i] };
-        s.low_d[i] = if nearer { d_used } else { s.low_d[i] };
+        let (m, _, [ex, ey, ez], ins, seen) = pixel(p, raw[i], xs[i], y);
+        s.row_surface[i] = min(seen, s.row_surface[i]);
+        s.row_low[i] = min(if ins { m } else { f64::INFINITY }, s.row_low[i]);
         s.count[i] += u64::from(ins);
         any |= ins;
         inside[i] = ins;
@@ -404,29 +421,86 @@ by_lanes! {
     pub(crate) fn scan(p: &Point, w: &Window<'_>, s: &mut Sums) -> () = scan_any::<FMA>;
 }
 
-#[inline(always)]
-fn scan_any<const FMA: bool>(p: &Point, w: &Window<'_>, sums: &mut Sums) {
-    // the sums as a local, which the compiler keeps in registers (behind
-    // the reference, each lane's conditional update was a masked store,
-    // and reading it back on the next run stalled)
-    let mut acc = *sums;
-    let s = &mut acc;
-    let cols = w.xs.len();
-    for v in w.v0..=w.v1 {
-        let y = w.yn[v];
-        let row = &w.frame[v * w.width + w.u0..v * w.width + w.u0 + cols];
-        for c in (0..cols).step_by(RUN) {
-            // a run all invalid or beyond range by more than a unit is
-            // skipped whole: most of a window's background (a short last
-            // run is padded with no reading, which is skipped too)
+impl Window<'_> {
+    /// Row `v`'s pixels of the window.
+    #[inline(always)]
+    fn row(&self, v: usize) -> &[u16] {
+        let at = v * self.width + self.u0;
+        &self.frame[at..at + self.xs.len()]
+    }
+
+    /// The runs of row `v` that the scan visits: their first column in the
+    /// window and their depths. A run all invalid or beyond range by more
+    /// than a unit is skipped whole: most of a window's background (a short
+    /// last run is padded with no reading, which is skipped too).
+    #[inline(always)]
+    fn runs(&self, v: usize) -> impl Iterator<Item = (usize, [u16; RUN])> + '_ {
+        let row = self.row(v);
+        (0..row.len()).step_by(RUN).filter_map(move |c| {
             let raw: [u16; RUN] = load(row, c);
             let nearest = raw.iter().fold(u16::MAX, |m, &r| m.min(r.wrapping_sub(1)));
-            if nearest < w.raw_far {
-                run::<FMA>(p, &raw, &load(w.xs, c), y, w.u0 + c, v, s);
-            }
+            (nearest < self.raw_far).then_some((c, raw))
+        })
+    }
+}
+
+#[inline(always)]
+fn scan_any<const FMA: bool>(p: &Point, w: &Window<'_>, sums: &mut Sums) {
+    // the sums as a local, which the compiler keeps in registers where it can
+    let mut acc = *sums;
+    let s = &mut acc;
+    for v in w.v0..=w.v1 {
+        let y = w.yn[v];
+        for (c, raw) in w.runs(v) {
+            run::<FMA>(p, &raw, &load(w.xs, c), y, s);
+        }
+        s.end_row(v);
+    }
+    acc.found = find(p, w, &acc);
+    *sums = acc;
+}
+
+/// The pixels that hold a scan's smallest values, each the first of its row
+/// at that value (the rows were found by [`Sums::end_row`], the first at
+/// their value), by the same arithmetic as the scan's ([`pixel`]).
+#[inline(always)]
+fn find(p: &Point, w: &Window<'_>, s: &Sums) -> Nearest {
+    let mut n = Nearest {
+        count: s.count.iter().sum::<u64>() as usize,
+        best2: s.low,
+        best: (0, 0, 0.0),
+        surface2: s.surface,
+        surface: (0, 0),
+    };
+    // the first pixel of row `v` (of the runs the scan visited) that `hit`
+    // takes: its column and what `hit` returned
+    let first = |v: usize, hit: &dyn Fn(u16, f64, f64) -> Option<f64>| {
+        let y = w.yn[v];
+        w.runs(v).find_map(|(c, raw)| {
+            let xs: [f64; RUN] = load(w.xs, c);
+            (0..RUN).find_map(|i| hit(raw[i], xs[i], y).map(|d| (w.u0 + c + i, d)))
+        })
+    };
+    if s.low.is_finite() {
+        let v = s.low_row;
+        let at = first(v, &|raw, x, y| {
+            let (m, d_used, _, ins, _) = pixel(p, raw, x, y);
+            (ins & (m == s.low)).then_some(d_used)
+        });
+        if let Some((u, d)) = at {
+            n.best = (u, v, d);
         }
     }
-    *sums = acc;
+    if s.surface.is_finite() {
+        let v = s.surface_row;
+        let at = first(v, &|raw, x, y| {
+            (pixel(p, raw, x, y).4 == s.surface).then_some(0.0)
+        });
+        if let Some((u, _)) = at {
+            n.surface = (u, v);
+        }
+    }
+    n
 }
 
 /// A deterministic sequence for the tests' scenes: the states of Knuth's
@@ -515,6 +589,65 @@ mod tests {
             }
         }
         assert!(seen > 0 && !all.is_empty());
+    }
+
+    /// The nearest pixel and the nearest surface are the first of the scan
+    /// order (row, then column) at their value, as a pixel-by-pixel scan
+    /// finds them, also where pixels tie (a flat wall seen square on, the
+    /// point halfway between two columns and two rows) and where the tie
+    /// spans two runs.
+    #[test]
+    fn ties_go_to_the_first_pixel_of_the_scan_order() {
+        let (width, height) = (64usize, 9usize);
+        let xs: Vec<f64> = (0..width).map(|u| (u as f64 - 31.5) / 64.0).collect();
+        let yn: Vec<f64> = (0..height).map(|v| (v as f64 - 4.5) / 64.0).collect();
+        for (depth, d_p, px) in [(2000u16, 1.8, 0.0), (1700, 1.8, 0.0), (2000, 1.8, 0.25)] {
+            let frame = vec![depth; width * height];
+            let reach = 0.4;
+            let p = Point {
+                x: px,
+                y: 0.0,
+                d_p,
+                d_far: d_p + reach,
+                reach2: reach * reach,
+                radius: 0.0,
+                scale: 0.001,
+                v_max: 0.21,
+                two_over_rho: 2.0 / 0.4,
+                alpha: 6.0,
+            };
+            let window = Window {
+                frame: &frame,
+                width,
+                u0: 0,
+                v0: 0,
+                v1: height - 1,
+                xs: &xs,
+                yn: &yn,
+                raw_far: ((d_p + reach) / 0.001 + 1.0).floor() as u16 + 1,
+            };
+            // pixel by pixel, row by row: the first strictly smaller wins
+            let (mut best, mut at, mut surface, mut surface_at) =
+                (f64::INFINITY, (0, 0, 0.0), f64::INFINITY, (0, 0));
+            for v in 0..height {
+                for u in 0..width {
+                    let (m, d_used, _, ins, seen) = pixel(&p, frame[v * width + u], xs[u], yn[v]);
+                    if ins && m < best {
+                        (best, at) = (m, (u, v, d_used));
+                    }
+                    if seen < surface {
+                        (surface, surface_at) = (seen, (u, v));
+                    }
+                }
+            }
+            for l in Lanes::available() {
+                let mut s = Sums::new();
+                scan(l, &p, &window, &mut s);
+                let n = s.nearest();
+                assert_eq!((n.best2, n.best), (best, at), "{l:?} {depth} {px}");
+                assert_eq!((n.surface2, n.surface), (surface, surface_at), "{l:?}");
+            }
+        }
     }
 
     #[test]
