@@ -532,43 +532,67 @@ impl RayCapsule {
         let mut hi = f64::NEG_INFINITY;
         let ma = self.a.x * x + self.a.y * y + self.a.z;
         sphere_lanes(q, ma, self.sa_c, &mut lo, &mut hi);
-        if self.k > 0.0 {
-            let mb = self.b.x * x + self.b.y * y + self.b.z;
-            sphere_lanes(q, mb, self.sb_c, &mut lo, &mut hi);
-            // the finite cylinder: the infinite one within the slab
-            let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
-            let ard = self.a.x * x + self.a.y * y + self.a.z;
-            let qa = self.k * q - bard * bard;
-            let slanted = qa > 1e-12 * self.k * q;
-            let half_b = -self.k * ard + bard * self.aba;
-            let h = half_b * half_b - qa * self.cyl_c;
-            let sh = h.sqrt();
-            let (c0, c1) = if slanted {
-                ((-half_b - sh) / qa, (-half_b + sh) / qa)
+        // a sphere (k = 0) has no second end and no cylinder: both are
+        // computed all the same and left out by a select, not a branch (the
+        // branch kept a run of pixels from vectorising)
+        let capsule = self.k > 0.0;
+        let mb = self.b.x * x + self.b.y * y + self.b.z;
+        let (mut lo_b, mut hi_b) = (lo, hi);
+        sphere_lanes(q, mb, self.sb_c, &mut lo_b, &mut hi_b);
+        // the finite cylinder: the infinite one within the slab
+        let bard = self.ba.x * x + self.ba.y * y + self.ba.z;
+        let ard = self.a.x * x + self.a.y * y + self.a.z;
+        let qa = self.k * q - bard * bard;
+        let slanted = qa > 1e-12 * self.k * q;
+        let half_b = -self.k * ard + bard * self.aba;
+        let h = half_b * half_b - qa * self.cyl_c;
+        let sh = h.sqrt();
+        let c0 = if slanted {
+            (-half_b - sh) / qa
+        } else {
+            f64::NEG_INFINITY
+        };
+        let c1 = if slanted {
+            (-half_b + sh) / qa
+        } else {
+            f64::INFINITY
+        };
+        let cyl = if slanted {
+            !(h < 0.0)
+        } else {
+            self.cyl_c <= 0.0
+        };
+        // slab 0 ≤ (t rd − a)·(b − a) ≤ k
+        let crossing = bard.abs() > 1e-300;
+        let t0 = self.aba / bard;
+        let t1 = (self.k + self.aba) / bard;
+        let ordered = t0 <= t1;
+        let s0 = if crossing {
+            if ordered {
+                t0
             } else {
-                (f64::NEG_INFINITY, f64::INFINITY)
-            };
-            let cyl = if slanted {
-                !(h < 0.0)
+                t1
+            }
+        } else {
+            f64::NEG_INFINITY
+        };
+        let s1 = if crossing {
+            if ordered {
+                t1
             } else {
-                self.cyl_c <= 0.0
-            };
-            // slab 0 ≤ (t rd − a)·(b − a) ≤ k
-            let crossing = bard.abs() > 1e-300;
-            let t0 = self.aba / bard;
-            let t1 = (self.k + self.aba) / bard;
-            let (s0, s1) = match (crossing, t0 <= t1) {
-                (true, true) => (t0, t1),
-                (true, false) => (t1, t0),
-                (false, _) => (f64::NEG_INFINITY, f64::INFINITY),
-            };
-            let slab = crossing | (-self.aba >= 0.0 && -self.aba <= self.k);
-            let l = c0.max(s0);
-            let u = c1.min(s1);
-            let hit = cyl & slab & (l <= u);
-            lo = if hit { lo.min(l) } else { lo };
-            hi = if hit { hi.max(u) } else { hi };
-        }
+                t0
+            }
+        } else {
+            f64::INFINITY
+        };
+        let slab = crossing | ((-self.aba >= 0.0) & (-self.aba <= self.k));
+        let l = c0.max(s0);
+        let u = c1.min(s1);
+        let hit = capsule & cyl & slab & (l <= u);
+        lo = if capsule { lo_b } else { lo };
+        hi = if capsule { hi_b } else { hi };
+        lo = if hit { lo.min(l) } else { lo };
+        hi = if hit { hi.max(u) } else { hi };
         (lo, hi)
     }
 
