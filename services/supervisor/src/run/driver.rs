@@ -19,6 +19,23 @@ use crate::shm::{self, SHM_DIR};
 use crate::supervision::{Action, Event, Supervision, TICK_NS};
 use crate::{SupervisorError, SupervisorState};
 
+/// A step that touches the disk longer than this held the loop \[ns\]: said
+/// in the log, so that a stall of the supervisor names its cause (the
+/// files of iceoryx2 and the state files live on a disk that a build beside
+/// the cell can keep busy for seconds).
+const HELD_NS: u64 = 100_000_000;
+
+/// Runs `step`, one warning line if it held the loop past [`HELD_NS`].
+fn held<T>(what: &str, step: impl FnOnce() -> T) -> T {
+    let t0 = now_ns();
+    let out = step();
+    let ns = now_ns().saturating_sub(t0);
+    if ns > HELD_NS {
+        tracing::warn!("{what} held the supervisor for {} ms", ns / 1_000_000);
+    }
+    out
+}
+
 /// What the supervision acts on: the processes, the channels, the report's
 /// evaluators.
 pub struct Driver {
@@ -181,7 +198,9 @@ impl Driver {
             }
             Action::Reap => self.reap(sup)?,
             Action::Kill(i) => self.cell.kill(i),
-            Action::WriteState => self.cell.write_state(sup.roster()),
+            Action::WriteState => held("writing the state files", || {
+                self.cell.write_state(sup.roster())
+            }),
             Action::PublishHealth { now_ns } => self.ports.publish_health(sup.roster(), now_ns),
             Action::CheckNodeCounter => {
                 if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &self.prefix) {
@@ -230,7 +249,9 @@ impl Driver {
                 continue;
             };
             let now = phri_runtime::now_ns();
-            let _ = self.node.try_cleanup_dead_nodes();
+            held("removing the dead processes' iceoryx2 resources", || {
+                let _ = self.node.try_cleanup_dead_nodes();
+            });
             self.feed(sup, now, Event::Exited { index, detail })?;
         }
         Ok(())
