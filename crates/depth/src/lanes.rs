@@ -520,6 +520,25 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> u64 {
 mod tests {
     use super::*;
 
+    /// A point at camera coordinates `(x, y, d_p)` \[m\] with link radius
+    /// `radius` \[m\], the paper's repulsion (ρ 0.4 m, V_max 0.21 m/s, α 6),
+    /// depths in millimetres.
+    fn point(x: f64, y: f64, d_p: f64, radius: f64) -> Point {
+        let reach = 0.4 + radius;
+        Point {
+            x,
+            y,
+            d_p,
+            d_far: d_p + reach,
+            reach2: reach * reach,
+            radius,
+            scale: 0.001,
+            v_max: 0.21,
+            two_over_rho: 2.0 / 0.4,
+            alpha: 6.0,
+        }
+    }
+
     fn ulps(a: f64, b: f64) -> u64 {
         (a.to_bits() as i64).abs_diff(b.to_bits() as i64)
     }
@@ -549,18 +568,7 @@ mod tests {
             (-0.2, 0.1, 2.2, 0.03),
         ] {
             let reach = 0.4 + radius;
-            let p = Point {
-                x: px,
-                y: py,
-                d_p,
-                d_far: d_p + reach,
-                reach2: reach * reach,
-                radius,
-                scale: 0.001,
-                v_max: 0.21,
-                two_over_rho: 2.0 / 0.4,
-                alpha: 6.0,
-            };
+            let p = point(px, py, d_p, radius);
             let window = Window {
                 frame: &frame,
                 width,
@@ -604,18 +612,7 @@ mod tests {
         for (depth, d_p, px) in [(2000u16, 1.8, 0.0), (1700, 1.8, 0.0), (2000, 1.8, 0.25)] {
             let frame = vec![depth; width * height];
             let reach = 0.4;
-            let p = Point {
-                x: px,
-                y: 0.0,
-                d_p,
-                d_far: d_p + reach,
-                reach2: reach * reach,
-                radius: 0.0,
-                scale: 0.001,
-                v_max: 0.21,
-                two_over_rho: 2.0 / 0.4,
-                alpha: 6.0,
-            };
+            let p = point(px, 0.0, d_p, 0.0);
             let window = Window {
                 frame: &frame,
                 width,
