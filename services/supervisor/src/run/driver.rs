@@ -10,6 +10,7 @@ use phri_ipc::IpcNode;
 use phri_runtime::{now_ns, Shutdown};
 
 use super::cell::Cell;
+use super::cleaner::Cleaner;
 use super::ports::{Liveness, Ports};
 use super::publishers::Publishers;
 use crate::evaluation::Evaluation;
@@ -20,9 +21,9 @@ use crate::supervision::{Action, Event, Supervision, TICK_NS};
 use crate::{SupervisorError, SupervisorState};
 
 /// A step that touches the disk longer than this held the loop \[ns\]: said
-/// in the log, so that a stall of the supervisor names its cause (the
-/// files of iceoryx2 and the state files live on a disk that a build beside
-/// the cell can keep busy for seconds).
+/// in the log, so that a stall of the supervisor names its cause (the state
+/// files live on a disk that a build beside the cell can keep busy for
+/// seconds; iceoryx2's files are removed beside the loop, [`Cleaner`]).
 const HELD_NS: u64 = 100_000_000;
 
 /// Runs `step`, one warning line if it held the loop past [`HELD_NS`].
@@ -53,6 +54,8 @@ pub struct Driver {
     pub previous: Option<SupervisorState>,
     /// the iceoryx2 prefix of the cell
     pub prefix: String,
+    /// removes dead processes' iceoryx2 resources beside the loop
+    pub cleaner: Cleaner,
 }
 
 impl Driver {
@@ -236,6 +239,7 @@ impl Driver {
         self.ports.read_rest(&mut self.evaluation)?;
         let behind = self.evaluation.eval.robot_behind_ns();
         self.feed(sup, now_ns, Event::RobotBehind(behind))?;
+        self.feed(sup, now_ns, Event::Cleaning(self.cleaner.busy()))?;
         Ok(())
     }
 
@@ -249,9 +253,7 @@ impl Driver {
                 continue;
             };
             let now = phri_runtime::now_ns();
-            held("removing the dead processes' iceoryx2 resources", || {
-                let _ = self.node.try_cleanup_dead_nodes();
-            });
+            self.cleaner.request();
             self.feed(sup, now, Event::Exited { index, detail })?;
         }
         Ok(())

@@ -2,11 +2,13 @@
 //! ([`crate::supervision`]): everything checked before the first process
 //! starts ([`checks`]), the node and its ports opened ([`ipc`], [`ports`]),
 //! the services started and supervised ([`driver`]: the processes of
-//! [`cell`], the publishers of [`publishers`]), then stopped in order and
+//! [`cell`], the publishers of [`publishers`], dead processes' resources
+//! removed by [`cleaner`]), then stopped in order and
 //! the report written ([`finish`], [`report_file`]).
 
 pub mod cell;
 pub mod checks;
+pub mod cleaner;
 pub mod driver;
 pub mod finish;
 pub mod ipc;
@@ -113,6 +115,7 @@ pub fn run(plan: Plan, opts: Options) -> Result<(), SupervisorError> {
         }
     };
     let mut driver = Driver {
+        cleaner: cleaner::Cleaner::new(&prefix),
         publishers: Publishers::new(ports.cameras()),
         cell: cell::Cell::new(launch, plan.services.len()),
         node,

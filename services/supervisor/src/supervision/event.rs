@@ -114,6 +114,11 @@ pub enum Event {
     /// added up): the scenario's time, which the person, the microphone
     /// and the contacts follow, is the robot's
     RobotBehind(u64),
+    /// whether dead processes' iceoryx2 resources are still being removed
+    /// (beside the loop): a due restart waits for that, at most
+    /// [`super::CLEANUP_WAIT_NS`], so that the new process does not meet
+    /// the dead one's files in its own start
+    Cleaning(bool),
 }
 
 /// What the supervisor is to do, in order; the caller performs it and tells

@@ -39,6 +39,11 @@ pub const WATCH_NS: u64 = 50_000_000;
 pub const CPU_SAMPLE_NS: u64 = 20_000_000;
 /// How long health goes out every tick after a (re)start \[ns\].
 pub const FAST_HEALTH_NS: u64 = 1_000_000_000;
+/// A due restart waits at most this long for the removal of dead processes'
+/// iceoryx2 resources ([`Event::Cleaning`]) \[ns\]: a disk that holds it
+/// longer delays no restart past this.
+pub const CLEANUP_WAIT_NS: u64 = 5_000_000_000;
+
 /// A supervision loop later than this was a stall of the supervisor itself \[ns\].
 pub const STALL_NS: u64 = 100_000_000;
 /// A service's real-time process is judged no earlier than this after its
@@ -157,6 +162,9 @@ pub struct Supervision {
     round_asked: bool,
     /// how long this supervisor did not run before this round [ns]
     stalled_ns: u64,
+    /// since when dead processes' resources are being removed [ns]
+    /// ([`Event::Cleaning`]; `None`: not now)
+    cleaning_since_ns: Option<u64>,
     /// a service ended or started in this round
     changed: bool,
     /// a verdict ended this round's reaping
@@ -192,6 +200,7 @@ impl Supervision {
             adopted_any: false,
             round_asked: false,
             stalled_ns: 0,
+            cleaning_since_ns: None,
             changed: false,
             reaped_enough: false,
             strangers_seen: Vec::new(),
@@ -244,6 +253,12 @@ impl Supervision {
             }
             Event::Signal => self.signalled = true,
             Event::RobotBehind(ns) => self.robot_behind_ns = ns,
+            Event::Cleaning(busy) => {
+                self.cleaning_since_ns = match busy {
+                    false => None,
+                    true => self.cleaning_since_ns.or(Some(now_ns)),
+                }
+            }
         }
     }
 

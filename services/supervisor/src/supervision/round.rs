@@ -4,7 +4,10 @@
 //! frozen killed and the due restarted, the state written and the health
 //! published.
 
-use super::{Action, Stage, Supervision, CPU_SAMPLE_NS, RT_SETTLE_NS, STALL_NS, TICK_NS, WATCH_NS};
+use super::{
+    Action, Stage, Supervision, CLEANUP_WAIT_NS, CPU_SAMPLE_NS, RT_SETTLE_NS, STALL_NS, TICK_NS,
+    WATCH_NS,
+};
 use crate::verdict;
 
 impl Supervision {
@@ -119,8 +122,11 @@ impl Supervision {
             }
         }
         self.kill_frozen(now_ns, out);
+        let cleaning = self
+            .cleaning_since_ns
+            .is_some_and(|since| now_ns < since + CLEANUP_WAIT_NS);
         for index in 0..self.roster.len() {
-            if self.roster.restart_due(index, now_ns) {
+            if !cleaning && self.roster.restart_due(index, now_ns) {
                 out.push(Action::Start(index));
             }
         }

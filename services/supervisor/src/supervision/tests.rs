@@ -393,6 +393,45 @@ fn a_crash_is_restarted_after_its_back_off() {
 }
 
 #[test]
+fn a_due_restart_waits_for_the_dead_process_s_resources_to_be_removed_at_most_a_while() {
+    let mut c = running();
+    let min_ms = c.sup.roster().config().restart_backoff_min_ms;
+    let t = 4 * S;
+    c.beat(t, &[]);
+    c.round(t, &[Event::Gone(1)], &[(1, "killed by signal 9")]);
+    let due = t + min_ms * MS;
+    // the removal runs past the back-off: no start while it does
+    let mut now = due;
+    for _ in 0..10 {
+        c.beat(now, &[1]);
+        let r = c.round(now, &[Event::Tick, Event::Cleaning(true)], &[]);
+        assert!(starts(&r).is_empty(), "at {now}: {r:?}");
+        now += 100 * MS;
+    }
+    // done: started in the next round
+    c.beat(now, &[1]);
+    let done = c.round(now, &[Event::Tick, Event::Cleaning(false)], &[]);
+    assert_eq!(starts(&done), [1]);
+    // a removal that never ends delays the next restart by CLEANUP_WAIT_NS at most
+    now += 100 * MS;
+    c.beat(now, &[]);
+    let exit = c.round(now, &[Event::Gone(1)], &[(1, "killed by signal 9")]);
+    assert_eq!(records(&exit), [("exit", "control")]);
+    let since = now;
+    let mut started_at = None;
+    while started_at.is_none() && now < since + CLEANUP_WAIT_NS + 2 * S {
+        now += 100 * MS;
+        c.beat(now, &[1]);
+        let r = c.round(now, &[Event::Tick, Event::Cleaning(true)], &[]);
+        if starts(&r) == [1] {
+            started_at = Some(now);
+        }
+    }
+    let at = started_at.expect("started while the removal still ran");
+    assert!(at >= since + 100 * MS + CLEANUP_WAIT_NS, "{at} {since}");
+}
+
+#[test]
 fn a_restart_that_cannot_start_is_tried_again_and_too_many_end_the_run() {
     let mut c = running();
     let limit = c.sup.roster().config().crash_loop_restarts as u64;
