@@ -6,8 +6,8 @@ use std::time::Duration;
 
 use phri_runtime::now_ns;
 
+use super::state_writer::StateWriter;
 use crate::process::{process_matches, Launch, Proc};
-use crate::state::{StateJson, STATE_FILE};
 use crate::supervision::Event;
 use crate::{Roster, SupervisorError, SupervisorState};
 
@@ -17,6 +17,8 @@ pub struct Cell {
     pub procs: Vec<Option<Proc>>,
     /// how this run starts its services
     pub launch: Launch,
+    /// writes the state files beside the loop
+    writer: StateWriter,
 }
 
 impl Cell {
@@ -24,6 +26,7 @@ impl Cell {
     pub fn new(launch: Launch, services: usize) -> Cell {
         Cell {
             procs: (0..services).map(|_| None).collect(),
+            writer: StateWriter::new(&launch.run_dir),
             launch,
         }
     }
@@ -97,24 +100,19 @@ impl Cell {
         Some(detail)
     }
 
-    /// `state.json` and `supervisor.state`, each replaced atomically, owner-only.
+    /// `state.json` and `supervisor.state`, each replaced atomically,
+    /// owner-only, beside the loop ([`StateWriter`]).
     pub fn write_state(&self, roster: &Roster) {
         let me = std::process::id();
-        let (dir, prefix) = (&self.launch.run_dir, &self.launch.prefix);
-        let written = roster.state_json(prefix, me).write(dir).and_then(|_| {
-            roster
-                .state(prefix, me, self.launch.cell_start_ns)
-                .write(dir)
-        });
-        if let Err(e) = written {
-            tracing::warn!("{e}");
-        }
+        let prefix = &self.launch.prefix;
+        let json = roster.state_json(prefix, me).to_json();
+        let state = roster.state(prefix, me, self.launch.cell_start_ns).encode();
+        self.writer.write(json, state);
     }
 
-    /// Remove the state files.
-    pub fn remove_state(&self) {
-        let _ = std::fs::remove_file(StateJson::path(&self.launch.run_dir));
-        let _ = std::fs::remove_file(self.launch.run_dir.join(STATE_FILE));
+    /// Remove the state files, once the writes asked before are done.
+    pub fn remove_state(&mut self) {
+        self.writer.remove();
     }
 
     /// The first service of the start that has ended, and how.

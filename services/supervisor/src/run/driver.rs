@@ -20,23 +20,6 @@ use crate::shm::{self, SHM_DIR};
 use crate::supervision::{Action, Event, Supervision, TICK_NS};
 use crate::{SupervisorError, SupervisorState};
 
-/// A step that touches the disk longer than this held the loop \[ns\]: said
-/// in the log, so that a stall of the supervisor names its cause (the state
-/// files live on a disk that a build beside the cell can keep busy for
-/// seconds; iceoryx2's files are removed beside the loop, [`Cleaner`]).
-const HELD_NS: u64 = 100_000_000;
-
-/// Runs `step`, one warning line if it held the loop past [`HELD_NS`].
-fn held<T>(what: &str, step: impl FnOnce() -> T) -> T {
-    let t0 = now_ns();
-    let out = step();
-    let ns = now_ns().saturating_sub(t0);
-    if ns > HELD_NS {
-        tracing::warn!("{what} held the supervisor for {} ms", ns / 1_000_000);
-    }
-    out
-}
-
 /// What the supervision acts on: the processes, the channels, the report's
 /// evaluators.
 pub struct Driver {
@@ -201,9 +184,7 @@ impl Driver {
             }
             Action::Reap => self.reap(sup)?,
             Action::Kill(i) => self.cell.kill(i),
-            Action::WriteState => held("writing the state files", || {
-                self.cell.write_state(sup.roster())
-            }),
+            Action::WriteState => self.cell.write_state(sup.roster()),
             Action::PublishHealth { now_ns } => self.ports.publish_health(sup.roster(), now_ns),
             Action::CheckNodeCounter => {
                 if let Err(e) = shm::check_global_mgmt(Path::new(SHM_DIR), &self.prefix) {

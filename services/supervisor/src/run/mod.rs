@@ -3,8 +3,9 @@
 //! starts ([`checks`]), the node and its ports opened ([`ipc`], [`ports`]),
 //! the services started and supervised ([`driver`]: the processes of
 //! [`cell`], the publishers of [`publishers`], dead processes' resources
-//! removed by [`cleaner`]), then stopped in order and
-//! the report written ([`finish`], [`report_file`]).
+//! removed by [`cleaner`], the state files written by [`state_writer`]),
+//! then stopped in order and the report written ([`finish`],
+//! [`report_file`]).
 
 pub mod cell;
 pub mod checks;
@@ -17,6 +18,7 @@ pub mod ports;
 pub mod procfs;
 pub mod publishers;
 pub mod report_file;
+pub mod state_writer;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,140 @@
+//! The state files (`state.json`, `supervisor.state`) written beside the
+//! supervision loop rather than in it: creating and renaming a file waits on
+//! the file system's journal, which a build or a recording writing to the
+//! same disk can hold for a second (measured: 1 032 ms, a `free-motion` cell
+//! with `dd` writing 3 GB files beside it, right after a kill). Each write
+//! replaces the one before; the newest waiting is the one written.
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::thread::JoinHandle;
+
+use phri_runtime::rundir::write_private;
+
+use crate::state::{StateJson, STATE_FILE};
+
+/// What the writer is asked to do.
+enum Job {
+    /// both files' bytes: `state.json`, `supervisor.state`
+    Write(String, Vec<u8>),
+    /// remove both (the run is over)
+    Remove,
+}
+
+/// The thread that writes the state files of one run directory.
+pub struct StateWriter {
+    /// jobs; `None` without a thread (then the caller writes, as before)
+    tx: Option<Sender<Job>>,
+    thread: Option<JoinHandle<()>>,
+    run_dir: PathBuf,
+}
+
+impl StateWriter {
+    /// The writer of the state files in `run_dir`.
+    pub fn new(run_dir: &Path) -> StateWriter {
+        let (tx, rx) = channel::<Job>();
+        let dir = run_dir.to_path_buf();
+        let started = std::thread::Builder::new()
+            .name("state-writer".into())
+            .spawn(move || serve(&dir, &rx));
+        if let Err(e) = &started {
+            tracing::warn!(
+                "no thread to write the state files ({e}): the supervision loop writes them"
+            );
+        }
+        let thread = started.ok();
+        StateWriter {
+            tx: thread.as_ref().map(|_| tx),
+            thread,
+            run_dir: run_dir.to_path_buf(),
+        }
+    }
+
+    /// Have both files replaced by these bytes; returns at once.
+    pub fn write(&self, json: String, state: Vec<u8>) {
+        let job = Job::Write(json, state);
+        match &self.tx {
+            Some(tx) => {
+                if let Err(e) = tx.send(job) {
+                    run(&self.run_dir, e.0);
+                }
+            }
+            None => run(&self.run_dir, job),
+        }
+    }
+
+    /// Remove both files once every write asked before is done; waits for it.
+    pub fn remove(&mut self) {
+        match self.tx.take() {
+            Some(tx) => {
+                let _ = tx.send(Job::Remove);
+                drop(tx);
+                if let Some(t) = self.thread.take() {
+                    let _ = t.join();
+                }
+            }
+            None => run(&self.run_dir, Job::Remove),
+        }
+    }
+}
+
+/// The thread's loop: the newest job waiting, one at a time, until the
+/// writer is dropped.
+fn serve(dir: &Path, rx: &Receiver<Job>) {
+    while let Ok(mut job) = rx.recv() {
+        // a removal is the last job; a newer write replaces an older one
+        while let Ok(next) = rx.try_recv() {
+            job = next;
+        }
+        run(dir, job);
+    }
+}
+
+fn run(dir: &Path, job: Job) {
+    match job {
+        Job::Write(json, state) => {
+            let written = write_private(&StateJson::path(dir), json.as_bytes())
+                .and_then(|_| write_private(&dir.join(STATE_FILE), &state));
+            if let Err(e) = written {
+                tracing::warn!("{e}");
+            }
+        }
+        Job::Remove => {
+            let _ = std::fs::remove_file(StateJson::path(dir));
+            let _ = std::fs::remove_file(dir.join(STATE_FILE));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_newest_write_is_on_disk_and_the_removal_waits_for_the_writes() {
+        let dir = std::env::temp_dir().join(format!("phri-state-writer-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut w = StateWriter::new(&dir);
+        for i in 0..50 {
+            w.write(format!("{{\"n\": {i}}}"), vec![i as u8]);
+        }
+        // removing waits for the writes before it, then removes both
+        w.remove();
+        assert!(!StateJson::path(&dir).exists());
+        assert!(!dir.join(STATE_FILE).exists());
+        let mut w = StateWriter::new(&dir);
+        w.write("{\"n\": 1}".into(), vec![1]);
+        w.write("{\"n\": 2}".into(), vec![2]);
+        // dropping the sender ends the thread after its last job
+        let t = w.thread.take().unwrap();
+        w.tx = None;
+        t.join().unwrap();
+        assert_eq!(
+            std::fs::read_to_string(StateJson::path(&dir)).unwrap(),
+            "{\"n\": 2}"
+        );
+        assert_eq!(std::fs::read(dir.join(STATE_FILE)).unwrap(), [2]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
