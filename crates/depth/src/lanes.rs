@@ -198,9 +198,9 @@ impl Sums {
     }
 }
 
-/// The smaller of two values that are never NaN (one vector instruction).
+/// Plain minimum (one instruction): `b` if either is NaN.
 #[inline(always)]
-fn min(a: f64, b: f64) -> f64 {
+pub(crate) fn min(a: f64, b: f64) -> f64 {
     if a < b {
         a
     } else {

@@ -14,22 +14,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::camera::{CameraPose, Intrinsics};
 use crate::error::{check_frame, DepthError};
-use crate::lanes::{self, by_lanes, Lanes, RUN};
+use crate::lanes::{self, by_lanes, min, Lanes, RUN};
 use crate::noise::{draws, normal_index, pixel_bits, sigma_z, NormalSource, TABLE_SIZE};
 use crate::shapes::{camera_box_bounds, Aabb, Capsule, CapsulePixels, PixelRect, RayCapsule};
 
 /// Surfaces nearer than this \[m\] block the view but give no reading.
 pub(crate) const NEAR_M: f64 = 1e-3;
-
-/// Plain minimum (one instruction): `b` if either is NaN.
-#[inline(always)]
-fn min(a: f64, b: f64) -> f64 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
 
 /// Plain maximum (one instruction): `b` if either is NaN.
 #[inline(always)]

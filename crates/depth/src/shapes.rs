@@ -547,15 +547,10 @@ impl RayCapsule {
         let half_b = -self.k * ard + bard * self.aba;
         let h = half_b * half_b - qa * self.cyl_c;
         let sh = h.sqrt();
-        let c0 = if slanted {
-            (-half_b - sh) / qa
+        let (c0, c1) = if slanted {
+            ((-half_b - sh) / qa, (-half_b + sh) / qa)
         } else {
-            f64::NEG_INFINITY
-        };
-        let c1 = if slanted {
-            (-half_b + sh) / qa
-        } else {
-            f64::INFINITY
+            (f64::NEG_INFINITY, f64::INFINITY)
         };
         let cyl = if slanted {
             !(h < 0.0)
@@ -566,24 +561,11 @@ impl RayCapsule {
         let crossing = bard.abs() > 1e-300;
         let t0 = self.aba / bard;
         let t1 = (self.k + self.aba) / bard;
-        let ordered = t0 <= t1;
-        let s0 = if crossing {
-            if ordered {
-                t0
-            } else {
-                t1
-            }
+        let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        let (s0, s1) = if crossing {
+            (near, far)
         } else {
-            f64::NEG_INFINITY
-        };
-        let s1 = if crossing {
-            if ordered {
-                t1
-            } else {
-                t0
-            }
-        } else {
-            f64::INFINITY
+            (f64::NEG_INFINITY, f64::INFINITY)
         };
         let slab = crossing | ((-self.aba >= 0.0) & (-self.aba <= self.k));
         let l = c0.max(s0);

@@ -105,8 +105,8 @@ impl Cell {
     pub fn write_state(&self, roster: &Roster) {
         let me = std::process::id();
         let prefix = &self.launch.prefix;
-        let json = roster.state_json(prefix, me).to_json();
-        let state = roster.state(prefix, me, self.launch.cell_start_ns).encode();
+        let json = roster.state_json(prefix, me);
+        let state = roster.state(prefix, me, self.launch.cell_start_ns);
         self.writer.write(json, state);
     }
 

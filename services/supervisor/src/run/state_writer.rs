@@ -9,14 +9,13 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::thread::JoinHandle;
 
-use phri_runtime::rundir::write_private;
-
 use crate::state::{StateJson, STATE_FILE};
+use crate::SupervisorState;
 
 /// What the writer is asked to do.
 enum Job {
-    /// both files' bytes: `state.json`, `supervisor.state`
-    Write(String, Vec<u8>),
+    /// both files' contents (serialised by the thread, not the loop)
+    Write(StateJson, SupervisorState),
     /// remove both (the run is over)
     Remove,
 }
@@ -50,8 +49,8 @@ impl StateWriter {
         }
     }
 
-    /// Have both files replaced by these bytes; returns at once.
-    pub fn write(&self, json: String, state: Vec<u8>) {
+    /// Have both files replaced by these; returns at once.
+    pub fn write(&self, json: StateJson, state: SupervisorState) {
         let job = Job::Write(json, state);
         match &self.tx {
             Some(tx) => {
@@ -93,8 +92,7 @@ fn serve(dir: &Path, rx: &Receiver<Job>) {
 fn run(dir: &Path, job: Job) {
     match job {
         Job::Write(json, state) => {
-            let written = write_private(&StateJson::path(dir), json.as_bytes())
-                .and_then(|_| write_private(&dir.join(STATE_FILE), &state));
+            let written = json.write(dir).and_then(|_| state.write(dir));
             if let Err(e) = written {
                 tracing::warn!("{e}");
             }
@@ -109,6 +107,25 @@ fn run(dir: &Path, job: Job) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::state::STATE_VERSION;
+
+    /// The two files of a supervisor whose pid is `pid`.
+    fn files(pid: u32) -> (StateJson, SupervisorState) {
+        let prefix = "p_".to_string();
+        let json = StateJson {
+            prefix: prefix.clone(),
+            services: Default::default(),
+            supervisor_pid: pid,
+        };
+        let state = SupervisorState {
+            version: STATE_VERSION,
+            supervisor_pid: pid,
+            prefix,
+            cell_start_ns: 1,
+            services: vec![],
+        };
+        (json, state)
+    }
 
     #[test]
     fn the_newest_write_is_on_disk_and_the_removal_waits_for_the_writes() {
@@ -116,25 +133,26 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let mut w = StateWriter::new(&dir);
-        for i in 0..50 {
-            w.write(format!("{{\"n\": {i}}}"), vec![i as u8]);
+        for pid in 0..50 {
+            let (json, state) = files(pid);
+            w.write(json, state);
         }
         // removing waits for the writes before it, then removes both
         w.remove();
         assert!(!StateJson::path(&dir).exists());
         assert!(!dir.join(STATE_FILE).exists());
         let mut w = StateWriter::new(&dir);
-        w.write("{\"n\": 1}".into(), vec![1]);
-        w.write("{\"n\": 2}".into(), vec![2]);
+        for pid in [1, 2] {
+            let (json, state) = files(pid);
+            w.write(json, state);
+        }
         // dropping the sender ends the thread after its last job
         let t = w.thread.take().unwrap();
         w.tx = None;
         t.join().unwrap();
-        assert_eq!(
-            std::fs::read_to_string(StateJson::path(&dir)).unwrap(),
-            "{\"n\": 2}"
-        );
-        assert_eq!(std::fs::read(dir.join(STATE_FILE)).unwrap(), [2]);
+        let json = StateJson::read(&dir).unwrap().unwrap();
+        let state = SupervisorState::read(&dir, "p_").unwrap().unwrap();
+        assert_eq!((json.supervisor_pid, state.supervisor_pid), (2, 2));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
