@@ -2,7 +2,8 @@
 //! builds from it: a prefix that fits opens every kind of channel, one
 //! character more is refused with an error naming it (it made services
 //! panic deep inside iceoryx2 when a channel opened). And a waking
-//! channel's wait with a zero timeout only consumes what is pending.
+//! channel's wait with a zero timeout only consumes what is pending; one
+//! with a timeout wakes on an announcement and ends at the timeout without.
 
 use std::time::Duration;
 
@@ -106,5 +107,44 @@ fn a_zero_wait_only_consumes_what_is_pending() {
     assert_eq!(s.drain(|_| {}).unwrap(), 3);
     done.send(()).unwrap();
     drop((l, p, s, node));
+    let _ = remove_leftovers(&prefix);
+}
+
+#[test]
+fn a_wait_wakes_on_an_announcement_and_ends_at_its_timeout_without_one() {
+    let prefix = prefix(20, 'v');
+    let node = node("wake-test", &prefix).unwrap();
+    let p = ROBOT_STATE.publisher(&node).unwrap();
+    let l = ROBOT_STATE.listener(&node).unwrap();
+    let waited = |timeout_ms| {
+        let (t0, mut n) = (std::time::Instant::now(), 0);
+        l.wait_each(Duration::from_millis(timeout_ms), || n += 1)
+            .unwrap();
+        (t0.elapsed(), n)
+    };
+    // nothing announced: the wait lasts its timeout and consumes nothing
+    let (took, n) = waited(30);
+    assert!(took >= Duration::from_millis(25) && n == 0, "{took:?}, {n}");
+    // announced before the wait: it returns with the announcement
+    p.publish(&<JointState as Zeroed>::zeroed()).unwrap();
+    let (took, n) = waited(10_000);
+    assert!(n >= 1 && took < Duration::from_secs(5), "{took:?}, {n}");
+    // announced by another thread while it waits: it wakes for it (a
+    // stuck wait would last its 10 s; a machine this slow fails loudly)
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            // iceoryx2's ports stay in their thread: a node of its own,
+            // and a notifier (the channel takes one publisher)
+            let own = phri_ipc::node("wake-test-2", &prefix).unwrap();
+            let n = ROBOT_STATE.notifier(&own).unwrap();
+            std::thread::sleep(Duration::from_millis(50));
+            n.notify();
+        });
+        let (took, n) = waited(10_000);
+        assert!(n >= 1 && took < Duration::from_secs(5), "{took:?}, {n}");
+    });
+    // and nothing is pending after
+    assert_eq!(waited(0).1, 0);
+    drop((l, p, node));
     let _ = remove_leftovers(&prefix);
 }

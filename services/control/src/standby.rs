@@ -256,9 +256,18 @@ impl Default for BehaviourInbox {
 
 impl BehaviourInbox {
     /// Keep `m` in place of the one received before the last (by arrival:
-    /// a restarted robot numbers its states from 1 again). Allocates nothing.
+    /// a restarted robot numbers its states from 1 again). Allocates
+    /// nothing, and copies the header and the `len` bytes in use only (a
+    /// few hundred of the message's 8 KiB: a standby takes every one).
     pub fn push(&mut self, m: &ControlBehaviour) {
-        *self.kept[self.next] = *m;
+        let kept = &mut *self.kept[self.next];
+        let used = m.snapshot();
+        kept.seq = m.seq;
+        kept.stamp_ns = m.stamp_ns;
+        kept.state_seq = m.state_seq;
+        kept.state_stamp_ns = m.state_stamp_ns;
+        kept.len = used.len() as u32;
+        kept.bytes[..used.len()].copy_from_slice(used);
         self.next = 1 - self.next;
     }
 
@@ -274,6 +283,7 @@ impl BehaviourInbox {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use phri_ipc::BEHAVIOUR_BYTES;
 
     #[test]
     fn the_priority_follows_the_role_with_one_syscall_per_change() {
@@ -395,6 +405,41 @@ mod tests {
         assert!(inbox.after_state(1).is_some() && inbox.after_state(2).is_some());
         inbox.push(&b(3));
         assert!(inbox.after_state(2).is_some() && inbox.after_state(1).is_none());
+    }
+
+    #[test]
+    fn the_inbox_keeps_each_behaviour_s_header_and_bytes_in_use() {
+        let mut inbox = BehaviourInbox::default();
+        let b = |seq: u64, len: usize, fill: u8| {
+            let mut m = ControlBehaviour {
+                seq: 100 + seq,
+                stamp_ns: 7 * seq,
+                state_seq: seq,
+                state_stamp_ns: 11 * seq,
+                len: len as u32,
+                ..ControlBehaviour::zeroed()
+            };
+            m.bytes[..len].fill(fill);
+            m
+        };
+        // a long one, then a shorter one into the same slot (two pushes
+        // later), then one that claims more than the message holds
+        for m in [b(1, 900, 1), b(2, 300, 2), b(3, 120, 3), b(4, 50, 4)] {
+            inbox.push(&m);
+            let kept = inbox.after_state(m.state_seq).unwrap();
+            assert_eq!(
+                (kept.seq, kept.stamp_ns, kept.state_stamp_ns),
+                (m.seq, m.stamp_ns, m.state_stamp_ns)
+            );
+            assert_eq!(kept.snapshot(), m.snapshot());
+        }
+        let mut over = b(5, BEHAVIOUR_BYTES, 5);
+        over.len = u32::MAX;
+        inbox.push(&over);
+        assert_eq!(
+            inbox.after_state(5).unwrap().snapshot(),
+            &[5; BEHAVIOUR_BYTES][..]
+        );
     }
 
     #[test]
