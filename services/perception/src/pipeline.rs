@@ -181,6 +181,15 @@ impl Perception {
         }
     }
 
+    /// Every worker of every camera places its control points only
+    /// ([`crate::Worker::set_positions_only`]): for a caller that replaces
+    /// the distances by the truth.
+    pub fn set_positions_only(&mut self, on: bool) {
+        for w in self.eyes.iter_mut().flat_map(|e| e.workers.iter_mut()) {
+            w.set_positions_only(on);
+        }
+    }
+
     /// Whether some camera is not dark ([`Perception::set_dark`]).
     pub fn any_lit(&self) -> bool {
         self.eyes.iter().any(|e| !e.dark)

@@ -96,6 +96,8 @@ pub struct Worker {
     view: Option<CameraView>,
     out: [PointRepulsion; MAX_POINTS_PER_WORKER],
     msg: RepulsionResult,
+    /// place the control points but scan nothing ([`Worker::set_positions_only`])
+    positions_only: bool,
 }
 
 impl Worker {
@@ -134,7 +136,17 @@ impl Worker {
             out: [PointRepulsion::default(); MAX_POINTS_PER_WORKER],
             msg,
             model,
+            positions_only: false,
         })
+    }
+
+    /// With `on`, each answer places the control points at the frame's
+    /// joint state and scans nothing: every point inactive, at ρ (a
+    /// lock-step cell whose distances are replaced by the simulator's truth
+    /// renders its frames for the tracker and ingestion, and spends nothing
+    /// on scans it would throw away).
+    pub fn set_positions_only(&mut self, on: bool) {
+        self.positions_only = on;
     }
 
     /// This worker's answers bounded by what `camera` watches (space outside
@@ -225,6 +237,15 @@ impl Worker {
             self.out.iter_mut().zip(&self.points).enumerate()
         {
             let p = phri_model::frame_placement(&self.model, &self.data, frame_id).apply(&xyz);
+            if self.positions_only {
+                *slot = PointRepulsion {
+                    point: index as u32,
+                    min_distance: self.params.rho,
+                    position: [p.x, p.y, p.z],
+                    ..PointRepulsion::default()
+                };
+                continue;
+            }
             let poi = PointOfInterest::new(Point3::from(p), radius);
             let mut r = dist
                 .repulsion(frame, &poi)

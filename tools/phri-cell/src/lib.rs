@@ -205,9 +205,12 @@ impl Cell {
             }
             let mut world = WorldState::zeroed();
             world.dof = n as u32;
+            let mut cameras = phri_perception::Perception::new(&model, cfg)
+                .map_err(|e| step_err(e.service())(&e))?;
+            // the truth replaces every distance: the workers place the points only
+            cameras.set_positions_only(opts.truth_perception);
             Some(Perception {
-                cameras: phri_perception::Perception::new(&model, cfg)
-                    .map_err(|e| step_err(e.service())(&e))?,
+                cameras,
                 history: StateHistory::new(n, 200),
                 world,
                 period_ns: (1e9 / cfg.camera.rate_hz) as u64,

@@ -107,6 +107,31 @@ fn a_ball_near_the_end_effector_is_seen_at_its_distance_and_repels_it() {
 }
 
 #[test]
+fn placing_the_points_only_gives_the_scan_s_positions_and_no_obstacle() {
+    // a ball beside the end effector: the full answer sees it
+    let model = model();
+    let p = ee(&model);
+    let w = world(p + Vector3::new(0.0, 0.2, 0.0));
+    let azimuth = Config::defaults().camera.azimuth_rad;
+    let (_, header, filtered, _) = filtered_view(azimuth, &w);
+    let mut worker = Worker::new(model, &repulsion_config(), 0).unwrap();
+    let full = worker.step(&header, &filtered).unwrap().to_vec();
+    assert!(full.iter().any(|r| r.active == 1));
+    worker.set_positions_only(true);
+    let placed = worker.step(&header, &filtered).unwrap().to_vec();
+    assert_eq!(placed.len(), full.len());
+    let rho = repulsion_config().params.rho;
+    for (a, b) in placed.iter().zip(&full) {
+        assert_eq!((a.point, a.position), (b.point, b.position));
+        assert_eq!((a.active, a.v_call, a.min_distance), (0, [0.0; 3], rho));
+    }
+    // and back: the scan again
+    worker.set_positions_only(false);
+    let again = worker.step(&header, &filtered).unwrap();
+    assert_eq!(again[0].min_distance, full[0].min_distance);
+}
+
+#[test]
 fn an_obstacle_in_front_of_the_point_is_never_farther_than_it_is() {
     // the occlusion rule: what hides the space behind it may be as near as the point's own depth
     let model = model();
