@@ -37,6 +37,11 @@ pub struct ResidualConfig {
     pub warmup_samples: u32,
     /// largest gap between two states integrated as one step \[s\]; longer gaps re-initialise
     pub max_gap_s: f64,
+    /// the hot standby's residual (`[control] standby`) wakes this often and
+    /// steps every state queued since \[ms\]: its residual is at most this
+    /// much older than the one in charge's, which the controller acts on
+    /// while that one answers; 0: woken by every state, as the one in charge
+    pub standby_wake_ms: f64,
 }
 
 impl ResidualConfig {
@@ -95,6 +100,7 @@ impl ResidualConfig {
         positive(S, "coulomb_velocity", self.coulomb_velocity)?;
         positive(S, "max_gap_s", self.max_gap_s)?;
         non_negative(S, "warmup_samples", self.warmup_samples as f64)?;
+        non_negative(S, "standby_wake_ms", self.standby_wake_ms)?;
         Ok(())
     }
 }

@@ -728,6 +728,20 @@ impl Config {
         self.repulsion.validate()?;
         self.dynamics.validate()?;
         self.control.validate()?;
+        // a standby residual as old as the controller's bound would be
+        // stale whenever the controller needs it
+        if self.control.standby
+            && self.dynamics.standby_wake_ms >= self.control.residual_max_age_ms / 2.0
+        {
+            return Err(Invalid::new(
+                "dynamics.standby_wake_ms",
+                format!(
+                    "{} ms: the hot standby's residual must wake in less than half of \
+                     control.residual_max_age_ms ({} ms), or it is stale when the controller needs it",
+                    self.dynamics.standby_wake_ms, self.control.residual_max_age_ms
+                ),
+            ));
+        }
         self.ssm.validate()?;
         self.avoidance.validate()?;
         self.record.validate()?;

@@ -6,6 +6,8 @@
 
 #![deny(missing_docs)]
 
+use std::time::Duration;
+
 use phri_config::ResidualConfig;
 use phri_estimation::{ResidualError, ResidualObserver};
 use phri_ipc::{residual_flags, robot_status, JointState, Residual, Zeroed};
@@ -45,6 +47,41 @@ pub enum DynamicsError {
     /// settings
     #[error(transparent)]
     Config(#[from] ResidualError),
+}
+
+/// How the service waits for robot states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wake {
+    /// woken by every state (the service in charge), and by this timeout
+    /// at the latest (a loop that checks for shutdown)
+    EveryState(Duration),
+    /// on its own clock this often, stepping the states queued since (the
+    /// hot standby: one wake-up in several states, its residual at most
+    /// this much older than the one in charge's)
+    Every(Duration),
+}
+
+/// The longest wait for a state of the service in charge.
+pub const STATE_WAIT: Duration = Duration::from_millis(50);
+
+impl Wake {
+    /// The service in charge wakes at every state; the hot standby
+    /// (`standby`) every `standby_wake_ms` (`[dynamics] standby_wake_ms`),
+    /// or at every state as well when that is 0 or not a finite positive
+    /// value.
+    pub fn of(standby: bool, standby_wake_ms: f64) -> Wake {
+        match standby && standby_wake_ms.is_finite() && standby_wake_ms > 0.0 {
+            true => Wake::Every(Duration::from_secs_f64(standby_wake_ms.min(1e3) * 1e-3)),
+            false => Wake::EveryState(STATE_WAIT),
+        }
+    }
+
+    /// How long one wait lasts at most.
+    pub fn timeout(self) -> Duration {
+        match self {
+            Wake::EveryState(d) | Wake::Every(d) => d,
+        }
+    }
 }
 
 /// The residual observer and the message it fills; `step` allocates nothing.
@@ -192,6 +229,23 @@ mod tests {
         let cfg = &loaded.config.dynamics;
         let step = DynamicsStep::new(model, cfg).unwrap();
         (step, g, cfg.warmup_samples as u64)
+    }
+
+    #[test]
+    fn the_standby_wakes_on_its_clock_and_the_one_in_charge_at_every_state() {
+        let ms = Duration::from_millis;
+        assert_eq!(Wake::of(true, 2.0), Wake::Every(ms(2)));
+        assert_eq!(Wake::of(true, 2.0).timeout(), ms(2));
+        assert_eq!(Wake::of(false, 2.0), Wake::EveryState(STATE_WAIT));
+        for off in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(Wake::of(true, off), Wake::EveryState(STATE_WAIT), "{off}");
+        }
+        // the default: the standby wakes every 2 ms
+        let cfg = Loaded::defaults().config;
+        assert_eq!(
+            Wake::of(true, cfg.dynamics.standby_wake_ms),
+            Wake::Every(ms(2))
+        );
     }
 
     #[test]

@@ -5,9 +5,8 @@
 
 use std::error::Error;
 use std::process::ExitCode;
-use std::time::Duration;
 
-use phri_dynamics::DynamicsStep;
+use phri_dynamics::{DynamicsStep, Wake};
 use phri_ipc::{Queue, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, ROBOT_STATE};
 use phri_runtime::{now_ns, ServiceContext};
 
@@ -50,7 +49,13 @@ fn body() -> Result<(), Box<dyn Error>> {
         return Ok(());
     }
     let node = ctx.node()?;
-    let states = ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?;
+    // the hot standby wakes on its own clock ([dynamics] standby_wake_ms),
+    // the one in charge at every state
+    let wait = Wake::of(standby, ctx.config().dynamics.standby_wake_ms);
+    let states = match wait {
+        Wake::EveryState(_) => ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?,
+        Wake::Every(_) => ROBOT_STATE.subscriber(&node, Queue::Drain)?,
+    };
     let channel = match standby {
         false => DYNAMICS_RESIDUAL,
         true => DYNAMICS_RESIDUAL_STANDBY,
@@ -66,8 +71,9 @@ fn body() -> Result<(), Box<dyn Error>> {
 
     let mut bad_samples = 0u64;
     while !ctx.shutdown.requested() {
-        // a wake-up without a sample (timeout, signal) just loops
-        let _ = states.wait(Duration::from_millis(50));
+        // a wake-up without a sample (timeout, signal) just loops; a
+        // channel read without waking sleeps the whole timeout
+        let _ = states.wait(wait.timeout());
         beat.beat(now_ns());
         let mut fresh = None;
         states.drain_from(|pid, s| {
