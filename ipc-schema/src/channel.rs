@@ -320,12 +320,13 @@ struct Sender {
 }
 
 impl Sender {
-    /// Copy `len` bytes from `src` into a loaned sample of one element,
-    /// send it and wake the readers.
+    /// Copy the first `head` of `len` bytes from `src` into a loaned sample
+    /// of one element (of `len` bytes; past `head` it keeps what an
+    /// earlier sample left in that memory), send it and wake the readers.
     ///
     /// # Safety
-    /// `src` is valid for reads of `len` bytes.
-    unsafe fn send_copy(&self, src: *const u8, len: usize) -> Result<(), IpcError> {
+    /// `src` is valid for reads of `head.min(len)` bytes.
+    unsafe fn send_copy(&self, src: *const u8, len: usize, head: usize) -> Result<(), IpcError> {
         // SAFETY: one element of a fixed-size payload
         let mut sample = unsafe { self.port.loan_custom_payload(1) }
             .map_err(|e| IpcError::send(self.channel, e))?;
@@ -337,9 +338,11 @@ impl Sender {
             ));
         }
         // SAFETY: dst holds len bytes (checked), src is readable (the caller)
-        // and the sample's memory is not the caller's
+        // and the sample's memory is not the caller's. Past `head` the bytes
+        // are shared memory of earlier samples (or the zeros it was made
+        // with): this process never reads them
         let sample = unsafe {
-            std::ptr::copy_nonoverlapping(src, dst.as_mut_ptr().cast::<u8>(), len);
+            std::ptr::copy_nonoverlapping(src, dst.as_mut_ptr().cast::<u8>(), head.min(len));
             sample.assume_init()
         };
         sample.send().map_err(|e| IpcError::send(self.channel, e))?;
@@ -640,8 +643,23 @@ impl<T: Message> Publisher<T> {
     pub fn publish(&self, value: &T) -> Result<(), IpcError> {
         // SAFETY: value is a T of size_of::<T>() bytes
         unsafe {
+            self.raw.send_copy(
+                (value as *const T).cast::<u8>(),
+                size_of::<T>(),
+                size_of::<T>(),
+            )
+        }
+    }
+
+    /// Publish the first `head` bytes of `value` only (all of it when
+    /// `head` says more), for a message whose tail past them is unused,
+    /// e.g. [`crate::ControlBehaviour`]'s `bytes` past its `len`: readers
+    /// find there what an earlier sample left.
+    pub fn publish_head(&self, value: &T, head: usize) -> Result<(), IpcError> {
+        // SAFETY: value is a T of size_of::<T>() bytes, at least the head read
+        unsafe {
             self.raw
-                .send_copy((value as *const T).cast::<u8>(), size_of::<T>())
+                .send_copy((value as *const T).cast::<u8>(), size_of::<T>(), head)
         }
     }
 

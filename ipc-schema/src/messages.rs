@@ -1148,7 +1148,8 @@ pub struct ControlBehaviour {
     #[serde(skip)]
     pub _pad: u32,
     /// the behaviour state: `len` bytes in the controller's own layout (not in
-    /// the JSON view)
+    /// the JSON view); past `len` unspecified (a publisher sends the bytes in
+    /// use only, [`ControlBehaviour::used_bytes`])
     #[serde(skip, default = "crate::json::zero_bytes")]
     pub bytes: [u8; BEHAVIOUR_BYTES],
 }
@@ -1160,6 +1161,13 @@ impl ControlBehaviour {
     /// when `len` says more).
     pub fn snapshot(&self) -> &[u8] {
         &self.bytes[..(self.len as usize).min(self.bytes.len())]
+    }
+
+    /// The message's bytes in use: its header and the snapshot's (what a
+    /// publisher sends, [`crate::Publisher::publish_head`]; the rest of
+    /// `bytes` is left unspecified on the channel).
+    pub fn used_bytes(&self) -> usize {
+        std::mem::offset_of!(ControlBehaviour, bytes) + self.snapshot().len()
     }
 }
 

@@ -148,3 +148,36 @@ fn a_wait_wakes_on_an_announcement_and_ends_at_its_timeout_without_one() {
     drop((l, p, node));
     let _ = remove_leftovers(&prefix);
 }
+
+#[test]
+fn a_behaviour_sent_by_its_head_arrives_whole_in_what_it_uses() {
+    let prefix = prefix(20, 'h');
+    let node = node("head-test", &prefix).unwrap();
+    let p = CONTROL_BEHAVIOUR.publisher(&node).unwrap();
+    let s = CONTROL_BEHAVIOUR.subscriber(&node, Queue::Drain).unwrap();
+    let msg = |seq: u64, len: usize, fill: u8| {
+        let mut m = <ControlBehaviour as Zeroed>::zeroed();
+        (m.seq, m.state_seq, m.len) = (seq, 10 + seq, len as u32);
+        m.bytes[..len].fill(fill);
+        m
+    };
+    // a long one, then shorter ones (the samples' memory is reused)
+    for m in [
+        msg(1, 4000, 1),
+        msg(2, 300, 2),
+        msg(3, 0, 3),
+        msg(4, 900, 4),
+    ] {
+        p.publish_head(&m, m.used_bytes()).unwrap();
+        let mut got = 0;
+        s.drain(|r| {
+            assert_eq!((r.seq, r.state_seq, r.len), (m.seq, m.state_seq, m.len));
+            assert_eq!(r.snapshot(), m.snapshot());
+            got += 1;
+        })
+        .unwrap();
+        assert_eq!(got, 1);
+    }
+    drop((p, s, node));
+    let _ = remove_leftovers(&prefix);
+}

@@ -108,7 +108,9 @@ impl Messages {
         if period.with_standby
             && save_behaviour(controller, state, seq, now(), &mut self.behaviour).is_ok()
         {
-            out.behaviour.publish(&self.behaviour)?;
+            // the header and the snapshot's few hundred bytes of 8 KiB
+            out.behaviour
+                .publish_head(&self.behaviour, self.behaviour.used_bytes())?;
         }
         Ok(())
     }
