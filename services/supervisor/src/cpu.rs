@@ -128,6 +128,24 @@ pub struct CpuReport {
     pub budget: Option<f64>,
 }
 
+impl CpuReport {
+    /// `cpu_ns` of CPU time over a run of `duration_s`, no budget (the
+    /// supervisor's own): its share of one core over the run (0 for a run
+    /// of no duration).
+    pub fn of_run(cpu_ns: u64, duration_s: f64) -> CpuReport {
+        let cpu_s = cpu_ns as f64 * 1e-9;
+        let share = match duration_s > 0.0 {
+            true => cpu_s / duration_s,
+            false => 0.0,
+        };
+        CpuReport {
+            cpu_s,
+            share,
+            budget: None,
+        }
+    }
+}
+
 impl CpuUse {
     /// For `services` services.
     pub fn new(services: usize) -> CpuUse {
@@ -337,6 +355,14 @@ mod tests {
     use super::*;
 
     const MS: u64 = 1_000_000;
+
+    #[test]
+    fn the_supervisor_s_own_share_is_its_time_over_the_run() {
+        let r = CpuReport::of_run(1_500 * MS, 60.0);
+        assert!((r.cpu_s - 1.5).abs() < 1e-12 && (r.share - 0.025).abs() < 1e-12);
+        assert_eq!(r.budget, None);
+        assert_eq!(CpuReport::of_run(7, 0.0).share, 0.0);
+    }
 
     /// camera and spinner on CPU 0, sim on CPU 1, all running.
     fn roster() -> Roster {

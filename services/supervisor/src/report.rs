@@ -244,6 +244,10 @@ pub struct Report {
     /// per service, the CPU its processes used over the run against its
     /// budget (set by the supervisor)
     pub cpu: BTreeMap<String, crate::cpu::CpuReport>,
+    /// the supervisor's own CPU: its time over the run, start-up included,
+    /// its share of one core over the run's duration (not a service: no
+    /// budget; null before the run's end)
+    pub supervisor_cpu: Option<crate::cpu::CpuReport>,
     /// the collaboration layer (empty lists when nothing happened)
     pub collaboration: crate::collab_report::CollabReport,
     /// the voice layer's microphone
@@ -1543,6 +1547,7 @@ impl Evaluator {
             sim_restarts: self.sim_restarts.clone(),
             perception: self.perception(),
             cpu: BTreeMap::new(),
+            supervisor_cpu: None,
             voice: self.mic.report(),
             collaboration: Default::default(),
             iso_ts_15066,

@@ -96,14 +96,17 @@ pub fn figures(scenario: &str, report: &Value, floor: &Value) -> Value {
                 .collect()
         })
         .unwrap_or_default();
+    // the services and the supervisor that runs them
     let cores: f64 = report["cpu"]
         .as_object()
         .map(|m| m.values().filter_map(|c| c["share"].as_f64()).sum())
-        .unwrap_or(0.0);
+        .unwrap_or(0.0)
+        + report["supervisor_cpu"]["share"].as_f64().unwrap_or(0.0);
     json!({
         "scenario": scenario,
         "summary": report["summary"],
         "cpu": report["cpu"],
+        "supervisor_cpu": report["supervisor_cpu"],
         "cell_cores": cores,
         "torque_loop": {
             "cycles": cycles,
@@ -144,7 +147,16 @@ pub fn table(f: &Value) -> String {
             );
         }
     }
-    out += &format!("{:<20}{:>9} cores\n", "the cell", num(&f["cell_cores"]));
+    out += &format!(
+        "{:<20}{:>9}\n",
+        "(the supervisor)",
+        pct(&f["supervisor_cpu"]["share"])
+    );
+    out += &format!(
+        "{:<20}{:>9} cores (the services and the supervisor)\n",
+        "the cell",
+        num(&f["cell_cores"])
+    );
     let tl = &f["torque_loop"];
     let fl = &f["floor"];
     out += &format!(
@@ -190,6 +202,7 @@ mod tests {
             "summary": "degraded (robot loop behind: 600 overruns, 1 % of periods)",
             "cpu": {"sim": {"cpu_s": 7.0, "share": 0.12, "budget": 0.3},
                     "camera": {"cpu_s": 5.0, "share": 0.08, "budget": 0.2}},
+            "supervisor_cpu": {"cpu_s": 1.2, "share": 0.02, "budget": null},
             "torque_loop": {"cycles": 59_000, "cycles_expected": 59_700, "cycles_short": 700,
                             "overruns": 590, "missed_deadlines": 0, "braked_cycles": 230,
                             "startup_braked_cycles": 200,
@@ -201,7 +214,8 @@ mod tests {
         let floor = json!({"late_over_half_period": 610, "late_share": 0.0102,
                            "latency_us": {"p50": 45.0, "p99": 800.0, "max": 9000.0}});
         let f = figures("coexistence", &report, &floor);
-        assert!((f["cell_cores"].as_f64().unwrap() - 0.20).abs() < 1e-9);
+        // the services and the supervisor
+        assert!((f["cell_cores"].as_f64().unwrap() - 0.22).abs() < 1e-9);
         assert_eq!(f["torque_loop"]["braked_after_start_up"], 30);
         assert!((f["torque_loop"]["overrun_share"].as_f64().unwrap() - 0.01).abs() < 1e-9);
         assert_eq!(f["perception"][0]["capture_to_repulsion_ms"]["p99"], 7.0);
@@ -209,6 +223,8 @@ mod tests {
         for needle in [
             "scenario coexistence: degraded",
             "sim                    12.0 %  30.0 %",
+            "(the supervisor)        2.0 %",
+            "the cell                 0.22 cores",
             "59000 cycles of 59700 (700 short)",
             "robot 590 (1.0 %), floor 610 (1.0 %)",
             "300.00 / 5000.00 µs; floor's wake-up latency p50/p99/max 45.00 / 800.00",

@@ -7,6 +7,7 @@ use phri_runtime::now_ns;
 use super::driver::Driver;
 use super::ipc;
 use super::report_file::ReportFile;
+use crate::cpu::CpuReport;
 use crate::evaluation::Evaluation;
 use crate::process::cpu_time_ns;
 use crate::report::Report;
@@ -60,7 +61,9 @@ pub fn finish(
     cell.stop(sup.roster());
     ports.read_after_stop(&mut evaluation);
     judge_last_strangers(sup, &mut evaluation, &ours);
-    let report = evaluation.report(plan, end, services, cpu, sup.realtime().report());
+    let own_cpu_ns = cpu_time_ns(std::process::id());
+    let mut report = evaluation.report(plan, end, services, cpu, sup.realtime().report());
+    report.supervisor_cpu = own_cpu_ns.map(|ns| CpuReport::of_run(ns, report.duration_s));
     ipc::close(node, Some(ports), &prefix);
     cell.remove_state();
     if let Some(file) = report_file.as_mut() {
