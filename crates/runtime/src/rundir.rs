@@ -206,6 +206,13 @@ pub fn read_trusted(path: &Path, max_len: u64) -> Result<Option<Vec<u8>>, TrustE
 /// Replace `path` atomically with `bytes`, owner-only (0600): written to a
 /// fresh temporary file beside it (never following a link), then renamed.
 pub fn write_private(path: &Path, bytes: &[u8]) -> Result<(), TrustError> {
+    write_private_open(path, bytes).map(drop)
+}
+
+/// [`write_private`], keeping the file open for writing: a writer that
+/// later overwrites it in place (`pwrite`) writes the very file it made,
+/// whatever the path names by then.
+pub fn write_private_open(path: &Path, bytes: &[u8]) -> Result<File, TrustError> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -220,8 +227,8 @@ pub fn write_private(path: &Path, bytes: &[u8]) -> Result<(), TrustError> {
         .open(&tmp)
         .map_err(io(&tmp))?;
     f.write_all(bytes).map_err(io(&tmp))?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(io(path))
+    std::fs::rename(&tmp, path).map_err(io(path))?;
+    Ok(f)
 }
 
 /// A file a service reads its settings from (a configuration file): a

@@ -394,10 +394,11 @@ fn spawn_listener(ctx: &ServiceContext, stamp: Arc<AtomicU64>) -> JoinHandle<Res
 fn spawn_saver(path: PathBuf, arm: Arc<SharedArm>, shutdown: Shutdown) -> JoinHandle<()> {
     std::thread::spawn(move || {
         let mut reported = false;
+        let mut writer = snapshot::SnapshotWriter::new(path);
         while !shutdown.requested() {
             std::thread::sleep(snapshot::SAVE_PERIOD);
             if let Some(s) = arm.load() {
-                if let Err(e) = snapshot::save(&path, &s) {
+                if let Err(e) = writer.save(&s) {
                     if !reported {
                         tracing::warn!("cannot save the arm's state: {e}");
                         reported = true;
