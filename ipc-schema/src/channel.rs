@@ -382,19 +382,13 @@ impl Receiver {
     /// # Safety
     /// `dst` is valid for writes of `len` bytes.
     unsafe fn receive_copy(&self, dst: *mut u8, len: usize) -> Result<Option<i32>, IpcError> {
-        let Some(s) = self.receive()? else {
-            return Ok(None);
-        };
-        let src = s.payload();
-        if src.len() != len {
-            return Err(IpcError::receive(
-                self.channel,
-                format!("a sample of {} bytes, the message has {len}", src.len()),
-            ));
-        }
-        // SAFETY: both hold len bytes (checked; the caller) and do not overlap
-        unsafe { std::ptr::copy_nonoverlapping(src.as_ptr().cast::<u8>(), dst, len) };
-        Ok(Some(sender_pid(s.header())))
+        let mut from = None;
+        self.receive_with(len, |pid, bytes| {
+            // SAFETY: both hold len bytes (checked; the caller) and do not overlap
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), dst, len) };
+            from = Some(pid);
+        })?;
+        Ok(from)
     }
 
     /// Hand the next sample's payload (`len` bytes, checked) to `f` in
