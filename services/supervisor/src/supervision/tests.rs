@@ -346,13 +346,20 @@ fn a_service_killed_frozen_within_the_start_up_is_restarted_not_a_failed_start()
     );
 }
 
-#[test]
-fn a_crash_is_restarted_after_its_back_off() {
+/// A running cell whose controller (index 1) was killed at 4 s: the cell,
+/// the restart back-off [ms], the kill's time [ns] and the actions of its round.
+fn control_killed() -> (Cell, u64, u64, Vec<Action>) {
     let mut c = running();
     let min_ms = c.sup.roster().config().restart_backoff_min_ms;
     let t = 4 * S;
     c.beat(t, &[]);
     let exit = c.round(t, &[Event::Gone(1)], &[(1, "killed by signal 9")]);
+    (c, min_ms, t, exit)
+}
+
+#[test]
+fn a_crash_is_restarted_after_its_back_off() {
+    let (mut c, min_ms, t, exit) = control_killed();
     assert_eq!(records(&exit), [("exit", "control")]);
     assert_eq!(
         warns(&exit),
@@ -394,11 +401,7 @@ fn a_crash_is_restarted_after_its_back_off() {
 
 #[test]
 fn a_due_restart_waits_for_the_dead_process_s_resources_to_be_removed_at_most_a_while() {
-    let mut c = running();
-    let min_ms = c.sup.roster().config().restart_backoff_min_ms;
-    let t = 4 * S;
-    c.beat(t, &[]);
-    c.round(t, &[Event::Gone(1)], &[(1, "killed by signal 9")]);
+    let (mut c, min_ms, t, _) = control_killed();
     let due = t + min_ms * MS;
     // the removal runs past the back-off: no start while it does
     let mut now = due;
