@@ -32,6 +32,24 @@ pub const MAX_INCIDENCE_RAD: f64 = 75.0 * std::f64::consts::PI / 180.0;
 const BUCKET_BITS: u32 = 4;
 const BUCKETS: usize = (u16::MAX as usize >> BUCKET_BITS) + 1;
 
+/// What [`FlyingPixels::filter`] did to a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Filtered {
+    /// readings removed as isolated flying pixels
+    pub removed: usize,
+    /// readings left (pixels of the output other than 0)
+    pub valid: usize,
+}
+
+impl Filtered {
+    /// Count one pixel: its reading `z` and what the filter left of it `o`.
+    #[inline]
+    fn count(&mut self, o: u16, z: u16) {
+        self.removed += usize::from(o == 0 && z != 0);
+        self.valid += usize::from(o != 0);
+    }
+}
+
 /// The flying-pixel filter of one camera: a tolerance per depth, computed once.
 #[derive(Clone, Debug)]
 pub struct FlyingPixels {
@@ -95,16 +113,22 @@ impl FlyingPixels {
     /// compared with its left and right neighbours, and with the rows above
     /// and below only when those two do not both agree.
     pub fn apply(&self, input: &[u16], out: &mut [u16]) -> Result<usize, DepthError> {
+        self.filter(input, out).map(|f| f.removed)
+    }
+
+    /// [`FlyingPixels::apply`], also counting the readings left in `out` (in
+    /// the same pass: no second pass over the frame to count them).
+    pub fn filter(&self, input: &[u16], out: &mut [u16]) -> Result<Filtered, DepthError> {
         let (w, h) = (self.width as usize, self.height as usize);
         check_frame("flying-pixel input", self.width, self.height, input.len())?;
         check_frame("flying-pixel output", self.width, self.height, out.len())?;
-        let mut removed = 0usize;
+        let mut f = Filtered::default();
         for y in 0..h {
             let out_row = &mut out[y * w..(y + 1) * w];
             if y == 0 || y + 1 == h || w < 3 {
                 for (x, o) in out_row.iter_mut().enumerate() {
                     *o = self.keep_at_border(input, w, h, x, y);
-                    removed += usize::from(*o == 0 && input[y * w + x] != 0);
+                    f.count(*o, input[y * w + x]);
                 }
                 continue;
             }
@@ -113,20 +137,22 @@ impl FlyingPixels {
             let down = &input[(y + 1) * w..(y + 2) * w];
             out_row[0] = self.keep_at_border(input, w, h, 0, y);
             out_row[w - 1] = self.keep_at_border(input, w, h, w - 1, y);
-            removed += usize::from(out_row[0] == 0 && row[0] != 0);
-            removed += usize::from(out_row[w - 1] == 0 && row[w - 1] != 0);
-            removed += self.interior(up, row, down, &mut out_row[1..w - 1]);
+            f.count(out_row[0], row[0]);
+            f.count(out_row[w - 1], row[w - 1]);
+            let (removed, kept) = self.interior(up, row, down, &mut out_row[1..w - 1]);
+            f.removed += removed;
+            f.valid += kept;
         }
-        Ok(removed)
+        Ok(f)
     }
 
     /// The interior pixels `1..w − 1` of a row (`up`, `row`, `down`: the three
     /// rows, full width) into `out` (`w − 2` pixels); returns how many it
-    /// removed. A reading stays when at least [`MIN_SUPPORT`] of its 8
+    /// removed and how many readings it kept. A reading stays when at least [`MIN_SUPPORT`] of its 8
     /// neighbours agree with it, counted branch-free over runs of pixels, so
     /// that it vectorises ([`Lanes`]): the same decisions as counting the two
     /// row neighbours first and the six others only when needed.
-    fn interior(&self, up: &[u16], row: &[u16], down: &[u16], out: &mut [u16]) -> usize {
+    fn interior(&self, up: &[u16], row: &[u16], down: &[u16], out: &mut [u16]) -> (usize, usize) {
         interior(self.lanes, &self.tolerance_mm, up, row, down, out)
     }
 
@@ -171,7 +197,7 @@ by_lanes! {
         row: &[u16],
         down: &[u16],
         out: &mut [u16],
-    ) -> usize = interior_any;
+    ) -> (usize, usize) = interior_any;
 }
 
 /// See [`FlyingPixels::interior`].
@@ -182,9 +208,9 @@ fn interior_any(
     row: &[u16],
     down: &[u16],
     out: &mut [u16],
-) -> usize {
+) -> (usize, usize) {
     let n = out.len();
-    let mut removed = 0usize;
+    let (mut removed, mut valid) = (0usize, 0usize);
     let mut x = 0;
     while x < n {
         let len = RUN.min(n - x);
@@ -209,7 +235,7 @@ fn interior_any(
             tol[i] = tolerance_mm[(z[i] >> BUCKET_BITS) as usize];
         }
         let mut kept = [0u16; RUN];
-        let mut gone = 0u16;
+        let (mut gone, mut left) = (0u16, 0u16);
         for i in 0..RUN {
             let shift = tol[i].wrapping_sub(z[i]);
             let span = 2 * tol[i];
@@ -220,12 +246,14 @@ fn interior_any(
             let keep = (z[i] != 0) & (support >= MIN_SUPPORT as u16);
             kept[i] = if keep { z[i] } else { 0 };
             gone += u16::from((z[i] != 0) & !keep);
+            left += u16::from(keep);
         }
         store(out, x, &kept);
         removed += usize::from(gone);
+        valid += usize::from(left);
         x += len;
     }
-    removed
+    (removed, valid)
 }
 
 #[cfg(test)]
@@ -297,9 +325,11 @@ mod tests {
             for lanes in Lanes::available() {
                 f.lanes = lanes;
                 let mut out = vec![7u16; wu * hu];
-                let removed = f.apply(&input, &mut out).unwrap();
+                let got = f.filter(&input, &mut out).unwrap();
                 assert_eq!(out, want, "{w}x{h} {lanes:?}");
-                assert_eq!(removed, want_removed, "{w}x{h} {lanes:?}");
+                assert_eq!(got.removed, want_removed, "{w}x{h} {lanes:?}");
+                let left = want.iter().filter(|&&d| d != 0).count();
+                assert_eq!(got.valid, left, "{w}x{h} {lanes:?}");
             }
         }
         assert!(removed_any > 50, "{removed_any}");

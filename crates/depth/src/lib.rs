@@ -41,7 +41,7 @@ pub mod shapes;
 pub use camera::{CameraPose, Intrinsics, PixelDepth};
 pub use distance::{DepthSpaceDistance, PixelWindow, PointOfInterest, Repulsion, RepulsionParams};
 pub use error::{DepthError, DepthPngError};
-pub use flying::FlyingPixels;
+pub use flying::{Filtered, FlyingPixels};
 pub use fusion::{capped_by_surface, fuse, CameraView, Fused, SeenSurface};
 pub use noise::sigma_z;
 pub use png::{decode_depth_png, encode_depth_png, read_depth_png, write_depth_png};

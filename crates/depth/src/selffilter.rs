@@ -79,6 +79,10 @@ pub struct SelfFilter {
     params: SelfFilterParams,
     xn: Vec<f64>,
     yn: Vec<f64>,
+    /// `d ± tol(d)` never decrease over the raw values (they do not for the
+    /// sensor's noise at any sane `noise_sigmas`): a capsule's depth range is
+    /// then one interval of raw values, tested on the raw depths first
+    monotone: bool,
     /// the vector width this CPU runs
     lanes: Lanes,
 }
@@ -99,6 +103,7 @@ impl SelfFilter {
             params,
             xn: intrinsics.column_factors(),
             yn: intrinsics.row_factors(),
+            monotone: edges_never_decrease(&params),
             lanes: Lanes::detect(),
         })
     }
@@ -144,9 +149,14 @@ impl SelfFilter {
             let Some(rect) = rc.pixel_rect(&self.intrinsics, NEAR_M) else {
                 continue;
             };
+            let (z_min, z_max) = rc.depth_range();
             let region = Region {
                 at: CapsulePixels::new(&rc, &rect, &self.xn, &self.yn),
                 params: &p,
+                raw: match self.monotone {
+                    true => raw_range(&p, z_min, z_max),
+                    false => (1, u16::MAX),
+                },
             };
             removed += remove(self.lanes, &region, frame);
         }
@@ -161,6 +171,67 @@ const RUN: usize = 16;
 struct Region<'a> {
     at: CapsulePixels<'a>,
     params: &'a SelfFilterParams,
+    /// raw depths (lo ≥ 1, hi) outside which no reading can lie in the
+    /// capsule's depth range: a run with none inside is passed over before
+    /// any floating-point work
+    raw: (u16, u16),
+}
+
+/// `tol(d)` of the filter's rule \[m\] for a depth `d` \[m\].
+#[inline(always)]
+fn tolerance(p: &SelfFilterParams, d: f64) -> f64 {
+    p.depth_tolerance_m + p.noise_sigmas * sigma_z(d)
+}
+
+/// Whether `d − tol(d)` and `d + tol(d)` never decrease from one raw value to
+/// the next over every raw value (checked once per filter: 65 536 values).
+fn edges_never_decrease(p: &SelfFilterParams) -> bool {
+    let edges = |r: u32| {
+        let d = f64::from(r) * p.depth_scale_m;
+        let t = tolerance(p, d);
+        (d - t, d + t)
+    };
+    (1..=u32::from(u16::MAX)).all(|r| {
+        let (a0, b0) = edges(r - 1);
+        let (a1, b1) = edges(r);
+        a1 >= a0 && b1 >= b0
+    })
+}
+
+/// The raw values (lo ≥ 1, hi) outside which a reading cannot lie within
+/// `tol` of the depth range `[z_min, z_max]` \[m\] (`d + tol(d) < z_min` or
+/// `d − tol(d) > z_max`), for edges that never decrease
+/// ([`edges_never_decrease`]); one unit wider on each side than the
+/// boundaries found, so that no rounding of the rule's own arithmetic
+/// falls outside.
+fn raw_range(p: &SelfFilterParams, z_min: f64, z_max: f64) -> (u16, u16) {
+    let d = |r: u32| f64::from(r) * p.depth_scale_m;
+    // the first raw value whose upper edge reaches z_min
+    let (mut a, mut b) = (0u32, u32::from(u16::MAX) + 1);
+    while a < b {
+        let m = (a + b) / 2;
+        if d(m) + tolerance(p, d(m)) < z_min {
+            a = m + 1;
+        } else {
+            b = m;
+        }
+    }
+    let lo = a.saturating_sub(1).max(1);
+    // the first raw value whose lower edge passes z_max
+    let (mut a, mut b) = (0u32, u32::from(u16::MAX) + 1);
+    while a < b {
+        let m = (a + b) / 2;
+        if d(m) - tolerance(p, d(m)) <= z_max {
+            a = m + 1;
+        } else {
+            b = m;
+        }
+    }
+    let hi = a.min(u32::from(u16::MAX));
+    match lo <= hi {
+        true => (lo as u16, hi as u16),
+        false => (1, 0),
+    }
 }
 
 by_lanes! {
@@ -185,13 +256,22 @@ fn remove_any(region: &Region<'_>, frame: &mut [u16]) -> usize {
         for c in (0..cols).step_by(RUN) {
             // a short last run is padded with no reading
             let mut raw: [u16; RUN] = load(row, c);
+            let (lo, hi) = region.raw;
+            let span = hi.wrapping_sub(lo);
+            let mut maybe = false;
+            for r in raw {
+                maybe |= r.wrapping_sub(lo) <= span;
+            }
+            if !maybe || hi < lo {
+                continue;
+            }
             let xs: [f64; RUN] = load(region.at.xn, c);
             let mut d = [0.0f64; RUN];
             let mut tol = [0.0f64; RUN];
             let mut near = [false; RUN];
             for i in 0..RUN {
                 d[i] = f64::from(raw[i]) * p.depth_scale_m;
-                tol[i] = p.depth_tolerance_m + p.noise_sigmas * sigma_z(d[i]);
+                tol[i] = tolerance(p, d[i]);
                 near[i] = (raw[i] != 0) & !(d[i] < z_min - tol[i] || d[i] > z_max + tol[i]);
             }
             if near.iter().any(|&n| n) {
@@ -300,14 +380,70 @@ mod tests {
             let mut want = frame.clone();
             let want_removed = reference(&f, &capsules, &mut want);
             total += want_removed;
-            for lanes in Lanes::available() {
+            for (lanes, monotone) in Lanes::available()
+                .into_iter()
+                .flat_map(|l| [(l, true), (l, false)])
+            {
                 f.lanes = lanes;
+                f.monotone = monotone;
                 let mut got = frame.clone();
                 let removed = f.apply(&capsules, &mut got).unwrap();
-                assert_eq!(removed, want_removed, "trial {trial} {lanes:?}");
-                assert!(got == want, "trial {trial} {lanes:?}");
+                assert_eq!(removed, want_removed, "trial {trial} {lanes:?} {monotone}");
+                assert!(got == want, "trial {trial} {lanes:?} {monotone}");
             }
         }
         assert!(total > 10_000, "{total}");
+    }
+
+    /// The raw interval a capsule's depth range allows holds every raw value
+    /// the rule's depth test lets through, over all 65 536 of them, and
+    /// little more; edges that decrease (an absurd noise factor) are found.
+    #[test]
+    fn the_raw_interval_holds_every_reading_the_depth_test_keeps() {
+        let base = SelfFilterParams::default();
+        let cases = [
+            base,
+            SelfFilterParams {
+                depth_tolerance_m: 0.0,
+                noise_sigmas: 0.0,
+                ..base
+            },
+            SelfFilterParams {
+                depth_scale_m: 0.0001,
+                ..base
+            },
+        ];
+        let mut lcg = crate::lanes::test_sequence(3);
+        let mut next = move || (lcg() >> 11) as f64 / (1u64 << 53) as f64;
+        for p in cases {
+            assert!(edges_never_decrease(&p), "{p:?}");
+            for _ in 0..40 {
+                let z_min = next() * 5.0 - 0.5;
+                let z_max = z_min + next() * 0.6;
+                let (lo, hi) = raw_range(&p, z_min, z_max);
+                let near: Vec<u16> = (1..=u16::MAX)
+                    .filter(|&r| {
+                        let d = f64::from(r) * p.depth_scale_m;
+                        let tol = tolerance(&p, d);
+                        !(d < z_min - tol || d > z_max + tol)
+                    })
+                    .collect();
+                match (near.first(), near.last()) {
+                    (Some(&a), Some(&b)) => {
+                        assert!(
+                            lo <= a && b <= hi,
+                            "{p:?} [{z_min}, {z_max}]: {a}..{b} outside {lo}..{hi}"
+                        );
+                        assert!(a - lo <= 1 && hi - b <= 1, "{p:?}: {a}..{b} in {lo}..{hi}");
+                    }
+                    _ => assert!(u32::from(hi) < u32::from(lo) + 2, "none near: {lo}..{hi}"),
+                }
+            }
+        }
+        let absurd = SelfFilterParams {
+            noise_sigmas: 1000.0,
+            ..base
+        };
+        assert!(!edges_never_decrease(&absurd));
     }
 }

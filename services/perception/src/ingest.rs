@@ -3,7 +3,7 @@
 //! pixels at the joint state nearest the frame's capture time.
 
 use phri_config::{IngestConfig, Invalid};
-use phri_depth::{Capsule, DepthError, FlyingPixels, SelfFilter, SelfFilterParams};
+use phri_depth::{Capsule, DepthError, Filtered, FlyingPixels, SelfFilter, SelfFilterParams};
 use phri_ipc::{FrameHeader, JointState, MAX_DOF};
 use phri_model::{Data, Model, ModelError};
 
@@ -310,14 +310,17 @@ impl Ingest {
                 FlyingPixels::new(&k).map_err(filter_err)?,
             ));
         }
-        let flying = match self.filter.as_ref() {
-            Some((_, _, fp)) if self.flying => fp.apply(input, out).map_err(filter_err)?,
+        let filtered = match self.filter.as_ref() {
+            Some((_, _, fp)) if self.flying => fp.filter(input, out).map_err(filter_err)?,
             _ => {
                 out.copy_from_slice(input);
-                0
+                Filtered {
+                    removed: 0,
+                    valid: out.iter().filter(|&&d| d > 0).count(),
+                }
             }
         };
-        let valid_in = out.iter().filter(|&&d| d > 0).count();
+        let (flying, valid_in) = (filtered.removed, filtered.valid);
         if valid_in == 0 {
             return Err(FrameError::Empty { seq });
         }
