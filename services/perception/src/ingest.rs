@@ -3,7 +3,9 @@
 //! pixels at the joint state nearest the frame's capture time.
 
 use phri_config::{IngestConfig, Invalid};
-use phri_depth::{Capsule, DepthError, Filtered, FlyingPixels, SelfFilter, SelfFilterParams};
+use phri_depth::{
+    Capsule, DepthError, Filtered, FlyingPixels, Intrinsics, SelfFilter, SelfFilterParams,
+};
 use phri_ipc::{FrameHeader, JointState, MAX_DOF};
 use phri_model::{Data, Model, ModelError};
 
@@ -170,9 +172,10 @@ pub struct Ingest {
     model: Model,
     data: Data,
     params: SelfFilterParams,
-    /// the filters of the current camera geometry (its key, the self-filter,
-    /// the flying-pixel filter), rebuilt only when the camera changes
-    filter: Option<(u64, SelfFilter, FlyingPixels)>,
+    /// the filters of the current camera (its intrinsics, the self-filter,
+    /// the flying-pixel filter): rebuilt when the intrinsics change, the
+    /// self-filter moved to every frame's pose
+    filter: Option<(Intrinsics, SelfFilter, FlyingPixels)>,
     robot: Vec<Capsule>,
     last_seq: Option<u64>,
     max_state_gap_ns: u64,
@@ -296,19 +299,18 @@ impl Ingest {
             });
         }
         let out = &mut out[..pixels];
-        // filters per camera geometry (rebuilt only when the camera changes)
-        let key = header.width as u64
-            ^ (header.height as u64) << 16
-            ^ header.fx.to_bits()
-            ^ header.pose_t[0].to_bits().rotate_left(7)
-            ^ header.pose_t[2].to_bits().rotate_left(13);
+        // filters per camera (rebuilt only when its intrinsics change; a
+        // camera that moves moves the self-filter, allocating nothing)
         let filter_err = |source| FrameError::Filter { seq, source };
-        if self.filter.as_ref().is_none_or(|(k0, _, _)| *k0 != key) {
-            self.filter = Some((
-                key,
-                SelfFilter::new(k, pose, self.params).map_err(filter_err)?,
-                FlyingPixels::new(&k).map_err(filter_err)?,
-            ));
+        match self.filter.as_mut() {
+            Some((k0, f, _)) if *k0 == k => f.set_pose(pose),
+            _ => {
+                self.filter = Some((
+                    k,
+                    SelfFilter::new(k, pose, self.params).map_err(filter_err)?,
+                    FlyingPixels::new(&k).map_err(filter_err)?,
+                ))
+            }
         }
         let filtered = match self.filter.as_ref() {
             Some((_, _, fp)) if self.flying => fp.filter(input, out).map_err(filter_err)?,

@@ -318,6 +318,41 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
     (cfg, header, filtered, out.removed)
 }
 
+/// One ingestion fed the frames of two cameras in turn, mirrored about the
+/// base's x axis (the same x and height, another y and orientation), removes
+/// the robot from each frame as a fresh ingestion of that camera does.
+#[test]
+fn ingestion_follows_the_camera_of_each_frame() {
+    let w = world(Vector3::new(0.0, 0.0, 3.0));
+    let az = Config::defaults().camera.azimuth_rad;
+    let model = model();
+    let mut ingest = Ingest::new(model.clone(), &ingest_config()).unwrap();
+    let mut history = StateHistory::new(7, 10);
+    history.push(w.stamp_ns, &Q0);
+    for (i, a) in [az, -az, az, -az].into_iter().enumerate() {
+        let (cfg, fresh, want, removed) = filtered_view(a, &w);
+        let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
+        let mut frame = vec![0u16; camera.pixels()];
+        let mut header = FrameHeader::zeroed();
+        camera.step(&w, 0, &mut frame, &mut header).unwrap();
+        header.seq = 10 + i as u64;
+        let mut got = vec![0u16; frame.len()];
+        let out = ingest
+            .step(
+                &mut header,
+                &frame,
+                &history,
+                w.stamp_ns + 5_000_000,
+                &mut got,
+            )
+            .unwrap();
+        assert!(removed > 1000, "camera at {a} rad: {removed} robot pixels");
+        assert_eq!(out.removed, removed, "camera at {a} rad, frame {i}");
+        assert!(got == want, "camera at {a} rad, frame {i}");
+        assert_eq!(header.valid_pixels, fresh.valid_pixels);
+    }
+}
+
 #[test]
 fn what_one_camera_saw_caps_what_the_robot_hid_from_another() {
     let model = model();
