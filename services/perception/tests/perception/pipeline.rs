@@ -298,10 +298,7 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
         azimuth_rad: azimuth,
         ..Config::defaults().camera
     };
-    let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
-    let mut frame = vec![0u16; camera.pixels()];
-    let mut header = FrameHeader::zeroed();
-    camera.step(w, 0, &mut frame, &mut header).unwrap();
+    let (mut header, frame) = camera_frame(&model, &cfg, w);
     let mut history = StateHistory::new(7, 10);
     history.push(w.stamp_ns, &Q0);
     let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
@@ -318,6 +315,15 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
     (cfg, header, filtered, out.removed)
 }
 
+/// The frame (header, depths) camera `cfg` takes of `w`.
+fn camera_frame(model: &Model, cfg: &CameraConfig, w: &WorldState) -> (FrameHeader, Vec<u16>) {
+    let mut camera = CameraSim::new(model.clone(), cfg).unwrap();
+    let mut frame = vec![0u16; camera.pixels()];
+    let mut header = FrameHeader::zeroed();
+    camera.step(w, 0, &mut frame, &mut header).unwrap();
+    (header, frame)
+}
+
 /// One ingestion fed the frames of two cameras in turn, mirrored about the
 /// base's x axis (the same x and height, another y and orientation), removes
 /// the robot from each frame as a fresh ingestion of that camera does.
@@ -331,10 +337,7 @@ fn ingestion_follows_the_camera_of_each_frame() {
     history.push(w.stamp_ns, &Q0);
     for (i, a) in [az, -az, az, -az].into_iter().enumerate() {
         let (cfg, fresh, want, removed) = filtered_view(a, &w);
-        let mut camera = CameraSim::new(model.clone(), &cfg).unwrap();
-        let mut frame = vec![0u16; camera.pixels()];
-        let mut header = FrameHeader::zeroed();
-        camera.step(&w, 0, &mut frame, &mut header).unwrap();
+        let (mut header, frame) = camera_frame(&model, &cfg, &w);
         header.seq = 10 + i as u64;
         let mut got = vec![0u16; frame.len()];
         let out = ingest
