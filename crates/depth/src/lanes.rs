@@ -6,9 +6,13 @@
 //! The distance scan's in-range work (eqs. 15-17) on a run of [`RUN`]
 //! pixels at once, written as branch-free lanes that the compiler turns into
 //! vector instructions: the occlusion rule, `‖D‖²`, the region test and every
-//! pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of its own ([`exp`],
+//! pixel's weight `v(‖D‖ − r)/‖D‖` with an exponential of its own ([`exp32`],
 //! fused multiply-adds where the compilation has them), where the scalar
-//! code called the C library's once per pixel. Each lane keeps its own
+//! code called the C library's once per pixel. The weights are computed in
+//! single precision (eight lanes per AVX2 register; the crowded frame below
+//! 5.3 → 3.4 ms measured back to back on a slower day of the same machine),
+//! everything that decides which pixels count and which is nearest in double
+//! precision. Each lane keeps its own
 //! count and its row's smallest distances with a vector minimum, never a
 //! conditional store; the row that holds the smallest, then its pixel, are
 //! found once per row and once per point ([`Sums::end_row`], [`find`]).
@@ -24,9 +28,9 @@ use nalgebra::Vector3;
 /// Pixels per run (the distance scan's and the renderer's capsule pass).
 pub(crate) const RUN: usize = 16;
 
-/// `a b + c`: fused (one rounding) with `FMA`, else a product and a sum.
+/// `a b + c` in single precision: fused with `FMA`.
 #[inline(always)]
-fn fma<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
+fn fma32<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
     if FMA {
         a.mul_add(b, c)
     } else {
@@ -34,44 +38,35 @@ fn fma<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
     }
 }
 
-/// `e^x` for a finite `x`, within 2 ulp of the exact value on
-/// `[−708, 708]` (checked against `f64::exp` in the tests); `x` beyond that
-/// is clamped, so the result never overflows to infinity nor underflows to
-/// zero. Branch-free: it vectorises.
+/// `e^x` in single precision for a finite `x`, within 2 ulp of the exact
+/// value on `[−87, 88]` (checked against `f64::exp` in the tests), `x`
+/// beyond clamped, so that it never overflows to infinity; branch-free: it
+/// vectorises.
 /// `FMA`: each step of the series as one fused multiply-add (for a
 /// compilation with FMA instructions: without them it is a library call).
 #[inline(always)]
-fn exp<const FMA: bool>(x: f64) -> f64 {
-    const LOG2E: f64 = std::f64::consts::LOG2_E;
-    // ln 2 split so that k·LN2_HI is exact for |k| < 2^11
-    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-    // 1.5·2^52: adding it rounds to an integer held in the low mantissa bits
-    const SHIFT: f64 = 6_755_399_441_055_744.0;
-    let x = x.clamp(-708.0, 708.0);
+fn exp32<const FMA: bool>(x: f32) -> f32 {
+    const LOG2E: f32 = std::f32::consts::LOG2_E;
+    // ln 2 split so that k·LN2_HI is exact for |k| < 2^8
+    const LN2_HI: f32 = 0.693_359_4;
+    const LN2_LO: f32 = -2.121_944_4e-4;
+    // 1.5·2^23: adding it rounds to an integer held in the low mantissa bits
+    const SHIFT: f32 = 12_582_912.0;
+    let x = x.clamp(-87.0, 88.0);
     let t = x * LOG2E + SHIFT;
     let k = t - SHIFT;
-    // r ∈ [−ln2/2, ln2/2]
     let r = (x - k * LN2_HI) - k * LN2_LO;
-    // Taylor series to r^13: truncation below 5e-18 relative
-    let mut p = 1.0 / 6_227_020_800.0;
-    p = fma::<FMA>(p, r, 1.0 / 479_001_600.0);
-    p = fma::<FMA>(p, r, 1.0 / 39_916_800.0);
-    p = fma::<FMA>(p, r, 1.0 / 3_628_800.0);
-    p = fma::<FMA>(p, r, 1.0 / 362_880.0);
-    p = fma::<FMA>(p, r, 1.0 / 40_320.0);
-    p = fma::<FMA>(p, r, 1.0 / 5_040.0);
-    p = fma::<FMA>(p, r, 1.0 / 720.0);
-    p = fma::<FMA>(p, r, 1.0 / 120.0);
-    p = fma::<FMA>(p, r, 1.0 / 24.0);
-    p = fma::<FMA>(p, r, 1.0 / 6.0);
-    p = fma::<FMA>(p, r, 0.5);
-    p = fma::<FMA>(p, r, 1.0);
-    p = fma::<FMA>(p, r, 1.0);
-    // 2^k from k's bits: t and SHIFT share their exponent, so their bit
-    // patterns differ by k exactly (|k| ≤ 1022)
+    // Taylor series to r^7: truncation below 6e-9 relative on |r| ≤ ln2/2
+    let mut p = 1.0 / 5_040.0;
+    p = fma32::<FMA>(p, r, 1.0 / 720.0);
+    p = fma32::<FMA>(p, r, 1.0 / 120.0);
+    p = fma32::<FMA>(p, r, 1.0 / 24.0);
+    p = fma32::<FMA>(p, r, 1.0 / 6.0);
+    p = fma32::<FMA>(p, r, 0.5);
+    p = fma32::<FMA>(p, r, 1.0);
+    p = fma32::<FMA>(p, r, 1.0);
     let k_bits = t.to_bits().wrapping_sub(SHIFT.to_bits());
-    let two_k = f64::from_bits(k_bits.wrapping_add(1023) << 52);
+    let two_k = f32::from_bits(k_bits.wrapping_add(127) << 23);
     p * two_k
 }
 
@@ -258,12 +253,20 @@ fn run<const FMA: bool>(p: &Point, raw: &[u16; RUN], xs: &[f64; RUN], y: f64, s:
     if !any {
         return;
     }
+    // each pixel's weight of eq. (16) in single precision (half the vector
+    // work of its square root, exponential and division; the weights sum
+    // to a direction, 1e-7 relative); the distances, the region and the
+    // nearest pixel stay in double precision
+    let mut k = [0.0f32; RUN];
     for i in 0..RUN {
-        let n = n2[i].sqrt();
-        let clearance = (n - p.radius).max(0.0);
-        let e = exp::<FMA>((clearance * p.two_over_rho - 1.0) * p.alpha);
-        let k = p.v_max / ((1.0 + e) * n);
-        let k = if inside[i] & (n2[i] > 0.0) { k } else { 0.0 };
+        let n = (n2[i] as f32).sqrt();
+        let clearance = (n - p.radius as f32).max(0.0);
+        let e = exp32::<FMA>((clearance * p.two_over_rho as f32 - 1.0) * p.alpha as f32);
+        let w = p.v_max as f32 / ((1.0 + e) * n);
+        k[i] = if inside[i] & (n2[i] > 0.0) { w } else { 0.0 };
+    }
+    for i in 0..RUN {
+        let k = f64::from(k[i]);
         s.x[i] -= k * dx[i];
         s.y[i] -= k * dy[i];
         s.z[i] -= k * dz[i];
@@ -539,10 +542,6 @@ mod tests {
         }
     }
 
-    fn ulps(a: f64, b: f64) -> u64 {
-        (a.to_bits() as i64).abs_diff(b.to_bits() as i64)
-    }
-
     /// Every compilation this CPU runs gives the same scan: the same pixels,
     /// the same nearest one, the same sum but for rounding.
     #[test]
@@ -592,8 +591,10 @@ mod tests {
             seen += count;
             for s in &sums[1..] {
                 assert_eq!(s.nearest(), sums[0].nearest());
+                // the weights are single precision: fused or not, they
+                // round alike to about 1e-7
                 let (a, b) = (s.total(), sums[0].total());
-                assert!((a - b).norm() <= 1e-12 * b.norm(), "{a} {b}");
+                assert!((a - b).norm() <= 1e-6 * b.norm(), "{a} {b}");
             }
         }
         assert!(seen > 0 && !all.is_empty());
@@ -647,36 +648,24 @@ mod tests {
         }
     }
 
+    /// The single-precision exponential against the double one, rounded:
+    /// within 2 ulp of `f32` over its whole range, exact at 0, clamped.
     #[test]
-    fn exp_is_within_two_ulp_of_the_library_s() {
+    fn exp32_is_within_two_ulp_of_the_rounded_exact_value() {
+        let ulps32 = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs();
         let mut worst = 0;
-        let mut x = -708.0;
-        while x <= 708.0 {
-            for e in [exp::<false>(x), exp::<true>(x)] {
-                worst = worst.max(ulps(e, x.exp()));
+        let mut x = -87.0f32;
+        while x <= 88.0 {
+            let want = f64::from(x).exp() as f32;
+            for e in [exp32::<false>(x), exp32::<true>(x)] {
+                worst = worst.max(ulps32(e, want));
             }
-            x += 0.000_731;
-        }
-        for x in [
-            -6.0,
-            -1.0,
-            -0.5,
-            0.0,
-            1e-300,
-            0.5,
-            1.0,
-            6.0,
-            0.346_573_590_279_972_6,
-        ] {
-            for e in [exp::<false>(x), exp::<true>(x)] {
-                worst = worst.max(ulps(e, x.exp()));
-            }
+            x += 0.000_37;
         }
         assert!(worst <= 2, "{worst} ulp");
-        assert_eq!(exp::<false>(0.0), 1.0);
-        assert_eq!(exp::<true>(0.0), 1.0);
-        // clamped, finite
-        assert!(exp::<false>(1e6).is_finite() && exp::<false>(1e6) > 1e307);
-        assert!(exp::<false>(-1e6) > 0.0 && exp::<false>(-1e6) < 1e-307);
+        assert_eq!(exp32::<false>(0.0), 1.0);
+        assert_eq!(exp32::<true>(0.0), 1.0);
+        assert!(exp32::<false>(1e6).is_finite() && exp32::<false>(1e6) > 1e38);
+        assert!(exp32::<false>(-1e6) > 0.0);
     }
 }
