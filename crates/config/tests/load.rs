@@ -548,16 +548,45 @@ fn a_control_point_of_one_law_exists_only_under_that_law() {
             .map(|p| p.name)
             .collect()
     };
-    // the Panda's link-7 point serves the barrier filter only
-    let paper = names(&["robot.name=panda"]);
-    let cbf = names(&["robot.name=panda", "avoidance.law=cbf"]);
-    assert!(!paper.iter().any(|n| n == "link7_low"), "{paper:?}");
-    assert_eq!(cbf.last().map(String::as_str), Some("link7_low"), "{cbf:?}");
-    // every other point in the same order under both
-    assert_eq!(paper[..], cbf[..cbf.len() - 1]);
-    // the arms without such a point: the same points under both laws
-    for arm in ["robot.name=lwr4", "robot.name=fr3"] {
-        assert_eq!(names(&[arm]), names(&[arm, "avoidance.law=cbf"]), "{arm}");
+    // each arm's points at the capsules' ends serve the barrier filter only
+    // (the coverage test in phri-cell's `cell`): the paper's points come
+    // first, in the same order under both laws
+    for (arm, only_cbf) in [
+        ("robot.name=lwr4", &["wrist_end_a", "wrist_end_b"][..]),
+        (
+            "robot.name=fr3",
+            &[
+                "shoulder_end_a",
+                "shoulder_end_b",
+                "forearm_end_a",
+                "forearm_end_b",
+                "wrist_end_a",
+                "wrist_end_b",
+                "link7_low",
+                "flange_side",
+            ][..],
+        ),
+        (
+            "robot.name=panda",
+            &[
+                "link7_low",
+                "shoulder_end_a",
+                "shoulder_end_b",
+                "forearm_end_a",
+                "forearm_end_b",
+                "wrist_end_a",
+                "wrist_end_b",
+            ][..],
+        ),
+    ] {
+        let paper = names(&[arm]);
+        let cbf = names(&[arm, "avoidance.law=cbf"]);
+        assert!(
+            !paper.iter().any(|n| only_cbf.contains(&n.as_str())),
+            "{arm}: {paper:?}"
+        );
+        assert_eq!(paper[..], cbf[..paper.len()], "{arm}");
+        assert_eq!(cbf[paper.len()..], only_cbf[..], "{arm}");
     }
     // a law that is none is refused, naming the key
     let text = "[[repulsion.points]]\nname = \"p\"\nlink = \"lwr_link_7\"\n\

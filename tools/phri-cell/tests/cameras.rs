@@ -278,7 +278,7 @@ fn the_mirrored_wave_on_the_depth_trackers_is_seen_by_two_cameras_and_not_by_one
 /// A person bowing over the arm from behind the second camera
 /// (`lean-over`): that camera sees the person's back with the arm hidden
 /// behind it, the paper's camera the gap between them. Under the barrier
-/// filter, on every arm, nobody is touched (closest 1.6-7.8 cm at this
+/// filter, on every arm, nobody is touched (closest 3.9-4.8 cm at this
 /// phase, the hardest of -2, 0 and 2 s). The paper's law touches the bowing
 /// person at this phase on the LWR-IV, the FR3 and the Panda (BENCHMARKS).
 #[test]

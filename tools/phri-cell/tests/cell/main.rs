@@ -11,6 +11,7 @@ mod barrier;
 mod collaboration_limits;
 mod control;
 mod controller_restart;
+mod coverage;
 mod force_estimation;
 mod lockstep_cli;
 mod robot_link;
