@@ -548,6 +548,15 @@ fn a_control_point_of_one_law_exists_only_under_that_law() {
             .map(|p| p.name)
             .collect()
     };
+    // the capsules' ends both Franka arms' paper points leave out
+    const FRANKA_ENDS: &[&str] = &[
+        "shoulder_end_a",
+        "shoulder_end_b",
+        "forearm_end_a",
+        "forearm_end_b",
+        "wrist_end_a",
+        "wrist_end_b",
+    ];
     // each arm's points at the capsules' ends serve the barrier filter only
     // (the coverage test in phri-cell's `cell`): the paper's points come
     // first, in the same order under both laws
@@ -555,28 +564,11 @@ fn a_control_point_of_one_law_exists_only_under_that_law() {
         ("robot.name=lwr4", &["wrist_end_a", "wrist_end_b"][..]),
         (
             "robot.name=fr3",
-            &[
-                "shoulder_end_a",
-                "shoulder_end_b",
-                "forearm_end_a",
-                "forearm_end_b",
-                "wrist_end_a",
-                "wrist_end_b",
-                "link7_low",
-                "flange_side",
-            ][..],
+            &[FRANKA_ENDS, &["link7_low", "flange_side"]].concat()[..],
         ),
         (
             "robot.name=panda",
-            &[
-                "link7_low",
-                "shoulder_end_a",
-                "shoulder_end_b",
-                "forearm_end_a",
-                "forearm_end_b",
-                "wrist_end_a",
-                "wrist_end_b",
-            ][..],
+            &[&["link7_low"], FRANKA_ENDS].concat()[..],
         ),
     ] {
         let paper = names(&[arm]);

@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::loaded;
+use common::{loaded, Uniform};
 use nalgebra::{Point3, Vector3};
 use phri_cell::CellOptions;
 use phri_config::Loaded;
@@ -24,18 +24,6 @@ use phri_model::{forward_kinematics, frame_placement, Data, Model};
 use phri_perception::ingest::StateHistory;
 use phri_perception::Perception;
 use phri_sim::{fill_world, Simulator};
-
-/// A deterministic uniform sequence in [0, 1) (xorshift64*).
-struct Uniform(u64);
-
-impl Uniform {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Joint positions \[rad\] that put the origin of `clik`'s frame at
 /// `target` \[m\]: the controller's CLIK as Newton steps from `q` (no

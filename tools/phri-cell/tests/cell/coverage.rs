@@ -9,29 +9,9 @@
 //! `cargo test --release -p phri-cell --test cell coverage -- --nocapture`
 //! prints each arm's worst excess per link.
 
-use crate::common::loaded;
+use crate::common::{loaded, Uniform};
 use nalgebra::Vector3;
 use phri_model::{forward_kinematics, frame_placement, Data};
-
-/// A deterministic uniform sequence in [0, 1) (xorshift64*).
-struct Uniform(u64);
-
-impl Uniform {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// A direction uniform on the unit sphere.
-    fn direction(&mut self) -> Vector3<f64> {
-        let z = 2.0 * self.next() - 1.0;
-        let phi = std::f64::consts::TAU * self.next();
-        let s = (1.0 - z * z).max(0.0).sqrt();
-        Vector3::new(s * phi.cos(), s * phi.sin(), z)
-    }
-}
 
 /// Per link that carries a control point: the most by which the points see
 /// an obstacle farther than it is from the arm \[m\], over obstacles placed

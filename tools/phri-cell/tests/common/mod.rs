@@ -145,3 +145,23 @@ impl CollabFigures {
             .map_or(f64::NAN, |x| x * 100.0)
     }
 }
+
+/// A deterministic uniform sequence in [0, 1) (xorshift64*).
+pub struct Uniform(pub u64);
+
+impl Uniform {
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A direction uniform on the unit sphere.
+    pub fn direction(&mut self) -> nalgebra::Vector3<f64> {
+        let z = 2.0 * self.next() - 1.0;
+        let phi = std::f64::consts::TAU * self.next();
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        nalgebra::Vector3::new(s * phi.cos(), s * phi.sin(), z)
+    }
+}
