@@ -16,7 +16,8 @@ use phri_model::{forward_kinematics, frame_placement, Data};
 /// Per link that carries a control point: the most by which the points see
 /// an obstacle farther than it is from the arm \[m\], over obstacles placed
 /// `clearance` \[m\] from that link's capsule all round (its sides and its
-/// end caps) in 40 postures, where that link is the arm's nearest.
+/// end caps) in 40 postures, where that link is the arm's nearest; and
+/// where that obstacle was \[m\], link frame.
 fn worst_excess(robot: &str, law: &str, clearance: f64) -> Vec<(String, f64, Vector3<f64>)> {
     let arm = format!("robot.name=\"{robot}\"");
     let law_set = format!("avoidance.law=\"{law}\"");
@@ -33,24 +34,23 @@ fn worst_excess(robot: &str, law: &str, clearance: f64) -> Vec<(String, f64, Vec
             (frame, Vector3::from(p.xyz), p.radius)
         })
         .collect();
-    let covered: Vec<String> = {
-        let mut v: Vec<String> = l
-            .config
-            .repulsion
-            .points
-            .iter()
-            .map(|p| p.link.clone())
-            .collect();
-        v.sort();
-        v.dedup();
-        v
-    };
+    // the links that carry a point, each with its worst excess so far and
+    // where it was
+    let mut links: Vec<String> = l
+        .config
+        .repulsion
+        .points
+        .iter()
+        .map(|p| p.link.clone())
+        .collect();
+    links.sort();
+    links.dedup();
+    let mut worst: Vec<(String, f64, Vector3<f64>)> = links
+        .into_iter()
+        .map(|k| (k, 0.0, Vector3::zeros()))
+        .collect();
     let n = model.nv();
     let mut rng = Uniform(0x9e37_79b9_7f4a_7c15);
-    let mut worst: Vec<(String, f64, Vector3<f64>)> = covered
-        .iter()
-        .map(|k| (k.clone(), 0.0, Vector3::zeros()))
-        .collect();
     for posture in 0..40 {
         let q: Vec<f64> = if posture == 0 {
             l.config.control.posture.clone()
