@@ -149,9 +149,10 @@ impl FlyingPixels {
     /// The interior pixels `1..w − 1` of a row (`up`, `row`, `down`: the three
     /// rows, full width) into `out` (`w − 2` pixels); returns how many it
     /// removed and how many readings it kept. A reading stays when at least
-    /// [`MIN_SUPPORT`] of its 8 neighbours agree with it, counted branch-free over runs of pixels, so
-    /// that it vectorises ([`Lanes`]): the same decisions as counting the two
-    /// row neighbours first and the six others only when needed.
+    /// [`MIN_SUPPORT`] of its 8 neighbours agree with it, counted branch-free
+    /// over runs of pixels, so that it vectorises ([`Lanes`]): the same
+    /// decisions as counting the two row neighbours first and the six others
+    /// only when needed.
     fn interior(&self, up: &[u16], row: &[u16], down: &[u16], out: &mut [u16]) -> (usize, usize) {
         interior(self.lanes, &self.tolerance_mm, up, row, down, out)
     }

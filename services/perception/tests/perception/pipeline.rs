@@ -7,7 +7,7 @@ use phri_config::{CameraConfig, Config, IngestConfig, PointConfig, RepulsionConf
 use phri_depth::RenderOptions;
 use phri_ipc::{FrameHeader, WorldState, Zeroed};
 use phri_model::{Data, Model};
-use phri_perception::{CameraSim, FrameError, Ingest, StateHistory, Worker};
+use phri_perception::{CameraSim, FrameError, Ingest, IngestOutcome, StateHistory, Worker};
 
 const Q0: [f64; 7] = [0.0, -0.4, 0.0, 1.8, 0.0, -0.6, 0.0];
 
@@ -299,20 +299,32 @@ fn filtered_view(azimuth: f64, w: &WorldState) -> (CameraConfig, FrameHeader, Ve
         ..Config::defaults().camera
     };
     let (mut header, frame) = camera_frame(&model, &cfg, w);
+    let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
+    let (filtered, out) = ingest_at_q0(&mut ingest, &mut header, &frame, w);
+    (cfg, header, filtered, out.removed)
+}
+
+/// `frame` of `w` (header `header`) through `ingest`, the arm at Q0 when
+/// it was taken, 5 ms before now: the filtered depths and the outcome.
+fn ingest_at_q0(
+    ingest: &mut Ingest,
+    header: &mut FrameHeader,
+    frame: &[u16],
+    w: &WorldState,
+) -> (Vec<u16>, IngestOutcome) {
     let mut history = StateHistory::new(7, 10);
     history.push(w.stamp_ns, &Q0);
-    let mut ingest = Ingest::new(model, &ingest_config()).unwrap();
     let mut filtered = vec![0u16; frame.len()];
     let out = ingest
         .step(
-            &mut header,
-            &frame,
+            header,
+            frame,
             &history,
             w.stamp_ns + 5_000_000,
             &mut filtered,
         )
         .unwrap();
-    (cfg, header, filtered, out.removed)
+    (filtered, out)
 }
 
 /// The frame (header, depths) camera `cfg` takes of `w`.
@@ -333,22 +345,11 @@ fn ingestion_follows_the_camera_of_each_frame() {
     let az = Config::defaults().camera.azimuth_rad;
     let model = model();
     let mut ingest = Ingest::new(model.clone(), &ingest_config()).unwrap();
-    let mut history = StateHistory::new(7, 10);
-    history.push(w.stamp_ns, &Q0);
     for (i, a) in [az, -az, az, -az].into_iter().enumerate() {
         let (cfg, fresh, want, removed) = filtered_view(a, &w);
         let (mut header, frame) = camera_frame(&model, &cfg, &w);
         header.seq = 10 + i as u64;
-        let mut got = vec![0u16; frame.len()];
-        let out = ingest
-            .step(
-                &mut header,
-                &frame,
-                &history,
-                w.stamp_ns + 5_000_000,
-                &mut got,
-            )
-            .unwrap();
+        let (got, out) = ingest_at_q0(&mut ingest, &mut header, &frame, &w);
         assert!(removed > 1000, "camera at {a} rad: {removed} robot pixels");
         assert_eq!(out.removed, removed, "camera at {a} rad, frame {i}");
         assert!(got == want, "camera at {a} rad, frame {i}");
