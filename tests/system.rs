@@ -108,6 +108,15 @@ impl Cell {
         pid
     }
 
+    /// Ends the run now (SIGINT to the supervisor: its ordered shutdown
+    /// and report), for a test whose script is done before the duration
+    /// it set as a cap; then [`Cell::finish`].
+    fn end_now(self) -> Value {
+        // SAFETY: a signal to our own child.
+        unsafe { libc::kill(self.child.id() as i32, libc::SIGINT) };
+        self.finish()
+    }
+
     fn finish(mut self) -> Value {
         let status = self.child.wait().unwrap();
         assert!(status.success(), "supervisor failed: {status}");
@@ -707,9 +716,7 @@ fn sigint_stops_everything_and_leaves_nothing_behind() {
         err.contains("robot/command") && err.lines().count() == 1,
         "{err}"
     );
-    // SAFETY: signal to our own child.
-    unsafe { libc::kill(cell.child.id() as i32, libc::SIGINT) };
-    let r = cell.finish();
+    let r = cell.end_now();
     assert_eq!(restarts(&r, "control"), 0);
     // SAFETY: probing a pid with signal 0.
     assert_ne!(unsafe { libc::kill(ctl, 0) }, 0, "controller still running");
@@ -1144,7 +1151,7 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
         (name, ms)
     })
     .collect();
-    let cell = Cell::start("liveness", "free-motion", Some(28.0), &[]);
+    let cell = Cell::start("liveness", "free-motion", Some(40.0), &[]);
     wait(3.0); // past the start-up grace (2 s)
     let t0 = cell_start_of(cell.pid_of("sim"));
     let restarted = |service: &str, old: i32| {
@@ -1171,7 +1178,8 @@ fn every_service_silent_past_its_deadline_or_killed_is_noticed_within_one_beat()
         restarted(service, pid);
         faults.push((service, deadline_ms, stopped_ns, killed_ns));
     }
-    let r = cell.finish();
+    // the duration is a cap for a loaded machine: the script is done
+    let r = cell.end_now();
     let at_ns = |e: &Value| t0 + (e["t_s"].as_f64().unwrap() * 1e9) as u64;
     // the supervisor's own stalls (it did not run) within [from, to] [ns]:
     // what it noticed then, it noticed that much late (under the whole
