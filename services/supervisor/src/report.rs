@@ -715,6 +715,12 @@ impl Evaluator {
         self.mic.on_status(m);
     }
 
+    /// The run ended at `now_ns` \[CLOCK_MONOTONIC\]: what the robot's loop
+    /// does from here on, while the services are stopped, is the shutdown's.
+    pub fn on_stop(&mut self, now_ns: u64) {
+        self.pace.on_stop(now_ns);
+    }
+
     /// Real-time scheduling as the services got it (the run is degraded
     /// when any lacked something).
     pub fn set_realtime(&mut self, realtime: RealtimeReport) {
@@ -2173,8 +2179,8 @@ mod tests {
     }
 
     /// The robot's own loop falling behind is a slip the summary names
-    /// with its counts; start-up's braked wait for the first command is
-    /// reported apart and is none.
+    /// with its counts; start-up's braked wait for the first command, and
+    /// its late wake-ups, are reported apart and are none.
     #[test]
     fn a_robot_loop_that_fell_behind_or_braked_after_start_up_degrades_the_run() {
         let services = |_: u32| BTreeMap::<String, ServiceReport>::new();
@@ -2184,17 +2190,20 @@ mod tests {
             (s.braked_cycles, s.overruns) = (braked, overruns);
             s
         };
-        // 200 braked periods before the first command, then on time
+        // 200 braked periods before the first command, 2 of them woken
+        // late while the services started, then on time
         let mut e = eval();
-        e.on_stats(&stats(1, 100, 100, 100, 0));
-        e.on_stats(&stats(2, 300, 300, 200, 0));
-        e.on_stats(&stats(3, 10_000, 10_000, 200, 0));
+        e.on_stats(&stats(1, 100, 100, 100, 2));
+        e.on_stats(&stats(2, 300, 300, 200, 2));
+        e.on_stats(&stats(3, 10_000, 10_000, 200, 2));
         let r = e.report(10_000_000_000, "x", services(0));
         assert!(r.clean, "{:?}", r.degraded);
         assert_eq!(r.torque_loop.pace.startup_braked_cycles, 200);
+        assert_eq!(r.torque_loop.pace.startup_overruns, 2);
+        assert_eq!(r.torque_loop.overruns, 2);
         assert_eq!(r.torque_loop.pace.cycles_short, 0);
         // the loop woke late 1 500 times and ran 1 000 periods short
-        e.on_stats(&stats(4, 20_000, 19_000, 200, 1_500));
+        e.on_stats(&stats(4, 20_000, 19_000, 200, 1_502));
         let r = e.report(20_000_000_000, "x", services(0));
         assert_eq!(
             r.summary,
@@ -2215,6 +2224,7 @@ mod tests {
         assert_eq!(r.summary, "degraded (30 braked cycles)");
         let json = serde_json::to_value(&r).unwrap();
         assert_eq!(json["torque_loop"]["startup_braked_cycles"], 200);
+        assert_eq!(json["torque_loop"]["startup_overruns"], 0);
         assert_eq!(json["torque_loop"]["cycles_expected"], 300);
     }
 

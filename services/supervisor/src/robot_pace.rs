@@ -1,9 +1,12 @@
 //! Did the robot's own loop keep its pace? From `robot/stats` (cumulative
 //! counts since the robot process started, about every 100 periods, stamped
 //! on CLOCK_MONOTONIC): the cycles it ran against the cycles the time it ran
-//! held, its overruns, and its braked cycles apart from start-up's braked
-//! wait for the first command. A robot that slips is a robot whose control
-//! box stops it: any of these makes the run degraded.
+//! held, its overruns and its braked cycles, each apart from start-up's
+//! braked wait for the first command (the arm held by its brakes while the
+//! other services start: a late wake-up then commands nothing), and its
+//! overruns apart from the ordered shutdown's (the controllers stopped
+//! before it). A robot that slips is a robot whose control box stops it:
+//! any of these makes the run degraded.
 
 use phri_ipc::RobotStats;
 use serde::Serialize;
@@ -21,6 +24,16 @@ pub struct PaceReport {
     /// the wait for the first command, not a slip (to the statistics'
     /// resolution, 100 periods)
     pub startup_braked_cycles: u64,
+    /// overruns (of `overruns`) in that wait, while the cell's services
+    /// were starting: not a slip. To the statistics' resolution, on the
+    /// safe side: those of the last statistics before the loop first ran
+    /// unbraked
+    pub startup_overruns: u64,
+    /// overruns (of `overruns`) after the run ended, while the supervisor
+    /// stopped the services (the controllers before the robot): not a
+    /// slip. On the safe side: the statistics window the run ended in
+    /// counts as the run's
+    pub shutdown_overruns: u64,
 }
 
 /// One robot process's statistics: the first and the newest (stamp [ns],
@@ -54,6 +67,16 @@ pub struct RobotPace {
     startup_braked: Option<u64>,
     /// braked cycles so far (the first process's, until it ran unbraked)
     braked_so_far: u64,
+    /// start-up's overruns, once the loop first ran unbraked
+    startup_overruns: Option<u64>,
+    /// overruns so far (the first process's, until it ran unbraked)
+    overruns_so_far: u64,
+    /// overruns of the robot processes before the current one, and the
+    /// current one's newest count
+    overruns: (u64, u64),
+    /// when the run ended \[ns, CLOCK_MONOTONIC\], and the overruns (all
+    /// processes) of the first statistics stamped after it
+    stopped: Option<(u64, Option<u64>)>,
 }
 
 impl RobotPace {
@@ -66,7 +89,17 @@ impl RobotPace {
             before: (0, 0),
             startup_braked: None,
             braked_so_far: 0,
+            startup_overruns: None,
+            overruns_so_far: 0,
+            overruns: (0, 0),
+            stopped: None,
         }
+    }
+
+    /// The run ended at `now_ns` \[CLOCK_MONOTONIC\]: the services are about
+    /// to be stopped.
+    pub fn on_stop(&mut self, now_ns: u64) {
+        self.stopped.get_or_insert((now_ns, None));
     }
 
     /// A `robot/stats` message.
@@ -79,6 +112,14 @@ impl RobotPace {
             }
             // a restart is no start-up: its braked wait is the restart's
             self.startup_braked.get_or_insert(self.braked_so_far);
+            self.startup_overruns.get_or_insert(self.overruns_so_far);
+            self.overruns = (self.overruns.0 + self.overruns.1, 0);
+        }
+        self.overruns.1 = m.overruns;
+        if let Some((at, first @ None)) = self.stopped.as_mut() {
+            if m.stamp_ns > *at {
+                *first = Some(self.overruns.0 + m.overruns);
+            }
         }
         self.last_seq = m.seq;
         let now = (m.stamp_ns, m.cycles);
@@ -95,6 +136,11 @@ impl RobotPace {
             self.braked_so_far = m.braked_cycles;
             if m.cycles > m.braked_cycles {
                 self.startup_braked = Some(m.braked_cycles);
+                // this message's window held unbraked periods: its
+                // overruns count as the run's
+                self.startup_overruns = Some(self.overruns_so_far);
+            } else {
+                self.overruns_so_far = m.overruns;
             }
         }
     }
@@ -110,6 +156,13 @@ impl RobotPace {
             cycles_expected: expected,
             cycles_short: expected.saturating_sub(ran),
             startup_braked_cycles: self.startup_braked.unwrap_or(self.braked_so_far),
+            startup_overruns: self.startup_overruns.unwrap_or(self.overruns_so_far),
+            shutdown_overruns: match self.stopped {
+                Some((_, Some(at_stop))) => {
+                    (self.overruns.0 + self.overruns.1).saturating_sub(at_stop)
+                }
+                _ => 0,
+            },
         }
     }
 }
@@ -136,9 +189,10 @@ fn counted(n: u64, what: &str) -> String {
 }
 
 /// What the robot's loop did wrong, as (a `degraded` line, its words in the
-/// summary): overruns (woke more than half a period late) with their share
-/// of the periods run and the cycles short of the run's length; braked
-/// cycles after start-up's wait. Empty when it kept its pace.
+/// summary): overruns (woke more than half a period late) between start-up's
+/// wait and the shutdown, with their share of the periods run and the cycles short of the
+/// run's length; braked cycles after start-up's wait. Empty when it kept
+/// its pace.
 pub fn finding(
     cycles: u64,
     overruns: u64,
@@ -146,6 +200,7 @@ pub fn finding(
     pace: &PaceReport,
 ) -> Vec<(String, String)> {
     let mut out = Vec::new();
+    let overruns = overruns.saturating_sub(pace.startup_overruns + pace.shutdown_overruns);
     if overruns > 0 || pace.cycles_short > 0 {
         let share = 100.0 * overruns as f64 / cycles.max(1) as f64;
         let short = 100.0 * pace.cycles_short as f64 / pace.cycles_expected.max(1) as f64;
@@ -180,6 +235,11 @@ mod tests {
         m.stamp_ns = stamp_ms * MS;
         m.cycles = cycles;
         m.braked_cycles = braked;
+        m
+    }
+
+    fn late(mut m: RobotStats, overruns: u64) -> RobotStats {
+        m.overruns = overruns;
         m
     }
 
@@ -227,6 +287,51 @@ mod tests {
         let f = finding(300, 0, 175, &r);
         assert_eq!(f.len(), 1);
         assert_eq!(f[0].1, "25 braked cycles");
+    }
+
+    #[test]
+    fn overruns_in_start_up_s_braked_wait_are_apart_the_run_s_are_a_finding() {
+        let mut p = RobotPace::new(0.001);
+        // 3 late wake-ups while the services start, the arm braked
+        p.on_stats(&late(stats(1, 100, 100, 100), 2));
+        p.on_stats(&late(stats(2, 200, 200, 200), 3));
+        assert_eq!(p.report().startup_overruns, 3);
+        // the first unbraked periods: a late wake-up in their window is the run's
+        p.on_stats(&late(stats(3, 300, 300, 250), 4));
+        p.on_stats(&late(stats(4, 60_000, 60_000, 250), 4));
+        let r = p.report();
+        assert_eq!(r.startup_overruns, 3);
+        let f = finding(60_000, 4, 250, &r);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert_eq!(f[0].1, "robot loop behind: 1 overrun, 0 % of periods");
+        // none after start-up: no finding
+        assert!(finding(60_000, 3, 250, &r).is_empty());
+        // a restarted robot's late wake-ups are the run's, braked or not
+        p.on_stats(&late(stats(1, 60_100, 100, 100), 5));
+        assert_eq!(p.report().startup_overruns, 3);
+        let f = finding(60_100, 4 + 5, 350, &p.report());
+        assert!(f[0].1.starts_with("robot loop behind: 6 overruns"), "{f:?}");
+    }
+
+    #[test]
+    fn overruns_after_the_run_ended_are_the_shutdown_s() {
+        let mut p = RobotPace::new(0.001);
+        p.on_stats(&late(stats(1, 100, 100, 100), 1));
+        p.on_stats(&late(stats(2, 1_000, 1_000, 200), 2));
+        // the run ends at 1.05 s: the window it ends in is the run's
+        p.on_stop(1_050 * MS);
+        p.on_stats(&late(stats(3, 1_100, 1_100, 200), 4));
+        p.on_stats(&late(stats(4, 1_200, 1_200, 300), 7));
+        let r = p.report();
+        assert_eq!((r.startup_overruns, r.shutdown_overruns), (1, 3));
+        let f = finding(1_200, 7, 300, &r);
+        assert_eq!(f.len(), 2, "{f:?}");
+        assert!(f[0].1.starts_with("robot loop behind: 3 overruns"), "{f:?}");
+        // no statistics after the stop: none is the shutdown's
+        let mut p = RobotPace::new(0.001);
+        p.on_stats(&late(stats(1, 100, 100, 50), 1));
+        p.on_stop(150 * MS);
+        assert_eq!(p.report().shutdown_overruns, 0);
     }
 
     #[test]

@@ -58,6 +58,7 @@ pub fn finish(
     let ours: Vec<u32> = (0..sup.roster().len())
         .filter_map(|i| sup.roster().get(i).pid)
         .collect();
+    evaluation.eval.on_stop(now_ns());
     cell.stop(sup.roster());
     ports.read_after_stop(&mut evaluation);
     judge_last_strangers(sup, &mut evaluation, &ours);
