@@ -190,9 +190,9 @@ fn counted(n: u64, what: &str) -> String {
 
 /// What the robot's loop did wrong, as (a `degraded` line, its words in the
 /// summary): overruns (woke more than half a period late) between start-up's
-/// wait and the shutdown, with their share of the periods run and the cycles short of the
-/// run's length; braked cycles after start-up's wait. Empty when it kept
-/// its pace.
+/// wait and the shutdown, with their share of the periods run and the
+/// cycles short of the run's length; braked cycles after start-up's wait.
+/// Empty when it kept its pace.
 pub fn finding(
     cycles: u64,
     overruns: u64,
