@@ -37,11 +37,12 @@ pub struct PaceReport {
 }
 
 /// One robot process's statistics: the first and the newest (stamp [ns],
-/// cycles).
+/// cycles), and its newest overrun count.
 #[derive(Clone, Copy, Debug)]
 struct Span {
     first: (u64, u64),
     last: (u64, u64),
+    overruns: u64,
 }
 
 impl Span {
@@ -61,8 +62,8 @@ pub struct RobotPace {
     /// the current robot process's span, its statistics' last seq
     span: Option<Span>,
     last_seq: u64,
-    /// the spans of the robot processes before it: expected, ran
-    before: (u64, u64),
+    /// the spans of the robot processes before it: expected, ran, overruns
+    before: (u64, u64, u64),
     /// start-up's braked wait, once the loop first ran unbraked
     startup_braked: Option<u64>,
     /// braked cycles so far (the first process's, until it ran unbraked)
@@ -71,9 +72,6 @@ pub struct RobotPace {
     startup_overruns: Option<u64>,
     /// overruns so far (the first process's, until it ran unbraked)
     overruns_so_far: u64,
-    /// overruns of the robot processes before the current one, and the
-    /// current one's newest count
-    overruns: (u64, u64),
     /// when the run ended \[ns, CLOCK_MONOTONIC\], and the overruns (all
     /// processes) of the first statistics stamped after it
     stopped: Option<(u64, Option<u64>)>,
@@ -86,12 +84,11 @@ impl RobotPace {
             period_ns: (period_s * 1e9).round().max(1.0) as u64,
             span: None,
             last_seq: 0,
-            before: (0, 0),
+            before: (0, 0, 0),
             startup_braked: None,
             braked_so_far: 0,
             startup_overruns: None,
             overruns_so_far: 0,
-            overruns: (0, 0),
             stopped: None,
         }
     }
@@ -109,27 +106,24 @@ impl RobotPace {
             if let Some(s) = self.span.take() {
                 self.before.0 += s.expected(self.period_ns);
                 self.before.1 += s.ran();
+                self.before.2 += s.overruns;
             }
             // a restart is no start-up: its braked wait is the restart's
             self.startup_braked.get_or_insert(self.braked_so_far);
             self.startup_overruns.get_or_insert(self.overruns_so_far);
-            self.overruns = (self.overruns.0 + self.overruns.1, 0);
-        }
-        self.overruns.1 = m.overruns;
-        if let Some((at, first @ None)) = self.stopped.as_mut() {
-            if m.stamp_ns > *at {
-                *first = Some(self.overruns.0 + m.overruns);
-            }
         }
         self.last_seq = m.seq;
         let now = (m.stamp_ns, m.cycles);
-        match self.span.as_mut() {
-            Some(s) => s.last = now,
-            None => {
-                self.span = Some(Span {
-                    first: now,
-                    last: now,
-                })
+        let span = self.span.get_or_insert(Span {
+            first: now,
+            last: now,
+            overruns: 0,
+        });
+        (span.last, span.overruns) = (now, m.overruns);
+        let total = self.overruns();
+        if let Some((at, first @ None)) = self.stopped.as_mut() {
+            if m.stamp_ns > *at {
+                *first = Some(total);
             }
         }
         if self.startup_braked.is_none() {
@@ -145,9 +139,14 @@ impl RobotPace {
         }
     }
 
+    /// Overruns so far, every robot process's.
+    fn overruns(&self) -> u64 {
+        self.before.2 + self.span.map_or(0, |s| s.overruns)
+    }
+
     /// The pace so far.
     pub fn report(&self) -> PaceReport {
-        let (mut expected, mut ran) = self.before;
+        let (mut expected, mut ran, _) = self.before;
         if let Some(s) = &self.span {
             expected += s.expected(self.period_ns);
             ran += s.ran();
@@ -158,9 +157,7 @@ impl RobotPace {
             startup_braked_cycles: self.startup_braked.unwrap_or(self.braked_so_far),
             startup_overruns: self.startup_overruns.unwrap_or(self.overruns_so_far),
             shutdown_overruns: match self.stopped {
-                Some((_, Some(at_stop))) => {
-                    (self.overruns.0 + self.overruns.1).saturating_sub(at_stop)
-                }
+                Some((_, Some(at_stop))) => self.overruns().saturating_sub(at_stop),
                 _ => 0,
             },
         }
