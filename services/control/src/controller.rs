@@ -741,7 +741,13 @@ impl Controller {
                     false => self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee),
                     true => {
                         let scale = s.speed_scale * self.resolver.path_scale();
-                        self.task.step(dt, scale, &Vector3::zeros(), &self.ee)
+                        let mut c = self.task.step(dt, scale, &Vector3::zeros(), &self.ee);
+                        // the joints' bounds keep the safety's scale only:
+                        // scaled with the path's pace too, a filter that
+                        // holds the end effector back would shrink its own
+                        // room to back away
+                        c.speed_scale = s.speed_scale;
+                        c
                     }
                 };
                 self.counters.waypoints_reached = self.task.waypoints_reached();

@@ -30,11 +30,11 @@ fn the_mirrored_pair_keeps_the_person_clear_in_lock_step() {
 /// process): the other camera's distances go on alone, the dark one gives
 /// no fused distance after its last results age out, nothing stops
 /// protectively and nobody is touched, under either law. At this phase
-/// (offset 1 s; at 0 s: 13.5 cm under the paper's law, 7.0 cm under the
+/// (offset 1 s; at 0 s: 13.5 cm under the paper's law, 9.6 cm under the
 /// filter) the paper's law halts the arm in the shadow the camera left alone
 /// sees (SNS scales the task, repulsion included, to nothing) and the
-/// stepping-in hand comes to 1.7 cm of it; the control-barrier filter's
-/// slack moves it away: 5 cm kept.
+/// stepping-in hand comes to 1.9 cm of it; the control-barrier filter
+/// moves it away: 8.6 cm kept (5 cm asserted).
 #[test]
 fn either_camera_dark_leaves_the_other_s_distances_and_touches_nobody() {
     let file = common::deploy().with_file_name("two-cameras.toml");
@@ -278,8 +278,8 @@ fn the_mirrored_wave_on_the_depth_trackers_is_seen_by_two_cameras_and_not_by_one
 /// A person bowing over the arm from behind the second camera
 /// (`lean-over`): that camera sees the person's back with the arm hidden
 /// behind it, the paper's camera the gap between them. Under the barrier
-/// filter, on every arm, nobody is touched (closest 3.9-4.8 cm at this
-/// phase, the hardest of -2, 0 and 2 s). The paper's law touches the bowing
+/// filter, on every arm, nobody is touched (closest 6.5-7.9 cm at this
+/// phase, 6.1-8.2 cm over -2, 0 and 2 s). The paper's law touches the bowing
 /// person at this phase on the LWR-IV, the FR3 and the Panda (BENCHMARKS).
 #[test]
 fn a_person_bowing_over_the_arm_from_behind_the_second_camera_is_never_touched() {
