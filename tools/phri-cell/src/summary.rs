@@ -53,6 +53,10 @@ pub struct CellSummary {
     /// point's approach \[s\], and violations (`iso_ts_15066`'s, repeated)
     pub ssm_limited_s: f64,
     pub ssm_violations: u64,
+    /// ... the violations judged against the standard's own protective
+    /// separation distance (ISO 13855's human speed), as the report's
+    /// `iso_ts_15066.ssm_violations_standard`
+    pub ssm_violations_standard: u64,
     /// the hot standby (null without it)
     pub standby: Option<StandbySummary>,
     /// the control-barrier filter (`[avoidance] law = "cbf"`; null under the paper's law)
@@ -143,6 +147,8 @@ impl Accounting {
         self.s
             .iso_ts_15066
             .ssm_counts(enabled, c.limited_periods, c.violations, t, self.dt_s);
+        // the controller in charge's count (a restarted one counts from 0)
+        self.s.ssm_violations_standard = self.s.ssm_violations_standard.max(c.violations_standard);
     }
 
     pub(crate) fn frame(&mut self) {
