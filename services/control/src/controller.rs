@@ -738,16 +738,12 @@ impl Controller {
                 // under the barrier filter the path waits as much as the
                 // filter holds the end effector back, not by its repulsion
                 let c = match self.resolver.cbf_law() {
-                    false => self.task.step(dt, s.speed_scale, &s.ee_v_call, &self.ee),
+                    false => self
+                        .task
+                        .step(dt, (s.speed_scale, 1.0), &s.ee_v_call, &self.ee),
                     true => {
-                        let scale = s.speed_scale * self.resolver.path_scale();
-                        let mut c = self.task.step(dt, scale, &Vector3::zeros(), &self.ee);
-                        // the joints' bounds keep the safety's scale only:
-                        // scaled with the path's pace too, a filter that
-                        // holds the end effector back would shrink its own
-                        // room to back away
-                        c.speed_scale = s.speed_scale;
-                        c
+                        let scale = (s.speed_scale, self.resolver.path_scale());
+                        self.task.step(dt, scale, &Vector3::zeros(), &self.ee)
                     }
                 };
                 self.counters.waypoints_reached = self.task.waypoints_reached();

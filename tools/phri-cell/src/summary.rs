@@ -125,6 +125,8 @@ pub(crate) struct Accounting {
     open: Vec<(usize, usize, usize)>,
     /// the residual's collision flag in the last period
     collision: bool,
+    /// the controller in charge's count of the standard's S_p violations last seen
+    standard_seen: u64,
 }
 
 impl Accounting {
@@ -137,6 +139,7 @@ impl Accounting {
             },
             open: Vec::new(),
             collision: false,
+            standard_seen: 0,
         }
     }
 
@@ -147,8 +150,11 @@ impl Accounting {
         self.s
             .iso_ts_15066
             .ssm_counts(enabled, c.limited_periods, c.violations, t, self.dt_s);
-        // the controller in charge's count (a restarted one counts from 0)
-        self.s.ssm_violations_standard = self.s.ssm_violations_standard.max(c.violations_standard);
+        // the controller in charge's count, added as it grows (a restarted
+        // one counts from 0 again)
+        let (now, seen) = (c.violations_standard, self.standard_seen);
+        self.s.ssm_violations_standard += now - if now >= seen { seen } else { 0 };
+        self.standard_seen = now;
     }
 
     pub(crate) fn frame(&mut self) {

@@ -144,14 +144,16 @@ impl TaskState {
 
     /// One period of `dt` \[s\]: the end effector's reference. `speed_scale`
     /// (1, or slower while perception is stale) scales the joint velocity
-    /// bounds and the time law; the end effector's repulsive vector `v_call`
-    /// [m/s] (0 without fresh perception) slows the time law further
-    /// ([`path_slowdown`]); `ee` is the measured end effector \[m\] (to count
-    /// waypoints reached).
+    /// bounds and the time law; `pace` (0-1: the share of the task's motion
+    /// the barrier filter let through, 1 otherwise) and the end effector's
+    /// repulsive vector `v_call` [m/s] (0 without fresh perception) slow the
+    /// time law only ([`path_slowdown`]), never the bounds: an arm held back
+    /// keeps its room to back away; `ee` is the measured end effector \[m\]
+    /// (to count waypoints reached).
     pub fn step(
         &mut self,
         dt: f64,
-        speed_scale: f64,
+        (speed_scale, pace): (f64, f64),
         v_call: &Vector3<f64>,
         ee: &Vector3<f64>,
     ) -> CartesianRef {
@@ -159,7 +161,8 @@ impl TaskState {
             Some(a) => a.direction(),
             None => self.path.direction(self.s),
         };
-        let time_scale = speed_scale * (1.0 - path_slowdown(self.pace, v_call, &dir, self.v_max));
+        let slowdown = path_slowdown(self.pace, v_call, &dir, self.v_max);
+        let time_scale = speed_scale * pace * (1.0 - slowdown);
         let (x_d, xd_d) = match self.approach.as_mut() {
             Some(a) => {
                 let out = a.step(dt * time_scale);
@@ -221,9 +224,9 @@ mod tests {
         t.start(from);
         let dt = 0.001;
         // the approach ends at the path's start, at rest, without moving the path time
-        let mut last = t.step(dt, 1.0, &Vector3::zeros(), &from);
+        let mut last = t.step(dt, (1.0, 1.0), &Vector3::zeros(), &from);
         while t.approach.is_some() {
-            last = t.step(dt, 1.0, &Vector3::zeros(), &last.x_d);
+            last = t.step(dt, (1.0, 1.0), &Vector3::zeros(), &last.x_d);
         }
         assert!((last.x_d - w[0]).norm() < 1e-12 && last.xd_d.norm() < 1e-9);
         assert_eq!(last.path_time, Some(0.0));
@@ -231,7 +234,7 @@ mod tests {
         let cycle = t.path.period();
         let mut ee = last.x_d;
         for _ in 0..((2.0 * cycle + 0.6) / dt) as usize {
-            ee = t.step(dt, 1.0, &Vector3::zeros(), &ee).x_d;
+            ee = t.step(dt, (1.0, 1.0), &Vector3::zeros(), &ee).x_d;
         }
         assert_eq!(t.waypoints_reached(), 6);
     }
@@ -244,7 +247,7 @@ mod tests {
         t.approach = None;
         t.ramp_u = 1.0;
         for _ in 0..100 {
-            t.step(0.001, speed_scale, &v_call, &Vector3::zeros());
+            t.step(0.001, (speed_scale, 1.0), &v_call, &Vector3::zeros());
         }
         t.path_time()
     }
@@ -275,6 +278,21 @@ mod tests {
         // a malformed repulsion halts the path
         let nan = Vector3::new(f64::NAN, 0.0, 0.0);
         assert_eq!(path_time_after(opposing, 1.0, nan), 0.0);
+    }
+
+    #[test]
+    fn the_filter_s_pace_slows_the_time_law_never_the_bounds() {
+        let mut t = task();
+        t.approach = None;
+        t.ramp_u = 1.0;
+        let mut c = t.step(0.001, (0.3, 1.0), &Vector3::zeros(), &Vector3::zeros());
+        for _ in 1..100 {
+            c = t.step(0.001, (0.3, 0.5), &Vector3::zeros(), &Vector3::zeros());
+        }
+        // 1 ms at 0.3, then 99 ms at 0.3 × 0.5
+        assert!((t.path_time() - (0.0003 + 0.099 * 0.15)).abs() < 1e-12);
+        // the joints' bounds: stale perception's scale alone
+        assert_eq!(c.speed_scale, 0.3);
     }
 
     #[test]
