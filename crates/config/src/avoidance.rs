@@ -40,16 +40,22 @@ pub struct AvoidanceConfig {
     /// objective, against 1 for each joint velocity: the null space gives
     /// way first \[s²\]
     pub task_weight: f64,
+    /// a waypoint the filter has held the end effector from for this long
+    /// is passed over: the path goes on to the next one, the waypoint not
+    /// counted \[s\] (0: the path waits for it)
+    pub pass_after_s: f64,
 }
 
 impl AvoidanceConfig {
-    /// γ, margin, speed and weight are finite and non-negative; γ > 0.
+    /// γ, margin, speed, weight and the pass's wait are finite and
+    /// non-negative; γ > 0.
     pub fn validate(&self) -> Result<(), Invalid> {
         for (name, v) in [
             ("gamma", self.gamma),
             ("margin_m", self.margin_m),
             ("human_speed_m_s", self.human_speed_m_s),
             ("task_weight", self.task_weight),
+            ("pass_after_s", self.pass_after_s),
         ] {
             non_negative(S, name, v)?;
         }

@@ -249,6 +249,7 @@ mod tests {
             margin_m: 0.05,
             human_speed_m_s: 1.6,
             task_weight: 100.0,
+            pass_after_s: 1.0,
         }
     }
 

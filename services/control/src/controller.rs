@@ -232,6 +232,9 @@ impl Controller {
             }
             c.resolver.set_ssm(cfg.ssm.enabled.then_some(&cfg.ssm));
             c.resolver.set_law(&cfg.avoidance)?;
+            if c.resolver.cbf_law() {
+                c.task.pass_held_waypoints(cfg.avoidance.pass_after_s);
+            }
             c.set_control_points(&cfg.repulsion.points)?;
         }
         if cfg.collaboration.enabled {

@@ -7,7 +7,10 @@
 //! the component of the end effector's repulsive vector against the path's
 //! direction over `V_max` (`path_pace = "opposing"`; an obstacle beside the
 //! path does not slow it, the end effector goes around it by eq. 19), or its
-//! whole risk `‖V_Call(P_e)‖/V_max` (`"risk"`).
+//! whole risk `‖V_Call(P_e)‖/V_max` (`"risk"`). Under the barrier filter
+//! the time law runs at the share of the task's motion the filter lets
+//! through, and a waypoint the end effector is held from (`pass_after_s`)
+//! is passed over: the path goes round to the next one.
 
 use nalgebra::Vector3;
 use phri_config::{ControlConfig, PathPace};
@@ -41,7 +44,21 @@ pub struct TaskState {
     pace: PathPace,
     /// `V_max` of eq. 16 [m/s]
     v_max: f64,
+    /// a waypoint the end effector is held from this long is passed over
+    /// \[s\] (0: never; `[avoidance] pass_after_s` under the barrier filter)
+    pass_after_s: f64,
+    /// how long the end effector has been held on this segment: grows
+    /// while an obstacle leaves the time law less than [`HELD_SHARE`],
+    /// shrinks as fast otherwise \[s\]
+    held_s: f64,
+    /// the path passes over the segment's waypoint: its time law runs
+    /// whatever holds the end effector, until the next segment
+    passing: bool,
 }
+
+/// The time law runs at less than this share of its rate: the end
+/// effector is held.
+pub const HELD_SHARE: f64 = 0.5;
 
 /// The share of the time law an obstacle takes away, `f ∈ [0, 1]`: the
 /// component of the end effector's repulsive vector `v_call` [m/s] against
@@ -69,6 +86,8 @@ impl Snapshot for TaskState {
         self.last_target.save(w);
         self.waypoints_reached.save(w);
         self.segments_ended.save(w);
+        self.held_s.save(w);
+        self.passing.save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.approach.load(r);
@@ -82,6 +101,8 @@ impl Snapshot for TaskState {
         r.store(&mut self.last_target, target);
         self.waypoints_reached.load(r);
         self.segments_ended.load(r);
+        self.held_s.load(r);
+        self.passing.load(r);
     }
 }
 
@@ -109,7 +130,16 @@ impl TaskState {
             segments_ended: 0,
             pace: cfg.path_pace,
             v_max: cfg.avoidance_params.v_max_repulsion,
+            pass_after_s: 0.0,
+            held_s: 0.0,
+            passing: false,
         }
+    }
+
+    /// Pass over a waypoint the end effector has been held from for
+    /// `after_s` \[s\] (0: wait for it, the default).
+    pub fn pass_held_waypoints(&mut self, after_s: f64) {
+        self.pass_after_s = after_s.max(0.0);
     }
 
     /// (Re)join the path where it was left, from the end effector at `from`
@@ -119,6 +149,8 @@ impl TaskState {
         self.approach = Some(Approach::new(from, to, self.approach_speed));
         self.ramp_u = 0.0;
         self.last_target = self.path.target_index(self.s);
+        self.held_s = 0.0;
+        self.passing = false;
     }
 
     /// Path time \[s\].
@@ -149,7 +181,10 @@ impl TaskState {
     /// repulsive vector `v_call` [m/s] (0 without fresh perception) slow the
     /// time law only ([`path_slowdown`]), never the bounds: an arm held back
     /// keeps its room to back away; `ee` is the measured end effector \[m\]
-    /// (to count waypoints reached).
+    /// (to count waypoints reached). A segment held up for `pass_after_s`
+    /// is passed over: its time law ramps up again and runs at
+    /// `speed_scale` to the next segment, the waypoint counted only if the
+    /// end effector is there all the same.
     pub fn step(
         &mut self,
         dt: f64,
@@ -162,10 +197,11 @@ impl TaskState {
             None => self.path.direction(self.s),
         };
         let slowdown = path_slowdown(self.pace, v_call, &dir, self.v_max);
-        let time_scale = speed_scale * pace * (1.0 - slowdown);
+        // the share of the time law what is near leaves
+        let share = pace * (1.0 - slowdown);
         let (x_d, xd_d) = match self.approach.as_mut() {
             Some(a) => {
-                let out = a.step(dt * time_scale);
+                let out = a.step(dt * speed_scale * share);
                 if a.done() {
                     self.approach = None;
                     self.segments_ended += 1;
@@ -173,6 +209,20 @@ impl TaskState {
                 out
             }
             None => {
+                if self.pass_after_s > 0.0 && !self.passing {
+                    if share < HELD_SHARE {
+                        self.held_s += dt;
+                    }
+                    if self.held_s >= self.pass_after_s {
+                        // go round: the time law ramps up again from rest
+                        self.passing = true;
+                        self.ramp_u = 0.0;
+                    }
+                }
+                let time_scale = match self.passing {
+                    true => speed_scale,
+                    false => speed_scale * share,
+                };
                 // time scaling: ṡ = smoothstep(u) ramps 0 → 1, so that a path resumed
                 // mid-segment starts without a jump in velocity or acceleration
                 self.ramp_u = (self.ramp_u + dt / self.path_ramp_s.max(1e-3)).min(1.0);
@@ -191,6 +241,8 @@ impl TaskState {
                     }
                     self.segments_ended += 1;
                     self.last_target = target;
+                    self.held_s = 0.0;
+                    self.passing = false;
                 }
                 (x, dx)
             }
@@ -293,6 +345,59 @@ mod tests {
         assert!((t.path_time() - (0.0003 + 0.099 * 0.15)).abs() < 1e-12);
         // the joints' bounds: stale perception's scale alone
         assert_eq!(c.speed_scale, 0.3);
+    }
+
+    #[test]
+    fn a_waypoint_held_from_the_end_effector_is_passed_over_not_counted() {
+        let run = |pass_after_s: f64| {
+            let mut t = task();
+            t.pass_held_waypoints(pass_after_s);
+            t.approach = None;
+            t.ramp_u = 1.0;
+            let w = t.path.waypoints.clone();
+            let dt = 0.001;
+            // the end effector held 10 cm short of P2, the filter letting 10 % through
+            let held = w[1] + (w[0] - w[1]).normalize() * 0.1;
+            let mut passed_at = None;
+            for k in 0..5500 {
+                let ee = match t.path.target_index(t.s) {
+                    1 => held,
+                    _ => t.path.sample(t.s).0,
+                };
+                let pace = if t.path.target_index(t.s) == 1 {
+                    0.1
+                } else {
+                    1.0
+                };
+                t.step(dt, (1.0, pace), &Vector3::zeros(), &ee);
+                if passed_at.is_none() && t.path.target_index(t.s) == 2 {
+                    passed_at = Some(k as f64 * dt);
+                }
+            }
+            (passed_at, t.waypoints_reached())
+        };
+        // waiting: 5.5 s at a tenth of the rate, P2 still ahead
+        assert_eq!(run(0.0), (None, 0));
+        // passing after 1 s held: P2 not counted, P3 (and P1) reached on time
+        let (passed_at, reached) = run(1.0);
+        let passed_at = passed_at.expect("the path went on to P3");
+        // 1 s at a tenth (0.1 s of path), the ramp from rest (0.5 s: 0.25 s of
+        // path), the rest of the segment's 1.33 s at full rate: 2.48 s
+        assert!((2.4..2.6).contains(&passed_at), "passed at {passed_at} s");
+        assert_eq!(reached, 2, "P3 and P1, not the held P2");
+        // the pass ends with its segment: P3 → P1 runs at the filter's pace again
+        let mut t = task();
+        t.pass_held_waypoints(1.0);
+        t.approach = None;
+        t.ramp_u = 1.0;
+        for _ in 0..1500 {
+            t.step(0.001, (1.0, 0.1), &Vector3::zeros(), &Vector3::zeros());
+        }
+        assert!(t.passing, "held 1.5 s at a tenth of the rate");
+        while t.path.target_index(t.s) == 1 {
+            t.step(0.001, (1.0, 0.1), &Vector3::zeros(), &Vector3::zeros());
+        }
+        assert!(!t.passing && t.held_s == 0.0);
     }
 
     #[test]
