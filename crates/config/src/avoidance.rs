@@ -44,11 +44,14 @@ pub struct AvoidanceConfig {
     /// is passed over: the path goes on to the next one, the waypoint not
     /// counted \[s\] (0: the path waits for it)
     pub pass_after_s: f64,
+    /// the filter's joint velocities reach the reference through this
+    /// slew limit \[rad/s²\] (the paper's law: `control.reference_accel_limit`)
+    pub accel_limit: f64,
 }
 
 impl AvoidanceConfig {
-    /// γ, margin, speed, weight and the pass's wait are finite and
-    /// non-negative; γ > 0.
+    /// γ, margin, speed, weight, the pass's wait and the slew limit are
+    /// finite and non-negative; γ and the slew limit > 0.
     pub fn validate(&self) -> Result<(), Invalid> {
         for (name, v) in [
             ("gamma", self.gamma),
@@ -56,10 +59,12 @@ impl AvoidanceConfig {
             ("human_speed_m_s", self.human_speed_m_s),
             ("task_weight", self.task_weight),
             ("pass_after_s", self.pass_after_s),
+            ("accel_limit", self.accel_limit),
         ] {
             non_negative(S, name, v)?;
         }
-        positive(S, "gamma", self.gamma)
+        positive(S, "gamma", self.gamma)?;
+        positive(S, "accel_limit", self.accel_limit)
     }
 
     /// d_s for perception results `age_s` old \[m\].

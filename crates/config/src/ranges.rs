@@ -153,6 +153,7 @@ pub const SAFETY_RANGES: &[Range] = &[
     // speed and separation monitoring: the terms' minima are the arm's measured stop and the sensor's noise
     ro("avoidance.gamma", 0.0, 20.0, "1/s", "a barrier rate faster than the arm can brake lets a point close in at speed until the last centimetres"),
     r("avoidance.margin_m", 0.02, 0.5, "m", "a clearance below depth's noise and the mask's margins (2 cm) lets the filter keep none"),
+    ro("avoidance.accel_limit", 0.0, 100.0, "rad/s²", "the reference's slew under the barrier filter"),
     r("avoidance.human_speed_m_s", 1.6, 2.5, "m/s", "below ISO 13855's 1.6 m/s the perception's latency is charged at less than a walking hand"),
     r("ssm.stop_time_s", MIN_STOP_TIME_S, 1.0, "s", "T_s below the arm's measured stop (47 ms) promises a stop it cannot make"),
     r("ssm.stop_distance_per_speed_s", MIN_STOP_DISTANCE_PER_SPEED_S, 1.0, "s", "S_s below the measured 18 ms × v promises a stop it cannot make"),

@@ -250,6 +250,7 @@ mod tests {
             human_speed_m_s: 1.6,
             task_weight: 100.0,
             pass_after_s: 1.0,
+            accel_limit: 30.0,
         }
     }
 

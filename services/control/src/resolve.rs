@@ -607,7 +607,12 @@ impl Resolver {
         // the protective stop holds (no feed-forward of the step)
         let dv = match self.ssm_period.stopping {
             true => f64::INFINITY,
-            false => cfg.reference_accel_limit * dt,
+            // the filter's answer lags the reference no more than a slew
+            // the barrier can live with: a hand at 1 m/s braked against
+            false => match self.cbf.as_ref() {
+                Some(f) => f.config().accel_limit * dt,
+                None => cfg.reference_accel_limit * dt,
+            },
         };
         let solved = self
             .avoidance

@@ -189,6 +189,34 @@ fn a_hand_thrust_into_the_path_at_1_m_s_is_never_touched() {
     }
 }
 
+/// The same thrust seen as it is (perception that hides nothing), at the
+/// phase where it comes nearest, on the two arms it came nearest: the
+/// filter's braking reaches the arm through its own slew limit
+/// (`[avoidance] accel_limit`), so the hand is held at d_s's fixed part,
+/// 5 cm. (At the paper's law's slew, 10 rad/s², it came to 4.2 cm of the
+/// FR3 and 3.8 cm of the Panda.)
+#[test]
+fn a_hand_thrust_at_1_m_s_seen_as_it_is_is_held_at_the_margin() {
+    for robot in ["fr3", "panda"] {
+        let arm = format!("robot.name=\"{robot}\"");
+        let opts = CellOptions {
+            truth_perception: true,
+            ..at(0.0)
+        };
+        let s = run("hand-into-arm", 20.0, &opts, &[CBF, arm.as_str()]);
+        eprintln!(
+            "{robot}: closest {:.3} m at {:.2} s",
+            s.min_distance_m, s.min_distance_t_s
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        assert!(
+            (0.05..0.15).contains(&s.min_distance_m),
+            "{robot}: closest {:.3} m",
+            s.min_distance_m
+        );
+    }
+}
+
 /// A hand held still on the path between P1 and P2 (`hand-on-path`),
 /// seen by the camera, on each arm: the filter stops short of it or goes
 /// round it and touches nothing. (The paper's law touches it on the Panda:
