@@ -47,9 +47,9 @@ pub struct TaskState {
     /// a waypoint the end effector is held from this long is passed over
     /// \[s\] (0: never; `[avoidance] pass_after_s` under the barrier filter)
     pass_after_s: f64,
-    /// how long the end effector has been held on this segment: grows
-    /// while an obstacle leaves the time law less than [`HELD_SHARE`],
-    /// shrinks as fast otherwise \[s\]
+    /// how long the end effector has been held on this segment: the time
+    /// an obstacle has left the time law less than [`HELD_SHARE`] of its
+    /// rate \[s\] (from 0 at each segment and start)
     held_s: f64,
     /// the path passes over the segment's waypoint: its time law runs
     /// whatever holds the end effector, until the next segment
@@ -385,7 +385,7 @@ mod tests {
         // path), the rest of the segment's 1.33 s at full rate: 2.48 s
         assert!((2.4..2.6).contains(&passed_at), "passed at {passed_at} s");
         assert_eq!(reached, 2, "P3 and P1, not the held P2");
-        // the pass ends with its segment: P3 → P1 runs at the filter's pace again
+        // the pass ends with its segment: the next one is paced by the filter again
         let mut t = task();
         t.pass_held_waypoints(1.0);
         t.approach = None;
