@@ -35,6 +35,8 @@ use nalgebra::{Matrix6xX, Vector3};
 use phri_config::AvoidanceConfig;
 use phri_qp::{Problem, QpError, Settings, Start, Workspace};
 
+use crate::snapshot::{Reader, Snapshot, Writer};
+
 /// Most control points that carry a row.
 pub const MAX_ROWS: usize = 64;
 
@@ -44,6 +46,10 @@ pub const SLACK_PRICE: f64 = 1e6;
 
 /// The slack counts as needed above this \[m/s\].
 const SLACK_NEEDED_M_S: f64 = 1e-6;
+
+/// Room for the warm start's active set in a snapshot: as many rows as can
+/// be active at once for the most joints a message carries.
+pub const HINT_ROOM: usize = phri_ipc::MAX_DOF + MAX_ROWS;
 
 /// The filter's figures over the run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -235,6 +241,51 @@ impl CbfFilter {
             }
         }
     }
+}
+
+/// What the filter carries from one period to the next: the control points
+/// of the last solved period and the active set it ended with, the warm
+/// start of the next solve. The solution does not depend on it, but its
+/// rounding does: a standby that adopts it answers to the bit (its own
+/// warm start, from the periods it rested through, answered up to 1e-6 Nm
+/// apart). Fixed length: the set's length, then [`HINT_ROOM`] rows.
+impl Snapshot for CbfFilter {
+    fn save(&self, w: &mut Writer<'_>) {
+        self.points_before.save(w);
+        save_hint(Some(self.ws.hint()), w);
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        self.points_before.load(r);
+        let mut hint = [0usize; HINT_ROOM];
+        let len = load_hint(&mut hint, r);
+        if r.applying() {
+            self.ws.set_hint(&hint[..len]);
+        }
+    }
+}
+
+/// A warm start's active set in [`HINT_ROOM`] rows (`None`: no filter, an
+/// empty set).
+pub(crate) fn save_hint(hint: Option<&[usize]>, w: &mut Writer<'_>) {
+    let hint = hint.unwrap_or(&[]);
+    let len = hint.len().min(HINT_ROOM);
+    w.u32(len as u32);
+    for k in 0..HINT_ROOM {
+        w.u32(hint.get(k).map_or(0, |&r| r as u32));
+    }
+}
+
+/// Reads what [`save_hint`] wrote into `hint`; returns its length (a length
+/// beyond the room is a fault).
+pub(crate) fn load_hint(hint: &mut [usize; HINT_ROOM], r: &mut Reader<'_>) -> usize {
+    let len = r.u32() as usize;
+    if len > HINT_ROOM {
+        r.fail();
+    }
+    for h in hint.iter_mut() {
+        *h = r.u32() as usize;
+    }
+    len.min(HINT_ROOM)
 }
 
 #[cfg(test)]

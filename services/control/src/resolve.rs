@@ -107,8 +107,9 @@ snapshot_fields!(SsmPeriod {
 /// What the resolver carries from one period to the next: per control
 /// point the filtered repulsion and the behind-the-hand hysteresis, the
 /// task scale, speed and separation monitoring (the monitor, when
-/// configured, after a byte saying it is) and the perception ages d_s
-/// holds. CLIK, SNS, the body task and the Jacobians keep nothing between
+/// configured, after a byte saying it is), the perception ages d_s
+/// holds, the path's pace the barrier filter let through and (after a
+/// byte saying it runs) the filter's warm start. CLIK, SNS, the body task and the Jacobians keep nothing between
 /// periods.
 impl Snapshot for Resolver {
     fn save(&self, w: &mut Writer<'_>) {
@@ -124,6 +125,15 @@ impl Snapshot for Resolver {
         self.ssm_was_violating.save(w);
         self.ssm_was_violating_standard.save(w);
         self.age_hold.save(w);
+        self.path_scale.save(w);
+        w.bool(self.cbf.is_some());
+        match &self.cbf {
+            Some(f) => f.save(w),
+            None => {
+                0u64.save(w);
+                crate::cbf::save_hint(None, w);
+            }
+        }
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.v_call_filtered.load(r);
@@ -140,6 +150,18 @@ impl Snapshot for Resolver {
         self.ssm_was_violating.load(r);
         self.ssm_was_violating_standard.load(r);
         self.age_hold.load(r);
+        self.path_scale.load(r);
+        if r.bool() != self.cbf.is_some() {
+            r.fail();
+        }
+        match self.cbf.as_mut() {
+            Some(f) => f.load(r),
+            None => {
+                let _ = r.u64();
+                let mut hint = [0usize; crate::cbf::HINT_ROOM];
+                crate::cbf::load_hint(&mut hint, r);
+            }
+        }
     }
 }
 

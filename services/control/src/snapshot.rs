@@ -32,7 +32,8 @@
 //! velocity estimator (its last `q` and filtered `q̇`), the safety monitor,
 //! the resolver (filtered repulsion per control point, the behind-the-hand
 //! hysteresis, the task scale, the speed and separation monitor's
-//! sightings, speeds and timers, its counters), the joint reference, the
+//! sightings, speeds and timers, its counters, the path's pace the barrier
+//! filter let through and the filter's warm start), the joint reference, the
 //! path history's entry count, the task (path time, ramp, segment,
 //! approach, counts), the reaction (start time, retreat progress), the
 //! collaboration (the phase machine, hand and other-hand filters and

@@ -282,3 +282,48 @@ fn a_takeover_in_contact_with_the_hand_is_the_collaboration_without_it() {
     assert!(peak(&reference) > 0.0);
     assert_eq!(peak(&faulted), peak(&reference));
 }
+
+#[test]
+fn a_takeover_while_the_barrier_filter_holds_the_arm_is_bumpless() {
+    // under the barrier filter the hand holds the arm short of its second
+    // waypoint from about 10.5 s (`coexistence`): the first controller stops
+    // at 12 s, inside the hold, where the path's pace is the filter's, and
+    // the standby, resting through the states before, takes over with the
+    // pace and the solver's warm start it adopted
+    for robot in ["robot.name=lwr4", "robot.name=panda"] {
+        let sets = [robot, "avoidance.law=\"cbf\""];
+        let seconds = 14.0;
+        let reference = run("coexistence", &sets, seconds, &standby_opts(&[]), |_, _| {});
+        let r = reference.summary.standby.clone().unwrap();
+        assert!(
+            r.max_answer_diff_nm <= 1e-9,
+            "{robot}: both controllers answer alike ({} Nm)",
+            r.max_answer_diff_nm
+        );
+        let outages = [(Down::Control, 12.0, 12.5)];
+        let faulted = run(
+            "coexistence",
+            &sets,
+            seconds,
+            &standby_opts(&outages),
+            |_, _| {},
+        );
+        let s = faulted.summary.standby.clone().unwrap();
+        println!(
+            "{robot}: {s:?}, largest torque step of the run {:.3} Nm",
+            reference.max_step_nm
+        );
+        assert_eq!((s.missed_deadlines, s.takeovers), (0, 1), "{robot}");
+        assert!(
+            s.max_answer_diff_nm <= 1e-9,
+            "{robot}: {}",
+            s.max_answer_diff_nm
+        );
+        assert!(s.max_takeover_diff_nm <= reference.max_step_nm, "{robot}");
+        let gap = largest_gap(&reference, &faulted);
+        assert!(
+            gap < 1e-9,
+            "{robot}: the arm moved as without the fault ({gap:e} rad)"
+        );
+    }
+}
