@@ -78,6 +78,24 @@ fn largest_gap(a: &Run, b: &Run) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Bumpless: both controllers answered alike, a takeover stepped the
+/// torque no more than a period of `reference` did, and the arm moved as in
+/// `reference`, the run without the fault.
+fn assert_bumpless(reference: &Run, faulted: &Run, robot: &str) {
+    let s = faulted.summary.standby.clone().expect("the standby ran");
+    assert!(
+        s.max_answer_diff_nm <= 1e-9,
+        "{robot}: {}",
+        s.max_answer_diff_nm
+    );
+    assert!(s.max_takeover_diff_nm <= reference.max_step_nm, "{robot}");
+    let gap = largest_gap(reference, faulted);
+    assert!(
+        gap < 1e-9,
+        "{robot}: the arm moved as without the fault ({gap:e} rad)"
+    );
+}
+
 fn fresh_controller(scenario: &str, sets: &[&str]) -> Controller {
     let l = loaded(scenario, sets);
     Controller::from_config(l.model().unwrap(), &l.config).unwrap()
@@ -145,18 +163,7 @@ fn a_stopped_controller_costs_the_arm_nothing_on_either_arm() {
             faulted.summary.braked_s, 0.001,
             "{robot}: braked only before the start"
         );
-        // bumpless: both answer alike, and a takeover steps no more than a period can
-        assert!(
-            s.max_answer_diff_nm <= 1e-9,
-            "{robot}: {}",
-            s.max_answer_diff_nm
-        );
-        assert!(s.max_takeover_diff_nm <= reference.max_step_nm, "{robot}");
-        let gap = largest_gap(&reference, &faulted);
-        assert!(
-            gap < 1e-9,
-            "{robot}: the arm moved as without the fault ({gap:e} rad)"
-        );
+        assert_bumpless(&reference, &faulted, &robot);
         // the stopped one rejoined as the standby: both answered after it
         // woke, every state or (resting) one in FULL_STEP_EVERY
         let both = 6000 - 500 - 300 - 100;
@@ -314,16 +321,6 @@ fn a_takeover_while_the_barrier_filter_holds_the_arm_is_bumpless() {
             reference.max_step_nm
         );
         assert_eq!((s.missed_deadlines, s.takeovers), (0, 1), "{robot}");
-        assert!(
-            s.max_answer_diff_nm <= 1e-9,
-            "{robot}: {}",
-            s.max_answer_diff_nm
-        );
-        assert!(s.max_takeover_diff_nm <= reference.max_step_nm, "{robot}");
-        let gap = largest_gap(&reference, &faulted);
-        assert!(
-            gap < 1e-9,
-            "{robot}: the arm moved as without the fault ({gap:e} rad)"
-        );
+        assert_bumpless(&reference, &faulted, robot);
     }
 }
