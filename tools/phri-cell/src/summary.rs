@@ -61,6 +61,12 @@ pub struct CellSummary {
     pub standby: Option<StandbySummary>,
     /// the control-barrier filter (`[avoidance] law = "cbf"`; null under the paper's law)
     pub barrier: Option<BarrierSummary>,
+    /// the largest change of the applied torque of any joint from one
+    /// period to the next, the brakes off in both \[Nm\] (the first command
+    /// after the brakes not counted: gravity taken up at once)
+    pub max_torque_step_nm: f64,
+    /// ... its 99th percentile over the periods \[Nm\]
+    pub torque_step_p99_nm: f64,
 }
 
 /// What the control-barrier filter did in a lock-step run (the controller in charge's).
@@ -127,6 +133,10 @@ pub(crate) struct Accounting {
     collision: bool,
     /// the controller in charge's count of the standard's S_p violations last seen
     standard_seen: u64,
+    /// the torque applied in the last period, the brakes off (empty: braked)
+    last_torque: Vec<f64>,
+    /// each period's largest joint torque step \[Nm\]
+    torque_steps: Vec<f64>,
 }
 
 impl Accounting {
@@ -140,6 +150,8 @@ impl Accounting {
             open: Vec::new(),
             collision: false,
             standard_seen: 0,
+            last_torque: Vec::new(),
+            torque_steps: Vec::new(),
         }
     }
 
@@ -213,6 +225,20 @@ impl Accounting {
         }
         if link.brake {
             s.braked_s += self.dt_s;
+            self.last_torque.clear();
+        } else {
+            let tau = link.torque();
+            if self.last_torque.len() == tau.len() {
+                let step = tau
+                    .iter()
+                    .zip(&self.last_torque)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                s.max_torque_step_nm = s.max_torque_step_nm.max(step);
+                self.torque_steps.push(step);
+            }
+            self.last_torque.clear();
+            self.last_torque.extend_from_slice(tau);
         }
         let mut still = Vec::with_capacity(t.contacts.len());
         for c in &t.contacts {
@@ -249,6 +275,13 @@ impl Accounting {
         s.ssm_violations = s.iso_ts_15066.ssm_violations;
         s.waypoints = counters.waypoints_reached;
         s.detections = counters.detections;
+        let mut steps = self.torque_steps.clone();
+        steps.sort_by(f64::total_cmp);
+        s.torque_step_p99_nm = steps
+            .get((steps.len() as f64 * 0.99) as usize)
+            .or(steps.last())
+            .copied()
+            .unwrap_or(0.0);
         for c in &s.contacts {
             let touching = ((c.t_start_s, c.t_end_s), c.link.as_str(), c.part.as_str());
             let truth = phri_iso15066::ForceSource::Truth;
