@@ -47,10 +47,14 @@ pub struct AvoidanceConfig {
     /// the filter's joint velocities reach the reference through this
     /// slew limit \[rad/s²\] (the paper's law: `control.reference_accel_limit`)
     pub accel_limit: f64,
+    /// … and this jerk limit \[rad/s³\]: the reference's acceleration, fed
+    /// forward into the torque, changes by at most this × the period (0:
+    /// the slew alone)
+    pub jerk_limit: f64,
 }
 
 impl AvoidanceConfig {
-    /// γ, margin, speed, weight, the pass's wait and the slew limit are
+    /// γ, margin, speed, weight, the pass's wait, the slew and jerk limits are
     /// finite and non-negative; γ and the slew limit > 0.
     pub fn validate(&self) -> Result<(), Invalid> {
         for (name, v) in [
@@ -60,6 +64,7 @@ impl AvoidanceConfig {
             ("task_weight", self.task_weight),
             ("pass_after_s", self.pass_after_s),
             ("accel_limit", self.accel_limit),
+            ("jerk_limit", self.jerk_limit),
         ] {
             non_negative(S, name, v)?;
         }

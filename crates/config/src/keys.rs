@@ -192,6 +192,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("avoidance.human_speed_m_s", "m/s", "cbf: d_s = margin_m + this × the perception's age (ISO 13855: 1.6)"),
     d("avoidance.task_weight", "s²", "cbf: the end effector's task velocity against 1 per joint velocity"),
     d("avoidance.accel_limit", "rad/s²", "cbf: slew limit of the reference velocity (the paper's law: control.reference_accel_limit)"),
+    d("avoidance.jerk_limit", "rad/s³", "cbf: jerk limit of the reference velocity, whose acceleration the torque feeds forward (0: the slew alone)"),
     d("avoidance.pass_after_s", "s", "cbf: a waypoint the filter holds the end effector from this long is passed over (0: wait)"),
     d("ssm.enabled", "", "speed and separation monitoring (ISO/TS 15066 5.5.4) outside the collaboration; false: reported degraded"),
     d("ssm.human_speed", "", "v_h: measured (a speed the cell monitors) or iso13855 (2.0 m/s within 0.5 m, 1.6 m/s beyond)"),

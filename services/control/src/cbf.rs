@@ -302,6 +302,7 @@ mod tests {
             task_weight: 100.0,
             pass_after_s: 1.0,
             accel_limit: 30.0,
+            jerk_limit: 6000.0,
         }
     }
 

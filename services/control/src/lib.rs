@@ -48,6 +48,7 @@ pub mod requests;
 pub mod resolve;
 pub mod safety;
 pub mod service;
+pub mod slew;
 pub mod snapshot;
 pub mod sns;
 pub mod ssm;

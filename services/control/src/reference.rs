@@ -24,6 +24,8 @@ pub struct JointReference {
     pub qd_ref: Vec<f64>,
     /// the reference velocity of the previous period [rad/s] (feed-forward)
     pub qd_ref_prev: Vec<f64>,
+    /// the reference acceleration fed forward last period [rad/s²] (0 at a hold)
+    pub qdd_ref: Vec<f64>,
     /// joint positions held \[rad\]
     pub q_hold: Vec<f64>,
     /// end-effector position held while recovering \[m\], base frame
@@ -34,6 +36,7 @@ snapshot_fields!(JointReference {
     q_ref,
     qd_ref,
     qd_ref_prev,
+    qdd_ref,
     q_hold,
     x_hold
 });
@@ -45,6 +48,7 @@ impl JointReference {
             q_ref: vec![0.0; n],
             qd_ref: vec![0.0; n],
             qd_ref_prev: vec![0.0; n],
+            qdd_ref: vec![0.0; n],
             q_hold: vec![0.0; n],
             x_hold: Vector3::zeros(),
         }
@@ -56,6 +60,7 @@ impl JointReference {
         self.q_ref.copy_from_slice(q);
         self.qd_ref.fill(0.0);
         self.qd_ref_prev.fill(0.0);
+        self.qdd_ref.fill(0.0);
     }
 
     /// Track (`q_ref`, `qd_ref`) with the feed-forward of the reference's
@@ -67,6 +72,7 @@ impl JointReference {
             } else {
                 0.0
             };
+            self.qdd_ref[i] = qdd_ref;
             accel[i] = qdd_ref + g.kp * (self.q_ref[i] - q[i]) + g.kd * (self.qd_ref[i] - qd[i]);
         }
         self.qd_ref_prev.copy_from_slice(&self.qd_ref);

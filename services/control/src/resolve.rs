@@ -18,6 +18,7 @@ use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
 use crate::reference::JointReference;
+use crate::slew;
 use crate::snapshot::{snapshot_fields, Reader, Snapshot, Writer};
 use crate::ssm::SsmMonitor;
 
@@ -627,6 +628,13 @@ impl Resolver {
         // it was computed for; the limit only delays reaching it), except
         // when the separation monitor stops an approach: then at once, as
         // the protective stop holds (no feed-forward of the step)
+        // under the filter, with a jerk limit: (its slew, its jerk)
+        let jerk = match (self.cbf.as_ref(), self.ssm_period.stopping) {
+            (Some(f), false) if f.config().jerk_limit > 0.0 => {
+                Some((f.config().accel_limit, f.config().jerk_limit))
+            }
+            _ => None,
+        };
         let dv = match self.ssm_period.stopping {
             true => f64::INFINITY,
             // the filter's answer lags the reference no more than a slew
@@ -659,8 +667,19 @@ impl Resolver {
             });
         match solved {
             Ok(qd) => {
-                for (r, &target) in reference.qd_ref.iter_mut().zip(qd) {
-                    *r += (target - *r).clamp(-dv, dv);
+                let r = &mut *reference;
+                match jerk {
+                    Some(limits) => {
+                        let v = r.qd_ref.iter_mut().zip(r.qdd_ref.iter_mut());
+                        for ((v, a), &target) in v.zip(qd) {
+                            slew::slew_jerk(v, a, target, limits, dt);
+                        }
+                    }
+                    None => {
+                        for (v, &target) in r.qd_ref.iter_mut().zip(qd) {
+                            slew::slew(v, target, dv);
+                        }
+                    }
                 }
                 if self.ssm_period.stopping {
                     reference.qd_ref_prev.copy_from_slice(&reference.qd_ref);

@@ -193,7 +193,10 @@ fn a_hand_thrust_into_the_path_at_1_m_s_is_never_touched() {
 /// phase where it comes nearest, on each arm: the filter's braking reaches
 /// the arm through its own slew limit (`[avoidance] accel_limit`), so the
 /// hand stays beyond d_s's fixed part, 5 cm. (At the paper's law's slew,
-/// 10 rad/s², it came to 4.2 cm of the FR3 and 3.8 cm of the Panda.)
+/// 10 rad/s², it came to 4.2 cm of the FR3 and 3.8 cm of the Panda.) Its
+/// jerk limit (`[avoidance] jerk_limit`) keeps the braking from stepping
+/// the torque: at most 15-24 Nm from one period to the next (with the slew
+/// alone, 97-154 Nm, the reference's acceleration fed forward).
 #[test]
 fn a_hand_thrust_at_1_m_s_seen_as_it_is_is_held_at_the_margin() {
     for robot in ["lwr4", "fr3", "panda"] {
@@ -212,6 +215,11 @@ fn a_hand_thrust_at_1_m_s_seen_as_it_is_is_held_at_the_margin() {
             (0.05..0.15).contains(&s.min_distance_m),
             "{robot}: closest {:.3} m",
             s.min_distance_m
+        );
+        assert!(
+            s.max_torque_step_nm < 35.0,
+            "{robot}: the torque stepped {:.1} Nm in a period",
+            s.max_torque_step_nm
         );
     }
 }
