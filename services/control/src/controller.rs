@@ -230,7 +230,8 @@ impl Controller {
             if cfg.repulsion.workers == 0 || cfg.repulsion.points.is_empty() {
                 return Err(ControlError::NoControlPoints);
             }
-            c.resolver.set_ssm(cfg.ssm.enabled.then_some(&cfg.ssm));
+            c.resolver
+                .set_ssm(cfg.ssm.enabled.then_some(&cfg.ssm), cfg.cameras.len());
             c.resolver.set_law(&cfg.avoidance)?;
             if c.resolver.cbf_law() {
                 c.task.pass_held_waypoints(cfg.avoidance.pass_after_s);

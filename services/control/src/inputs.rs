@@ -59,6 +59,19 @@ pub struct PerceptionView<'a> {
     pub capture_ns: u64,
     /// newest result per control point, indexed by point (0: the end effector)
     pub points: &'a [PointRepulsion],
+    /// with several cameras, per point the camera whose result it is and
+    /// that result's capture time (empty: one camera, every point its own
+    /// at `capture_ns`), so that a rate is measured over one camera's frames
+    pub sources: &'a [PointSource],
+}
+
+/// Which camera's result a fused point is ([`PerceptionView::sources`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PointSource {
+    /// the camera's index in `[[camera]]`
+    pub camera: usize,
+    /// the result's capture time [ns, robot clock]
+    pub capture_ns: u64,
 }
 
 /// One control period's inputs.
@@ -152,6 +165,8 @@ pub struct RepulsionInputs {
     cameras: Vec<CameraResults>,
     /// the fused view's points and capture time (several cameras)
     fused: Vec<PointRepulsion>,
+    /// ... each point's camera and capture time
+    fused_sources: Vec<PointSource>,
     fused_capture_ns: u64,
     /// per camera: point-periods it gave the fused distance
     gave: Vec<u64>,
@@ -188,6 +203,7 @@ impl RepulsionInputs {
                     ..PointRepulsion::default()
                 })
                 .collect(),
+            fused_sources: vec![PointSource::default(); points],
             fused_capture_ns: 0,
             gave: vec![0; cameras],
             max_age_ns,
@@ -322,7 +338,12 @@ impl RepulsionInputs {
             .max()
             .unwrap_or(0);
         self.fused_capture_ns = capture_ns;
-        for (k, slot) in self.fused.iter_mut().enumerate() {
+        for (k, (slot, source)) in self
+            .fused
+            .iter_mut()
+            .zip(&mut self.fused_sources)
+            .enumerate()
+        {
             let mut best: Option<usize> = None;
             for (i, c) in cameras.iter().enumerate() {
                 let eligible = match any_fresh {
@@ -340,6 +361,10 @@ impl RepulsionInputs {
             }
             if let Some(b) = best {
                 *slot = cameras[b].points[k];
+                *source = PointSource {
+                    camera: b,
+                    capture_ns: cameras[b].point_capture_ns[k],
+                };
                 self.gave[b] += 1;
                 // the first camera's direction at the fused magnitude
                 let first = &cameras[0].points[k];
@@ -367,10 +392,12 @@ impl RepulsionInputs {
             [one] => PerceptionView {
                 capture_ns: one.capture_ns(),
                 points: &one.points,
+                sources: &[],
             },
             _ => PerceptionView {
                 capture_ns: self.fused_capture_ns,
                 points: &self.fused,
+                sources: &self.fused_sources,
             },
         }
     }

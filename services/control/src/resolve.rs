@@ -350,14 +350,15 @@ impl Resolver {
         self.v_call_filtered = vec![Vector3::zeros(); points.len()];
         self.behind_before = vec![false; points.len()];
         if let Some(m) = self.ssm.as_mut() {
-            *m = SsmMonitor::new(m.config(), points.len());
+            *m = SsmMonitor::with_cameras(m.config(), points.len(), m.cameras());
         }
         Ok(())
     }
 
-    /// Speed and separation monitoring after `[ssm]` (`None`: off).
-    pub fn set_ssm(&mut self, cfg: Option<&phri_config::SsmConfig>) {
-        self.ssm = cfg.map(|c| SsmMonitor::new(c, self.points.len()));
+    /// Speed and separation monitoring after `[ssm]` (`None`: off), with
+    /// `cameras` cameras' results.
+    pub fn set_ssm(&mut self, cfg: Option<&phri_config::SsmConfig>, cameras: usize) {
+        self.ssm = cfg.map(|c| SsmMonitor::with_cameras(c, self.points.len(), cameras));
     }
 
     /// What speed and separation monitoring did so far.
@@ -1118,6 +1119,7 @@ mod tests {
             let view = PerceptionView {
                 capture_ns: 1,
                 points: &[],
+                sources: &[],
             };
             let f = r.avoid(
                 &model,

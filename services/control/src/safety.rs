@@ -209,6 +209,7 @@ mod tests {
         let view = |capture_ms: u64, points| PerceptionView {
             capture_ns: capture_ms * 1_000_000,
             points,
+            sources: &[],
         };
         let mut m = SafetyMonitor::default();
         let s = m.assess(&input(1000, None, Some(view(950, &near))), &cfg, 7);

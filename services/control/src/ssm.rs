@@ -39,7 +39,12 @@ struct Sample {
 #[derive(Clone, Debug)]
 pub struct SsmMonitor {
     cfg: SsmConfig,
+    /// per control point, its last sighting by each camera (point-major:
+    /// `k × cameras + camera`), so that a rate is measured between two
+    /// frames of one camera
     last: Vec<Option<Sample>>,
+    /// cameras whose sightings are kept apart (1 or more)
+    cameras: usize,
     /// per control point, the person's measured speed toward it [m/s]
     v_h: Vec<f64>,
     /// per control point, how long it has been approaching its obstacle
@@ -68,16 +73,28 @@ snapshot_fields!(SsmMonitor {
 });
 
 impl SsmMonitor {
-    /// For `points` control points.
+    /// For `points` control points seen by one camera.
     pub fn new(cfg: &SsmConfig, points: usize) -> SsmMonitor {
+        SsmMonitor::with_cameras(cfg, points, 1)
+    }
+
+    /// For `points` control points seen by `cameras` cameras.
+    pub fn with_cameras(cfg: &SsmConfig, points: usize, cameras: usize) -> SsmMonitor {
+        let cameras = cameras.max(1);
         SsmMonitor {
             cfg: cfg.clone(),
-            last: vec![None; points],
+            last: vec![None; points * cameras],
+            cameras,
             v_h: vec![0.0; points],
             inside_s: vec![0.0; points],
             inside_standard_s: vec![0.0; points],
             frame_ns: 0,
         }
+    }
+
+    /// Cameras whose sightings it keeps apart.
+    pub fn cameras(&self) -> usize {
+        self.cameras
     }
 
     /// Its configuration.
@@ -109,10 +126,24 @@ impl SsmMonitor {
         self.frame_ns = t;
         let fall = self.cfg.human_speed_decay * since.min(1.0);
         for (k, p) in view.points.iter().enumerate() {
-            let (Some(last), Some(v_h)) = (self.last.get_mut(k), self.v_h.get_mut(k)) else {
+            let Some(v_h) = self.v_h.get_mut(k) else {
                 break;
             };
             *v_h = (*v_h - fall).max(0.0);
+            // with several cameras, the point's own camera and capture: a
+            // rate between two cameras' views is their disagreement, not
+            // the person's motion (up to the 3 m/s cap from a few mm apart
+            // in time)
+            let (camera, t_k) = match view.sources.get(k) {
+                Some(s) => (s.camera, s.capture_ns),
+                None => (0, t),
+            };
+            if camera >= self.cameras {
+                continue;
+            }
+            let Some(last) = self.last.get_mut(k * self.cameras + camera) else {
+                break;
+            };
             let position = Vector3::from(p.position);
             let obstacle = Vector3::from(p.obstacle);
             let usable = p.active != 0
@@ -126,9 +157,13 @@ impl SsmMonitor {
                 continue;
             }
             if let Some(s) = *last {
-                let dt = (t - s.capture_ns.min(t)) as f64 * 1e-9;
+                if t_k <= s.capture_ns {
+                    // this camera's sighting of the point is not newer
+                    continue;
+                }
+                let dt = (t_k - s.capture_ns) as f64 * 1e-9;
                 let away = position - obstacle;
-                if dt > 0.0 && dt <= MAX_FRAME_GAP_S && away.norm() > 1e-6 {
+                if dt <= MAX_FRAME_GAP_S && away.norm() > 1e-6 {
                     let closing = (s.d - p.min_distance) / dt;
                     let own = -(position - s.position).dot(&away.normalize()) / dt;
                     let measured = (closing - own).clamp(0.0, HUMAN_SPEED_MAX);
@@ -136,7 +171,7 @@ impl SsmMonitor {
                 }
             }
             *last = Some(Sample {
-                capture_ns: t,
+                capture_ns: t_k,
                 d: p.min_distance,
                 position,
             });
@@ -289,6 +324,65 @@ mod tests {
         assert_eq!(m.approaching_inside_standard(3, true, 0.001), 0.0);
     }
 
+    /// Two cameras phase-shifted by 16 ms see a person standing still at
+    /// different clearances (each a bound from its own view), and the
+    /// fused point alternates between them: no speed. The same person
+    /// walking in at 1 m/s, seen by both: 1 m/s.
+    #[test]
+    fn the_speed_is_measured_over_one_camera_s_frames() {
+        use crate::inputs::PointSource;
+        let mut m = SsmMonitor::with_cameras(&cfg(HumanSpeed::Measured), 1, 2);
+        let at = |camera: usize, ms: u64| PointSource {
+            camera,
+            capture_ns: ms * 1_000_000,
+        };
+        // (camera, capture [ms], clearance [m]) in the order fused
+        let still = [
+            (0, 1000, 0.30),
+            (1, 1016, 0.20),
+            (0, 1033, 0.30),
+            (1, 1050, 0.20),
+        ];
+        for (camera, ms, d) in still {
+            let (pts, src) = ([point(d, 0.5)], [at(camera, ms)]);
+            m.observe(&PerceptionView {
+                capture_ns: ms * 1_000_000,
+                points: &pts,
+                sources: &src,
+            });
+        }
+        assert_eq!(m.human_speed(0, 0.2), 0.0, "a disagreement is no motion");
+        // taken as one stream, 10 cm in 16 ms would be the 3 m/s cap
+        let mut one = SsmMonitor::new(&cfg(HumanSpeed::Measured), 1);
+        for (_, ms, d) in still {
+            let pts = [point(d, 0.5)];
+            one.observe(&PerceptionView {
+                capture_ns: ms * 1_000_000,
+                points: &pts,
+                sources: &[],
+            });
+        }
+        assert_eq!(one.human_speed(0, 0.2), HUMAN_SPEED_MAX);
+        // walking in: each camera's clearance shrinks 1 m/s × its frame gap
+        let mut m = SsmMonitor::with_cameras(&cfg(HumanSpeed::Measured), 1, 2);
+        for (camera, ms, d0) in [
+            (0, 2000, 0.60),
+            (1, 2016, 0.50),
+            (0, 2033, 0.60),
+            (1, 2050, 0.50),
+        ] {
+            let d = d0 - (ms - 2000) as f64 * 1e-3 * 1.0;
+            let (pts, src) = ([point(d, 0.5)], [at(camera, ms)]);
+            m.observe(&PerceptionView {
+                capture_ns: ms * 1_000_000,
+                points: &pts,
+                sources: &src,
+            });
+        }
+        let v = m.human_speed(0, 0.45);
+        assert!((v - 1.0).abs() < 0.05, "{v}");
+    }
+
     #[test]
     fn a_person_walking_in_is_measured_and_forgotten_slowly() {
         let mut m = SsmMonitor::new(&cfg(HumanSpeed::Measured), 1);
@@ -297,6 +391,7 @@ mod tests {
             PerceptionView {
                 capture_ns: t_ms * 1_000_000,
                 points,
+                sources: &[],
             }
         }
         m.observe(&view(&pts, 1000));
