@@ -249,43 +249,70 @@ impl CbfFilter {
 /// rounding does: a standby that adopts it answers to the bit (its own
 /// warm start, from the periods it rested through, answered up to 1e-6 Nm
 /// apart). Fixed length: the set's length, then [`HINT_ROOM`] rows.
-impl Snapshot for CbfFilter {
-    fn save(&self, w: &mut Writer<'_>) {
-        self.points_before.save(w);
-        save_hint(Some(self.ws.hint()), w);
-    }
-    fn load(&mut self, r: &mut Reader<'_>) {
-        self.points_before.load(r);
-        let mut hint = [0usize; HINT_ROOM];
-        let len = load_hint(&mut hint, r);
-        if r.applying() {
-            self.ws.set_hint(&hint[..len]);
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WarmStart {
+    /// the control points of the last solved period (bit k: point k)
+    points: u64,
+    /// rows of the active set in `rows`
+    len: u32,
+    /// the active set's rows
+    rows: [u32; HINT_ROOM],
+}
+
+impl Default for WarmStart {
+    fn default() -> WarmStart {
+        WarmStart {
+            points: 0,
+            len: 0,
+            rows: [0; HINT_ROOM],
         }
     }
 }
 
-/// A warm start's active set in [`HINT_ROOM`] rows (`None`: no filter, an
-/// empty set).
-pub(crate) fn save_hint(hint: Option<&[usize]>, w: &mut Writer<'_>) {
-    let hint = hint.unwrap_or(&[]);
-    let len = hint.len().min(HINT_ROOM);
-    w.u32(len as u32);
-    for k in 0..HINT_ROOM {
-        w.u32(hint.get(k).map_or(0, |&r| r as u32));
+impl Snapshot for WarmStart {
+    fn save(&self, w: &mut Writer<'_>) {
+        self.points.save(w);
+        self.len.save(w);
+        self.rows.save(w);
+    }
+    fn load(&mut self, r: &mut Reader<'_>) {
+        let mut read = WarmStart::default();
+        read.points.load(r);
+        read.len.load(r);
+        read.rows.load(r);
+        if read.len as usize > HINT_ROOM {
+            r.fail();
+        }
+        r.store(self, read);
     }
 }
 
-/// Reads what [`save_hint`] wrote into `hint`; returns its length (a length
-/// beyond the room is a fault).
-pub(crate) fn load_hint(hint: &mut [usize; HINT_ROOM], r: &mut Reader<'_>) -> usize {
-    let len = r.u32() as usize;
-    if len > HINT_ROOM {
-        r.fail();
+impl CbfFilter {
+    /// The warm start of the next solve, to carry to a peer.
+    pub fn warm_start(&self) -> WarmStart {
+        let hint = self.ws.hint();
+        let len = hint.len().min(HINT_ROOM);
+        let mut rows = [0; HINT_ROOM];
+        for (r, &h) in rows.iter_mut().zip(&hint[..len]) {
+            *r = h as u32;
+        }
+        WarmStart {
+            points: self.points_before,
+            len: len as u32,
+            rows,
+        }
     }
-    for h in hint.iter_mut() {
-        *h = r.u32() as usize;
+
+    /// Solve on from a peer's warm start.
+    pub fn adopt_warm_start(&mut self, w: &WarmStart) {
+        self.points_before = w.points;
+        let mut hint = [0usize; HINT_ROOM];
+        let len = (w.len as usize).min(HINT_ROOM);
+        for (h, &r) in hint.iter_mut().zip(&w.rows[..len]) {
+            *h = r as usize;
+        }
+        self.ws.set_hint(&hint[..len]);
     }
-    len.min(HINT_ROOM)
 }
 
 #[cfg(test)]

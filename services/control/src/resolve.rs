@@ -12,7 +12,7 @@ use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
 use phri_model::{Data, Model};
 
 use crate::avoidance::Avoidance;
-use crate::cbf::{CbfCounters, CbfFilter};
+use crate::cbf::{CbfCounters, CbfFilter, WarmStart};
 use crate::clik::{Clik, ClikGains};
 use crate::error::ControlError;
 use crate::inputs::PerceptionView;
@@ -110,8 +110,8 @@ snapshot_fields!(SsmPeriod {
 /// task scale, speed and separation monitoring (the monitor, when
 /// configured, after a byte saying it is), the perception ages d_s
 /// holds, the path's pace the barrier filter let through and (after a
-/// byte saying it runs) the filter's warm start. CLIK, SNS, the body task and the Jacobians keep nothing between
-/// periods.
+/// byte saying it runs) the filter's warm start. CLIK, SNS, the body task
+/// and the Jacobians keep nothing between periods.
 impl Snapshot for Resolver {
     fn save(&self, w: &mut Writer<'_>) {
         self.v_call_filtered.save(w);
@@ -127,14 +127,7 @@ impl Snapshot for Resolver {
         self.ssm_was_violating_standard.save(w);
         self.age_hold.save(w);
         self.path_scale.save(w);
-        w.bool(self.cbf.is_some());
-        match &self.cbf {
-            Some(f) => f.save(w),
-            None => {
-                0u64.save(w);
-                crate::cbf::save_hint(None, w);
-            }
-        }
+        self.cbf.as_ref().map(CbfFilter::warm_start).save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.v_call_filtered.load(r);
@@ -152,16 +145,15 @@ impl Snapshot for Resolver {
         self.ssm_was_violating_standard.load(r);
         self.age_hold.load(r);
         self.path_scale.load(r);
+        // as an Option's layout; the tag is read here so that a dry run
+        // checks it too
         if r.bool() != self.cbf.is_some() {
             r.fail();
         }
-        match self.cbf.as_mut() {
-            Some(f) => f.load(r),
-            None => {
-                let _ = r.u64();
-                let mut hint = [0usize; crate::cbf::HINT_ROOM];
-                crate::cbf::load_hint(&mut hint, r);
-            }
+        let mut warm = WarmStart::default();
+        warm.load(r);
+        if let (Some(f), true) = (self.cbf.as_mut(), r.applying()) {
+            f.adopt_warm_start(&warm);
         }
     }
 }
@@ -629,13 +621,6 @@ impl Resolver {
         // it was computed for; the limit only delays reaching it), except
         // when the separation monitor stops an approach: then at once, as
         // the protective stop holds (no feed-forward of the step)
-        // under the filter, with a jerk limit: (its slew, its jerk)
-        let jerk = match (self.cbf.as_ref(), self.ssm_period.stopping) {
-            (Some(f), false) if f.config().jerk_limit > 0.0 => {
-                Some((f.config().accel_limit, f.config().jerk_limit))
-            }
-            _ => None,
-        };
         let dv = match self.ssm_period.stopping {
             true => f64::INFINITY,
             // the filter's answer lags the reference no more than a slew
@@ -644,6 +629,13 @@ impl Resolver {
                 Some(f) => f.config().accel_limit * dt,
                 None => cfg.reference_accel_limit * dt,
             },
+        };
+        // under the filter, with a jerk limit: (its slew, its jerk)
+        let jerk = match (self.cbf.as_ref(), self.ssm_period.stopping) {
+            (Some(f), false) if f.config().jerk_limit > 0.0 => {
+                Some((f.config().accel_limit, f.config().jerk_limit))
+            }
+            _ => None,
         };
         let solved = self
             .avoidance
