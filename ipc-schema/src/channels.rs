@@ -9,6 +9,15 @@ use crate::qos::Qos;
 
 /// [`JointState`] from the robot (simulated or real adapter), 1 kHz. Wakes: new state.
 pub const ROBOT_STATE: Channel<JointState> = Channel::new("robot/state", Qos::ONE_PUBLISHER, true);
+/// [`JointState`] from the robot again, for the hot standby on
+/// `robot/command/standby` only when its answer is wanted: every state while
+/// it is in charge, and a state the controller in charge has not answered
+/// by the robot's next period (the robot waits a grace for it). The
+/// standby otherwise rests on a clock of its own (`[control]
+/// standby_wake_ms`); a robot adapter that cannot wait republishes every
+/// state. Wakes: a state to answer.
+pub const ROBOT_STATE_STANDBY: Channel<JointState> =
+    Channel::new("robot/state/standby", Qos::ONE_PUBLISHER, true);
 /// [`TorqueCommand`] to the robot, one publisher only (the controller). Wakes: new command.
 pub const ROBOT_COMMAND: Channel<TorqueCommand> =
     Channel::new("robot/command", Qos::ONE_PUBLISHER, true);
@@ -243,6 +252,7 @@ const _: () = {
     assert!(PERCEPTION_REPULSION.qos.max_publishers >= 4);
     assert!(CAMERA_DEPTH.qos.history == 0 && PERCEPTION_DEPTH.qos.history == 0);
     assert!(ROBOT_STATE.wakes && ROBOT_COMMAND.wakes && DYNAMICS_RESIDUAL.wakes);
+    assert!(ROBOT_STATE_STANDBY.wakes && ROBOT_STATE_STANDBY.qos.max_publishers == 1);
     assert!(CAMERA_DEPTH.wakes && PERCEPTION_DEPTH.wakes && !SIM_TRUTH.wakes);
     assert!(AUDIO_MIC.qos.max_publishers == 1 && AUDIO_MIC.wakes);
     assert!(crate::owners::PUBLISHERS.len() <= crate::messages::AUDIT_CHANNELS);
@@ -282,11 +292,13 @@ pub const ALL: &[&str] = &[
     CAMERA_STATUS.name,
     AUDIO_MIC_STATUS.name,
     CONTROL_BARRIER.name,
+    ROBOT_STATE_STANDBY.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
 /// fault, a contact, a request, a collaboration, an arm outside the cell, a
-/// roster past one health message, the barrier filter chosen): monitors and tests must not
+/// roster past one health message, the barrier filter chosen, a standby's
+/// answer wanted): monitors and tests must not
 /// expect traffic on them.
 pub const ON_DEMAND: &[&str] = &[
     FAULT_DEPTH.name,
@@ -302,6 +314,7 @@ pub const ON_DEMAND: &[&str] = &[
     ROS2_REQUESTS.name,
     SUPERVISOR_HEALTH_MORE.name,
     CONTROL_BARRIER.name,
+    ROBOT_STATE_STANDBY.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -347,6 +360,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(CAMERA_STATUS);
     v.message(AUDIO_MIC_STATUS);
     v.message(CONTROL_BARRIER);
+    v.message(ROBOT_STATE_STANDBY);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

@@ -70,6 +70,9 @@ impl Owned {
             n if n == crate::channels::DYNAMICS_RESIDUAL_STANDBY.name => {
                 crate::channels::DYNAMICS_RESIDUAL.name
             }
+            n if n == crate::channels::ROBOT_STATE_STANDBY.name => {
+                crate::channels::ROBOT_STATE.name
+            }
             n => n,
         };
         PUBLISHERS.iter().position(|(c, _)| *c == name).map(Owned)

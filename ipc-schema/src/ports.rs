@@ -83,6 +83,7 @@ pub const PORTS: &[Ports] = &[
         When::ArmSimulated,
         &[
             ROBOT_STATE.name,
+            ROBOT_STATE_STANDBY.name,
             ROBOT_STATS.name,
             ROBOT_COMMANDERS.name,
             INPUT_AUDIT.name,
@@ -95,6 +96,7 @@ pub const PORTS: &[Ports] = &[
         When::Always,
         &[
             ROBOT_STATE.name,
+            ROBOT_STATE_STANDBY.name,
             ROBOT_STATS.name,
             ROBOT_COMMANDERS.name,
             ROBOT_BOX.name,
@@ -150,7 +152,7 @@ pub const PORTS: &[Ports] = &[
         "phri-control",
         When::Flag("--standby"),
         &[ROBOT_COMMAND_STANDBY.name, CONTROL_STANDBY_BEHAVIOUR.name],
-        &[CONTROL_BEHAVIOUR.name],
+        &[CONTROL_BEHAVIOUR.name, ROBOT_STATE_STANDBY.name],
     ),
     ports(
         "phri-camera",

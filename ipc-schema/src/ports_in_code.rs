@@ -123,6 +123,7 @@ macro_rules! constants {
 /// Every channel constant by its identifier.
 const CONSTANTS: &[(&str, &str)] = constants![
     ROBOT_STATE,
+    ROBOT_STATE_STANDBY,
     ROBOT_COMMAND,
     ROBOT_COMMAND_STANDBY,
     ROBOT_COMMANDERS,

@@ -48,11 +48,12 @@ impl Qos {
         ..Qos::ONE_PUBLISHER
     };
     /// A controller's behaviour state for its standby: one publisher, one
-    /// reader that wants the newest only, no history (a restarted standby
-    /// waits for the next period's).
+    /// reader that takes every one, waking every `[control] standby_wake_ms`
+    /// (25 ms at most), no history (a restarted standby waits for the next
+    /// period's).
     pub const BEHAVIOUR: Qos = Qos {
         max_subscribers: 8,
-        subscriber_max_buffer: 2,
+        subscriber_max_buffer: 32,
         history: 0,
         ..Qos::ONE_PUBLISHER
     };

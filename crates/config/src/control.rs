@@ -65,6 +65,12 @@ pub struct ControlConfig {
     /// the answers); it still takes over in the same period. False: it
     /// steps and answers every state
     pub standby_rests: bool,
+    /// the controller on `robot/command/standby`, not in charge, wakes this
+    /// often to take the behaviours and inputs queued since, and rests; the
+    /// robot wakes it at once (`robot/state/standby`) for a state the one
+    /// in charge has not answered, and for every state while it is in
+    /// charge. 0: it is woken by every state \[ms\]
+    pub standby_wake_ms: f64,
     /// resume the task once the residual stayed below the contact level for `resume_quiet_s`
     pub resume: bool,
     /// how long the residual must stay below the contact level before the

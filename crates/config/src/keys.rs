@@ -164,6 +164,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("control.reaction_min_s", "s", "react at least this long"),
     d("control.standby", "", "a hot standby controller and residual take over in the same period; false: one controller"),
     d("control.standby_rests", "", "true: the controller not in charge skips its step of a state the one in charge already answered (one in 64 stepped all the same; it keeps the path history of the behaviours it receives); false: it steps every state"),
+    d("control.standby_wake_ms", "ms", "the standby controller, not in charge, wakes this often and takes what was queued since; the robot wakes it at once for a state the one in charge has not answered (0: every state wakes it)"),
     d("control.resume", "", "resume the task when the residual is quiet ..."),
     d("control.resume_quiet_s", "s", "... for this long"),
     d("control.residual_max_age_ms", "ms", "older residual: protective stop"),

@@ -126,6 +126,7 @@ pub const SAFETY_RANGES: &[Range] = &[
     r("dynamics.warmup_samples", 0.0, 1000.0, "samples", "no detection for longer than 1 s after a (re)start"),
     r("dynamics.standby_wake_ms", 0.0, 2.5, "ms", "a standby residual this much older detects a collision later once the one in charge is gone"),
     // the controller's inputs, reactions and speeds
+    r("control.standby_wake_ms", 0.0, 25.0, "ms", "past the 32 behaviours its channel queues, a standby loses the path history a retreat after its takeover walks back"),
     ro("control.residual_max_age_ms", 0.0, 1000.0, "ms", STALE),
     ro("control.perception_max_age_ms", 0.0, 1000.0, "ms", STALE),
     ro("control.perception_stop_after_ms", 0.0, 5000.0, "ms", "stale perception this long stops the arm whatever was seen last"),

@@ -24,14 +24,19 @@
 //! when; the waiting is the caller's. Missed deadlines are reported as runs
 //! ([`MissRun`]), one per run of consecutive misses, when it ends.
 //!
-//! With a hot standby ([`RobotLink::cycle_slots`]) two controllers answer
-//! every state, each on a command channel of its own (slot 0
-//! `robot/command`, slot 1 `robot/command/standby`). The slot in charge
-//! commands while it answers in time; when its fresh answer is missing and
-//! the other slot's is there, the other slot's is applied in the same period
-//! and that slot is in charge from then on (a **takeover**, counted with the
-//! torque step it made in [`CommanderStats`]). The state's
-//! `STANDBY_IN_CHARGE` bit tells both controllers which one is in charge.
+//! With a hot standby ([`RobotLink::cycle_slots`]) two controllers answer,
+//! each on a command channel of its own (slot 0 `robot/command`, slot 1
+//! `robot/command/standby`). The slot in charge commands while it answers
+//! in time; when its fresh answer is missing and the other slot's is there,
+//! the other slot's is applied in the same period and that slot is in
+//! charge from then on (a **takeover**, counted with the torque step it
+//! made in [`CommanderStats`]). The state's `STANDBY_IN_CHARGE` bit tells
+//! both controllers which one is in charge. Slot 0 is woken by every state;
+//! slot 1 rests on its own clock and is woken (`robot/state/standby`) by
+//! every state while it is in charge, and by a state slot 0 has not
+//! answered at the deadline ([`RobotLink::standby_wanted`]): then the
+//! adapter waits up to [`STANDBY_GRACE_NS`] for an answer, applies it, and
+//! counts the period as a missed deadline ([`CycleTiming::standby_asked`]).
 //!
 //! **Who may command**: a command sample is taken only from the controller
 //! the supervisor started for its slot ([`CommandGate`]: `control` for slot
@@ -59,6 +64,12 @@ pub const STATS_EVERY: u64 = 100;
 /// When this process itself woke late (the simulated world paused with it),
 /// the controller gets this much more to answer before the cycle counts as missed \[ns\].
 pub const LATE_CYCLE_GRACE_NS: u64 = 500_000;
+/// How long the adapter waits for an answer after asking the standby for
+/// one ([`RobotLink::standby_wanted`]) \[ns\]: a standby woken at its
+/// lower priority, adopting and stepping, answers within it on these
+/// 2-core machines (its state-to-command time is the in-charge's, p99
+/// 0.1-0.2 ms, plus its wake-up).
+pub const STANDBY_GRACE_NS: u64 = 500_000;
 /// How often the caller looks for the answer during the grace \[ns\].
 pub const GRACE_POLL_NS: u64 = 50_000;
 /// Runs of missed deadlines logged in full; afterwards only runs whose last
@@ -140,6 +151,10 @@ pub struct CycleTiming {
     pub now_ns: u64,
     /// how far behind its schedule this cycle woke ([`Wake::behind_schedule_ns`])
     pub behind_schedule_ns: u64,
+    /// the standby was asked for this period's answer at its deadline
+    /// ([`RobotLink::standby_wanted`]): an answer is applied, late, and
+    /// the period counts as a missed deadline
+    pub standby_asked: bool,
 }
 
 /// A run of consecutive missed deadlines, reported when it ends.
@@ -453,6 +468,18 @@ impl RobotLink {
         }
     }
 
+    /// Ask the standby (slot 1) for the answer to state `state_seq` at this
+    /// period's deadline? When slot 0 is in charge of a running loop (not
+    /// braked) and `newest[0]` does not answer it: slot 0 is late or gone.
+    /// (While slot 1 is in charge, it is woken by every state instead:
+    /// [`LinkOutput::in_charge`].)
+    pub fn standby_wanted(&self, newest: &[Option<TorqueCommand>; SLOTS], state_seq: u64) -> bool {
+        let answered = newest[0]
+            .as_ref()
+            .is_some_and(|c| self.valid(c) && Self::answers(c, state_seq));
+        self.last.in_charge == 0 && self.loop_established && !self.last.brake && !answered
+    }
+
     /// Decide this period: `newest` is the newest command received (if any),
     /// `state_seq` the last state published, which a fresh command answers.
     /// Allocates nothing.
@@ -505,11 +532,11 @@ impl RobotLink {
             // a late answer to an older state is still the newest torque: reuse it
             (None, _) => valid[primary].map(|c| (primary, c)),
         };
-        let mut fresh = false;
+        let mut answered = false;
         let mut takeover = false;
         if let Some((slot, cmd)) = applied {
             if Self::answers(cmd, state_seq) {
-                fresh = true;
+                answered = true;
                 let received = timing.command_event_ns.max(cmd.stamp_ns);
                 let latency = received.saturating_sub(timing.state_published_ns);
                 let bin = ((latency / 1000) as usize).min(LATENCY_BINS - 1);
@@ -541,6 +568,8 @@ impl RobotLink {
             self.last.tau[..n].copy_from_slice(&cmd.tau[..n]);
             self.last.command_seq = cmd.seq;
         }
+        // an answer given after the standby was asked is applied, but late
+        let fresh = answered && !timing.standby_asked;
         let mut miss_run = None;
         if fresh {
             self.consecutive_missed = 0;

@@ -29,6 +29,7 @@ fn cycle2(
         command_event_ns: 0,
         now_ns: (seq + 1) * PERIOD_NS,
         behind_schedule_ns: 0,
+        standby_asked: false,
     };
     link.cycle_slots([first, standby], seq, &timing)
 }

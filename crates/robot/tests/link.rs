@@ -27,6 +27,7 @@ fn timing(seq: u64) -> CycleTiming {
         command_event_ns: 0,
         now_ns: (seq + 1) * PERIOD_NS,
         behind_schedule_ns: 0,
+        standby_asked: false,
     }
 }
 
@@ -164,6 +165,7 @@ fn latency_is_binned_in_microseconds_from_the_state_to_the_receipt() {
             command_event_ns: event_ns,
             now_ns: published + PERIOD_NS,
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         assert!(
             link.cycle(Some(&command(seq, seq, stamp_ns, 0.0)), seq, &t)
@@ -520,4 +522,57 @@ fn without_a_supervisor_every_sender_commands_as_before() {
         assert!(link.admit(1, 0, &command(1, 1, PERIOD_NS, 2.0)));
         assert_eq!(link.commanders().refused_stranger, [0, 0]);
     }
+}
+
+/// The resting standby is asked for an answer only when slot 0, in charge
+/// of a running loop, has not answered at the deadline; its answer, given
+/// after that, is applied (it takes charge) and the period counts as a
+/// missed deadline; in charge, it is woken by every state and asked nothing.
+#[test]
+fn the_standby_is_asked_only_for_the_answer_the_one_in_charge_did_not_give() {
+    let mut link = RobotLink::new(DOF, PERIOD_NS).expect("link");
+    // braked before the first start: nobody is asked
+    assert!(!link.standby_wanted(&[None, None], 1));
+    let mut link = {
+        let out = link.cycle_slots([Some(&command(1, 1, PERIOD_NS, 2.0)), None], 1, &timing(1));
+        assert!(out.fresh && out.in_charge == 0);
+        link
+    };
+    // slot 0 answered in time: the standby rests
+    let on_time = [Some(command(2, 2, 2 * PERIOD_NS, 2.5)), None];
+    assert!(!link.standby_wanted(&on_time, 2));
+    link.cycle_slots([on_time[0].as_ref(), None], 2, &timing(2));
+    // slot 0 answered an older state only (late, or gone): asked
+    let late = [Some(command(2, 2, 2 * PERIOD_NS, 2.5)), None];
+    assert!(link.standby_wanted(&late, 3));
+    // a malformed answer is no answer
+    let mut bad = command(3, 3, 3 * PERIOD_NS, 2.5);
+    bad.tau[0] = f64::NAN;
+    assert!(link.standby_wanted(&[Some(bad), None], 3));
+    // the standby answers within the grace: applied, in charge, but late
+    let standby = command(7, 3, 3 * PERIOD_NS + 1_200_000, 2.6);
+    let asked = CycleTiming {
+        standby_asked: true,
+        ..timing(3)
+    };
+    let missed_before = link.stats().missed_deadlines;
+    let out = link.cycle_slots([late[0].as_ref(), Some(&standby)], 3, &asked);
+    assert_eq!(out.torque(), &[2.6; DOF]);
+    assert!(!out.fresh && !out.brake && out.takeover && out.in_charge == 1);
+    assert_eq!(out.status & robot_status::COMMAND_FRESH, 0);
+    assert_ne!(out.status & robot_status::STANDBY_IN_CHARGE, 0);
+    assert_eq!(link.stats().missed_deadlines, missed_before + 1);
+    assert_eq!(link.commanders().takeovers, 1);
+    // in charge now: never asked, whatever slot 0 does; its answers are fresh
+    assert!(!link.standby_wanted(&[None, None], 4));
+    let next = command(8, 4, 4 * PERIOD_NS + 100_000, 2.7);
+    let out = link.cycle_slots([None, Some(&next)], 4, &timing(4));
+    assert!(out.fresh && out.in_charge == 1 && !out.takeover);
+    assert_eq!(link.stats().missed_deadlines, missed_before + 1);
+    // the brakes on (both gone): nobody asked
+    for seq in 5..=5 + u64::from(MAX_MISSED) {
+        link.cycle_slots([None, None], seq, &timing(seq));
+    }
+    assert!(link.output().brake);
+    assert!(!link.standby_wanted(&[None, None], 30));
 }

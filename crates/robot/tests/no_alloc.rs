@@ -73,6 +73,7 @@ fn judging_senders_and_deciding_allocate_nothing() {
             command_event_ns: 0,
             now_ns: seq * 1_000_000 + 100_000,
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         let out = link.cycle_slots(
             [newest.filter(|_| slot == 0), newest.filter(|_| slot == 1)],

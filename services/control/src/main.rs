@@ -9,7 +9,6 @@
 //! `phri_control::inputs` and `outputs`.
 
 use std::process::ExitCode;
-use std::time::Duration;
 
 use phri_control::service::{self, ControlService, Note};
 use phri_control::standby::{RolePriority, Slot};
@@ -51,7 +50,13 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let node = ctx.node()?;
-    let (mut inputs, outputs) = service::open(&node, slot, with_standby, repulsion.cameras())?;
+    let (mut inputs, outputs) = service::open(
+        &node,
+        slot,
+        with_standby,
+        repulsion.cameras(),
+        cfg.control.standby_wake_ms,
+    )?;
     // with the standby, the loop's priority follows the role (the lower until in charge)
     let rank = RolePriority::for_cell(cfg).filter(|_| with_standby && ctx.rt_priority > 0);
     let mut service = ControlService::new(controller, cfg, repulsion, slot, with_standby, rank);
@@ -68,8 +73,8 @@ fn body() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     while !ctx.shutdown.requested() {
-        // a wait ended early (a signal, a failed wake-up) is one more poll
-        let _ = inputs.states.wait(Duration::from_millis(50));
+        // every state, or the resting standby's clock and the robot's call
+        inputs.wait(&gate);
         beat.beat(now_ns());
         let Some(state) = inputs.latest_state(&gate)? else {
             continue;

@@ -224,6 +224,7 @@ mod tests {
             command_event_ns: seq * 1_000_000 + 100_000,
             now_ns: seq * 1_000_000 + 100_000,
             behind_schedule_ns: 0,
+            standby_asked: false,
         }
     }
 

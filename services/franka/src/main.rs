@@ -26,7 +26,7 @@ use phri_franka::{
 };
 use phri_ipc::{
     BoxStatus, JointState, Publisher, Queue, TorqueCommand, Zeroed, ROBOT_BOX, ROBOT_COMMAND,
-    ROBOT_COMMANDERS, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS,
+    ROBOT_COMMANDERS, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATE_STANDBY, ROBOT_STATS,
 };
 use phri_robot::{CommandGate, CycleTiming, LinkOutput, GRACE_POLL_NS, MAX_MISSED};
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext};
@@ -329,6 +329,8 @@ fn body() -> Result<(), Box<dyn Error>> {
 
     let node = ctx.node()?;
     let state_pub = ROBOT_STATE.publisher(&node)?;
+    // the box leaves no grace to wake the standby in: it gets every state
+    let standby_state_pub = ROBOT_STATE_STANDBY.publisher(&node)?;
     let stats_pub = ROBOT_STATS.publisher(&node)?;
     let commands = ROBOT_COMMAND.subscriber(&node, Queue::Latest)?;
     // the hot standby's (slot 1): applied when the controller in charge misses
@@ -374,6 +376,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             &mut state,
         );
         state_pub.publish(&state)?;
+        standby_state_pub.publish(&state)?;
         let mut newest: [Option<TorqueCommand>; 2] = [None, None];
         while !cycle.poll([&commands, &standby], &mut newest, seq)?
             && now_ns() < published + ANSWER_BUDGET_NS
@@ -385,6 +388,7 @@ fn body() -> Result<(), Box<dyn Error>> {
             command_event_ns: 0,
             now_ns: now_ns(),
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         let decided = cycle.step_slots(newest.each_ref().map(Option::as_ref), seq, &timing, q)?;
         if decided.0.publish_stats {

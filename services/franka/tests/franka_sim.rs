@@ -61,6 +61,7 @@ fn the_adapter_holds_the_fr3_of_franka_sim_with_gravity_left_to_the_box() {
             command_event_ns: seq * 1_000_000 + 100_000,
             now_ns: seq * 1_000_000 + 100_000,
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         let (_, out) = cycle.step(Some(&cmd), seq, &timing, &s.q).expect("a step");
         assert!(!out.brake);

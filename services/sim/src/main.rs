@@ -26,11 +26,12 @@ use phri_ipc::liveness::Beat;
 use phri_ipc::{
     CommanderStats, ContactEvent, IpcError, IpcNode, JointState, Publisher, Queue, RobotStats,
     Subscriber, TorqueCommand, Truth, WorldState, Zeroed, ROBOT_COMMAND, ROBOT_COMMANDERS,
-    ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH, SIM_WORLD,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATE_STANDBY, ROBOT_STATS, SIM_CONTACTS, SIM_TRUTH,
+    SIM_WORLD,
 };
 use phri_runtime::log::Deferred;
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
-use phri_sim::link::{CommandGate, GRACE_POLL_NS};
+use phri_sim::link::{CommandGate, GRACE_POLL_NS, STANDBY_GRACE_NS};
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
     fill_state, fill_truth, fill_world, forces_out::ForcesDatagram, ContactLog, CycleTiming,
@@ -100,6 +101,8 @@ struct RobotPorts {
     commands: Subscriber<TorqueCommand>,
     /// the hot standby's (slot 1): applied when the controller in charge misses
     standby: Subscriber<TorqueCommand>,
+    /// the state again for the standby, when its answer is wanted
+    standby_state: Publisher<JointState>,
 }
 
 impl RobotPorts {
@@ -113,6 +116,7 @@ impl RobotPorts {
             commands: ROBOT_COMMAND.subscriber(node, Queue::Latest)?,
             standby: ROBOT_COMMAND_STANDBY.subscriber(node, Queue::Latest)?,
             commanders: ROBOT_COMMANDERS.publisher(node)?,
+            standby_state: ROBOT_STATE_STANDBY.publisher(node)?,
         })
     }
 }
@@ -245,9 +249,16 @@ fn robot_loop(
         tick = wake.deadline_ns;
         let mut newest = [None, None];
         link.poll(slots, &mut newest, seq)?;
-        if let Some(until) = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq) {
-            // the machine stalled us and maybe the controller too: in
-            // simulated time the cycle is not over yet
+        // the one in charge has not answered: the resting standby is asked
+        let standby_asked = link.standby_wanted(&newest, seq);
+        if standby_asked {
+            ports.standby_state.publish(&outbox.state)?;
+        }
+        // the machine stalled us and maybe the controller too (in simulated
+        // time the cycle is not over yet), or the standby was just woken
+        let late = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq);
+        let asked = standby_asked.then(|| now_ns() + STANDBY_GRACE_NS);
+        if let Some(until) = late.max(asked) {
             while now_ns() < until {
                 sleep_until_ns(now_ns() + GRACE_POLL_NS);
                 if link.poll(slots, &mut newest, seq)? {
@@ -260,6 +271,7 @@ fn robot_loop(
             command_event_ns: last_command_event.load(Ordering::Acquire),
             now_ns: now_ns(),
             behind_schedule_ns: wake.behind_schedule_ns(),
+            standby_asked,
         };
         let out = link.cycle_slots(newest.each_ref().map(Option::as_ref), seq, &timing);
         if let Some(run) = out.miss_run {
@@ -272,6 +284,10 @@ fn robot_loop(
         seq += 1;
         state_published_ns =
             outbox.publish(ports, sim, &out, seq, link.state_stamp_ns(epoch, seq))?;
+        if out.in_charge == 1 {
+            // the standby in charge is woken by every state
+            ports.standby_state.publish(&outbox.state)?;
+        }
         if out.publish_stats {
             ports.stats.publish(link.stats_message(now_ns()))?;
         }

@@ -81,6 +81,7 @@ fn step_does_not_allocate() {
             command_event_ns: seq * 1_000_000 + 300_000,
             now_ns: seq * 1_000_000 + 1_000_000,
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         let out = link.cycle(newest, seq, &timing);
         reports += usize::from(out.miss_run.is_some()) + usize::from(out.brake_engaged);

@@ -383,6 +383,7 @@ impl Cell {
             command_event_ns: 0,
             now_ns: self.t_ns,
             behind_schedule_ns: 0,
+            standby_asked: false,
         };
         self.link_out = match &self.pair {
             Some(p) => self.link.cycle_slots(

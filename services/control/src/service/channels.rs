@@ -1,21 +1,27 @@
 //! The controller's channels in the cell: what it reads each period and
 //! what it publishes, opened in one place.
 
+use std::time::Duration;
+
 use phri_ipc::{BarrierStatus, CollabState, ControlStatus, SsmStatus, TorqueCommand};
 use phri_ipc::{
     ControlBehaviour, HandObservation, HriRequest, IpcError, IpcNode, JointState, LatestReader,
     Publisher, Queue, RepulsionResult, Residual, Skeleton, Subscriber, COLLAB_STATE,
     CONTROL_BARRIER, CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR, CONTROL_STATUS,
     DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND,
-    ROBOT_COMMAND_STANDBY, ROBOT_STATE,
+    ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATE_STANDBY,
 };
 
 use crate::standby::Slot;
 
 /// What the controller reads.
 pub struct InputChannels {
-    /// `robot/state`, waking the loop
+    /// `robot/state`, waking the loop (not the standby's that rests on its clock)
     pub states: Subscriber<JointState>,
+    /// the standby resting on its clock: `robot/state/standby`, waking it
+    /// when its answer is wanted, and the clock's period
+    /// (`[control] standby_wake_ms`)
+    pub standby_states: Option<(Subscriber<JointState>, Duration)>,
     /// `dynamics/residual`
     pub residuals: LatestReader<Residual>,
     /// `dynamics/residual/standby`, with a hot standby (the fresher residual is acted on)
@@ -48,14 +54,20 @@ pub struct OutputChannels {
     pub barrier: Publisher<BarrierStatus>,
 }
 
+/// How long a loop waits for a state before it beats and looks again.
+const STATE_WAIT: Duration = Duration::from_millis(50);
+
 /// Opens the channels of the controller in `slot` on `node`, for `cameras`
-/// cameras; the standby's residual only `with_standby`. A second controller
-/// of one slot fails here: the command channel accepts exactly one publisher.
+/// cameras; the standby's residual only `with_standby`; the standby slot
+/// rests on a clock of `standby_wake_ms` \[ms\] (0: woken by every state).
+/// A second controller of one slot fails here: the command channel accepts
+/// exactly one publisher.
 pub fn open(
     node: &IpcNode,
     slot: Slot,
     with_standby: bool,
     cameras: usize,
+    standby_wake_ms: f64,
 ) -> Result<(InputChannels, OutputChannels), IpcError> {
     let (command_channel, own_behaviour, peer_behaviour) = match slot {
         Slot::First => (ROBOT_COMMAND, CONTROL_BEHAVIOUR, CONTROL_STANDBY_BEHAVIOUR),
@@ -65,7 +77,18 @@ pub fn open(
             CONTROL_BEHAVIOUR,
         ),
     };
-    let states = ROBOT_STATE.waking_subscriber(node, Queue::Latest)?;
+    let on_clock = (slot == Slot::Standby && with_standby && standby_wake_ms > 0.0)
+        .then(|| Duration::from_secs_f64(standby_wake_ms.min(1e3) * 1e-3));
+    let (states, standby_states) = match on_clock {
+        Some(every) => (
+            ROBOT_STATE.subscriber(node, Queue::Latest)?,
+            Some((
+                ROBOT_STATE_STANDBY.waking_subscriber(node, Queue::Latest)?,
+                every,
+            )),
+        ),
+        None => (ROBOT_STATE.waking_subscriber(node, Queue::Latest)?, None),
+    };
     let residuals = DYNAMICS_RESIDUAL.latest_reader(node)?;
     let standby_residuals = match with_standby {
         true => Some(DYNAMICS_RESIDUAL_STANDBY.latest_reader(node)?),
@@ -94,6 +117,7 @@ pub fn open(
     let barrier = CONTROL_BARRIER.publisher(node)?;
     let inputs = InputChannels {
         states,
+        standby_states,
         residuals,
         standby_residuals,
         results,
@@ -114,6 +138,25 @@ pub fn open(
 }
 
 impl InputChannels {
+    /// Wait for a state to answer: the next of `robot/state`, or, the
+    /// standby resting on its clock, a `robot/state/standby` (the robot
+    /// wants its answer) or the clock's tick; the wake-up's samples are
+    /// taken (counted by `gate`), the state is `robot/state`'s newest.
+    /// An error ends a wait early: one more poll.
+    pub fn wait(&self, gate: &crate::InputGate) {
+        match &self.standby_states {
+            Some((wake, every)) => {
+                let _ = wake.wait(*every);
+                let _ = wake.drain_from(|pid, _| {
+                    gate.state(pid);
+                });
+            }
+            None => {
+                let _ = self.states.wait(STATE_WAIT);
+            }
+        }
+    }
+
     /// The newest `robot/state` queued from the robot `gate` admits, if any.
     pub fn latest_state(&self, gate: &crate::InputGate) -> Result<Option<JointState>, IpcError> {
         let mut latest = None;
