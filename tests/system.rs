@@ -429,8 +429,9 @@ fn killing_either_residual_service_causes_no_protective_stop() {
     assert_eq!(r["false_detections"], 0);
     // the two observers agree: the same states, the same model
     let d = &r["dynamics"];
-    // (the standby's residual wakes every 2 ms: one of its states in two)
-    assert!(d["residuals_compared"].as_u64().unwrap() > 2500, "{d}");
+    // (the standby's residual wakes every 10 ms while the first answers:
+    // one of its states in ten)
+    assert!(d["residuals_compared"].as_u64().unwrap() > 500, "{d}");
     let disagreement = d["max_residual_disagreement_nm"].as_f64().unwrap();
     assert!(disagreement < 1.0, "{d}");
 }

@@ -59,6 +59,14 @@ pub const DYNAMICS_RESIDUAL: Channel<Residual> =
 /// two. Wakes: new residual.
 pub const DYNAMICS_RESIDUAL_STANDBY: Channel<Residual> =
     Channel::new("dynamics/residual/standby", Qos::ONE_PUBLISHER, true);
+/// [`JointState`] from the controller in charge, when `dynamics/residual`
+/// falls two periods behind the state it answers or is not valid (the
+/// residual service killed, restarting, warming up): the standby's
+/// residual service, resting on its clock (`[dynamics] standby_wake_ms`),
+/// steps the states queued since at once, then each state the call names,
+/// until the calls stop. Wakes: a residual wanted.
+pub const DYNAMICS_RESIDUAL_CALL: Channel<JointState> =
+    Channel::new("dynamics/residual/call", Qos::CONTROLLERS, true);
 /// [`ControlStatus`] from the controller in charge, 1 kHz (the standby's
 /// publisher waits: two publishers at most).
 pub const CONTROL_STATUS: Channel<ControlStatus> =
@@ -293,6 +301,7 @@ pub const ALL: &[&str] = &[
     AUDIO_MIC_STATUS.name,
     CONTROL_BARRIER.name,
     ROBOT_STATE_STANDBY.name,
+    DYNAMICS_RESIDUAL_CALL.name,
 ];
 
 /// Channels that carry messages only when something happens (a tool injects a
@@ -315,6 +324,7 @@ pub const ON_DEMAND: &[&str] = &[
     SUPERVISOR_HEALTH_MORE.name,
     CONTROL_BARRIER.name,
     ROBOT_STATE_STANDBY.name,
+    DYNAMICS_RESIDUAL_CALL.name,
 ];
 
 /// Something done with each channel of the cell, typed: tools that handle
@@ -361,6 +371,7 @@ pub fn visit_all(v: &mut impl ChannelVisitor) {
     v.message(AUDIO_MIC_STATUS);
     v.message(CONTROL_BARRIER);
     v.message(ROBOT_STATE_STANDBY);
+    v.message(DYNAMICS_RESIDUAL_CALL);
 }
 
 /// The further cameras' channels by name (camera 1 on, in [`CAMERAS`]'s

@@ -73,6 +73,10 @@ impl Owned {
             n if n == crate::channels::ROBOT_STATE_STANDBY.name => {
                 crate::channels::ROBOT_STATE.name
             }
+            // the controllers' call for the standby's residual
+            n if n == crate::channels::DYNAMICS_RESIDUAL_CALL.name => {
+                crate::channels::CONTROL_BEHAVIOUR.name
+            }
             n => n,
         };
         PUBLISHERS.iter().position(|(c, _)| *c == name).map(Owned)

@@ -120,7 +120,7 @@ pub const PORTS: &[Ports] = &[
         "phri-dynamics",
         When::Flag("--standby"),
         &[DYNAMICS_RESIDUAL_STANDBY.name],
-        &[],
+        &[DYNAMICS_RESIDUAL_CALL.name],
     ),
     ports(
         "phri-control",
@@ -130,6 +130,7 @@ pub const PORTS: &[Ports] = &[
             COLLAB_STATE.name,
             CONTROL_SSM.name,
             CONTROL_BARRIER.name,
+            DYNAMICS_RESIDUAL_CALL.name,
             INPUT_AUDIT.name,
         ],
         &[

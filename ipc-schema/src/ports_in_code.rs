@@ -124,6 +124,7 @@ macro_rules! constants {
 const CONSTANTS: &[(&str, &str)] = constants![
     ROBOT_STATE,
     ROBOT_STATE_STANDBY,
+    DYNAMICS_RESIDUAL_CALL,
     ROBOT_COMMAND,
     ROBOT_COMMAND_STANDBY,
     ROBOT_COMMANDERS,

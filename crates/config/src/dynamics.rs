@@ -38,9 +38,10 @@ pub struct ResidualConfig {
     /// largest gap between two states integrated as one step \[s\]; longer gaps re-initialise
     pub max_gap_s: f64,
     /// the hot standby's residual (`[control] standby`) wakes this often and
-    /// steps every state queued since \[ms\]: its residual is at most this
-    /// much older than the one in charge's, which the controller acts on
-    /// while that one answers; 0: woken by every state, as the one in charge
+    /// steps every state queued since \[ms\], and at once when the
+    /// controller in charge calls it (`dynamics/residual/call`: the first
+    /// residual is two periods behind or gone); 0: woken by every state,
+    /// as the one in charge
     pub standby_wake_ms: f64,
 }
 

@@ -140,7 +140,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("dynamics.ft_link", "", "link of the F/T reading (\"\": the last joint's link)"),
     d("dynamics.warmup_samples", "samples", "samples before the residual is valid after a (re)start"),
     d("dynamics.max_gap_s", "s", "longer gaps between states re-initialise the observer"),
-    d("dynamics.standby_wake_ms", "ms", "the hot standby's residual wakes this often and steps the states queued since (0: at every state)"),
+    d("dynamics.standby_wake_ms", "ms", "the hot standby's residual wakes this often and steps the states queued since, and at once when the controller calls it (0: at every state)"),
     d("control.waypoints", "m", "the end effector's path, base frame"),
     d("control.segment_time_s", "s", "time per path segment"),
     d("control.ee_link", "", "the end effector's link (robot file)"),

@@ -79,6 +79,12 @@ pub const DEFAULT_DEPLOY_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..
 /// The most services one supervisor runs. `supervisor/health` lists the
 /// first [`phri_ipc::MAX_SERVICES`] of them in start order (its size is a
 /// contract with outside readers); `state.json`, the report and the
+/// How old the residual a controller acts on gets when the first residual
+/// service is gone, with the hot standby: the first's is two periods
+/// behind before the controller calls the standby's, which is acted on a
+/// period later \[ms\] (`control.residual_max_age_ms` must be longer).
+pub const STANDBY_RESIDUAL_LAG_MS: f64 = 3.0;
+
 /// supervisor's own watch cover every one.
 pub const MAX_ROSTER: usize = 2 * phri_ipc::MAX_SERVICES;
 
@@ -728,17 +734,16 @@ impl Config {
         self.repulsion.validate()?;
         self.dynamics.validate()?;
         self.control.validate()?;
-        // a standby residual as old as the controller's bound would be
-        // stale whenever the controller needs it
-        if self.control.standby
-            && self.dynamics.standby_wake_ms >= self.control.residual_max_age_ms / 2.0
-        {
+        // the standby's residual is called once the first's is two periods
+        // behind and acted on a period later: a bound as short would stop
+        // the arm whenever the first residual service is replaced
+        if self.control.standby && self.control.residual_max_age_ms <= STANDBY_RESIDUAL_LAG_MS {
             return Err(Invalid::new(
-                "dynamics.standby_wake_ms",
+                "control.residual_max_age_ms",
                 format!(
-                    "{} ms: the hot standby's residual must wake in less than half of \
-                     control.residual_max_age_ms ({} ms), or it is stale when the controller needs it",
-                    self.dynamics.standby_wake_ms, self.control.residual_max_age_ms
+                    "{} ms: with the hot standby it must be more than {STANDBY_RESIDUAL_LAG_MS} ms \
+                     (the standby's residual is called once the first's is 2 ms behind, and acted on a period later)",
+                    self.control.residual_max_age_ms
                 ),
             ));
         }

@@ -124,7 +124,7 @@ pub const SAFETY_RANGES: &[Range] = &[
     r("dynamics.velocity_cutoff_hz", 5.0, 500.0, "Hz", "a lower cutoff delays the velocity the residual's model needs: false or late detections"),
     ro("dynamics.max_gap_s", 0.0, 1.0, "s", STALE),
     r("dynamics.warmup_samples", 0.0, 1000.0, "samples", "no detection for longer than 1 s after a (re)start"),
-    r("dynamics.standby_wake_ms", 0.0, 2.5, "ms", "a standby residual this much older detects a collision later once the one in charge is gone"),
+    r("dynamics.standby_wake_ms", 0.0, 25.0, "ms", "the standby residual steps this many periods' states at once, on the torque loop's CPU"),
     // the controller's inputs, reactions and speeds
     r("control.standby_wake_ms", 0.0, 25.0, "ms", "past the 32 behaviours its channel queues, a standby loses the path history a retreat after its takeover walks back"),
     ro("control.residual_max_age_ms", 0.0, 1000.0, "ms", STALE),

@@ -214,6 +214,22 @@ pub fn inputs_fresh(controller: &Controller, cfg: &ControlConfig) -> bool {
     residual && perception
 }
 
+/// How far `dynamics/residual` may fall behind the state a controller
+/// answers before the one in charge calls the standby's residual
+/// (`dynamics/residual/call`): two periods of the robot's clock \[ns\]
+/// (it is one behind when the residual service runs after the controller).
+pub const RESIDUAL_CALL_BEHIND_NS: u64 = 2_000_000;
+
+/// Does the controller in charge call the standby's residual service for
+/// `state`? When the first's newest residual (`first`) is missing, not
+/// valid (restarting, warming up) or [`RESIDUAL_CALL_BEHIND_NS`] behind.
+pub fn residual_wanted(first: Option<&Residual>, state: &JointState) -> bool {
+    first.is_none_or(|r| {
+        r.flags & residual_flags::VALID == 0
+            || r.state_stamp_ns.saturating_add(RESIDUAL_CALL_BEHIND_NS) < state.stamp_ns
+    })
+}
+
 /// The residual to act on of the two dynamics services' newest (the first's
 /// `dynamics/residual`, the standby's `dynamics/residual/standby`): a valid
 /// one before one still warming up, then the one of the newer state, then
@@ -310,6 +326,44 @@ mod tests {
             status,
             ..JointState::zeroed()
         }
+    }
+
+    #[test]
+    fn the_standby_residual_is_called_when_the_first_is_behind_invalid_or_gone() {
+        let at = |stamp_ns: u64| JointState {
+            seq: 9,
+            stamp_ns,
+            ..JointState::zeroed()
+        };
+        let residual = |state_stamp_ns: u64, flags: u32| Residual {
+            state_stamp_ns,
+            flags,
+            ..Residual::zeroed()
+        };
+        let ms = 1_000_000;
+        let valid = residual_flags::VALID;
+        // of this state or the one before: no call
+        assert!(!residual_wanted(
+            Some(&residual(100 * ms, valid)),
+            &at(100 * ms)
+        ));
+        assert!(!residual_wanted(
+            Some(&residual(99 * ms, valid)),
+            &at(100 * ms)
+        ));
+        assert!(!residual_wanted(
+            Some(&residual(98 * ms, valid)),
+            &at(100 * ms)
+        ));
+        // more than two periods behind, warming up, or none at all: a call
+        assert!(residual_wanted(
+            Some(&residual(97 * ms, valid)),
+            &at(100 * ms)
+        ));
+        assert!(residual_wanted(Some(&residual(100 * ms, 0)), &at(100 * ms)));
+        assert!(residual_wanted(None, &at(100 * ms)));
+        // the bound the configuration checks against
+        assert!(RESIDUAL_CALL_BEHIND_NS as f64 / 1e6 + 1.0 <= phri_config::STANDBY_RESIDUAL_LAG_MS);
     }
 
     #[test]

@@ -55,9 +55,9 @@ pub enum Wake {
     /// woken by every state (the service in charge), and by this timeout
     /// at the latest (a loop that checks for shutdown)
     EveryState(Duration),
-    /// on its own clock this often, stepping the states queued since (the
-    /// hot standby: one wake-up in several states, its residual at most
-    /// this much older than the one in charge's)
+    /// on its own clock this often, stepping the states queued since, and
+    /// at once when the controller in charge calls (the hot standby: one
+    /// wake-up in several states while the one in charge answers)
     Every(Duration),
 }
 
@@ -240,11 +240,11 @@ mod tests {
         for off in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert_eq!(Wake::of(true, off), Wake::EveryState(STATE_WAIT), "{off}");
         }
-        // the default: the standby wakes every 2 ms
+        // the default: the standby wakes every 10 ms
         let cfg = Loaded::defaults().config;
         assert_eq!(
             Wake::of(true, cfg.dynamics.standby_wake_ms),
-            Wake::Every(ms(2))
+            Wake::Every(ms(10))
         );
     }
 

@@ -7,7 +7,9 @@ use std::error::Error;
 use std::process::ExitCode;
 
 use phri_dynamics::{DynamicsStep, Wake};
-use phri_ipc::{Queue, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, ROBOT_STATE};
+use phri_ipc::{
+    Queue, DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_CALL, DYNAMICS_RESIDUAL_STANDBY, ROBOT_STATE,
+};
 use phri_runtime::{now_ns, ServiceContext};
 
 /// A refused `robot/state` sample, for the log: the error and how many so far.
@@ -49,12 +51,16 @@ fn body() -> Result<(), Box<dyn Error>> {
         return Ok(());
     }
     let node = ctx.node()?;
-    // the hot standby wakes on its own clock ([dynamics] standby_wake_ms),
-    // the one in charge at every state
+    // the hot standby wakes on its own clock ([dynamics] standby_wake_ms)
+    // and when the controller in charge calls it, the one in charge at
+    // every state
     let wait = Wake::of(standby, ctx.config().dynamics.standby_wake_ms);
-    let states = match wait {
-        Wake::EveryState(_) => ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?,
-        Wake::Every(_) => ROBOT_STATE.subscriber(&node, Queue::Drain)?,
+    let (states, calls) = match wait {
+        Wake::EveryState(_) => (ROBOT_STATE.waking_subscriber(&node, Queue::Drain)?, None),
+        Wake::Every(_) => (
+            ROBOT_STATE.subscriber(&node, Queue::Drain)?,
+            Some(DYNAMICS_RESIDUAL_CALL.waking_subscriber(&node, Queue::Latest)?),
+        ),
     };
     let channel = match standby {
         false => DYNAMICS_RESIDUAL,
@@ -73,7 +79,18 @@ fn body() -> Result<(), Box<dyn Error>> {
     while !ctx.shutdown.requested() {
         // a wake-up without a sample (timeout, signal) just loops; a
         // channel read without waking sleeps the whole timeout
-        let _ = states.wait(wait.timeout());
+        match &calls {
+            Some(calls) => {
+                let _ = calls.wait(wait.timeout());
+                // a call only wakes: the states are robot/state's
+                calls.drain_from(|pid, _| {
+                    owners.admit(phri_ipc::Owned::CONTROL_BEHAVIOUR, pid);
+                })?;
+            }
+            None => {
+                let _ = states.wait(wait.timeout());
+            }
+        }
         beat.beat(now_ns());
         let mut fresh = None;
         states.drain_from(|pid, s| {

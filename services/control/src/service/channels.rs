@@ -8,8 +8,8 @@ use phri_ipc::{
     ControlBehaviour, HandObservation, HriRequest, IpcError, IpcNode, JointState, LatestReader,
     Publisher, Queue, RepulsionResult, Residual, Skeleton, Subscriber, COLLAB_STATE,
     CONTROL_BARRIER, CONTROL_BEHAVIOUR, CONTROL_SSM, CONTROL_STANDBY_BEHAVIOUR, CONTROL_STATUS,
-    DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST, ROBOT_COMMAND,
-    ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATE_STANDBY,
+    DYNAMICS_RESIDUAL, DYNAMICS_RESIDUAL_CALL, DYNAMICS_RESIDUAL_STANDBY, HRI_REQUEST,
+    ROBOT_COMMAND, ROBOT_COMMAND_STANDBY, ROBOT_STATE, ROBOT_STATE_STANDBY,
 };
 
 use crate::standby::Slot;
@@ -52,6 +52,8 @@ pub struct OutputChannels {
     pub ssm: Publisher<SsmStatus>,
     /// `control/barrier` (under `[avoidance] law = "cbf"`)
     pub barrier: Publisher<BarrierStatus>,
+    /// `dynamics/residual/call`, with a standby: the first residual is late
+    pub residual_call: Option<Publisher<JointState>>,
 }
 
 /// How long a loop waits for a state before it beats and looks again.
@@ -115,6 +117,10 @@ pub fn open(
     let collab = COLLAB_STATE.publisher(node)?;
     let ssm = CONTROL_SSM.publisher(node)?;
     let barrier = CONTROL_BARRIER.publisher(node)?;
+    let residual_call = match with_standby {
+        true => Some(DYNAMICS_RESIDUAL_CALL.publisher(node)?),
+        false => None,
+    };
     let inputs = InputChannels {
         states,
         standby_states,
@@ -133,6 +139,7 @@ pub fn open(
         collab,
         ssm,
         barrier,
+        residual_call,
     };
     Ok((inputs, outputs))
 }

@@ -11,7 +11,7 @@ use phri_ipc::{
 use super::channels::InputChannels;
 use crate::cut::{CutLatest, HeldBack};
 use crate::requests::{RequestQueueWatch, MAX_REQUESTS};
-use crate::standby::fresher_residual;
+use crate::standby::{fresher_residual, residual_wanted};
 use crate::{CollabInput, ControlInput, InputError, InputGate, RepulsionInputs};
 
 /// The buffers one period's inputs are gathered into, allocated once.
@@ -46,6 +46,9 @@ pub struct Gathered<'a> {
     pub input: ControlInput<'a>,
     /// a request lost may have been a stop: the controller in charge stops
     pub requests_lost: bool,
+    /// with a standby, `dynamics/residual` is missing, not valid or behind:
+    /// the one in charge calls the standby's ([`residual_wanted`])
+    pub residual_late: bool,
 }
 
 impl Intake {
@@ -101,6 +104,7 @@ impl Intake {
             s.update_from(|pid, r| r.dof as usize == n && gate.residual(pid, r, now))?;
         }
         self.gather_repulsion(ch, gate, now, cut)?;
+        let residual_late = self.with_standby && residual_wanted(ch.residuals.get(), state);
         let residual = fresher_residual(
             ch.residuals.get(),
             ch.standby_residuals.as_ref().and_then(|s| s.get()),
@@ -140,6 +144,7 @@ impl Intake {
         Ok(Ok(Gathered {
             input,
             requests_lost,
+            residual_late,
         }))
     }
 

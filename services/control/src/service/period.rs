@@ -116,6 +116,7 @@ impl ControlService {
             let seq = &mut self.seq;
             self.role.adopt(&mut self.controller, state, seq, log);
         }
+        let call_residual = gathered.residual_late;
         self.controller.step(&gathered.input);
         self.seq += 1;
         let stamps = Stamps {
@@ -127,6 +128,7 @@ impl ControlService {
             stamps,
             duty: self.role.duty(&self.controller, &self.control, state),
             requests_dropped: self.intake.request_watch.dropped(),
+            call_residual,
             with_standby: self.role.with_standby,
         };
         let c = &self.controller;

@@ -49,6 +49,8 @@ pub struct Period {
     pub requests_dropped: u32,
     /// whether a hot standby runs beside (the behaviour state is published)
     pub with_standby: bool,
+    /// in charge, call the standby's residual (`dynamics/residual/call`)
+    pub call_residual: bool,
 }
 
 impl Messages {
@@ -93,7 +95,14 @@ impl Messages {
             out.ssm.update_connections();
             out.barrier.update_connections();
             out.behaviour.update_connections();
+            if let Some(call) = &out.residual_call {
+                call.update_connections();
+            }
             return Ok(());
+        }
+        if let (true, Some(call)) = (period.call_residual, &out.residual_call) {
+            // the first residual is late: the standby's steps the states now
+            call.publish(state)?;
         }
         let (seq, now) = (period.seq, phri_runtime::now_ns);
         out.status.publish(&self.status)?;

@@ -100,6 +100,8 @@ fn owned_watches(n_cameras: usize) -> Vec<PublisherWatch> {
     }
     // the robot's call to the resting standby, owned as its states
     watches.push(ROBOT_STATE_STANDBY.publisher_watch());
+    // the controllers' call for the standby's residual, owned as their behaviour
+    watches.push(DYNAMICS_RESIDUAL_CALL.publisher_watch());
     for c in CAMERAS.iter().take(n_cameras).skip(1) {
         watches.push(c.repulsion.publisher_watch());
         watches.push(c.skeleton.publisher_watch());
