@@ -276,7 +276,11 @@ mod tests {
                 .map(|e| e.channels.clone())
                 .unwrap_or_default()
         };
-        assert_eq!(edge("sim", "control"), ["robot/state"]);
+        assert_eq!(
+            edge("sim", "control"),
+            ["robot/state", "robot/state/standby"]
+        );
+        assert_eq!(edge("control", "dynamics"), ["dynamics/residual/call"]);
         assert_eq!(
             edge("control", "sim"),
             ["robot/command", "robot/command/standby"]

@@ -275,6 +275,13 @@ pub const ROUTES: &[Route] = &[
         &[(510.0, 106.0), (920.0, 106.0)],
         Label::On(0),
     ),
+    // the call for the standby's residual, back under it
+    route(
+        "control",
+        "dynamics",
+        &[(920.0, 128.0), (510.0, 128.0)],
+        Label::On(0),
+    ),
     route(
         "sim",
         "perception",
