@@ -157,6 +157,17 @@ pub struct CycleTiming {
     pub standby_asked: bool,
 }
 
+/// What a cycle waits for before deciding ([`RobotLink::grace`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grace {
+    /// the standby was asked for the answer ([`RobotLink::standby_wanted`]):
+    /// publish the state to it now
+    pub standby_asked: bool,
+    /// poll the command slots until this time \[ns\] or an answer (`None`:
+    /// decide now)
+    pub until_ns: Option<u64>,
+}
+
 /// A run of consecutive missed deadlines, reported when it ends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MissRun {
@@ -327,6 +338,8 @@ pub struct RobotLink {
     gate: CommandGate,
     /// commands refused since the last `robot/commanders` message
     refused_unpublished: bool,
+    /// a hot standby answers on slot 1 ([`RobotLink::set_standby`])
+    standby: bool,
     /// the cycle of the last `robot/commanders` message
     commanders_cycle: u64,
 }
@@ -377,6 +390,7 @@ impl RobotLink {
             },
             gate: CommandGate::unchecked(),
             refused_unpublished: false,
+            standby: true,
             commanders_cycle: 0,
         })
     }
@@ -385,6 +399,12 @@ impl RobotLink {
     /// every sender, [`CommandGate::unchecked`]).
     pub fn set_gate(&mut self, gate: CommandGate) {
         self.gate = gate;
+    }
+
+    /// Whether a hot standby answers on slot 1 (the default: yes). Without
+    /// one, nobody is asked for a missing answer ([`RobotLink::standby_wanted`]).
+    pub fn set_standby(&mut self, standby: bool) {
+        self.standby = standby;
     }
 
     /// Judge command sample `cmd` for `slot`, sent by process `pid`: taken
@@ -469,15 +489,41 @@ impl RobotLink {
     }
 
     /// Ask the standby (slot 1) for the answer to state `state_seq` at this
-    /// period's deadline? When slot 0 is in charge of a running loop (not
-    /// braked) and `newest[0]` does not answer it: slot 0 is late or gone.
+    /// period's deadline? With a standby, when slot 0 is in charge of a
+    /// running loop (not braked) and `newest[0]` does not answer it: slot 0
+    /// is late or gone.
     /// (While slot 1 is in charge, it is woken by every state instead:
     /// [`LinkOutput::in_charge`].)
     pub fn standby_wanted(&self, newest: &[Option<TorqueCommand>; SLOTS], state_seq: u64) -> bool {
         let answered = newest[0]
             .as_ref()
             .is_some_and(|c| self.valid(c) && Self::answers(c, state_seq));
-        self.last.in_charge == 0 && self.loop_established && !self.last.brake && !answered
+        self.standby
+            && self.last.in_charge == 0
+            && self.loop_established
+            && !self.last.brake
+            && !answered
+    }
+
+    /// At the deadline (`now_ns`), having polled `newest`: ask the standby
+    /// ([`RobotLink::standby_wanted`]) and wait for an answer to state
+    /// `state_seq` until the later of a late cycle's grace
+    /// ([`Wake::grace_until_any`]) and, the standby asked,
+    /// [`STANDBY_GRACE_NS`] from now.
+    pub fn grace(
+        &self,
+        wake: &Wake,
+        newest: &[Option<TorqueCommand>; SLOTS],
+        state_seq: u64,
+        now_ns: u64,
+    ) -> Grace {
+        let standby_asked = self.standby_wanted(newest, state_seq);
+        let late = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), state_seq);
+        let asked = standby_asked.then_some(now_ns + STANDBY_GRACE_NS);
+        Grace {
+            standby_asked,
+            until_ns: late.max(asked),
+        }
     }
 
     /// Decide this period: `newest` is the newest command received (if any),

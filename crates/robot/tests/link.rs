@@ -576,3 +576,38 @@ fn the_standby_is_asked_only_for_the_answer_the_one_in_charge_did_not_give() {
     assert!(link.output().brake);
     assert!(!link.standby_wanted(&[None, None], 30));
 }
+
+/// The cycle's wait: none when slot 0 answered in time; the standby asked
+/// and 0.5 ms from the deadline when it did not; a late cycle's own grace
+/// when that ends later; without a standby, nobody asked.
+#[test]
+fn the_grace_asks_the_standby_and_waits_the_later_of_the_two() {
+    use phri_robot::link::{Wake, STANDBY_GRACE_NS};
+    let mut link = established();
+    let on_time = Wake {
+        woke_ns: 2 * PERIOD_NS,
+        deadline_ns: 2 * PERIOD_NS,
+        late: false,
+    };
+    let now = 2 * PERIOD_NS + 10_000;
+    let answered = [Some(command(2, 1, PERIOD_NS + 100_000, 2.0)), None];
+    let g = link.grace(&on_time, &answered, 1, now);
+    assert!(!g.standby_asked && g.until_ns.is_none());
+    let missing = [Some(command(1, 0, 100_000, 2.0)), None];
+    let g = link.grace(&on_time, &missing, 1, now);
+    assert!(g.standby_asked);
+    assert_eq!(g.until_ns, Some(now + STANDBY_GRACE_NS));
+    // this process woke late: the longer of its grace and the standby's
+    let late = Wake {
+        woke_ns: 2 * PERIOD_NS + 700_000,
+        deadline_ns: 2 * PERIOD_NS + 700_000,
+        late: true,
+    };
+    let g = link.grace(&late, &missing, 1, now);
+    assert_eq!(g.until_ns, Some(late.woke_ns + LATE_CYCLE_GRACE_NS));
+    // one controller alone: a late cycle's grace only
+    link.set_standby(false);
+    let g = link.grace(&on_time, &missing, 1, now);
+    assert!(!g.standby_asked && g.until_ns.is_none());
+    assert!(!link.grace(&late, &missing, 1, now).standby_asked);
+}

@@ -31,7 +31,7 @@ use phri_ipc::{
 };
 use phri_runtime::log::Deferred;
 use phri_runtime::{now_ns, sleep_until_ns, ServiceContext, Shutdown};
-use phri_sim::link::{CommandGate, GRACE_POLL_NS, STANDBY_GRACE_NS};
+use phri_sim::link::{CommandGate, GRACE_POLL_NS};
 use phri_sim::snapshot::{self, SharedArm};
 use phri_sim::{
     fill_state, fill_truth, fill_world, forces_out::ForcesDatagram, ContactLog, CycleTiming,
@@ -70,7 +70,9 @@ fn body() -> Result<(), Box<dyn Error>> {
     let cfg = ctx.config().sim.clone();
     let period_ns = (cfg.dt_s * 1e9).round() as u64;
     let mut sim = Simulator::from_scenario(model, cfg, ctx.scenario(), None)?;
-    let link = RobotLink::new(n, period_ns)?;
+    let mut link = RobotLink::new(n, period_ns)?;
+    // without a hot standby nobody is asked for a missing answer
+    link.set_standby(ctx.config().control.standby);
     if ctx.checking() {
         return Ok(());
     }
@@ -249,16 +251,14 @@ fn robot_loop(
         tick = wake.deadline_ns;
         let mut newest = [None, None];
         link.poll(slots, &mut newest, seq)?;
-        // the one in charge has not answered: the resting standby is asked
-        let standby_asked = link.standby_wanted(&newest, seq);
-        if standby_asked {
+        // the machine stalled us and maybe the controller too (in simulated
+        // time the cycle is not over yet), or the one in charge has not
+        // answered and the resting standby is asked
+        let grace = link.grace(&wake, &newest, seq, now_ns());
+        if grace.standby_asked {
             ports.standby_state.publish(&outbox.state)?;
         }
-        // the machine stalled us and maybe the controller too (in simulated
-        // time the cycle is not over yet), or the standby was just woken
-        let late = wake.grace_until_any(&newest.each_ref().map(Option::as_ref), seq);
-        let asked = standby_asked.then(|| now_ns() + STANDBY_GRACE_NS);
-        if let Some(until) = late.max(asked) {
+        if let Some(until) = grace.until_ns {
             while now_ns() < until {
                 sleep_until_ns(now_ns() + GRACE_POLL_NS);
                 if link.poll(slots, &mut newest, seq)? {
@@ -271,7 +271,7 @@ fn robot_loop(
             command_event_ns: last_command_event.load(Ordering::Acquire),
             now_ns: now_ns(),
             behind_schedule_ns: wake.behind_schedule_ns(),
-            standby_asked,
+            standby_asked: grace.standby_asked,
         };
         let out = link.cycle_slots(newest.each_ref().map(Option::as_ref), seq, &timing);
         if let Some(run) = out.miss_run {
