@@ -33,6 +33,10 @@ const SSM_MOVING_M_S: f64 = 0.01;
 /// The time constant of the path's pace under the barrier filter \[s\].
 const PATH_SCALE_FILTER_S: f64 = 0.05;
 
+/// A nominal end-effector progress along the path below this sets no pace
+/// [m/s].
+const LET_THROUGH_MIN_M_S: f64 = 1e-3;
+
 /// What speed and separation monitoring did, counted over the run.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SsmCounters {
@@ -239,8 +243,8 @@ pub struct Resolver {
     perception_age_s: f64,
     /// the largest perception ages of the last two spans of [`AGE_HOLD_S`]
     age_hold: AgeHold,
-    /// the share of the task's end-effector velocity the filter let through
-    /// in the last period, 0-1 (1 under the paper's law)
+    /// the share of the task's end-effector progress along the path the
+    /// filter let through, low-passed, 0-1 (1 under the paper's law)
     path_scale: f64,
 }
 
@@ -312,8 +316,8 @@ impl Resolver {
         };
     }
 
-    /// The share of the task's end-effector velocity the last period let
-    /// through, 0-1: the path's time slows by it under the filter (1 under
+    /// The share of the task's end-effector progress along the path the
+    /// filter let through (low-passed), 0-1: the path's time slows by it under the filter (1 under
     /// the paper's law, whose path slows by its own rule).
     pub fn path_scale(&self) -> f64 {
         self.path_scale
@@ -651,7 +655,7 @@ impl Resolver {
                             .map_err(|_| ())?;
                         // low-passed: the path's pace follows the filter's
                         // braking, not its period-to-period changes
-                        let r = let_through(&self.jac_ee, out.qd, qd);
+                        let r = let_through(&self.jac_ee, &c.xd_d, out.qd, qd);
                         self.path_scale +=
                             (r - self.path_scale) * (dt / PATH_SCALE_FILTER_S).min(1.0);
                         Ok(qd)
@@ -716,17 +720,22 @@ fn add_barrier(
     }
 }
 
-/// The share of the nominal end-effector velocity (at `qd_nom`) that the
-/// filtered `qd` keeps along it, 0-1 (1 when the nominal is at rest).
-fn let_through(jac_ee: &Matrix6xX<f64>, qd_nom: &[f64], qd: &[f64]) -> f64 {
+/// The share of the nominal end effector's progress along the path's
+/// direction `along` [m/s] (at `qd_nom`) that the filtered `qd` keeps,
+/// 0-1: 1 when the path is at rest or the nominal makes no progress along
+/// it (an end effector trailing its reference from aside or ahead: the time
+/// law goes on, and the reference leads it away from what held it).
+fn let_through(jac_ee: &Matrix6xX<f64>, along: &Vector3<f64>, qd_nom: &[f64], qd: &[f64]) -> f64 {
     // the linear rows times the joint velocities: a Vector3 on the stack
     let v = |qd: &[f64]| -> Vector3<f64> {
         jac_ee.fixed_rows::<3>(0) * DVectorView::from_slice(qd, qd.len())
     };
-    let (nom, got) = (v(qd_nom), v(qd));
-    let n2 = nom.norm_squared();
-    match n2 > 1e-6 {
-        true => (got.dot(&nom) / n2).clamp(0.0, 1.0),
+    let Some(u) = along.try_normalize(1e-9) else {
+        return 1.0;
+    };
+    let (nom, got) = (v(qd_nom).dot(&u), v(qd).dot(&u));
+    match nom > LET_THROUGH_MIN_M_S {
+        true => (got / nom).clamp(0.0, 1.0),
         false => 1.0,
     }
 }

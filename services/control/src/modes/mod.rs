@@ -15,6 +15,7 @@
 //! torque law or a Cartesian reference of the end effector, which the
 //! avoidance stage resolves (SNS under perception, CLIK without).
 
+pub mod arrival;
 pub mod collaborate;
 pub mod protective_stop;
 pub mod reaction;

@@ -8,13 +8,16 @@
 //! direction over `V_max` (`path_pace = "opposing"`; an obstacle beside the
 //! path does not slow it, the end effector goes around it by eq. 19), or its
 //! whole risk `‖V_Call(P_e)‖/V_max` (`"risk"`). Under the barrier filter
-//! the time law runs at the share of the task's motion the filter lets
-//! through, and a waypoint the end effector is held from (`pass_after_s`)
-//! is passed over: the path goes round to the next one.
+//! the time law runs at the share of the end effector's progress along the
+//! path the filter lets through, a waypoint waits for an end effector led
+//! round a person ([`crate::modes::arrival`]), and a waypoint the end
+//! effector is held from (`pass_after_s`) is passed over: the reference
+//! goes straight on to the waypoint after it.
 
 use nalgebra::Vector3;
 use phri_config::{ControlConfig, PathPace};
 
+use crate::modes::arrival::Arrival;
 use crate::modes::CartesianRef;
 use crate::path::{Approach, Path};
 use crate::snapshot::{Reader, Snapshot, Writer};
@@ -51,14 +54,21 @@ pub struct TaskState {
     /// an obstacle has left the time law less than [`HELD_SHARE`] of its
     /// rate \[s\] (from 0 at each segment and start)
     held_s: f64,
-    /// the path passes over the segment's waypoint: its time law runs
-    /// whatever holds the end effector, until the next segment
+    /// the path passes over a held waypoint: the bypass to the waypoint after
+    /// it runs whatever holds the end effector, until that waypoint
     passing: bool,
+    /// under the barrier filter, the wait at the segment's waypoint for the
+    /// end effector
+    arrival: Arrival,
 }
 
 /// The time law runs at less than this share of its rate: the end
 /// effector is held.
 pub const HELD_SHARE: f64 = 0.5;
+
+/// A bypass ends this much path time before the waypoint it goes to (the
+/// end of that waypoint's segment) \[s\].
+const BYPASS_END_S: f64 = 1e-9;
 
 /// The share of the time law an obstacle takes away, `f ∈ [0, 1]`: the
 /// component of the end effector's repulsive vector `v_call` [m/s] against
@@ -88,6 +98,7 @@ impl Snapshot for TaskState {
         self.segments_ended.save(w);
         self.held_s.save(w);
         self.passing.save(w);
+        self.arrival.save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         self.approach.load(r);
@@ -103,6 +114,7 @@ impl Snapshot for TaskState {
         self.segments_ended.load(r);
         self.held_s.load(r);
         self.passing.load(r);
+        self.arrival.load(r);
     }
 }
 
@@ -133,6 +145,7 @@ impl TaskState {
             pass_after_s: 0.0,
             held_s: 0.0,
             passing: false,
+            arrival: Arrival::default(),
         }
     }
 
@@ -151,6 +164,7 @@ impl TaskState {
         self.last_target = self.path.target_index(self.s);
         self.held_s = 0.0;
         self.passing = false;
+        self.arrival.reset();
     }
 
     /// Path time \[s\].
@@ -176,15 +190,15 @@ impl TaskState {
 
     /// One period of `dt` \[s\]: the end effector's reference. `speed_scale`
     /// (1, or slower while perception is stale) scales the joint velocity
-    /// bounds and the time law; `pace` (0-1: the share of the task's motion
-    /// the barrier filter let through, 1 otherwise) and the end effector's
+    /// bounds and the time law; `pace` (0-1: the share of the end
+    /// effector's progress along the path the barrier filter let through, 1
+    /// otherwise) and the end effector's
     /// repulsive vector `v_call` [m/s] (0 without fresh perception) slow the
     /// time law only ([`path_slowdown`]), never the bounds: an arm held back
     /// keeps its room to back away; `ee` is the measured end effector \[m\]
     /// (to count waypoints reached). A segment held up for `pass_after_s`
-    /// is passed over: its time law ramps up again and runs at
-    /// `speed_scale` to the next segment, the waypoint counted only if the
-    /// end effector is there all the same.
+    /// is passed over: the reference goes straight on to the waypoint after
+    /// it, at `speed_scale`, its own waypoint not counted.
     pub fn step(
         &mut self,
         dt: f64,
@@ -201,7 +215,11 @@ impl TaskState {
         let share = pace * (1.0 - slowdown);
         let (x_d, xd_d) = match self.approach.as_mut() {
             Some(a) => {
-                let out = a.step(dt * speed_scale * share);
+                // a bypass runs whatever holds the end effector, as a pass does
+                let out = match self.passing {
+                    true => a.step(dt * speed_scale),
+                    false => a.step(dt * speed_scale * share),
+                };
                 if a.done() {
                     self.approach = None;
                     self.segments_ended += 1;
@@ -214,9 +232,8 @@ impl TaskState {
                         self.held_s += dt;
                     }
                     if self.held_s >= self.pass_after_s {
-                        // go round: the time law ramps up again from rest
-                        self.passing = true;
-                        self.ramp_u = 0.0;
+                        // go round, straight to the waypoint after the held one
+                        return self.bypass(speed_scale);
                     }
                 }
                 let time_scale = match self.passing {
@@ -228,25 +245,69 @@ impl TaskState {
                 self.ramp_u = (self.ramp_u + dt / self.path_ramp_s.max(1e-3)).min(1.0);
                 let u = self.ramp_u;
                 let rate = u * u * (3.0 - 2.0 * u) * time_scale;
-                self.s += dt * rate;
-                let (x, dx) = self.path.sample(self.s);
-                let dx = dx * rate;
+                let s = self.s + dt * rate;
                 // waypoint reached: the segment ended with the end effector there
-                let target = self.path.target_index(self.s);
+                let target = self.path.target_index(s);
                 if target != self.last_target {
-                    if (ee - self.path.waypoints[self.last_target]).norm()
-                        <= self.waypoint_tolerance
+                    let distance = (ee - self.path.waypoints[self.last_target]).norm();
+                    let there = distance <= self.waypoint_tolerance;
+                    if !there
+                        && self.pass_after_s > 0.0
+                        && self.arrival.wait(distance, dt, self.pass_after_s)
                     {
+                        // the segment ends at rest: its waypoint waits for the end effector
+                        return self.reference(
+                            self.path.sample(self.s).0,
+                            Vector3::zeros(),
+                            speed_scale,
+                        );
+                    }
+                    if there {
                         self.waypoints_reached += 1;
                     }
                     self.segments_ended += 1;
                     self.last_target = target;
                     self.held_s = 0.0;
                     self.passing = false;
+                    self.arrival.reset();
                 }
-                (x, dx)
+                self.s = s;
+                let (x, dx) = self.path.sample(self.s);
+                (x, dx * rate)
             }
         };
+        self.reference(x_d, xd_d, speed_scale)
+    }
+
+    /// Pass over the held segment's waypoint: the reference goes from where
+    /// it is straight to the waypoint after it, on a minimum-jerk move of one
+    /// segment's time from rest that runs whatever holds the end effector,
+    /// and the path goes on from there (the end of the segment after, so
+    /// that the waypoint counts, or waits, as any other). This period: the
+    /// reference at rest where it is.
+    fn bypass(&mut self, speed_scale: f64) -> CartesianRef {
+        let n = self.path.waypoints.len();
+        let t = self.path.segment_time;
+        let (from, _) = self.path.sample(self.s);
+        let next = (self.last_target + 1) % n;
+        // the end of the segment after this one, just before its waypoint
+        self.s = (self.s / t).floor() * t + 2.0 * t - BYPASS_END_S;
+        self.approach = Some(Approach {
+            from,
+            to: self.path.waypoints[next],
+            duration: t,
+            t: 0.0,
+        });
+        self.last_target = next;
+        self.segments_ended += 1;
+        self.held_s = 0.0;
+        self.passing = true;
+        self.arrival.reset();
+        self.reference(from, Vector3::zeros(), speed_scale)
+    }
+
+    /// The end effector's reference at `x_d` \[m\], `xd_d` [m/s].
+    fn reference(&self, x_d: Vector3<f64>, xd_d: Vector3<f64>, speed_scale: f64) -> CartesianRef {
         CartesianRef {
             x_d,
             xd_d,
@@ -349,6 +410,8 @@ mod tests {
 
     #[test]
     fn a_waypoint_held_from_the_end_effector_is_passed_over_not_counted() {
+        // (time the path went on to P3's segment, time it began P3 → P1,
+        // waypoints reached, largest step of the reference [m])
         let run = |pass_after_s: f64| {
             let mut t = task();
             t.pass_held_waypoints(pass_after_s);
@@ -358,34 +421,41 @@ mod tests {
             let dt = 0.001;
             // the end effector held 10 cm short of P2, the filter letting 10 % through
             let held = w[1] + (w[0] - w[1]).normalize() * 0.1;
-            let mut passed_at = None;
+            let (mut passed_at, mut at_p3, mut step) = (None, None, 0.0_f64);
+            let mut x_d = w[0];
             for k in 0..5500 {
-                let ee = match t.path.target_index(t.s) {
-                    1 => held,
-                    _ => t.path.sample(t.s).0,
+                let toward_p2 = t.approach.is_none() && t.path.target_index(t.s) == 1;
+                let (ee, pace) = match toward_p2 {
+                    true => (held, 0.1),
+                    false => (x_d, 1.0),
                 };
-                let pace = if t.path.target_index(t.s) == 1 {
-                    0.1
-                } else {
-                    1.0
-                };
-                t.step(dt, (1.0, pace), &Vector3::zeros(), &ee);
-                if passed_at.is_none() && t.path.target_index(t.s) == 2 {
+                let r = t.step(dt, (1.0, pace), &Vector3::zeros(), &ee);
+                step = step.max((r.x_d - x_d).norm());
+                x_d = r.x_d;
+                let target = t.path.target_index(t.s);
+                if passed_at.is_none() && target == 2 {
                     passed_at = Some(k as f64 * dt);
                 }
+                if at_p3.is_none() && target == 0 {
+                    at_p3 = Some(k as f64 * dt);
+                }
             }
-            (passed_at, t.waypoints_reached())
+            (passed_at, at_p3, t.waypoints_reached(), step)
         };
         // waiting: 5.5 s at a tenth of the rate, P2 still ahead
-        assert_eq!(run(0.0), (None, 0));
-        // passing after 1 s held: P2 not counted, P3 (and P1) reached on time
-        let (passed_at, reached) = run(1.0);
+        let (passed_at, _, reached, _) = run(0.0);
+        assert_eq!((passed_at, reached), (None, 0));
+        // passing after 1 s held: straight on to P3 in one segment's time (1.33
+        // s), P2 not counted, P3 and P1 reached
+        let (passed_at, at_p3, reached, step) = run(1.0);
         let passed_at = passed_at.expect("the path went on to P3");
-        // 1 s at a tenth (0.1 s of path), the ramp from rest (0.5 s: 0.25 s of
-        // path), the rest of the segment's 1.33 s at full rate: 2.48 s
-        assert!((2.4..2.6).contains(&passed_at), "passed at {passed_at} s");
+        assert!((0.99..1.01).contains(&passed_at), "passed at {passed_at} s");
+        let at_p3 = at_p3.expect("P3 reached");
+        assert!((2.32..2.35).contains(&at_p3), "at P3 at {at_p3} s");
         assert_eq!(reached, 2, "P3 and P1, not the held P2");
-        // the pass ends with its segment: the next one is paced by the filter again
+        // no jump: 1 mm in a period at most (the path peaks at 0.55 m/s)
+        assert!(step < 1e-3, "the reference stepped {step} m");
+        // the pass ends with the bypass: the next segment is paced by the filter again
         let mut t = task();
         t.pass_held_waypoints(1.0);
         t.approach = None;
@@ -393,11 +463,51 @@ mod tests {
         for _ in 0..1500 {
             t.step(0.001, (1.0, 0.1), &Vector3::zeros(), &Vector3::zeros());
         }
-        assert!(t.passing, "held 1.5 s at a tenth of the rate");
-        while t.path.target_index(t.s) == 1 {
-            t.step(0.001, (1.0, 0.1), &Vector3::zeros(), &Vector3::zeros());
+        assert!(
+            t.passing && t.approach.is_some(),
+            "held 1 s at a tenth of the rate"
+        );
+        let p3 = t.path.waypoints[2];
+        while t.path.target_index(t.s) == 2 {
+            t.step(0.001, (1.0, 0.1), &Vector3::zeros(), &p3);
         }
         assert!(!t.passing && t.held_s == 0.0);
+        assert_eq!(t.waypoints_reached(), 1, "P3");
+    }
+
+    /// Waypoints reached in 4 s of path by an end effector that trails its
+    /// reference by `lag` periods (led round something), the held
+    /// waypoints passed over after `pass_after_s`.
+    fn reached_trailing_by(lag: usize, pass_after_s: f64) -> u64 {
+        let mut t = task();
+        t.pass_held_waypoints(pass_after_s);
+        t.approach = None;
+        t.ramp_u = 1.0;
+        let start = t.path.waypoints[0];
+        let mut trail = std::collections::VecDeque::from(vec![start; lag]);
+        for _ in 0..4000 {
+            let ee = trail.pop_front().unwrap_or(start);
+            trail.push_back(t.step(0.001, (1.0, 1.0), &Vector3::zeros(), &ee).x_d);
+        }
+        t.waypoints_reached()
+    }
+
+    #[test]
+    fn under_the_filter_a_waypoint_waits_for_the_end_effector_closing_in() {
+        // 0.4 s behind, the end effector is 6 cm short of the first two
+        // waypoints when their segments end
+        assert!(
+            reached_trailing_by(400, 0.0) <= 1,
+            "the paper's law: not counted"
+        );
+        assert_eq!(
+            reached_trailing_by(400, 1.0),
+            3,
+            "the filter's: each, a little later"
+        );
+        // right behind it: every waypoint in time, either way
+        assert_eq!(reached_trailing_by(1, 0.0), 3);
+        assert_eq!(reached_trailing_by(1, 1.0), 3);
     }
 
     #[test]
