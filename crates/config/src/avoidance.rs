@@ -42,9 +42,9 @@ pub struct AvoidanceConfig {
     pub task_weight: f64,
     /// a waypoint the filter has held the end effector from for this long
     /// is passed over: the reference goes straight on to the waypoint after
-    /// it, the waypoint not counted \[s\] (0: the path waits for it); and the longest the path
-    /// waits at a waypoint for an end effector led round a person
-    /// (`phri_control::modes::arrival`)
+    /// it, the waypoint not counted \[s\] (0: the path waits for it); and
+    /// the longest the path waits at a waypoint for an end effector led
+    /// round a person (`phri_control::modes::arrival`)
     pub pass_after_s: f64,
     /// the filter's joint velocities reach the reference through this
     /// slew limit \[rad/s²\] (the paper's law: `control.reference_accel_limit`)

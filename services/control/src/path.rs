@@ -94,6 +94,11 @@ impl Approach {
     pub fn new(from: Vector3<f64>, to: Vector3<f64>, speed: f64) -> Approach {
         // a minimum-jerk move peaks at 1.875× its mean speed
         let duration = ((to - from).norm() * 1.875 / speed.max(1e-3)).max(0.5);
+        Approach::lasting(from, to, duration)
+    }
+
+    /// From `from` to `to` in `duration` \[s\].
+    pub fn lasting(from: Vector3<f64>, to: Vector3<f64>, duration: f64) -> Approach {
         Approach {
             from,
             to,

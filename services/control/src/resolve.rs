@@ -317,8 +317,9 @@ impl Resolver {
     }
 
     /// The share of the task's end-effector progress along the path the
-    /// filter let through (low-passed), 0-1: the path's time slows by it under the filter (1 under
-    /// the paper's law, whose path slows by its own rule).
+    /// filter let through (low-passed), 0-1: the path's time slows by it
+    /// under the filter (1 under the paper's law, whose path slows by its
+    /// own rule).
     pub fn path_scale(&self) -> f64 {
         self.path_scale
     }
@@ -1055,6 +1056,40 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pace_is_the_progress_along_the_path_the_filter_let_through() {
+        // three joints moving the end effector along x, y and z
+        let mut jac = Matrix6xX::zeros(3);
+        jac.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
+        let x = Vector3::x();
+        // along the path: half of it let through, none, or backwards
+        assert!((let_through(&jac, &x, &[0.2, 0.0, 0.0], &[0.1, 0.05, 0.0]) - 0.5).abs() < 1e-12);
+        assert_eq!(
+            let_through(&jac, &x, &[0.2, 0.0, 0.0], &[0.0, 0.1, 0.0]),
+            0.0
+        );
+        assert_eq!(
+            let_through(&jac, &x, &[0.2, 0.0, 0.0], &[-0.1, 0.0, 0.0]),
+            0.0
+        );
+        // more progress than asked: the full pace, no more
+        assert_eq!(
+            let_through(&jac, &x, &[0.2, 0.0, 0.0], &[0.3, 0.0, 0.0]),
+            1.0
+        );
+        // trailing the reference from aside (the nominal makes no progress
+        // along the path) and held there: the path goes on
+        assert_eq!(
+            let_through(&jac, &x, &[0.0, 0.2, 0.0], &[0.0, 0.0, 0.0]),
+            1.0
+        );
+        // the path at rest: the full pace
+        assert_eq!(
+            let_through(&jac, &Vector3::zeros(), &[0.2, 0.0, 0.0], &[0.0; 3]),
+            1.0
+        );
+    }
 
     #[test]
     fn the_held_age_is_the_frames_largest_and_follows_a_faster_camera() {

@@ -192,9 +192,8 @@ impl TaskState {
     /// (1, or slower while perception is stale) scales the joint velocity
     /// bounds and the time law; `pace` (0-1: the share of the end
     /// effector's progress along the path the barrier filter let through, 1
-    /// otherwise) and the end effector's
-    /// repulsive vector `v_call` [m/s] (0 without fresh perception) slow the
-    /// time law only ([`path_slowdown`]), never the bounds: an arm held back
+    /// otherwise) and the end effector's repulsive vector `v_call` [m/s] (0
+    /// without fresh perception) slow the time law only ([`path_slowdown`]), never the bounds: an arm held back
     /// keeps its room to back away; `ee` is the measured end effector \[m\]
     /// (to count waypoints reached). A segment held up for `pass_after_s`
     /// is passed over: the reference goes straight on to the waypoint after
@@ -292,12 +291,7 @@ impl TaskState {
         let next = (self.last_target + 1) % n;
         // the end of the segment after this one, just before its waypoint
         self.s = (self.s / t).floor() * t + 2.0 * t - BYPASS_END_S;
-        self.approach = Some(Approach {
-            from,
-            to: self.path.waypoints[next],
-            duration: t,
-            t: 0.0,
-        });
+        self.approach = Some(Approach::lasting(from, self.path.waypoints[next], t));
         self.last_target = next;
         self.segments_ended += 1;
         self.held_s = 0.0;
