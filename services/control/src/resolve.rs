@@ -536,7 +536,9 @@ impl Resolver {
                 let v_call = *f;
                 if let Some(filter) = self.cbf.as_mut() {
                     // the filter's barrier replaces eq. 19's and eq. 20's repulsion
-                    if p.active != 0 && !behind_the_hand {
+                    let hand = c.collab_hand.is_some_and(|h| at_the_hand(&h, p));
+                    if p.active != 0 && !behind_the_hand && !hand {
+                        let d_s = collaborating_distance(c, k, d_s, filter.config().margin_m);
                         let v_h = monitor.as_ref().and_then(|(m, _)| m.measured_speed(k));
                         let jacs = (&self.jac_ee, &mut self.jac_point);
                         let at = (k, frame, xyz);
@@ -696,6 +698,23 @@ impl Resolver {
             *q += v * dt;
         }
         failed
+    }
+}
+
+/// The distance \[m\] the barrier keeps control point `k` from its
+/// obstacle under `c`: `d_s`, except for the body points while a
+/// collaboration has a hand (approach, contact, follow), which keep only
+/// `margin_m` \[m\]: the person stands within reach on purpose, the
+/// perception's age charged at ISO 13855's speed (5-7 cm more) held the
+/// wrist and the forearm off the hand and off the arm it is held out on,
+/// and the end effector, which carries the approach, keeps its `d_s` to
+/// all but the hand. Under the paper's law the body points do not repel
+/// at all while collaborating; speed and separation monitoring still
+/// watches over every point.
+fn collaborating_distance(c: &CartesianRef, k: usize, d_s: f64, margin_m: f64) -> f64 {
+    match c.collab_hand.is_some() && k != 0 && k != c.collab_point {
+        true => margin_m.min(d_s),
+        false => d_s,
     }
 }
 
@@ -1026,7 +1045,10 @@ fn along(jac: &Matrix6xX<f64>, u: &Vector3<f64>, qd: &[f64]) -> f64 {
         .sum()
 }
 
-/// The obstacle of `p` is the collaborative hand `h` itself ([`AT_THE_HAND_M`]).
+/// The obstacle of `p` is the collaborative hand `h` itself ([`AT_THE_HAND_M`]):
+/// touching, no point repels it; under the barrier filter, no point keeps
+/// its distance to it while a collaboration has the hand (the wrist and
+/// the last links reach a hand held out beside the end effector).
 fn at_the_hand(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion) -> bool {
     let o = Vector3::from(p.obstacle);
     o.iter().all(|v| v.is_finite()) && (o - h).norm() <= AT_THE_HAND_M

@@ -318,6 +318,53 @@ fn collaborations_on_the_depth_trackers_skeletons_reach_the_truths_phases() {
     }
 }
 
+/// Under the barrier filter (`[avoidance] law = "cbf"`) each arm reaches the
+/// held-out hand past the crossing one, follows it to a second touch, and
+/// the wrist push ends it: while a collaboration has a hand, no point keeps
+/// its distance to that hand and the body points keep only `margin_m` to
+/// the rest of the person. With d_s for every point the Panda's wrist was
+/// held off the hand it held out, and its collaborations ended by the
+/// collision flag instead (a reflex).
+#[test]
+fn under_the_barrier_filter_each_arm_touches_the_hand_twice_and_the_wrist_push_ends_it() {
+    for robot in ["lwr4", "fr3", "panda"] {
+        let arm = format!("robot.name=\"{robot}\"");
+        let sets = [arm.as_str(), "avoidance.law=\"cbf\""];
+        let Collab { s, ended_by, .. } = collaborate_with("safe-collaboration", 17.0, &sets);
+        let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
+        eprintln!("{robot}: {order:?}, ended by {ended_by:?}");
+        let first =
+            |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
+        let a = first("approach", 0).expect("an approach");
+        let c1 = first("contact", a).expect("a first contact");
+        let f = first("follow", c1).expect("a follow");
+        assert!(first("contact", f).is_some(), "{robot}: {order:?}");
+        assert!(!order.contains(&"reaction"), "{robot}: {order:?}");
+        let (t_end, why) = ended_by.expect("the collaboration ended");
+        assert_eq!(why, phri_ipc::CollabReason::WristPush, "{robot}");
+        assert!(
+            (15.5..16.2).contains(&t_end),
+            "{robot}: ended at {t_end:.2} s"
+        );
+        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        // the first touch before the hand moves on (11-12 s; the FR3's
+        // reaches it at 11.1-11.2 s under either law), the second after
+        let hand: Vec<_> = s
+            .contacts
+            .iter()
+            .filter(|c| c.part == "hand_right")
+            .collect();
+        assert!(
+            hand.iter().all(|c| c.intended)
+                && hand.iter().any(|c| c.t_start_s < 11.5)
+                && hand
+                    .iter()
+                    .any(|c| c.t_start_s > 12.0 && c.t_start_s < 15.5),
+            "{robot}: {hand:?}"
+        );
+    }
+}
+
 /// The robot following a hand that moved away touches it again at about
 /// `contact_speed`: near the hand its reference no longer leads the end
 /// effector by up to 5 cm, which pulled it in at the feedback's cap on top
