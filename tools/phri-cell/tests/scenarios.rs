@@ -191,6 +191,43 @@ fn collaborate_with(scenario: &str, seconds: f64, sets: &[&str]) -> Collab {
     }
 }
 
+/// The collaboration's phases of `s` ran approach → contact → follow →
+/// contact again, with no reaction and no protective stop (`what` names
+/// the run); the index of the first phase after the second contact.
+fn assert_touch_follow_touch(s: &phri_cell::CellSummary, what: &str) -> usize {
+    let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
+    let first = |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
+    let a = first("approach", 0).unwrap_or_else(|| panic!("{what}: no approach: {order:?}"));
+    let c1 = first("contact", a).unwrap_or_else(|| panic!("{what}: no first contact: {order:?}"));
+    let f = first("follow", c1).unwrap_or_else(|| panic!("{what}: no follow: {order:?}"));
+    let c2 = first("contact", f).unwrap_or_else(|| panic!("{what}: no second contact: {order:?}"));
+    assert!(
+        !order.contains(&"reaction"),
+        "{what}: a reaction: {order:?}"
+    );
+    assert!(
+        !order.contains(&"protective_stop"),
+        "{what}: a stop: {order:?}"
+    );
+    c2 + 1
+}
+
+/// The wrist push (15.5-16.5 s) ended the collaboration of `s` within 0.7
+/// s, and nothing was touched unintended (`what` names the run).
+fn assert_the_wrist_push_ends_it(
+    s: &phri_cell::CellSummary,
+    ended_by: Option<(f64, phri_ipc::CollabReason)>,
+    what: &str,
+) {
+    let (t_end, why) = ended_by.unwrap_or_else(|| panic!("{what}: the collaboration never ended"));
+    assert_eq!(why, phri_ipc::CollabReason::WristPush, "{what}");
+    assert!(
+        (15.5..16.2).contains(&t_end),
+        "{what}: ended at {t_end:.2} s"
+    );
+    assert_eq!(s.unintended_contacts, 0, "{what}: {:?}", s.contacts);
+}
+
 #[test]
 fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
     // deploy/scenarios/collaboration.toml (paper Sect. VII-C, Figs. 8-9)
@@ -210,16 +247,14 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
         approach.0 - 3.0
     );
     // approach → contact → follow → contact again, then recover and the task
+    let after = assert_touch_follow_touch(&s, "collaboration");
     let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
-    let first = |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
-    let a = first("approach", 0).unwrap();
-    let c1 = first("contact", a).expect("a first contact");
-    let f = first("follow", c1).expect("a follow");
-    let c2 = first("contact", f).expect("a contact after the follow");
-    let r = first("recover", c2).expect("the end");
-    assert!(first("task", r).is_some(), "the task resumes: {order:?}");
-    assert!(!order.contains(&"reaction"), "no reaction: {order:?}");
-    assert!(!order.contains(&"protective_stop"), "no stop: {order:?}");
+    let r = order[after..]
+        .iter()
+        .position(|m| *m == "recover")
+        .expect("the end")
+        + after;
+    assert!(order[r..].contains(&"task"), "the task resumes: {order:?}");
     // the wrist push (15.5-16.5 s) ends it
     let (t_end, why) = ended_by.expect("the collaboration ended");
     assert_eq!(why, phri_ipc::CollabReason::WristPush);
@@ -288,22 +323,8 @@ fn collaborations_on_the_depth_trackers_skeletons_reach_the_truths_phases() {
         eprintln!("{scenario}: the approach {late:+.2} s from the truth's");
         assert!(late.abs() <= 0.5, "{scenario}: {late:.2} s");
         // approach → contact → follow → contact again, as from the truth
-        let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
-        let first =
-            |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
-        let a = first("approach", 0).expect("an approach");
-        let c1 = first("contact", a).expect("a first contact");
-        let f = first("follow", c1).expect("a follow");
-        assert!(first("contact", f).is_some(), "{scenario}: {order:?}");
-        assert!(!order.contains(&"reaction"), "{scenario}: {order:?}");
-        assert!(!order.contains(&"protective_stop"), "{scenario}: {order:?}");
-        let (t_end, why) = ended_by.expect("the collaboration ended");
-        assert_eq!(why, phri_ipc::CollabReason::WristPush, "{scenario}");
-        assert!(
-            (15.5..16.2).contains(&t_end),
-            "{scenario}: ended at {t_end:.2} s"
-        );
-        assert_eq!(s.unintended_contacts, 0, "{scenario}: {:?}", s.contacts);
+        assert_touch_follow_touch(&s, scenario);
+        assert_the_wrist_push_ends_it(&s, ended_by, scenario);
         let hand: Vec<_> = s
             .contacts
             .iter()
@@ -331,22 +352,9 @@ fn under_the_barrier_filter_each_arm_touches_the_hand_twice_and_the_wrist_push_e
         let arm = format!("robot.name=\"{robot}\"");
         let sets = [arm.as_str(), "avoidance.law=\"cbf\""];
         let Collab { s, ended_by, .. } = collaborate_with("safe-collaboration", 17.0, &sets);
-        let order: Vec<&str> = s.modes.iter().map(|(_, m)| m.as_str()).collect();
-        eprintln!("{robot}: {order:?}, ended by {ended_by:?}");
-        let first =
-            |m: &str, from: usize| order[from..].iter().position(|x| *x == m).map(|i| i + from);
-        let a = first("approach", 0).expect("an approach");
-        let c1 = first("contact", a).expect("a first contact");
-        let f = first("follow", c1).expect("a follow");
-        assert!(first("contact", f).is_some(), "{robot}: {order:?}");
-        assert!(!order.contains(&"reaction"), "{robot}: {order:?}");
-        let (t_end, why) = ended_by.expect("the collaboration ended");
-        assert_eq!(why, phri_ipc::CollabReason::WristPush, "{robot}");
-        assert!(
-            (15.5..16.2).contains(&t_end),
-            "{robot}: ended at {t_end:.2} s"
-        );
-        assert_eq!(s.unintended_contacts, 0, "{robot}: {:?}", s.contacts);
+        eprintln!("{robot}: {:?}, ended by {ended_by:?}", s.modes);
+        assert_touch_follow_touch(&s, robot);
+        assert_the_wrist_push_ends_it(&s, ended_by, robot);
         // the first touch before the hand moves on (11-12 s; the FR3's
         // reaches it at 11.1-11.2 s under either law), the second after
         let hand: Vec<_> = s
