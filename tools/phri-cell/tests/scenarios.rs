@@ -228,6 +228,11 @@ fn assert_the_wrist_push_ends_it(
     assert_eq!(s.unintended_contacts, 0, "{what}: {:?}", s.contacts);
 }
 
+/// The contact episodes of the person's `part` in `s`.
+fn touches<'s>(s: &'s phri_cell::CellSummary, part: &str) -> Vec<&'s phri_cell::ContactEpisode> {
+    s.contacts.iter().filter(|c| c.part == part).collect()
+}
+
 #[test]
 fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
     // deploy/scenarios/collaboration.toml (paper Sect. VII-C, Figs. 8-9)
@@ -255,20 +260,15 @@ fn collaboration_wave_approach_contact_follow_and_a_wrist_push_ends_it() {
         .expect("the end")
         + after;
     assert!(order[r..].contains(&"task"), "the task resumes: {order:?}");
-    // the wrist push (15.5-16.5 s) ends it
-    let (t_end, why) = ended_by.expect("the collaboration ended");
-    assert_eq!(why, phri_ipc::CollabReason::WristPush);
+    // the wrist push (15.5-16.5 s) ends it, within 0.5 s here; only
+    // intended contacts: the right hand on the end effector, the push
+    assert_the_wrist_push_ends_it(&s, ended_by, "collaboration");
+    let t_end = ended_by.map_or(f64::INFINITY, |(t, _)| t);
     assert!(
-        (15.5..16.0).contains(&t_end),
+        t_end < 16.0,
         "ended at {t_end:.2} s: the push began at 15.5 s"
     );
-    // only intended contacts: the right hand on the end effector, the push
-    assert_eq!(s.unintended_contacts, 0, "{:?}", s.contacts);
-    let hand: Vec<_> = s
-        .contacts
-        .iter()
-        .filter(|c| c.part == "hand_right")
-        .collect();
+    let hand = touches(&s, "hand_right");
     assert!(
         hand.iter().any(|c| c.t_start_s < 11.0),
         "first contact: {hand:?}"
@@ -325,11 +325,7 @@ fn collaborations_on_the_depth_trackers_skeletons_reach_the_truths_phases() {
         // approach → contact → follow → contact again, as from the truth
         assert_touch_follow_touch(&s, scenario);
         assert_the_wrist_push_ends_it(&s, ended_by, scenario);
-        let hand: Vec<_> = s
-            .contacts
-            .iter()
-            .filter(|c| c.part == "hand_right")
-            .collect();
+        let hand = touches(&s, "hand_right");
         assert!(
             hand.iter().all(|c| c.link == "lwr_link_7" && c.intended)
                 && hand.iter().any(|c| c.t_start_s < 11.0)
@@ -357,11 +353,7 @@ fn under_the_barrier_filter_each_arm_touches_the_hand_twice_and_the_wrist_push_e
         assert_the_wrist_push_ends_it(&s, ended_by, robot);
         // the first touch before the hand moves on (11-12 s; the FR3's
         // reaches it at 11.1-11.2 s under either law), the second after
-        let hand: Vec<_> = s
-            .contacts
-            .iter()
-            .filter(|c| c.part == "hand_right")
-            .collect();
+        let hand = touches(&s, "hand_right");
         assert!(
             hand.iter().all(|c| c.intended)
                 && hand.iter().any(|c| c.t_start_s < 11.5)

@@ -193,8 +193,9 @@ impl TaskState {
     /// bounds and the time law; `pace` (0-1: the share of the end
     /// effector's progress along the path the barrier filter let through, 1
     /// otherwise) and the end effector's repulsive vector `v_call` [m/s] (0
-    /// without fresh perception) slow the time law only ([`path_slowdown`]), never the bounds: an arm held back
-    /// keeps its room to back away; `ee` is the measured end effector \[m\]
+    /// without fresh perception) slow the time law only
+    /// ([`path_slowdown`]), never the bounds: an arm held back keeps its
+    /// room to back away; `ee` is the measured end effector \[m\]
     /// (to count waypoints reached). A segment held up for `pass_after_s`
     /// is passed over: the reference goes straight on to the waypoint after
     /// it, at `speed_scale`, its own waypoint not counted.
