@@ -800,6 +800,7 @@ impl Controller {
         with_perception: bool,
         fresh: Option<PerceptionView<'_>>,
     ) {
+        self.resolver.set_drives(&self.data.m, &self.terms.bias);
         let (model, data, rf, cfg) = (&self.model, &mut self.data, &mut self.reference, &self.cfg);
         // the perception's age now (capture → this command) [s]: the
         // barrier filter's d_s, and speed and separation monitoring's T_r

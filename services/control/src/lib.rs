@@ -36,6 +36,7 @@ pub mod clik;
 pub mod collab;
 pub mod controller;
 pub mod cut;
+pub mod drives;
 pub mod error;
 pub mod history;
 pub mod inputs;

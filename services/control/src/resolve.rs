@@ -7,13 +7,15 @@
 //! obstacle in the task's null space; without perception, CLIK with a
 //! null-space posture.
 
-use nalgebra::{DVectorView, Matrix6xX, Vector3};
+use nalgebra::{DMatrix, DVectorView, Matrix6xX, Vector3};
 use phri_config::{BodyAvoidance, ControlConfig, PointConfig};
+use phri_ipc::MAX_DOF;
 use phri_model::{Data, Model};
 
 use crate::avoidance::Avoidance;
 use crate::cbf::{CbfCounters, CbfFilter, WarmStart};
 use crate::clik::{Clik, ClikGains};
+use crate::drives::DriveCaps;
 use crate::error::ControlError;
 use crate::inputs::PerceptionView;
 use crate::modes::CartesianRef;
@@ -239,6 +241,8 @@ pub struct Resolver {
     ssm_was_violating_standard: bool,
     /// the control-barrier filter (`None`: the paper's law)
     cbf: Option<CbfFilter>,
+    /// each joint's acceleration cap from its drive (under the filter)
+    drives: DriveCaps,
     /// d_s's perception age \[s\] (capture → command)
     perception_age_s: f64,
     /// the largest perception ages of the last two spans of [`AGE_HOLD_S`]
@@ -272,6 +276,7 @@ impl Resolver {
             ssm_was_violating: false,
             ssm_was_violating_standard: false,
             cbf: None,
+            drives: DriveCaps::new(model),
             perception_age_s: 0.0,
             age_hold: AgeHold::default(),
             path_scale: 1.0,
@@ -291,6 +296,13 @@ impl Resolver {
     /// The control-barrier filter is the law.
     pub fn cbf_law(&self) -> bool {
         self.cbf.is_some()
+    }
+
+    /// The drives' acceleration caps at the measured state (joint-space
+    /// inertia `m` \[kg m²\], bias `C q̇ + g` \[Nm\]), for the barrier
+    /// filter's reference ([`crate::drives`]).
+    pub fn set_drives(&mut self, m: &DMatrix<f64>, bias: &[f64]) {
+        self.drives.update(m, bias);
     }
 
     /// What the control-barrier filter did so far (zeros under the paper's law).
@@ -644,6 +656,13 @@ impl Resolver {
             }
             _ => None,
         };
+        // under the filter, each joint no faster than its drive gives it
+        let mut caps = [f64::INFINITY; MAX_DOF];
+        if self.cbf.is_some() && !self.ssm_period.stopping {
+            for (i, cap) in caps.iter_mut().enumerate() {
+                *cap = self.drives.cap(i);
+            }
+        }
         let solved = self
             .avoidance
             .solve(&self.jac_ee, &xdot_task, &v_ee, c.speed_scale)
@@ -671,13 +690,13 @@ impl Resolver {
                 match jerk {
                     Some(limits) => {
                         let v = r.qd_ref.iter_mut().zip(r.qdd_ref.iter_mut());
-                        for ((v, a), &target) in v.zip(qd) {
-                            slew::slew_jerk(v, a, target, limits, dt);
+                        for ((v, a), (&target, &cap)) in v.zip(qd.iter().zip(&caps)) {
+                            slew::slew_jerk(v, a, target, (limits.0.min(cap), limits.1), dt);
                         }
                     }
                     None => {
-                        for (v, &target) in r.qd_ref.iter_mut().zip(qd) {
-                            slew::slew(v, target, dv);
+                        for (v, (&target, &cap)) in r.qd_ref.iter_mut().zip(qd.iter().zip(&caps)) {
+                            slew::slew(v, target, dv.min(cap * dt));
                         }
                     }
                 }
