@@ -11,7 +11,8 @@ use crate::Cell;
 
 /// The CSV header, one name per column (units in the names, base frame).
 pub const HEADER: &str = "t_s,mode,ee_x_m,ee_y_m,ee_z_m,ref_x_m,ref_y_m,ref_z_m,waypoints,\
-closest_true_m,closest_human_part,closest_robot_link,perceived_min_distance_m,risk,task_scale";
+closest_true_m,closest_human_part,closest_robot_link,perceived_min_distance_m,risk,task_scale,\
+collab_hand_x_m,collab_hand_y_m,collab_hand_z_m,collab_hand_error_m,collab_gap_m";
 
 /// The closest human–robot capsule pair at the cell's state: surface
 /// distance \[m\] (negative: penetrating), human part, robot link (`None`
@@ -35,13 +36,33 @@ pub fn closest_pair(cell: &Cell) -> Option<(f64, &'static str, String)> {
     })
 }
 
+/// The collaboration's hand as the controller follows it \[m\], its distance
+/// from the centre of the nearest hand of the simulated person \[m\], and the
+/// gap to it that decides the phase \[m\] (`None` while no hand is followed).
+fn collab_hand(cell: &Cell) -> Option<([f64; 3], f64, f64)> {
+    let c = cell.controller.collaboration()?;
+    let h = c.hand()?;
+    let error = cell
+        .sim
+        .human_capsules()
+        .iter()
+        .filter(|k| matches!(k.part.name(), "hand_right" | "hand_left"))
+        .map(|k| ((k.a + k.b) * 0.5 - h).norm())
+        .fold(f64::INFINITY, f64::min);
+    Some(([h.x, h.y, h.z], error, c.near_gap_m()))
+}
+
 /// One CSV row (no newline) of the cell after its last tick.
 pub fn row(cell: &Cell) -> String {
     let s = &cell.status;
     let x_d = cell.controller.task_reference();
     let (d, part, link) = closest_pair(cell).unwrap_or((f64::INFINITY, "", String::new()));
+    let collab = match collab_hand(cell) {
+        Some((h, e, g)) => format!("{:.4},{:.4},{:.4},{e:.4},{g:.4}", h[0], h[1], h[2]),
+        None => ",,,,".to_string(),
+    };
     format!(
-        "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.4},{},{},{:.4},{:.3},{:.3}",
+        "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.4},{},{},{:.4},{:.3},{:.3},{}",
         cell.time_ns() as f64 * 1e-9,
         cell.mode().name(),
         s.ee[0],
@@ -56,7 +77,8 @@ pub fn row(cell: &Cell) -> String {
         link,
         s.min_distance,
         s.risk,
-        s.task_scale
+        s.task_scale,
+        collab
     )
 }
 
