@@ -174,6 +174,11 @@ pub struct RepulsionInputs {
     max_age_ns: u64,
     /// whose direction a fused point takes
     direction: FusedDirection,
+    /// the speed at which a camera's bound ages \[m/s\]: a camera's
+    /// distance counts `age_speed × (how much older its result is than
+    /// the fused view's)` less when the cameras' bounds are compared (0:
+    /// the largest distance, however old)
+    age_speed_m_s: f64,
     refused: u64,
 }
 
@@ -208,8 +213,21 @@ impl RepulsionInputs {
             gave: vec![0; cameras],
             max_age_ns,
             direction: FusedDirection::Largest,
+            age_speed_m_s: 0.0,
             refused: 0,
         }
+    }
+
+    /// Compare the cameras' bounds as they stand at the fused view's
+    /// capture time: a result `a` older than the newest fresh camera's
+    /// counts `speed_m_s · a` \[m\] less (a person may have come that much
+    /// nearer since). Default 0: the largest distance, however old.
+    pub fn with_age_speed(mut self, speed_m_s: f64) -> RepulsionInputs {
+        self.age_speed_m_s = match speed_m_s.is_finite() {
+            true => speed_m_s.max(0.0),
+            false => 0.0,
+        };
+        self
     }
 
     /// Fused points take `direction`'s repulsive direction (default:
@@ -226,8 +244,15 @@ impl RepulsionInputs {
 
     /// For the cameras (`[[camera]]`), workers and control points of
     /// `config`, cameras staler than `[control] perception_max_age_ms` left
-    /// out of the fusion.
+    /// out of the fusion; under the barrier filter the cameras' bounds
+    /// compared at the same instant (`[avoidance] human_speed_m_s`,
+    /// [`RepulsionInputs::with_age_speed`]), under the paper's law the
+    /// largest.
     pub fn for_cell(config: &phri_config::Config) -> RepulsionInputs {
+        let age_speed = match config.avoidance.law {
+            phri_config::AvoidanceLaw::Cbf => config.avoidance.human_speed_m_s,
+            phri_config::AvoidanceLaw::Paper => 0.0,
+        };
         RepulsionInputs::with_cameras(
             config.cameras.len(),
             config.repulsion.workers as usize,
@@ -235,6 +260,7 @@ impl RepulsionInputs {
             (config.control.perception_max_age_ms * 1e6) as u64,
         )
         .with_direction(config.repulsion.fused_direction)
+        .with_age_speed(age_speed)
     }
 
     /// Cameras whose results this gathers.
@@ -315,7 +341,9 @@ impl RepulsionInputs {
 
     /// Fuse the cameras at robot time `now_ns` (several cameras; with one,
     /// nothing to do): per point, the largest distance among the cameras
-    /// that are fresh, with its camera's repulsive vector, or, with
+    /// that are fresh (each less its age beyond the view's at
+    /// [`RepulsionInputs::with_age_speed`]), with its camera's repulsive
+    /// vector, or, with
     /// [`FusedDirection::First`], the first camera's direction at that
     /// vector's magnitude while the first camera is fresh and sees
     /// something near the point. The view's
@@ -344,21 +372,21 @@ impl RepulsionInputs {
             .zip(&mut self.fused_sources)
             .enumerate()
         {
-            let mut best: Option<usize> = None;
+            let mut best: Option<(usize, f64)> = None;
             for (i, c) in cameras.iter().enumerate() {
                 let eligible = match any_fresh {
                     true => fresh(c),
                     // none fresh: the newest camera's, whatever it says
                     false => c.capture_ns() == capture_ns,
                 };
-                if eligible
-                    && best.is_none_or(|b| {
-                        c.points[k].min_distance > cameras[b].points[k].min_distance
-                    })
-                {
-                    best = Some(i);
+                // its bound at the view's capture time
+                let older_s = capture_ns.saturating_sub(c.point_capture_ns[k]) as f64 * 1e-9;
+                let bound = c.points[k].min_distance - self.age_speed_m_s * older_s;
+                if eligible && best.is_none_or(|(_, b)| bound > b) {
+                    best = Some((i, bound));
                 }
             }
+            let best = best.map(|(i, _)| i);
             if let Some(b) = best {
                 *slot = cameras[b].points[k];
                 *source = PointSource {
@@ -686,6 +714,42 @@ mod tests {
                 cameras: 1
             })
         );
+    }
+
+    #[test]
+    fn an_older_camera_s_bound_counts_as_it_stands_now() {
+        const MS: u64 = 1_000_000;
+        // camera 0 answered at 1000 ms: 20 cm; camera 1 a frame earlier
+        // (967 ms): 24 cm. At 1.6 m/s the person may have come 5.3 cm
+        // nearer since camera 1 looked: its bound is 18.7 cm at 1000 ms
+        let fused = |speed: f64| {
+            let mut acc = RepulsionInputs::with_cameras(2, 1, 1, 100 * MS).with_age_speed(speed);
+            acc.push_camera(0, &at(0, 1000 * MS, &[0], 0.20, 1.0))
+                .unwrap();
+            acc.push_camera(1, &at(0, 967 * MS, &[0], 0.24, -1.0))
+                .unwrap();
+            acc.fuse(1005 * MS);
+            let v = acc.view();
+            (v.points[0].min_distance, v.sources[0], v.capture_ns)
+        };
+        let (d, source, capture) = fused(1.6);
+        assert_eq!((d, source.camera, source.capture_ns), (0.20, 0, 1000 * MS));
+        assert_eq!(capture, 1000 * MS);
+        // without: the largest, however old (the paper's law)
+        let (d, source, _) = fused(0.0);
+        assert_eq!((d, source.camera, source.capture_ns), (0.24, 1, 967 * MS));
+        // an older camera still gives the bound when it is enough larger
+        let mut acc = RepulsionInputs::with_cameras(2, 1, 1, 100 * MS).with_age_speed(1.6);
+        acc.push_camera(0, &at(0, 1000 * MS, &[0], 0.20, 1.0))
+            .unwrap();
+        acc.push_camera(1, &at(0, 967 * MS, &[0], 0.30, -1.0))
+            .unwrap();
+        acc.fuse(1005 * MS);
+        assert_eq!(acc.view().points[0].min_distance, 0.30);
+        assert_eq!(acc.view().sources[0].camera, 1);
+        // a speed that is no speed compares the distances alone
+        let acc = RepulsionInputs::with_cameras(2, 1, 1, 100 * MS).with_age_speed(f64::NAN);
+        assert_eq!(acc.age_speed_m_s, 0.0);
     }
 
     #[test]

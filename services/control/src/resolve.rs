@@ -550,6 +550,8 @@ impl Resolver {
                     // the filter's barrier replaces eq. 19's and eq. 20's repulsion
                     let hand = c.collab_hand.is_some_and(|h| at_the_hand(&h, p));
                     if p.active != 0 && !behind_the_hand && !hand {
+                        // fused from an older camera than the view's: its age
+                        let d_s = d_s + filter.config().human_speed_m_s * source_older_s(&v, k);
                         let d_s = collaborating_distance(c, k, d_s, filter.config().margin_m);
                         let v_h = monitor.as_ref().and_then(|(m, _)| m.measured_speed(k));
                         let jacs = (&self.jac_ee, &mut self.jac_point);
@@ -717,6 +719,16 @@ impl Resolver {
             *q += v * dt;
         }
         failed
+    }
+}
+
+/// How much older \[s\] control point `k`'s result in `v` is than the view
+/// (several cameras: the camera that gave its fused distance may lag the
+/// newest one); 0 with one camera or without a result.
+fn source_older_s(v: &PerceptionView<'_>, k: usize) -> f64 {
+    match v.sources.get(k) {
+        Some(s) if s.capture_ns > 0 => v.capture_ns.saturating_sub(s.capture_ns) as f64 * 1e-9,
+        _ => 0.0,
     }
 }
 
@@ -1097,6 +1109,40 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_point_fused_from_an_older_camera_is_as_old_as_its_camera() {
+        use crate::inputs::PointSource;
+        const MS: u64 = 1_000_000;
+        let points = [phri_ipc::PointRepulsion::default(); 3];
+        let sources = [
+            PointSource {
+                camera: 0,
+                capture_ns: 1000 * MS,
+            },
+            PointSource {
+                camera: 1,
+                capture_ns: 967 * MS,
+            },
+            // no result yet: no age of its own
+            PointSource {
+                camera: 1,
+                capture_ns: 0,
+            },
+        ];
+        let v = PerceptionView {
+            capture_ns: 1000 * MS,
+            points: &points,
+            sources: &sources,
+        };
+        assert_eq!(source_older_s(&v, 0), 0.0);
+        assert!((source_older_s(&v, 1) - 0.033).abs() < 1e-12);
+        assert_eq!(source_older_s(&v, 2), 0.0);
+        assert_eq!(source_older_s(&v, 3), 0.0, "no such point");
+        // one camera: the view's own age
+        let one = PerceptionView { sources: &[], ..v };
+        assert_eq!(source_older_s(&one, 1), 0.0);
+    }
 
     #[test]
     fn the_pace_is_the_progress_along_the_path_the_filter_let_through() {
