@@ -72,7 +72,7 @@ struct Cli {
     truth_perception: bool,
     /// Write the run's time series as CSV to FILE (one run only): end effector and its path
     /// reference, waypoints, the closest human–robot pair (ground truth), what perception told the
-    /// controller
+    /// controller, the collaboration's hand as the controller follows it and its error
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
     /// One trace row every MS of simulated time
