@@ -302,6 +302,10 @@ struct SetFigures {
     all_open_2cm: usize,
     over: usize,
     largest_excess: f64,
+    /// where: the waypoint, the control point, each camera's bound and the truth [m]
+    worst: Option<(usize, usize, Vec<f64>, f64)>,
+    /// per control point: its bounds 2 cm or more over the truth
+    over_by_point: Vec<usize>,
     compared: usize,
 }
 
@@ -340,6 +344,8 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
             all_open_2cm: 0,
             over: 0,
             largest_excess: 0.0,
+            worst: None,
+            over_by_point: Vec::new(),
             compared: 0,
         })
         .collect();
@@ -375,8 +381,15 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
                     f.compared += 1;
                     if excess >= 0.02 {
                         f.over += 1;
+                        if f.over_by_point.len() <= p {
+                            f.over_by_point.resize(p + 1, 0);
+                        }
+                        f.over_by_point[p] += 1;
                     }
-                    f.largest_excess = f.largest_excess.max(excess);
+                    if excess > f.largest_excess {
+                        f.largest_excess = excess;
+                        f.worst = Some((i, p, seen.iter().map(|c| c[p]).collect(), *t));
+                    }
                 }
                 let all = (0..truth.len()).map(fused).fold(f64::INFINITY, f64::min);
                 *b = (b.0.max(fused(0)), b.1.max(all));
@@ -404,6 +417,12 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
             f.compared,
             f.largest_excess
         );
+        if let Some((w, p, bounds, t)) = &f.worst {
+            eprintln!(
+                "    largest at waypoint {w}, control point {p}: bounds {bounds:.3?} against {t:.3}; over by point {:?}",
+                f.over_by_point
+            );
+        }
     }
     (rows, figures)
 }
