@@ -65,6 +65,26 @@ pub struct PerceptionView<'a> {
     pub sources: &'a [PointSource],
 }
 
+impl PerceptionView<'_> {
+    /// How much older \[s\] control point `k`'s result is than the view
+    /// (several cameras: the camera that gave its fused distance may lag
+    /// the newest one); 0 with one camera or without a result.
+    pub fn point_older_s(&self, k: usize) -> f64 {
+        self.sources
+            .get(k)
+            .map_or(0.0, |s| older_s(self.capture_ns, s.capture_ns))
+    }
+}
+
+/// How much older \[s\] a result captured at `then_ns` is than one captured
+/// at `now_ns` (0 for a result never captured: `then_ns` 0).
+fn older_s(now_ns: u64, then_ns: u64) -> f64 {
+    match then_ns {
+        0 => 0.0,
+        t => now_ns.saturating_sub(t) as f64 * 1e-9,
+    }
+}
+
 /// Which camera's result a fused point is ([`PerceptionView::sources`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PointSource {
@@ -380,8 +400,8 @@ impl RepulsionInputs {
                     false => c.capture_ns() == capture_ns,
                 };
                 // its bound at the view's capture time
-                let older_s = capture_ns.saturating_sub(c.point_capture_ns[k]) as f64 * 1e-9;
-                let bound = c.points[k].min_distance - self.age_speed_m_s * older_s;
+                let older = older_s(capture_ns, c.point_capture_ns[k]);
+                let bound = c.points[k].min_distance - self.age_speed_m_s * older;
                 if eligible && best.is_none_or(|(_, b)| bound > b) {
                     best = Some((i, bound));
                 }
@@ -750,6 +770,39 @@ mod tests {
         // a speed that is no speed compares the distances alone
         let acc = RepulsionInputs::with_cameras(2, 1, 1, 100 * MS).with_age_speed(f64::NAN);
         assert_eq!(acc.age_speed_m_s, 0.0);
+    }
+
+    #[test]
+    fn a_point_fused_from_an_older_camera_is_as_old_as_its_camera() {
+        const MS: u64 = 1_000_000;
+        let points = [PointRepulsion::default(); 3];
+        let sources = [
+            PointSource {
+                camera: 0,
+                capture_ns: 1000 * MS,
+            },
+            PointSource {
+                camera: 1,
+                capture_ns: 967 * MS,
+            },
+            // no result yet: no age of its own
+            PointSource {
+                camera: 1,
+                capture_ns: 0,
+            },
+        ];
+        let v = PerceptionView {
+            capture_ns: 1000 * MS,
+            points: &points,
+            sources: &sources,
+        };
+        assert_eq!(v.point_older_s(0), 0.0);
+        assert!((v.point_older_s(1) - 0.033).abs() < 1e-12);
+        assert_eq!(v.point_older_s(2), 0.0);
+        assert_eq!(v.point_older_s(3), 0.0, "no such point");
+        // one camera: the view's own age
+        let one = PerceptionView { sources: &[], ..v };
+        assert_eq!(one.point_older_s(1), 0.0);
     }
 
     #[test]

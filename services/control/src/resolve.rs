@@ -300,9 +300,12 @@ impl Resolver {
 
     /// The drives' acceleration caps at the measured state (joint-space
     /// inertia `m` \[kg m²\], bias `C q̇ + g` \[Nm\]), for the barrier
-    /// filter's reference ([`crate::drives`]).
+    /// filter's reference ([`crate::drives`]); nothing under the paper's
+    /// law, which does not read them.
     pub fn set_drives(&mut self, m: &DMatrix<f64>, bias: &[f64]) {
-        self.drives.update(m, bias);
+        if self.cbf.is_some() {
+            self.drives.update(m, bias);
+        }
     }
 
     /// What the control-barrier filter did so far (zeros under the paper's law).
@@ -551,7 +554,7 @@ impl Resolver {
                     let hand = c.collab_hand.is_some_and(|h| at_the_hand(&h, p));
                     if p.active != 0 && !behind_the_hand && !hand {
                         // fused from an older camera than the view's: its age
-                        let d_s = d_s + filter.config().human_speed_m_s * source_older_s(&v, k);
+                        let d_s = d_s + filter.config().human_speed_m_s * v.point_older_s(k);
                         let d_s = collaborating_distance(c, k, d_s, filter.config().margin_m);
                         let v_h = monitor.as_ref().and_then(|(m, _)| m.measured_speed(k));
                         let jacs = (&self.jac_ee, &mut self.jac_point);
@@ -719,16 +722,6 @@ impl Resolver {
             *q += v * dt;
         }
         failed
-    }
-}
-
-/// How much older \[s\] control point `k`'s result in `v` is than the view
-/// (several cameras: the camera that gave its fused distance may lag the
-/// newest one); 0 with one camera or without a result.
-fn source_older_s(v: &PerceptionView<'_>, k: usize) -> f64 {
-    match v.sources.get(k) {
-        Some(s) if s.capture_ns > 0 => v.capture_ns.saturating_sub(s.capture_ns) as f64 * 1e-9,
-        _ => 0.0,
     }
 }
 
@@ -1109,40 +1102,6 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_point_fused_from_an_older_camera_is_as_old_as_its_camera() {
-        use crate::inputs::PointSource;
-        const MS: u64 = 1_000_000;
-        let points = [phri_ipc::PointRepulsion::default(); 3];
-        let sources = [
-            PointSource {
-                camera: 0,
-                capture_ns: 1000 * MS,
-            },
-            PointSource {
-                camera: 1,
-                capture_ns: 967 * MS,
-            },
-            // no result yet: no age of its own
-            PointSource {
-                camera: 1,
-                capture_ns: 0,
-            },
-        ];
-        let v = PerceptionView {
-            capture_ns: 1000 * MS,
-            points: &points,
-            sources: &sources,
-        };
-        assert_eq!(source_older_s(&v, 0), 0.0);
-        assert!((source_older_s(&v, 1) - 0.033).abs() < 1e-12);
-        assert_eq!(source_older_s(&v, 2), 0.0);
-        assert_eq!(source_older_s(&v, 3), 0.0, "no such point");
-        // one camera: the view's own age
-        let one = PerceptionView { sources: &[], ..v };
-        assert_eq!(source_older_s(&one, 1), 0.0);
-    }
 
     #[test]
     fn the_pace_is_the_progress_along_the_path_the_filter_let_through() {
