@@ -206,7 +206,8 @@ fn free_motion_waypoints(seconds: f64) -> Vec<(f64, usize)> {
     let (mut reached, mut out) = (0, Vec::new());
     for k in 1..=(seconds * 1000.0).round() as usize {
         c.tick().unwrap();
-        let now = c.summary().waypoints;
+        // the controller's own count (the summary sorts the run's figures)
+        let now = c.in_charge().counters().waypoints_reached;
         if now != reached {
             reached = now;
             forward_kinematics(&model, &mut data, &c.sim.truth().q).unwrap();
