@@ -430,12 +430,12 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
 
 /// Placements of a second camera around the base, as figures: `cargo test
 /// --release -p phri-cell --test waypoint_clearance second_camera_placements
-/// -- --ignored --nocapture` (75 s). Behind and beside the robot the robot
+/// -- --ignored --nocapture` (60 s). Behind and beside the robot the robot
 /// hides the person from the second camera, whose self-filtered pixels then
 /// read as free space: its bound is capped by the surfaces the first camera
 /// saw, and exceeds the truth only where neither saw the nearest part.
 #[test]
-#[ignore = "figures (75 s): run with --ignored"]
+#[ignore = "figures (60 s): run with --ignored"]
 fn second_camera_placements() {
     let pi = std::f64::consts::PI;
     let (rows, f) = camera_sets(&[-0.6, -1.5, 1.6, 2.4, -2.4, pi]);
