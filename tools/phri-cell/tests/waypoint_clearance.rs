@@ -336,6 +336,7 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
         )
         .collect();
     let rho = eyes[0].rho;
+    let points = eyes[0].radii.len();
     let zeros = vec![0.0; sim.model().nv()];
     let sets = eyes.len();
     let mut figures: Vec<SetFigures> = (0..sets)
@@ -346,7 +347,7 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
             over: 0,
             largest_excess: 0.0,
             worst: None,
-            over_by_point: Vec::new(),
+            over_by_point: vec![0; points],
             compared: 0,
         })
         .collect();
@@ -382,9 +383,6 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
                     f.compared += 1;
                     if excess >= 0.02 {
                         f.over += 1;
-                        if f.over_by_point.len() <= p {
-                            f.over_by_point.resize(p + 1, 0);
-                        }
                         f.over_by_point[p] += 1;
                     }
                     if excess > f.largest_excess {
