@@ -35,6 +35,13 @@ pub const FORCE_TOUCH_GAP_M: f64 = 0.1;
 /// contact is a touch, not one noisy sample.
 const MIN_CONTACT_S: f64 = 0.3;
 
+/// A force near the hand counts as the touch once it has lasted this long
+/// \[s\]: an arm braking near a hand that depth places within
+/// [`FORCE_TOUCH_GAP_M`] for a moment (a hand moving, seen by a camera that
+/// sees its edge) reads a few newtons for a few milliseconds; a hand that
+/// is touched keeps pressing. The modelled surfaces' overlap counts at once.
+pub const FORCE_TOUCH_S: f64 = 0.03;
+
 /// Backing off ends after this long even when the arm could not get as far
 /// as `back_off_m` (blocked by avoidance or a joint limit) \[s\].
 pub const BACK_OFF_MAX_S: f64 = 2.0;
@@ -114,6 +121,8 @@ pub struct CollabMachine {
     follow_touch_gap: Option<f64>,
     /// a `stop` request asked for a protective stop
     stop_requested: bool,
+    /// a force near the hand has said it touches since \[s\] ([`FORCE_TOUCH_S`])
+    force_touch_since: Option<f64>,
 }
 
 snapshot_fields!(Answer { accepted, reason });
@@ -139,7 +148,8 @@ snapshot_fields!(CollabMachine {
     apart_since,
     touch_gap,
     follow_touch_gap,
-    stop_requested
+    stop_requested,
+    force_touch_since
 });
 
 impl CollabMachine {
@@ -158,6 +168,7 @@ impl CollabMachine {
             touch_gap: None,
             follow_touch_gap: None,
             stop_requested: false,
+            force_touch_since: None,
         }
     }
 
@@ -347,10 +358,17 @@ impl CollabMachine {
         // moving arm is never quite zero), nor while another part of the
         // person touches the robot (a hand crossing the approach: pressing
         // it with the contact's hold would crush it)
-        let touching = obs.gap_m <= self.cfg.contact_gap_m
-            || (obs.force_n >= self.cfg.contact_force_n
-                && obs.gap_m <= FORCE_TOUCH_GAP_M.min(self.cfg.slow_down_m)
-                && !obs.other_touch);
+        let pressed = obs.force_n >= self.cfg.contact_force_n
+            && obs.gap_m <= FORCE_TOUCH_GAP_M.min(self.cfg.slow_down_m)
+            && !obs.other_touch;
+        self.force_touch_since = match pressed {
+            true => self.force_touch_since.or(Some(obs.t)),
+            false => None,
+        };
+        let pressing = self
+            .force_touch_since
+            .is_some_and(|t0| obs.t - t0 >= FORCE_TOUCH_S - 1e-9);
+        let touching = obs.gap_m <= self.cfg.contact_gap_m || pressing;
         match self.phase {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
                 self.enter(CollabPhase::Contact, CollabReason::ContactMade, obs.t)
@@ -427,7 +445,37 @@ mod tests {
         assert_eq!(m.step(&obs), CollabPhase::Contact);
         // and the same force with nothing else at the robot
         let mut m = approaching_left_hand();
-        assert_eq!(m.step(&seen(1.0, 0.1, 10.0)), CollabPhase::Contact);
+        assert_eq!(press(&mut m, 1.0, 0.1, 10.0), CollabPhase::Contact);
+    }
+
+    /// The hand pressed `force_n` at `gap_m` from `t` for [`FORCE_TOUCH_S`],
+    /// a step every millisecond: the phase after it.
+    fn press(m: &mut CollabMachine, t: f64, gap_m: f64, force_n: f64) -> CollabPhase {
+        let steps = (FORCE_TOUCH_S * 1e3).round() as usize;
+        for k in 0..steps {
+            let phase = m.step(&seen(t + k as f64 * 1e-3, gap_m, force_n));
+            assert_ne!(phase, CollabPhase::Contact, "a touch after {k} ms");
+        }
+        m.step(&seen(t + steps as f64 * 1e-3, gap_m, force_n))
+    }
+
+    #[test]
+    fn a_force_near_the_hand_for_a_moment_is_no_touch() {
+        // an arm braking near a hand depth places 10 cm off for a moment
+        let mut m = approaching_left_hand();
+        let mut t = 1.0;
+        for k in 0..195 {
+            t += 1e-3;
+            // 5 ms of every 20 over contact_force_n, the last of them at 1 N
+            let force = if k % 20 < 15 { 1.0 } else { 6.0 };
+            assert_eq!(m.step(&seen(t, 0.09, force)), CollabPhase::Approach);
+        }
+        // the hand pressed: a touch once the force has lasted
+        assert_eq!(press(&mut m, t + 1e-3, 0.09, 6.0), CollabPhase::Contact);
+        // the surfaces overlapping are a touch at once, force or not
+        let mut m = approaching_left_hand();
+        let gap = m.cfg.contact_gap_m;
+        assert_eq!(m.step(&seen(1.0, gap, 0.0)), CollabPhase::Contact);
     }
 
     fn seen(t: f64, gap_m: f64, force_n: f64) -> Observation {
@@ -520,7 +568,8 @@ mod tests {
         // a force is contact near the hand, not far from it
         let t1 = t0 + release + 0.05;
         assert_eq!(m.step(&seen(t1, 0.4, 10.0)), CollabPhase::Follow);
-        assert_eq!(m.step(&seen(t1 + 0.05, 0.05, 10.0)), CollabPhase::Contact);
+        assert_eq!(press(&mut m, t1 + 0.05, 0.05, 10.0), CollabPhase::Contact);
+        let t1 = t1 + FORCE_TOUCH_S;
         // the wrist push ends it; `begin` without a part resumes with the last one
         let push = Observation {
             wrist_push: true,
@@ -546,8 +595,8 @@ mod tests {
         let mut m = approaching_left_hand();
         let c = m.cfg.clone();
         // touched: depth sees the pressing hand 4 cm off the surface
-        assert_eq!(m.step(&seen(1.0, 0.04, 30.0)), CollabPhase::Contact);
-        let mut t = 1.0;
+        assert_eq!(press(&mut m, 1.0, 0.04, 30.0), CollabPhase::Contact);
+        let mut t = 1.0 + FORCE_TOUCH_S;
         for k in 0..3000 {
             t += 1e-3;
             // the contact bounces apart 40 ms in every 100 ms (F̂ drops to
