@@ -26,6 +26,7 @@ pub mod skeleton;
 pub mod source;
 pub mod surfaces;
 pub mod tracker;
+pub mod turns;
 
 pub use camera::{CameraError, CameraSim, HeaderError};
 pub use fault::{FaultAccepted, FaultRefused, FaultState};

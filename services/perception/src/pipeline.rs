@@ -207,27 +207,57 @@ impl Perception {
         frame_period_s: f64,
         history: &StateHistory,
     ) -> Result<&Skeleton, PipelineError> {
+        self.capture_some(world, now_ns, frame_period_s, history, |_| true)
+    }
+
+    /// Camera `camera` alone captures `world` at `now_ns`, as
+    /// [`Perception::capture`]; the merged skeleton takes its new view and
+    /// every other camera's last (cameras that capture in turn,
+    /// [`Perception::turn`]).
+    pub fn capture_one(
+        &mut self,
+        camera: usize,
+        world: &WorldState,
+        now_ns: u64,
+        frame_period_s: f64,
+        history: &StateHistory,
+    ) -> Result<&Skeleton, PipelineError> {
+        self.capture_some(world, now_ns, frame_period_s, history, |i| i == camera)
+    }
+
+    fn capture_some(
+        &mut self,
+        world: &WorldState,
+        now_ns: u64,
+        frame_period_s: f64,
+        history: &StateHistory,
+        which: impl Fn(usize) -> bool,
+    ) -> Result<&Skeleton, PipelineError> {
         let mut merged = false;
         for (i, eye) in self.eyes.iter_mut().enumerate() {
             if eye.dark {
                 continue;
             }
-            eye.header = FrameHeader::zeroed();
-            eye.camera
-                .step(world, now_ns, &mut eye.frame, &mut eye.header)
-                .map_err(|source| PipelineError::Camera { camera: i, source })?;
-            match eye.depth.as_mut() {
-                Some(t) => {
-                    t.step(&eye.header, &eye.frame, history, now_ns, &mut eye.skeleton)
-                        .map_err(|source| PipelineError::Tracker { camera: i, source })?;
+            if which(i) {
+                eye.header = FrameHeader::zeroed();
+                eye.camera
+                    .step(world, now_ns, &mut eye.frame, &mut eye.header)
+                    .map_err(|source| PipelineError::Camera { camera: i, source })?;
+                match eye.depth.as_mut() {
+                    Some(t) => {
+                        t.step(&eye.header, &eye.frame, history, now_ns, &mut eye.skeleton)
+                            .map_err(|source| PipelineError::Tracker { camera: i, source })?;
+                    }
+                    None => eye.tracker.step(
+                        world,
+                        &eye.header,
+                        &eye.frame,
+                        frame_period_s,
+                        &mut eye.skeleton,
+                    ),
                 }
-                None => eye.tracker.step(
-                    world,
-                    &eye.header,
-                    &eye.frame,
-                    frame_period_s,
-                    &mut eye.skeleton,
-                ),
+            } else if eye.header.capture_ns == 0 {
+                continue; // no frame of its own yet: nothing to merge
             }
             match merged {
                 false => self.skeleton = eye.skeleton,
@@ -241,6 +271,21 @@ impl Perception {
             self.skeleton = Skeleton::zeroed();
         }
         Ok(&self.skeleton)
+    }
+
+    /// Which camera captures at `slot` of a frame period cut in as many
+    /// slots as there are cameras (`slot` counted from any start): cameras
+    /// that capture in turn, camera `i` at `i`/N of the period, so that the
+    /// newest of N views is never older than a period over N (the camera
+    /// services' phase, [`crate::turns`]).
+    pub fn turn(&self, slot: u64) -> usize {
+        (slot % self.eyes.len().max(1) as u64) as usize
+    }
+
+    /// Whether `camera` is the first camera that is not dark (whose new
+    /// view leads the merged skeleton, as in the gesture service).
+    pub fn leads(&self, camera: usize) -> bool {
+        self.eyes.iter().position(|e| !e.dark) == Some(camera)
     }
 
     /// The merged skeleton of the last capture.
@@ -259,17 +304,43 @@ impl Perception {
         collab: Option<&CollabState>,
         ready_ns: u64,
     ) -> Result<Option<HandObservation>, PipelineError> {
-        let part = collaborating_part(collab, ready_ns);
         let capture_ns = self
             .eyes
             .iter()
             .find(|e| !e.dark)
             .map_or(0, |e| e.header.capture_ns);
+        self.perceive_some(history, collab, (capture_ns, ready_ns), |_| true)
+    }
+
+    /// [`Perception::perceive`] of camera `camera`'s last capture alone
+    /// (the others' results are left as they were).
+    pub fn perceive_one(
+        &mut self,
+        camera: usize,
+        history: &StateHistory,
+        collab: Option<&CollabState>,
+        ready_ns: u64,
+    ) -> Result<Option<HandObservation>, PipelineError> {
+        let capture_ns = self.eyes.get(camera).map_or(0, |e| e.header.capture_ns);
+        self.perceive_some(history, collab, (capture_ns, ready_ns), |i| i == camera)
+    }
+
+    fn perceive_some(
+        &mut self,
+        history: &StateHistory,
+        collab: Option<&CollabState>,
+        (capture_ns, ready_ns): (u64, u64),
+        which: impl Fn(usize) -> bool,
+    ) -> Result<Option<HandObservation>, PipelineError> {
+        let part = collaborating_part(collab, ready_ns);
         let mask = self
             .mask_hold
             .mask(Some(&self.skeleton), part, &self.collab, capture_ns);
         let mut hands = [None; phri_ipc::MAX_CAMERAS];
         for (i, eye) in self.eyes.iter_mut().enumerate() {
+            if !which(i) {
+                continue;
+            }
             eye.results.clear();
             if eye.dark {
                 continue;

@@ -106,6 +106,8 @@ impl Default for CellOptions {
 /// A frame's repulsion results on their way to the controller.
 struct InFlight {
     ready_ns: u64,
+    /// the camera whose frame it is
+    camera: usize,
     /// per camera, its workers' results
     results: Vec<Vec<RepulsionResult>>,
     /// the frame's skeleton, the request recognised on it, the refined hand
@@ -122,6 +124,13 @@ struct Perception {
     world: WorldState,
     period_ns: u64,
     next_capture_ns: u64,
+    /// the captures so far: whose turn is next ([`phri_perception::Perception::turn`])
+    turn: u64,
+    /// per camera, its newest observation of the collaborative hand
+    hands: [Option<HandObservation>; phri_ipc::MAX_CAMERAS],
+    /// the widest spread of the cameras' captures the controller takes the
+    /// hand from, its perception's staleness bound \[ns\]
+    spread_ns: u64,
     latency_ns: u64,
     in_flight: VecDeque<InFlight>,
     gesture: WaveDetector,
@@ -215,6 +224,9 @@ impl Cell {
                 world,
                 period_ns: (1e9 / cfg.camera.rate_hz) as u64,
                 next_capture_ns: 0,
+                turn: 0,
+                hands: [None; phri_ipc::MAX_CAMERAS],
+                spread_ns: (cfg.control.perception_max_age_ms * 1e6) as u64,
                 latency_ns: (opts.perception_latency_ms * 1e6) as u64,
                 in_flight: VecDeque::new(),
                 gesture: WaveDetector::new(&cfg.gesture).map_err(|e| step_err("gesture")(&e))?,
@@ -421,17 +433,29 @@ impl Cell {
             p.cameras.set_dark(c, d);
         }
         // every camera dark: no frame at all (none in flight is lost)
+        // several cameras capture in turn, a period over N apart (as the
+        // camera services do), one camera every period
         if now >= p.next_capture_ns && p.cameras.any_lit() {
-            p.next_capture_ns = now + p.period_ns;
+            let cameras = p.cameras.cameras().max(1) as u64;
+            p.next_capture_ns = now + p.period_ns / cameras;
+            let camera = p.cameras.turn(p.turn);
+            p.turn += 1;
             fill_world(&self.sim, self.seq, now, &mut p.world);
             let ready_ns = now + p.latency_ns;
+            let period_s = p.period_ns as f64 * 1e-9;
             let mut skeleton = *p
                 .cameras
-                .capture(&p.world, now, p.period_ns as f64 * 1e-9, &p.history)
+                .capture_one(camera, &p.world, now, period_s, &p.history)
                 .map_err(|e| step_err(e.service())(&e))?;
             skeleton.published_ns = ready_ns;
+            // the first live camera's new view leads the gesture's steps
+            let leads = p.cameras.leads(camera);
             let mut request = None;
-            if let Some(w) = p.gesture.step(&skeleton) {
+            let wave = match leads {
+                true => p.gesture.step(&skeleton),
+                false => None,
+            };
+            if let Some(w) = wave {
                 self.summary.gesture(&w);
                 request = Some(phri_gesture::follow_request(&w, self.seq, ready_ns));
             }
@@ -444,10 +468,13 @@ impl Cell {
             write_collab_state(controller, &self.state, self.seq, now, &mut collab);
             let hand = p
                 .cameras
-                .perceive(&p.history, Some(&collab), ready_ns)
+                .perceive_one(camera, &p.history, Some(&collab), ready_ns)
                 .map_err(|e| step_err(e.service())(&e))?;
             let mut results: Vec<Vec<RepulsionResult>> = (0..p.cameras.cameras())
-                .map(|c| p.cameras.results(c).to_vec())
+                .map(|c| match c == camera {
+                    true => p.cameras.results(c).to_vec(),
+                    false => Vec::new(),
+                })
                 .collect();
             if let Some((radii, params)) = &p.truth {
                 for r in results.iter_mut().flatten() {
@@ -456,12 +483,15 @@ impl Cell {
             }
             p.in_flight.push_back(InFlight {
                 ready_ns,
+                camera,
                 results,
                 skeleton,
                 request,
                 hand,
             });
-            self.summary.frame();
+            if leads {
+                self.summary.frame();
+            }
         }
         while p.in_flight.front().is_some_and(|x| x.ready_ns <= now) {
             if let Some(done) = p.in_flight.pop_front() {
@@ -473,8 +503,14 @@ impl Cell {
                     }
                 }
                 self.skeleton = Some(done.skeleton);
-                if done.hand.is_some() {
-                    self.hand = done.hand;
+                // the controller's choice among the cameras' hands
+                if let Some(slot) = p.hands.get_mut(done.camera) {
+                    *slot = done.hand.or(*slot);
+                }
+                let hands: [Option<&HandObservation>; phri_ipc::MAX_CAMERAS] =
+                    std::array::from_fn(|c| p.hands[c].as_ref());
+                if let Some(h) = phri_ipc::best_hand(&hands, p.spread_ns) {
+                    self.hand = Some(*h);
                 }
                 if let Some(r) = done.request {
                     self.requests.push(r);

@@ -1,7 +1,8 @@
 //! `phri-camera`: a camera served from this machine's own means, on
 //! `camera/depth` (`camera/I/depth` with `--camera I`) and `camera/status`.
 //! `[camera] source = "sim"`: the simulated depth camera. At `[camera]
-//! rate_hz` it takes the newest `sim/world`, renders it straight into a
+//! rate_hz` (several simulated cameras in turn, camera I at I/N of the
+//! period: [`phri_perception::turns`]) it takes the newest `sim/world`, renders it straight into a
 //! loaned `camera/depth` sample (zero-copy: the frame is written once, in
 //! shared memory), applies the faults `fault/depth` asked for (the first
 //! camera only), waits the sensor latency and publishes. With `[skeleton]
@@ -21,6 +22,7 @@ use phri_ipc::{CameraChannels, Queue, Skeleton, Zeroed, CAMERA_STATUS, FAULT_DEP
 use phri_perception::live::STATUS_PERIOD_NS;
 use phri_perception::replay::Replay;
 use phri_perception::skeleton::SkeletonTracker;
+use phri_perception::turns::last_turn_ns;
 use phri_perception::{
     CameraFlag, CameraOut, CameraSim, CameraStamps, DropCause, FaultState, RateLimited, Ticks,
 };
@@ -87,14 +89,16 @@ fn simulated(
     ctx.go_realtime();
     let period = (1e9 / cfg.rate_hz) as u64;
     let latency = (cfg.latency_ms * 1e6) as u64;
-    let mut tick = now_ns();
-    let mut next_status = tick;
+    // several cameras capture in turn, this one at its phase of the period
+    let turn = |now| last_turn_ns(now, period, flag.camera, ctx.config().cameras.len());
+    let mut tick = turn(now_ns());
+    let mut next_status = now_ns();
     while !ctx.shutdown.requested() {
         tick += period;
         sleep_until_ns(tick);
         beat.beat(now_ns());
         if now_ns() > tick + period {
-            tick = now_ns(); // fell behind: skip frames rather than burst
+            tick = turn(now_ns()); // fell behind: skip frames rather than burst
         }
         if now_ns() >= next_status {
             next_status = now_ns() + STATUS_PERIOD_NS;
