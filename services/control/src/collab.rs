@@ -6,7 +6,7 @@
 //! | from | to | when |
 //! | --- | --- | --- |
 //! | idle | approach | a `begin`/`follow` request for a well-tracked hand, the robot neither reacting nor stopped |
-//! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within [`FORCE_TOUCH_GAP_M`] |
+//! | approach | contact | surface gap ≤ `contact_gap_m`, or ‖F̂‖ ≥ `contact_force_n` within [`TOUCHING_GAP_M`], or within [`FORCE_TOUCH_GAP_M`] for [`FORCE_TOUCH_S`] |
 //! | contact | follow | the hand `follow_gap_m` farther than where it last pressed (‖F̂‖ ≥ `contact_force_n`) and ‖F̂‖ below `release_force_n`, both for `release_s` without a break |
 //! | follow | contact | as approach → contact |
 //! | approach, contact, follow | back off | ‖F̂‖ above the force limit |
@@ -35,11 +35,15 @@ pub const FORCE_TOUCH_GAP_M: f64 = 0.1;
 /// contact is a touch, not one noisy sample.
 const MIN_CONTACT_S: f64 = 0.3;
 
-/// A force near the hand counts as the touch once it has lasted this long
-/// \[s\]: an arm braking near a hand that depth places within
-/// [`FORCE_TOUCH_GAP_M`] for a moment (a hand moving, seen by a camera that
-/// sees its edge) reads a few newtons for a few milliseconds; a hand that
-/// is touched keeps pressing. The modelled surfaces' overlap counts at once.
+/// Depth places a touching hand this near the surface \[m\]: a force with
+/// the hand nearer counts as the touch at once.
+pub const TOUCHING_GAP_M: f64 = 0.06;
+
+/// A force with the hand farther than [`TOUCHING_GAP_M`] (but within
+/// [`FORCE_TOUCH_GAP_M`]) counts as the touch once it has lasted this long
+/// \[s\]: an arm braking near a hand that depth places 10 cm off for a
+/// moment (a hand moving, seen by a camera that sees its edge) reads a few
+/// newtons for a few milliseconds; a hand that is touched keeps pressing.
 pub const FORCE_TOUCH_S: f64 = 0.03;
 
 /// Backing off ends after this long even when the arm could not get as far
@@ -365,9 +369,11 @@ impl CollabMachine {
             true => self.force_touch_since.or(Some(obs.t)),
             false => None,
         };
-        let pressing = self
-            .force_touch_since
-            .is_some_and(|t0| obs.t - t0 >= FORCE_TOUCH_S - 1e-9);
+        let pressing = pressed
+            && (obs.gap_m <= TOUCHING_GAP_M
+                || self
+                    .force_touch_since
+                    .is_some_and(|t0| obs.t - t0 >= FORCE_TOUCH_S - 1e-9));
         let touching = obs.gap_m <= self.cfg.contact_gap_m || pressing;
         match self.phase {
             CollabPhase::Approach | CollabPhase::Follow if touching => {
@@ -461,7 +467,7 @@ mod tests {
 
     #[test]
     fn a_force_near_the_hand_for_a_moment_is_no_touch() {
-        // an arm braking near a hand depth places 10 cm off for a moment
+        // an arm braking near a hand depth places 9 cm off for a moment
         let mut m = approaching_left_hand();
         let mut t = 1.0;
         for k in 0..195 {
@@ -472,6 +478,12 @@ mod tests {
         }
         // the hand pressed: a touch once the force has lasted
         assert_eq!(press(&mut m, t + 1e-3, 0.09, 6.0), CollabPhase::Contact);
+        // a force with the hand where depth places a touching one: at once
+        let mut m = approaching_left_hand();
+        assert_eq!(
+            m.step(&seen(1.0, TOUCHING_GAP_M, 6.0)),
+            CollabPhase::Contact
+        );
         // the surfaces overlapping are a touch at once, force or not
         let mut m = approaching_left_hand();
         let gap = m.cfg.contact_gap_m;
@@ -568,8 +580,7 @@ mod tests {
         // a force is contact near the hand, not far from it
         let t1 = t0 + release + 0.05;
         assert_eq!(m.step(&seen(t1, 0.4, 10.0)), CollabPhase::Follow);
-        assert_eq!(press(&mut m, t1 + 0.05, 0.05, 10.0), CollabPhase::Contact);
-        let t1 = t1 + FORCE_TOUCH_S;
+        assert_eq!(m.step(&seen(t1 + 0.05, 0.05, 10.0)), CollabPhase::Contact);
         // the wrist push ends it; `begin` without a part resumes with the last one
         let push = Observation {
             wrist_push: true,
@@ -595,8 +606,8 @@ mod tests {
         let mut m = approaching_left_hand();
         let c = m.cfg.clone();
         // touched: depth sees the pressing hand 4 cm off the surface
-        assert_eq!(press(&mut m, 1.0, 0.04, 30.0), CollabPhase::Contact);
-        let mut t = 1.0 + FORCE_TOUCH_S;
+        assert_eq!(m.step(&seen(1.0, 0.04, 30.0)), CollabPhase::Contact);
+        let mut t = 1.0;
         for k in 0..3000 {
             t += 1e-3;
             // the contact bounces apart 40 ms in every 100 ms (F̂ drops to
