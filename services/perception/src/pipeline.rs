@@ -233,32 +233,41 @@ impl Perception {
         history: &StateHistory,
         which: impl Fn(usize) -> bool,
     ) -> Result<&Skeleton, PipelineError> {
-        let mut merged = false;
+        let mut newest = None;
         for (i, eye) in self.eyes.iter_mut().enumerate() {
-            if eye.dark {
+            if eye.dark || !which(i) {
                 continue;
             }
-            if which(i) {
-                eye.header = FrameHeader::zeroed();
-                eye.camera
-                    .step(world, now_ns, &mut eye.frame, &mut eye.header)
-                    .map_err(|source| PipelineError::Camera { camera: i, source })?;
-                match eye.depth.as_mut() {
-                    Some(t) => {
-                        t.step(&eye.header, &eye.frame, history, now_ns, &mut eye.skeleton)
-                            .map_err(|source| PipelineError::Tracker { camera: i, source })?;
-                    }
-                    None => eye.tracker.step(
-                        world,
-                        &eye.header,
-                        &eye.frame,
-                        frame_period_s,
-                        &mut eye.skeleton,
-                    ),
+            eye.header = FrameHeader::zeroed();
+            eye.camera
+                .step(world, now_ns, &mut eye.frame, &mut eye.header)
+                .map_err(|source| PipelineError::Camera { camera: i, source })?;
+            match eye.depth.as_mut() {
+                Some(t) => {
+                    t.step(&eye.header, &eye.frame, history, now_ns, &mut eye.skeleton)
+                        .map_err(|source| PipelineError::Tracker { camera: i, source })?;
                 }
-            } else if eye.header.capture_ns == 0 {
-                continue; // no frame of its own yet: nothing to merge
+                None => eye.tracker.step(
+                    world,
+                    &eye.header,
+                    &eye.frame,
+                    frame_period_s,
+                    &mut eye.skeleton,
+                ),
             }
+            newest.get_or_insert(i);
+        }
+        // the new view first, then every other camera's last (as
+        // `merge_newest` merges for the services): a joint either sees is seen
+        let others = self
+            .eyes
+            .iter()
+            .enumerate()
+            .filter(|&(i, e)| Some(i) != newest && !e.dark && e.header.capture_ns != 0)
+            .map(|(_, e)| e);
+        let lead = newest.and_then(|i| self.eyes.get(i));
+        let mut merged = false;
+        for eye in lead.into_iter().chain(others) {
             match merged {
                 false => self.skeleton = eye.skeleton,
                 true => merge_views(&mut self.skeleton, &eye.skeleton),
