@@ -432,9 +432,9 @@ impl Cell {
         for (c, &d) in dark.iter().enumerate() {
             p.cameras.set_dark(c, d);
         }
-        // every camera dark: no frame at all (none in flight is lost)
         // several cameras capture in turn, a period over N apart (as the
-        // camera services do), one camera every period
+        // camera services do); every camera dark: no frame at all (none in
+        // flight is lost)
         if now >= p.next_capture_ns && p.cameras.any_lit() {
             let cameras = p.cameras.cameras().max(1) as u64;
             p.next_capture_ns = now + p.period_ns / cameras;
