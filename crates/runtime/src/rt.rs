@@ -29,12 +29,14 @@ pub enum RtError {
 /// MCL_FUTURE: a real-time loop would then stall while the kernel faults in
 /// and locks every shared-memory segment of a publisher that appears later
 /// (a restarted perception worker, a monitor), milliseconds per segment.
+/// Its descriptor table is sized first ([`reserve_descriptors`]).
 /// Returns a description of what could not be done (without SCHED_FIFO the
 /// process runs under the normal scheduler), never fails hard.
 pub fn make_realtime(priority: i32) -> Result<(), RtError> {
     if priority <= 0 {
         return Err(RtError::NoPriority);
     }
+    reserve_descriptors(RESERVED_DESCRIPTORS);
     // SAFETY: plain syscall with a valid flag.
     let locked = unsafe { libc::mlockall(libc::MCL_CURRENT) };
     let lock_error = std::io::Error::last_os_error();
@@ -43,6 +45,62 @@ pub fn make_realtime(priority: i32) -> Result<(), RtError> {
         return Err(RtError::Lock(lock_error));
     }
     Ok(())
+}
+
+/// The descriptors a real-time process's table holds room for from its
+/// start (fewer if `RLIMIT_NOFILE` allows fewer): 1024 on a default limit.
+pub const RESERVED_DESCRIPTORS: u64 = 4096;
+
+/// Grow the calling process's descriptor table now to hold `n` descriptors
+/// (at most its `RLIMIT_NOFILE`), so that a real-time loop never grows it.
+/// Every shared-memory connection to a new peer opens descriptors inside
+/// the loop (iceoryx2 connects lazily, in `send` and `receive`), and the
+/// kernel grows a table shared by several threads only after an RCU grace
+/// period (`expand_files` → `synchronize_rcu`): 14-16 ms on these 2 cores,
+/// seen in ftrace as both controllers blocked in `openat` as their 257th
+/// descriptor opened when the ROS 2 bridge's ports appeared (the robot
+/// braked after 14 missed commands). The table never shrinks. Returns the
+/// table's size as the kernel reports it (`FDSize`, 0 unknown).
+pub fn reserve_descriptors(n: u64) -> u64 {
+    let mut limit = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: a valid rlimit to fill in
+    let soft = match unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) } {
+        0 => limit.rlim_cur,
+        _ => 0,
+    };
+    let highest = libc::c_int::try_from(n.min(soft).saturating_sub(1)).unwrap_or(0);
+    if highest > 0 {
+        // a descriptor duplicated at `highest` or above makes the kernel
+        // grow the table to hold it; closed at once, the table stays
+        // SAFETY: plain syscalls on a descriptor this function opened
+        unsafe {
+            let fd = libc::open(c"/dev/null".as_ptr(), libc::O_RDONLY | libc::O_CLOEXEC);
+            if fd >= 0 {
+                let high = libc::fcntl(fd, libc::F_DUPFD_CLOEXEC, highest);
+                if high >= 0 {
+                    libc::close(high);
+                }
+                libc::close(fd);
+            }
+        }
+    }
+    descriptor_table_size()
+}
+
+/// The calling process's descriptor table size (`FDSize` of
+/// `/proc/self/status`), 0 when unknown.
+pub fn descriptor_table_size() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("FDSize:"))
+                .and_then(|v| v.trim().parse().ok())
+        })
+        .unwrap_or(0)
 }
 
 /// Move the calling thread, already under SCHED_FIFO, to `priority`
@@ -118,5 +176,35 @@ pub fn policy() -> &'static str {
         libc::SCHED_FIFO => "SCHED_FIFO",
         libc::SCHED_RR => "SCHED_RR",
         _ => "SCHED_OTHER",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table holds the reserve afterwards (as the kernel reports it),
+    /// and a descriptor opened then lands inside it.
+    #[test]
+    fn the_descriptor_table_holds_the_reserve() {
+        let mut limit = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: a valid rlimit to fill in
+        assert_eq!(
+            unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) },
+            0
+        );
+        let want = RESERVED_DESCRIPTORS.min(limit.rlim_cur);
+        // a thread shares the table, as in every service
+        let t = std::thread::spawn(|| ());
+        let size = reserve_descriptors(RESERVED_DESCRIPTORS);
+        t.join().unwrap();
+        assert!(size >= want, "FDSize {size}, reserve {want}");
+        let f = std::fs::File::open("/dev/null").unwrap();
+        use std::os::fd::AsRawFd;
+        assert!((f.as_raw_fd() as u64) < size);
+        assert_eq!(descriptor_table_size(), size, "the table stays");
     }
 }
