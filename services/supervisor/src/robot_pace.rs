@@ -208,7 +208,15 @@ pub fn finding(
                 grouped(pace.cycles_short),
                 grouped(pace.cycles_expected)
             ),
-            format!("robot loop behind: {over}, {share:.0} % of periods"),
+            match overruns {
+                // the periods not run are the finding
+                0 => format!(
+                    "robot loop behind: {} cycles short of the run's {}",
+                    grouped(pace.cycles_short),
+                    grouped(pace.cycles_expected)
+                ),
+                _ => format!("robot loop behind: {over}, {share:.0} % of periods"),
+            },
         ));
     }
     let braked = braked_cycles.saturating_sub(pace.startup_braked_cycles);
@@ -308,6 +316,23 @@ mod tests {
         assert_eq!(p.report().startup_overruns, 3);
         let f = finding(60_100, 4 + 5, 350, &p.report());
         assert!(f[0].1.starts_with("robot loop behind: 6 overruns"), "{f:?}");
+    }
+
+    #[test]
+    fn periods_short_without_an_overrun_are_named_as_such() {
+        let r = PaceReport {
+            cycles_expected: 4_605,
+            cycles_short: 5,
+            startup_braked_cycles: 0,
+            startup_overruns: 1,
+            shutdown_overruns: 0,
+        };
+        let f = finding(4_700, 1, 0, &r);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert_eq!(
+            f[0].1,
+            "robot loop behind: 5 cycles short of the run's 4 605"
+        );
     }
 
     #[test]
