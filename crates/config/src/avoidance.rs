@@ -53,6 +53,10 @@ pub struct AvoidanceConfig {
     /// forward into the torque, changes by at most this × the period (0:
     /// the slew alone)
     pub jerk_limit: f64,
+    /// during a collaboration's approach and follow, the person's measured
+    /// approach toward a control point counts up to this \[m/s\] (a hand
+    /// thrust faster is a push on purpose); in contact, not at all
+    pub collaboration_speed_m_s: f64,
 }
 
 impl AvoidanceConfig {
@@ -67,6 +71,7 @@ impl AvoidanceConfig {
             ("pass_after_s", self.pass_after_s),
             ("accel_limit", self.accel_limit),
             ("jerk_limit", self.jerk_limit),
+            ("collaboration_speed_m_s", self.collaboration_speed_m_s),
         ] {
             non_negative(S, name, v)?;
         }

@@ -195,6 +195,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     d("avoidance.accel_limit", "rad/s²", "cbf: slew limit of the reference velocity (the paper's law: control.reference_accel_limit)"),
     d("avoidance.jerk_limit", "rad/s³", "cbf: jerk limit of the reference velocity, whose acceleration the torque feeds forward (0: the slew alone)"),
     d("avoidance.pass_after_s", "s", "cbf: a waypoint the filter holds the end effector from this long is passed over (0: wait)"),
+    d("avoidance.collaboration_speed_m_s", "m/s", "cbf: during a collaboration's approach and follow, the person's measured approach counts up to this (faster: a push on purpose); in contact, not at all"),
     d("ssm.enabled", "", "speed and separation monitoring (ISO/TS 15066 5.5.4) outside the collaboration; false: reported degraded"),
     d("ssm.human_speed", "", "v_h: measured (a speed the cell monitors) or iso13855 (2.0 m/s within 0.5 m, 1.6 m/s beyond)"),
     d("ssm.stop_time_s", "s", "T_s: the protective stop's time to rest"),

@@ -330,6 +330,7 @@ mod tests {
             pass_after_s: 1.0,
             accel_limit: 30.0,
             jerk_limit: 6000.0,
+            collaboration_speed_m_s: 1.0,
         }
     }
 

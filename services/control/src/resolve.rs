@@ -513,7 +513,9 @@ impl Resolver {
             if let Some(m) = self.ssm.as_mut() {
                 m.observe(&v);
             }
-            let mut monitor = self.ssm.as_mut().zip(ssm);
+            // the monitor measures the person's approach speeds in every
+            // period; its separation applies only when `ssm` says so
+            let mut monitor = self.ssm.as_mut();
             for (k, &(frame, xyz)) in self.points.iter().enumerate() {
                 let Some(p) = v.points.get(k) else { break };
                 let behind_the_hand = masked_by_hand(c, k, p, &mut self.behind_before);
@@ -528,11 +530,10 @@ impl Resolver {
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
                 let bound = monitor
-                    .as_mut()
+                    .as_deref_mut()
+                    .zip(ssm)
                     .filter(|_| p.active != 0)
-                    .and_then(|(m, t_r)| {
-                        approach_bound(m, k, p, *t_r, period).map(|b| (m, *t_r, b))
-                    });
+                    .and_then(|(m, t_r)| approach_bound(m, k, p, t_r, period).map(|b| (m, t_r, b)));
                 let (inside, inside_standard) = bound.map_or((false, false), |(m, t_r, bound)| {
                     let (jacs, qd_ref) = ((&self.jac_ee, &mut self.jac_point), &reference.qd_ref);
                     let a = Approach { k, p, t_r, qd_ref };
@@ -541,7 +542,7 @@ impl Resolver {
                 });
                 // a violation: approaching inside S_p for longer than the
                 // stop takes (S_p grants it T_s)
-                if let Some((m, _)) = monitor.as_mut() {
+                if let Some(m) = monitor.as_deref_mut().filter(|_| ssm.is_some()) {
                     time_inside(m, k, (inside, inside_standard), dt, period);
                 }
                 let Some(f) = self.v_call_filtered.get_mut(k) else {
@@ -551,15 +552,13 @@ impl Resolver {
                 let v_call = *f;
                 if let Some(filter) = self.cbf.as_mut() {
                     // the filter's barrier replaces eq. 19's and eq. 20's repulsion
-                    let hand = c.collab_hand.is_some_and(|h| at_the_hand(&h, p));
-                    if p.active != 0 && !behind_the_hand && !hand {
-                        // fused from an older camera than the view's: its age
-                        let d_s = d_s + filter.config().human_speed_m_s * v.point_older_s(k);
-                        let d_s = collaborating_distance(c, k, d_s, filter.config().margin_m);
-                        let v_h = monitor.as_ref().and_then(|(m, _)| m.measured_speed(k));
-                        let jacs = (&self.jac_ee, &mut self.jac_point);
-                        let at = (k, frame, xyz);
-                        faults.model += add_barrier(filter, (model, data), at, p, (d_s, v_h), jacs);
+                    let measured = monitor.as_deref().and_then(|m| m.measured_speed(k));
+                    let (jacs, at) = ((&self.jac_ee, &mut self.jac_point), (k, frame, xyz));
+                    let ages = (d_s, v.point_older_s(k));
+                    let speeds = (measured, ssm.is_some());
+                    if p.active != 0 && !behind_the_hand {
+                        faults.model +=
+                            barrier_row(filter, (model, data), c, at, p, ages, speeds, jacs);
                     }
                     continue;
                 }
@@ -739,6 +738,58 @@ fn collaborating_distance(c: &CartesianRef, k: usize, d_s: f64, margin_m: f64) -
     match c.collab_hand.is_some() && k != 0 && k != c.collab_point {
         true => margin_m.min(d_s),
         false => d_s,
+    }
+}
+
+/// Control point `k`'s barrier row in `filter` (none for an obstacle at
+/// the collaborative hand), `d_s` \[m\] for the view's age and the point's
+/// result `older_s` \[s\] older (fused from an older camera: its age),
+/// the person's approach `measured` \[m/s\] charged as [`barrier_speed`]
+/// says (`separating`: outside a collaboration); 1 when the model refused
+/// its Jacobian.
+#[allow(clippy::too_many_arguments)]
+fn barrier_row(
+    filter: &mut CbfFilter,
+    (model, data): (&Model, &mut Data),
+    c: &CartesianRef,
+    (k, frame, xyz): (usize, usize, Vector3<f64>),
+    p: &phri_ipc::PointRepulsion,
+    (d_s, older_s): (f64, f64),
+    (measured, separating): (Option<f64>, bool),
+    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
+) -> u64 {
+    if c.collab_hand.is_some_and(|h| at_the_hand(&h, p)) {
+        return 0;
+    }
+    let cfg = filter.config();
+    let d_s = d_s + cfg.human_speed_m_s * older_s;
+    let d_s = collaborating_distance(c, k, d_s, cfg.margin_m);
+    let v_h = barrier_speed(
+        measured,
+        separating,
+        c.collab_touching,
+        cfg.collaboration_speed_m_s,
+    );
+    add_barrier(filter, (model, data), (k, frame, xyz), p, (d_s, v_h), jacs)
+}
+
+/// The person's approach speed toward a control point that its barrier
+/// row charges \[m/s\] (`None`: none), of the one `measured`: all of it
+/// while the separation is monitored (`separating`: outside a
+/// collaboration); during a collaboration's approach and follow, at most
+/// `collaboration_m_s` (another hand thrust at the arm is braked against
+/// before it arrives; the hand thrust faster is a push on purpose, the
+/// wrist push at 3 m/s, which the arm would flee as fast); none in contact.
+fn barrier_speed(
+    measured: Option<f64>,
+    separating: bool,
+    touching: bool,
+    collaboration_m_s: f64,
+) -> Option<f64> {
+    match (separating, touching) {
+        (true, _) => measured,
+        (false, false) => measured.map(|v| v.min(collaboration_m_s)),
+        (false, true) => None,
     }
 }
 
@@ -1102,6 +1153,15 @@ fn behind(h: &Vector3<f64>, p: &phri_ipc::PointRepulsion, margin: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_collaboration_charges_the_approach_up_to_its_cap_and_none_in_contact() {
+        assert_eq!(barrier_speed(Some(3.0), true, false, 1.0), Some(3.0));
+        assert_eq!(barrier_speed(Some(3.0), false, false, 1.0), Some(1.0));
+        assert_eq!(barrier_speed(Some(0.4), false, false, 1.0), Some(0.4));
+        assert_eq!(barrier_speed(Some(3.0), false, true, 1.0), None);
+        assert_eq!(barrier_speed(None, true, false, 1.0), None);
+    }
 
     #[test]
     fn the_pace_is_the_progress_along_the_path_the_filter_let_through() {
