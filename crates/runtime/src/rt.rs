@@ -123,11 +123,14 @@ pub fn set_fifo_priority(priority: i32) -> Result<(), RtError> {
 /// threads it starts begin under the normal scheduler (each service sets
 /// its own priority). A watchdog below the services it watches can be
 /// starved by the one that misbehaves, and then blames nobody. Memory is
-/// not locked: the thread does not run a control loop.
+/// not locked: the thread does not run a control loop. Its descriptor table
+/// is sized first, as a service's ([`reserve_descriptors`]): the watchdog
+/// opens pipes and channels as it starts and restarts services.
 pub fn make_watchdog(priority: i32) -> Result<(), RtError> {
     if priority <= 0 {
         return Err(RtError::NoPriority);
     }
+    reserve_descriptors(RESERVED_DESCRIPTORS);
     let param = libc::sched_param {
         sched_priority: priority.min(99),
     };
