@@ -62,16 +62,7 @@ pub const RESERVED_DESCRIPTORS: u64 = 4096;
 /// braked after 14 missed commands). The table never shrinks. Returns the
 /// table's size as the kernel reports it (`FDSize`, 0 unknown).
 pub fn reserve_descriptors(n: u64) -> u64 {
-    let mut limit = libc::rlimit {
-        rlim_cur: 0,
-        rlim_max: 0,
-    };
-    // SAFETY: a valid rlimit to fill in
-    let soft = match unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) } {
-        0 => limit.rlim_cur,
-        _ => 0,
-    };
-    let highest = libc::c_int::try_from(n.min(soft).saturating_sub(1)).unwrap_or(0);
+    let highest = libc::c_int::try_from(n.min(descriptor_limit()).saturating_sub(1)).unwrap_or(0);
     if highest > 0 {
         // a descriptor duplicated at `highest` or above makes the kernel
         // grow the table to hold it; closed at once, the table stays
@@ -88,6 +79,19 @@ pub fn reserve_descriptors(n: u64) -> u64 {
         }
     }
     descriptor_table_size()
+}
+
+/// The calling process's soft `RLIMIT_NOFILE` (0 when unknown).
+pub fn descriptor_limit() -> u64 {
+    let mut limit = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: a valid rlimit to fill in
+    match unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) } {
+        0 => limit.rlim_cur,
+        _ => 0,
+    }
 }
 
 /// The calling process's descriptor table size (`FDSize` of
@@ -190,16 +194,9 @@ mod tests {
     /// and a descriptor opened then lands inside it.
     #[test]
     fn the_descriptor_table_holds_the_reserve() {
-        let mut limit = libc::rlimit {
-            rlim_cur: 0,
-            rlim_max: 0,
-        };
-        // SAFETY: a valid rlimit to fill in
-        assert_eq!(
-            unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) },
-            0
-        );
-        let want = RESERVED_DESCRIPTORS.min(limit.rlim_cur);
+        let limit = descriptor_limit();
+        assert!(limit > 0, "RLIMIT_NOFILE unknown");
+        let want = RESERVED_DESCRIPTORS.min(limit);
         // a thread shares the table, as in every service
         let t = std::thread::spawn(|| ());
         let size = reserve_descriptors(RESERVED_DESCRIPTORS);

@@ -3,8 +3,8 @@
 //! `[camera] source = "sim"`: the simulated depth camera. At `[camera]
 //! rate_hz` (several simulated cameras in turn, camera I at I/N of the
 //! period: [`phri_perception::turns`]) it takes the newest `sim/world`,
-//! renders it straight into a loaned `camera/depth` sample (zero-copy: the frame is written once, in
-//! shared memory), applies the faults `fault/depth` asked for (the first
+//! renders it straight into a loaned `camera/depth` sample (zero-copy: the
+//! frame is written once, in shared memory), applies the faults `fault/depth` asked for (the first
 //! camera only), waits the sensor latency and publishes. With `[skeleton]
 //! enabled` and `source = "sim"` it also stands in for a body tracker: the
 //! person's skeleton of that frame from the truth on `perception/skeleton`,
