@@ -128,7 +128,7 @@ pub enum PathPace {
     /// effector goes around an obstacle beside it (eq. 19)
     Opposing,
     /// the end effector's whole risk `‖V_Call(P_e)‖/V_max`, whatever its
-    /// direction (phri before issue 14)
+    /// direction (phri's first pace law)
     Risk,
 }
 

@@ -9,15 +9,18 @@
 //! minimise   ½ (q̇ − q̇_nom)ᵀ W (q̇ − q̇_nom),   W = w_t J_eeᵀ J_ee + I
 //!            + Σᵢ (ρ σᵢ + ½ σᵢ²)
 //! subject to nᵢᵀ Jᵢ q̇ + σᵢ ≥ −γ (dᵢ − d_s) + v_h,i   (one row per control point)
-//!            q̇_min ≤ q̇ ≤ q̇_max,  σᵢ ≥ 0              (joint limits, SSM, speed scale)
+//!            nᵢᵀ Jᵢ q̇ ≥ −v_ssm,i                   (where SSM bounds a point clear of d_s)
+//!            q̇_min ≤ q̇ ≤ q̇_max,  σᵢ ≥ 0              (joint limits, speed scale)
 //! ```
 //!
 //! `nᵢ` is the unit direction from the obstacle to the point, `Jᵢ` the
 //! point's linear Jacobian, `dᵢ` its distance, `d_s` the distance kept
 //! (a margin plus perception's age at a person's speed), `v_h,i ≥ 0` the
-//! person's measured approach toward the point. Motion along or away from
-//! an obstacle costs nothing; only the approach is braked, and with
-//! `w_t ≫ 1` the null space gives way before the end effector does.
+//! person's measured approach toward the point, `v_ssm,i ≥ 0` the approach
+//! that speed and separation monitoring allows it: a hard row, which q̇ = 0
+//! always keeps. Motion along or away from an obstacle costs nothing; only
+//! the approach is braked, and with `w_t ≫ 1` the null space gives way
+//! before the end effector does.
 //!
 //! σᵢ is row i's slack, priced linearly at ρ ([`SLACK_PRICE`]): an exact
 //! penalty, so every σᵢ = 0 whenever the barriers can be kept, and where
@@ -83,13 +86,17 @@ pub struct CbfFilter {
     /// the bounds over (q̇, σ)
     lo: Vec<f64>,
     hi: Vec<f64>,
-    /// the rows' γ(dᵢ − d_s) − v_h,i
+    /// the rows' γ(dᵢ − d_s) − v_h,i (a barrier's), v_ssm,i (a separation's)
     d: Vec<f64>,
+    /// per row: it has a slack (a barrier's) or not (a separation's)
+    soft: Vec<bool>,
     rows: usize,
     /// the control points carrying this period's rows (bit k: point k)
     points: u64,
-    /// … and the last solved period's
-    points_before: u64,
+    /// ... and those carrying a separation's row too
+    separated: u64,
+    /// the rows' layout of the last solved period ([`CbfFilter::layout`])
+    layout_before: u64,
     qd: Vec<f64>,
     counters: CbfCounters,
 }
@@ -108,9 +115,11 @@ impl CbfFilter {
             lo: vec![0.0; n + MAX_ROWS],
             hi: vec![0.0; n + MAX_ROWS],
             d: vec![0.0; MAX_ROWS],
+            soft: vec![true; MAX_ROWS],
             rows: 0,
             points: 0,
-            points_before: 0,
+            separated: 0,
+            layout_before: 0,
             qd: vec![0.0; n],
             counters: CbfCounters::default(),
         })
@@ -130,6 +139,14 @@ impl CbfFilter {
     pub fn begin(&mut self) {
         self.rows = 0;
         self.points = 0;
+        self.separated = 0;
+    }
+
+    /// The rows' layout this period, for the warm start: the points with a
+    /// barrier, those with a separation's row too (a collision of two
+    /// layouts costs a warm start's speed, never the solution).
+    fn layout(&self) -> u64 {
+        self.points.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ self.separated
     }
 
     /// The barrier of control point `k` (Jacobian `jac`, its first three
@@ -159,11 +176,37 @@ impl CbfFilter {
             return false;
         }
         self.d[self.rows] = self.cfg.gamma * (d - d_s) - v_h.max(0.0);
+        self.soft[self.rows] = true;
         self.rows += 1;
         if k < 64 {
             self.points |= 1 << k;
         }
         true
+    }
+
+    /// The point of the barrier added last (control point `k`) approaches
+    /// its obstacle at most `v_max` \[m/s\] (speed and separation
+    /// monitoring's bound, ≥ 0; NaN: 0), a row without slack. Whether it
+    /// is tighter than the point's barrier; `None` (no row) when the rows
+    /// are full, the last row is not a barrier or `v_max` is infinite.
+    pub fn bound_approach(&mut self, k: usize, v_max: f64) -> Option<bool> {
+        let n = self.n;
+        let last = self.rows.checked_sub(1)?;
+        if self.rows >= MAX_ROWS || !self.soft[last] || v_max == f64::INFINITY {
+            return None;
+        }
+        let v_max = match v_max.is_nan() {
+            true => 0.0,
+            false => v_max.max(0.0),
+        };
+        self.a.copy_within(last * n..(last + 1) * n, self.rows * n);
+        self.d[self.rows] = v_max;
+        self.soft[self.rows] = false;
+        self.rows += 1;
+        if k < 64 {
+            self.separated |= 1 << k;
+        }
+        Some(v_max < self.d[last])
     }
 
     /// The filtered joint velocities \[rad/s\] for the nominal `qd_nom`
@@ -180,12 +223,12 @@ impl CbfFilter {
         if self.rows == 0 {
             // nothing near: the nominal motion, as it is
             self.qd.copy_from_slice(qd_nom);
-            self.points_before = 0;
+            self.layout_before = 0;
             return Ok(&self.qd);
         }
-        // variables: the n joint velocities, then one slack per row
+        // variables: the n joint velocities, then one slack per barrier
         let (w, rows) = (self.cfg.task_weight, self.rows);
-        let m = n + rows;
+        let m = n + self.soft[..rows].iter().filter(|&&s| s).count();
         self.h[..m * m].fill(0.0);
         for i in 0..n {
             for j in 0..n {
@@ -201,15 +244,19 @@ impl CbfFilter {
         }
         self.g[n..m].fill(SLACK_PRICE);
         self.c[..rows * m].fill(0.0);
+        let mut slack = n;
         for r in 0..rows {
             self.c[r * m..r * m + n].copy_from_slice(&self.a[r * n..(r + 1) * n]);
-            self.c[r * m + n + r] = -1.0;
+            if self.soft[r] {
+                self.c[r * m + slack] = -1.0;
+                slack += 1;
+            }
         }
         self.lo[..n].copy_from_slice(lo);
         self.hi[..n].copy_from_slice(hi);
         self.lo[n..m].fill(0.0);
         self.hi[n..m].fill(f64::INFINITY);
-        let start = match self.points == self.points_before {
+        let start = match self.layout() == self.layout_before {
             true => Start::Warm,
             false => Start::Cold,
         };
@@ -230,13 +277,13 @@ impl CbfFilter {
                 self.counters.braking_periods += u64::from(braking);
                 self.counters.max_iterations =
                     self.counters.max_iterations.max(s.iterations as u64);
-                self.points_before = self.points;
+                self.layout_before = self.layout();
                 Ok(&self.qd)
             }
             Err(e) => {
                 self.counters.infeasible_periods += 1;
                 self.ws.clear_hint();
-                self.points_before = 0;
+                self.layout_before = 0;
                 Err(e)
             }
         }
@@ -251,8 +298,8 @@ impl CbfFilter {
 /// apart). Fixed length: the set's length, then [`HINT_ROOM`] rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WarmStart {
-    /// the control points of the last solved period (bit k: point k)
-    points: u64,
+    /// the rows' layout of the last solved period
+    layout: u64,
     /// rows of the active set in `rows`
     len: u32,
     /// the active set's rows
@@ -262,7 +309,7 @@ pub struct WarmStart {
 impl Default for WarmStart {
     fn default() -> WarmStart {
         WarmStart {
-            points: 0,
+            layout: 0,
             len: 0,
             rows: [0; HINT_ROOM],
         }
@@ -271,13 +318,13 @@ impl Default for WarmStart {
 
 impl Snapshot for WarmStart {
     fn save(&self, w: &mut Writer<'_>) {
-        self.points.save(w);
+        self.layout.save(w);
         self.len.save(w);
         self.rows.save(w);
     }
     fn load(&mut self, r: &mut Reader<'_>) {
         let mut read = WarmStart::default();
-        read.points.load(r);
+        read.layout.load(r);
         read.len.load(r);
         read.rows.load(r);
         if read.len as usize > HINT_ROOM {
@@ -297,7 +344,7 @@ impl CbfFilter {
             *r = h as u32;
         }
         WarmStart {
-            points: self.points_before,
+            layout: self.layout_before,
             len: len as u32,
             rows,
         }
@@ -305,7 +352,7 @@ impl CbfFilter {
 
     /// Solve on from a peer's warm start.
     pub fn adopt_warm_start(&mut self, w: &WarmStart) {
-        self.points_before = w.points;
+        self.layout_before = w.layout;
         let mut hint = [0usize; HINT_ROOM];
         let len = (w.len as usize).min(HINT_ROOM);
         for (h, &r) in hint.iter_mut().zip(&w.rows[..len]) {
@@ -384,6 +431,51 @@ mod tests {
         assert_eq!(f.counters().slack_periods, 0);
         assert_eq!(f.counters().periods, 3);
         assert_eq!(f.counters().braking_periods, 3);
+    }
+
+    #[test]
+    fn the_separation_bounds_the_approach_even_where_a_barrier_needs_slack() {
+        let mut f = CbfFilter::new(3, &cfg()).unwrap();
+        let j = identity_jac(3);
+        let (lo, hi) = ([-1.0; 3], [1.0; 3]);
+        assert_eq!(f.bound_approach(1, 0.1), None, "no barrier, no separation");
+        // the barrier allows 0.2 m/s toward the obstacle, the separation 0.15
+        f.begin();
+        assert!(f.add_point(1, &j, &Vector3::x(), 0.10, 0.06, 0.0));
+        assert_eq!(f.bound_approach(1, 0.15), Some(true));
+        let qd = f.solve(&j, &[-0.8, 0.3, 0.0], (&lo, &hi)).unwrap().to_vec();
+        assert!(
+            (qd[0] + 0.15).abs() < 1e-9 && (qd[1] - 0.3).abs() < 1e-9,
+            "{qd:?}"
+        );
+        // the separation allows more than the barrier: the barrier's 0.2
+        f.begin();
+        assert!(f.add_point(1, &j, &Vector3::x(), 0.10, 0.06, 0.0));
+        assert_eq!(f.bound_approach(1, 0.5), Some(false));
+        assert_eq!(f.bound_approach(1, 0.5), None, "one per barrier");
+        let qd = f.solve(&j, &[-0.8, 0.3, 0.0], (&lo, &hi)).unwrap().to_vec();
+        assert!((qd[0] + 0.2).abs() < 1e-9, "{qd:?}");
+        assert_eq!(f.counters().slack_periods, 0);
+        // a point between two obstacles, inside d_s of both: the barriers
+        // trade their slack (without the separation, it approached the
+        // first at 0.05 m/s), but the point does not approach the one where
+        // the separation allows nothing (0, or no number), though the
+        // barrier asks more there (it moves away)
+        for v in [0.0, f64::NAN] {
+            f.begin();
+            assert!(f.add_point(1, &j, &Vector3::x(), 0.02, 0.06, 0.0));
+            assert_eq!(f.bound_approach(1, v), Some(false));
+            assert!(f.add_point(2, &j, &-Vector3::x(), 0.05, 0.06, 0.0));
+            let qd = f.solve(&j, &[-0.8, 0.3, 0.5], (&lo, &hi)).unwrap().to_vec();
+            assert!(qd[0] >= -1e-9 && (qd[2] - 0.5).abs() < 1e-9, "{qd:?}");
+        }
+        f.begin();
+        assert!(f.add_point(1, &j, &Vector3::x(), 0.02, 0.06, 0.0));
+        assert!(f.add_point(2, &j, &-Vector3::x(), 0.05, 0.06, 0.0));
+        let qd = f.solve(&j, &[-0.8, 0.3, 0.5], (&lo, &hi)).unwrap().to_vec();
+        assert!(qd[0] < -0.04, "{qd:?}");
+        assert_eq!(f.counters().slack_periods, 3);
+        assert_eq!(f.counters().infeasible_periods, 0);
     }
 
     #[test]

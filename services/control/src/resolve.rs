@@ -471,30 +471,13 @@ impl Resolver {
         ssm: Option<f64>,
     ) -> Faults {
         let mut faults = Faults::default();
-        let ee = self.clik.frame();
-        let kinematics =
-            phri_model::forward_kinematics(model, data, &reference.q_ref).and_then(|_| {
-                phri_model::point_jacobian(model, data, ee, &Vector3::zeros(), &mut self.jac_ee)
-            });
-        if kinematics.is_err() {
-            faults.model += 1;
-            reference.qd_ref.fill(0.0);
-            return faults;
-        }
-        // the body points move away in the task's null space, except while
-        // collaborating (the hand's arm would roll the wrist into the hand);
-        // the posture below them, except in contact with the hand (the arm
-        // yields to it in its null space)
-        self.avoidance
-            .pause_body_task(c.collab_hand.is_some(), c.collab_touching);
-        if self.avoidance.begin(&reference.q_ref).is_err() {
-            faults.avoidance += 1;
-            reference.qd_ref.fill(0.0);
-            return faults;
-        }
-        self.avoidance
-            .set_posture(posture, &reference.q_ref, cfg.posture_gain);
-        let x = phri_model::frame_placement(model, data, ee).p;
+        let x = match self.begin_avoidance((model, data), reference, c, cfg, posture) {
+            Ok(x) => x,
+            Err(f) => {
+                reference.qd_ref.fill(0.0);
+                return f;
+            }
+        };
         let mut v_ee = Vector3::zeros();
         // the end effector's clearance to its obstacle [m] (∞: none seen)
         let mut ee_clearance = f64::INFINITY;
@@ -527,18 +510,44 @@ impl Resolver {
                 if k == 0 && p.active != 0 && !behind_the_hand && !p.min_distance.is_nan() {
                     ee_clearance = p.min_distance;
                 }
+                // the person's measured approach toward the point [m/s]
+                let measured = monitor.as_deref().and_then(|m| m.measured_speed(k));
+                // the point's result may come from an older camera than the
+                // view's newest: its own age is T_r
+                let older_s = v.point_older_s(k);
                 // speed and separation monitoring: the point approaches its
                 // obstacle no faster than the separation allows
                 let bound = monitor
                     .as_deref_mut()
-                    .zip(ssm)
+                    .zip(ssm.map(|t_r| t_r + older_s))
                     .filter(|_| p.active != 0)
                     .and_then(|(m, t_r)| approach_bound(m, k, p, t_r, period).map(|b| (m, t_r, b)));
+                // under the filter, the point's barrier row (which replaces
+                // eq. 19's and eq. 20's repulsion), and that bound as a row
+                // of its own
+                let row = match self.cbf.as_mut() {
+                    Some(filter) if p.active != 0 && !behind_the_hand => {
+                        let (jacs, at) = ((&self.jac_ee, &mut self.jac_point), (k, frame, xyz));
+                        let ages = (d_s, older_s);
+                        let speeds = (measured, ssm.is_some(), bound.as_ref().map(|b| b.2 .0));
+                        barrier_row(filter, (model, data), c, at, p, ages, speeds, jacs)
+                    }
+                    _ => Row::None,
+                };
+                faults.model += u64::from(row == Row::Refused);
                 let (inside, inside_standard) = bound.map_or((false, false), |(m, t_r, bound)| {
                     let (jacs, qd_ref) = ((&self.jac_ee, &mut self.jac_point), &reference.qd_ref);
                     let a = Approach { k, p, t_r, qd_ref };
                     let limits = (&mut self.avoidance, &mut *period, &mut faults);
-                    separate_point(m, (model, data), (frame, xyz), &a, jacs, bound, limits)
+                    separate_point(
+                        m,
+                        (model, data),
+                        (frame, xyz),
+                        &a,
+                        jacs,
+                        (bound, row),
+                        limits,
+                    )
                 });
                 // a violation: approaching inside S_p for longer than the
                 // stop takes (S_p grants it T_s)
@@ -550,16 +559,7 @@ impl Resolver {
                 };
                 *f += (target - *f) * alpha;
                 let v_call = *f;
-                if let Some(filter) = self.cbf.as_mut() {
-                    // the filter's barrier replaces eq. 19's and eq. 20's repulsion
-                    let measured = monitor.as_deref().and_then(|m| m.measured_speed(k));
-                    let (jacs, at) = ((&self.jac_ee, &mut self.jac_point), (k, frame, xyz));
-                    let ages = (d_s, v.point_older_s(k));
-                    let speeds = (measured, ssm.is_some());
-                    if p.active != 0 && !behind_the_hand {
-                        faults.model +=
-                            barrier_row(filter, (model, data), c, at, p, ages, speeds, jacs);
-                    }
+                if self.cbf.is_some() {
                     continue;
                 }
                 if v_call.norm() < 1e-6 {
@@ -576,6 +576,46 @@ impl Resolver {
         self.count_ssm_period(was_violating);
         faults.avoidance += self.resolve_task(reference, c, cfg, (x, v_ee, ee_clearance), dt);
         faults
+    }
+
+    /// The period's kinematics at `reference.q_ref` (the end effector's
+    /// Jacobian) and the avoidance's bounds begun, with the body task and
+    /// `posture` as `c` allows; the end effector's position \[m\], base
+    /// frame, or the fault that stops the period.
+    fn begin_avoidance(
+        &mut self,
+        (model, data): (&Model, &mut Data),
+        reference: &JointReference,
+        c: &CartesianRef,
+        cfg: &ControlConfig,
+        posture: &[f64],
+    ) -> Result<Vector3<f64>, Faults> {
+        let ee = self.clik.frame();
+        let kinematics =
+            phri_model::forward_kinematics(model, data, &reference.q_ref).and_then(|_| {
+                phri_model::point_jacobian(model, data, ee, &Vector3::zeros(), &mut self.jac_ee)
+            });
+        if kinematics.is_err() {
+            return Err(Faults {
+                model: 1,
+                avoidance: 0,
+            });
+        }
+        // the body points move away in the task's null space, except while
+        // collaborating (the hand's arm would roll the wrist into the hand);
+        // the posture below them, except in contact with the hand (the arm
+        // yields to it in its null space)
+        self.avoidance
+            .pause_body_task(c.collab_hand.is_some(), c.collab_touching);
+        if self.avoidance.begin(&reference.q_ref).is_err() {
+            return Err(Faults {
+                model: 0,
+                avoidance: 1,
+            });
+        }
+        self.avoidance
+            .set_posture(posture, &reference.q_ref, cfg.posture_gain);
+        Ok(phri_model::frame_placement(model, data, ee).p)
     }
 
     /// A new period of speed and separation monitoring (`ssm`: the
@@ -741,12 +781,28 @@ fn collaborating_distance(c: &CartesianRef, k: usize, d_s: f64, margin_m: f64) -
     }
 }
 
+/// What became of a control point's barrier row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Row {
+    /// no separation's row: no filter, an inactive point or one behind or
+    /// at the collaborative hand, rows the filter could not take, or a
+    /// point inside its `d_s` (the separation shapes the joint velocity
+    /// bounds instead)
+    None,
+    /// the model refused the point's Jacobian
+    Refused,
+    /// a barrier row, and speed and separation monitoring's where it
+    /// applies; `separation`: the separation's is the tighter
+    Added { separation: bool },
+}
+
 /// Control point `k`'s barrier row in `filter` (none for an obstacle at
 /// the collaborative hand), `d_s` \[m\] for the view's age and the point's
 /// result `older_s` \[s\] older (fused from an older camera: its age),
 /// the person's approach `measured` \[m/s\] charged as [`barrier_speed`]
-/// says (`separating`: outside a collaboration); 1 when the model refused
-/// its Jacobian.
+/// says (`separating`: outside a collaboration), the point's approach at
+/// most `allowed` \[m/s\] (speed and separation monitoring's; none: not
+/// monitored) as a row of its own while the point is clear of `d_s`.
 #[allow(clippy::too_many_arguments)]
 fn barrier_row(
     filter: &mut CbfFilter,
@@ -755,11 +811,11 @@ fn barrier_row(
     (k, frame, xyz): (usize, usize, Vector3<f64>),
     p: &phri_ipc::PointRepulsion,
     (d_s, older_s): (f64, f64),
-    (measured, separating): (Option<f64>, bool),
+    (measured, separating, allowed): (Option<f64>, bool, Option<f64>),
     jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
-) -> u64 {
+) -> Row {
     if c.collab_hand.is_some_and(|h| at_the_hand(&h, p)) {
-        return 0;
+        return Row::None;
     }
     let cfg = filter.config();
     let d_s = d_s + cfg.human_speed_m_s * older_s;
@@ -770,7 +826,28 @@ fn barrier_row(
         c.collab_touching,
         cfg.collaboration_speed_m_s,
     );
-    add_barrier(filter, (model, data), (k, frame, xyz), p, (d_s, v_h), jacs)
+    let Some(j) = point_jac((model, data), (k, frame, xyz), jacs) else {
+        return Row::Refused;
+    };
+    let away = away_from_obstacle(p);
+    if !filter.add_point(k, j, &away, p.min_distance, d_s, v_h.unwrap_or(0.0)) {
+        return Row::None;
+    }
+    match allowed {
+        None => Row::Added { separation: false },
+        // inside d_s the barrier pushes the point out, with slack where it
+        // cannot: there the separation shapes the joint velocity bounds
+        // (a row let the slack's trade swing the rest of the arm at full
+        // speed, a hand in link 2's shadow beside the FR3's elbow: a swing
+        // the residual took for a collision)
+        Some(_) if p.min_distance < d_s => Row::None,
+        // the separation's own row, without slack; none: its bounds
+        Some(v) => filter
+            .bound_approach(k, v)
+            .map_or(Row::None, |tighter| Row::Added {
+                separation: tighter,
+            }),
+    }
 }
 
 /// The person's approach speed toward a control point that its barrier
@@ -790,28 +867,6 @@ fn barrier_speed(
         (true, _) => measured,
         (false, false) => measured.map(|v| v.min(collaboration_m_s)),
         (false, true) => None,
-    }
-}
-
-/// Control point `k` (at `xyz` \[m\] of link frame `frame`, repulsion
-/// result `p`) as a barrier row of `filter`, kept `d_s` \[m\] clear with
-/// the person approaching at `v_h` \[m/s\] (none: unmeasured); 1 when the
-/// model refused its Jacobian.
-fn add_barrier(
-    filter: &mut CbfFilter,
-    (model, data): (&Model, &mut Data),
-    (k, frame, xyz): (usize, usize, Vector3<f64>),
-    p: &phri_ipc::PointRepulsion,
-    (d_s, v_h): (f64, Option<f64>),
-    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
-) -> u64 {
-    match point_jac((model, data), (k, frame, xyz), jacs) {
-        Some(j) => {
-            let away = away_from_obstacle(p);
-            filter.add_point(k, j, &away, p.min_distance, d_s, v_h.unwrap_or(0.0));
-            0
-        }
-        None => 1,
     }
 }
 
@@ -941,15 +996,16 @@ fn approach_bound(
 }
 
 /// The approach of a bounded control point (`j`: its Jacobian, `allowed`
-/// \[m/s\] toward its obstacle, `away` from it) limited in the avoidance to
-/// what the separation allows, the period's margin and flags into
-/// `period`; whether it approaches inside the protective separation
-/// (phri's, and the standard's).
+/// \[m/s\] toward its obstacle, `away` from it) limited to what the
+/// separation allows (as a row of the filter when `row` says it carries
+/// one, else in the avoidance's joint velocity bounds), the period's margin and
+/// flags into `period`; whether it approaches inside the protective
+/// separation (phri's, and the standard's).
 fn separate(
     m: &mut SsmMonitor,
     a: &Approach<'_>,
     j: &Matrix6xX<f64>,
-    (allowed, away): (f64, Vector3<f64>),
+    ((allowed, away), row): ((f64, Vector3<f64>), Row),
     (avoidance, period, faults): (&mut Avoidance, &mut SsmPeriod, &mut Faults),
 ) -> (bool, bool) {
     let (k, p, t_r) = (a.k, a.p, a.t_r);
@@ -962,9 +1018,14 @@ fn separate(
     let standard = m.separation_standard(p.min_distance, v_r, t_r);
     let inside_standard = moving && p.min_distance < standard;
     period.stopping |= moving && allowed <= 0.0;
-    match avoidance.limit_approach(j, &away, allowed) {
-        Ok(f) => period.limiting |= f > 0.0,
-        Err(_) => faults.avoidance += 1,
+    match row {
+        // the filter's row bounds the approach itself
+        Row::Added { separation } => period.limiting |= separation,
+        // eq. 20's way: the joint velocity bounds shaped
+        Row::None | Row::Refused => match avoidance.limit_approach(j, &away, allowed) {
+            Ok(f) => period.limiting |= f > 0.0,
+            Err(_) => faults.avoidance += 1,
+        },
     }
     (inside, inside_standard)
 }
@@ -978,7 +1039,7 @@ fn separate_point(
     (frame, xyz): (usize, Vector3<f64>),
     a: &Approach<'_>,
     jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
-    bound: (f64, Vector3<f64>),
+    bound: ((f64, Vector3<f64>), Row),
     (avoidance, period, faults): (&mut Avoidance, &mut SsmPeriod, &mut Faults),
 ) -> (bool, bool) {
     match point_jac((model, data), (a.k, frame, xyz), jacs) {
