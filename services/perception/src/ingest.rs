@@ -157,6 +157,11 @@ impl StateHistory {
         self.newest_ns
     }
 
+    /// No state pushed yet.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
     /// The state nearest `stamp_ns`: (stamp, q).
     pub fn nearest(&self, stamp_ns: u64) -> Option<(u64, &[f64])> {
         let cap = self.stamps.len();
@@ -231,6 +236,42 @@ impl Ingest {
         self.mask = mask;
     }
 
+    /// Frame `seq` captured at `capture_ns` handled at `now_ns` (both [ns,
+    /// robot clock]): a state to match it exists, it is not from the future
+    /// (5 ms) and not older than the age bound.
+    fn check_time(
+        &self,
+        seq: u64,
+        capture_ns: u64,
+        states: &StateHistory,
+        now_ns: u64,
+    ) -> Result<(), FrameError> {
+        // no state at all (a service's first frames, `now_ns` its newest
+        // state's stamp, still 0): no state to match, not a frame from the
+        // future
+        if states.is_empty() {
+            return Err(FrameError::NoJointState {
+                seq,
+                limit_ms: self.max_state_gap_ns as f64 * 1e-6,
+            });
+        }
+        if capture_ns > now_ns + 5_000_000 {
+            return Err(FrameError::Future {
+                seq,
+                ahead_ms: (capture_ns - now_ns) as f64 * 1e-6,
+            });
+        }
+        let age = now_ns.saturating_sub(capture_ns);
+        if age > self.max_age_ns {
+            return Err(FrameError::Stale {
+                seq,
+                age_ms: age as f64 * 1e-6,
+                limit_ms: self.max_age_ns as f64 * 1e-6,
+            });
+        }
+        Ok(())
+    }
+
     /// Validate `header`/`input` (size, camera, millimetres, age, sequence),
     /// copy the depths \[mm\] into `out` without isolated flying pixels
     /// ([`FlyingPixels`]) and without the robot's pixels (the arm at the state
@@ -265,20 +306,7 @@ impl Ingest {
                 scale: header.depth_scale,
             });
         }
-        if header.capture_ns > now_ns + 5_000_000 {
-            return Err(FrameError::Future {
-                seq,
-                ahead_ms: (header.capture_ns - now_ns) as f64 * 1e-6,
-            });
-        }
-        let age = now_ns.saturating_sub(header.capture_ns);
-        if age > self.max_age_ns {
-            return Err(FrameError::Stale {
-                seq,
-                age_ms: age as f64 * 1e-6,
-                limit_ms: self.max_age_ns as f64 * 1e-6,
-            });
-        }
+        self.check_time(seq, header.capture_ns, states, now_ns)?;
         // a repeated or older frame is refused; a sequence that starts over is a
         // camera that restarted: its frames are accepted
         if let Some(last) = self.last_seq {

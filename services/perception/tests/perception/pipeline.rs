@@ -222,6 +222,12 @@ fn malformed_frames_are_refused() {
         ingest.step(&mut h.clone(), &frame, &empty, 1_000_000_000, &mut out),
         Err(FrameError::NoJointState { .. })
     ));
+    // a service before its first state (now: the newest state's stamp, 0):
+    // no state to match, not a frame from the future
+    assert!(matches!(
+        ingest.step(&mut h.clone(), &frame, &empty, empty.newest_ns(), &mut out),
+        Err(FrameError::NoJointState { .. })
+    ));
     // a good frame passes, then the same sequence again is refused
     let mut h5 = h;
     h5.seq = 5;
