@@ -113,6 +113,24 @@ fn postures(
     out
 }
 
+/// [`postures`] (1000 samples) at waypoint `i` of `control`, the person
+/// posed as the scenario has them at `t` \[s\].
+fn postures_at(
+    sim: &mut Simulator,
+    frame: usize,
+    control: &phri_config::ControlConfig,
+    (t, i): (f64, usize),
+) -> Vec<(f64, Vec<f64>)> {
+    sim.set_human_time_offset(t);
+    postures(
+        sim,
+        frame,
+        control.waypoints[i],
+        control.waypoint_tolerance,
+        1000,
+    )
+}
+
 /// The depth-space view of the arm at the simulator's state, from one
 /// camera per azimuth (the paper's set-up around the base): the cell's own
 /// perception step ([`Perception`]: every camera, its ingestion with the
@@ -354,14 +372,7 @@ fn camera_sets(second: &[f64]) -> (Vec<FirstCamera>, Vec<SetFigures>) {
         .collect();
     let mut rows = Vec::with_capacity(free.len());
     for &(t, i) in &free {
-        sim.set_human_time_offset(t);
-        let found = postures(
-            &mut sim,
-            ee,
-            control.waypoints[i],
-            control.waypoint_tolerance,
-            1000,
-        );
+        let found = postures_at(&mut sim, ee, control, (t, i));
         let best_true = found.first().map_or(f64::NEG_INFINITY, |b| b.0);
         // per set: the clearest end effector and the clearest least point
         let mut best = vec![(f64::NEG_INFINITY, f64::NEG_INFINITY); sets];
@@ -465,14 +476,7 @@ fn truth_bound_per_arm() {
         let ee = sim.model().frame_id(&control.ee_link).unwrap();
         let mut clearest = Vec::with_capacity(free.len());
         for &(t, i) in &free {
-            sim.set_human_time_offset(t);
-            let found = postures(
-                &mut sim,
-                ee,
-                control.waypoints[i],
-                control.waypoint_tolerance,
-                1000,
-            );
+            let found = postures_at(&mut sim, ee, control, (t, i));
             clearest.push(found.first().map_or(f64::NEG_INFINITY, |b| b.0));
         }
         let n = free.len();
