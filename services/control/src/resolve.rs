@@ -481,17 +481,10 @@ impl Resolver {
         let mut v_ee = Vector3::zeros();
         // the end effector's clearance to its obstacle [m] (∞: none seen)
         let mut ee_clearance = f64::INFINITY;
-        // the repulsions' low-pass gain this period
-        let alpha = match cfg.repulsion_filter_s > 0.0 {
-            true => 1.0 - (-dt / cfg.repulsion_filter_s).exp(),
-            false => 1.0,
-        };
+        let alpha = repulsion_gain(cfg, dt);
         let was_violating = self.begin_ssm_period(ssm);
+        let d_s = self.begin_filter();
         let period = &mut self.ssm_period;
-        let d_s = self.cbf.as_mut().map_or(0.0, |f| {
-            f.begin();
-            f.config().safe_distance_m(self.perception_age_s)
-        });
         if let Some(v) = perception {
             if let Some(m) = self.ssm.as_mut() {
                 m.observe(&v);
@@ -522,33 +515,36 @@ impl Resolver {
                     .zip(ssm.map(|t_r| t_r + older_s))
                     .filter(|_| p.active != 0)
                     .and_then(|(m, t_r)| approach_bound(m, k, p, t_r, period).map(|b| (m, t_r, b)));
-                // under the filter, the point's barrier row (which replaces
-                // eq. 19's and eq. 20's repulsion), and that bound as a row
-                // of its own
-                let row = match self.cbf.as_mut() {
-                    Some(filter) if p.active != 0 && !behind_the_hand => {
-                        let (jacs, at) = ((&self.jac_ee, &mut self.jac_point), (k, frame, xyz));
+                // under the filter, the point carries a barrier row
+                let barrier = self.cbf.is_some() && p.active != 0 && !behind_the_hand;
+                // the point's Jacobian, once, for its rows and its bound (a
+                // refusal counted: then neither)
+                let jacs = (&self.jac_ee, &mut self.jac_point);
+                let needed = barrier || bound.is_some();
+                let jac = jacobian_once(needed, (model, data), (k, frame, xyz), jacs, &mut faults);
+                // the barrier row (which replaces eq. 19's and eq. 20's
+                // repulsion), and the separation's bound as a row of its own
+                let row = match (self.cbf.as_mut(), jac) {
+                    (Some(filter), Some(j)) if barrier => {
                         let ages = (d_s, older_s);
                         let speeds = (measured, ssm.is_some(), bound.as_ref().map(|b| b.2 .0));
-                        barrier_row(filter, (model, data), c, at, p, ages, speeds, jacs)
+                        barrier_row(filter, c, (k, j), p, ages, speeds)
                     }
                     _ => Row::None,
                 };
-                faults.model += u64::from(row == Row::Refused);
-                let (inside, inside_standard) = bound.map_or((false, false), |(m, t_r, bound)| {
-                    let (jacs, qd_ref) = ((&self.jac_ee, &mut self.jac_point), &reference.qd_ref);
-                    let a = Approach { k, p, t_r, qd_ref };
-                    let limits = (&mut self.avoidance, &mut *period, &mut faults);
-                    separate_point(
-                        m,
-                        (model, data),
-                        (frame, xyz),
-                        &a,
-                        jacs,
-                        (bound, row),
-                        limits,
-                    )
-                });
+                let (inside, inside_standard) = match (bound, jac) {
+                    (Some((m, t_r, bound)), Some(j)) => {
+                        let a = Approach {
+                            k,
+                            p,
+                            t_r,
+                            qd_ref: &reference.qd_ref,
+                        };
+                        let limits = (&mut self.avoidance, &mut *period, &mut faults);
+                        separate(m, &a, j, (bound, row), limits)
+                    }
+                    _ => (false, false),
+                };
                 // a violation: approaching inside S_p for longer than the
                 // stop takes (S_p grants it T_s)
                 if let Some(m) = monitor.as_deref_mut().filter(|_| ssm.is_some()) {
@@ -616,6 +612,16 @@ impl Resolver {
         self.avoidance
             .set_posture(posture, &reference.q_ref, cfg.posture_gain);
         Ok(phri_model::frame_placement(model, data, ee).p)
+    }
+
+    /// A new period of the barrier filter (no rows): the distance its
+    /// barriers keep at this perception's age, d_s \[m\] (0: no filter).
+    fn begin_filter(&mut self) -> f64 {
+        let age = self.perception_age_s;
+        self.cbf.as_mut().map_or(0.0, |f| {
+            f.begin();
+            f.config().safe_distance_m(age)
+        })
     }
 
     /// A new period of speed and separation monitoring (`ssm`: the
@@ -785,34 +791,29 @@ fn collaborating_distance(c: &CartesianRef, k: usize, d_s: f64, margin_m: f64) -
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Row {
     /// no separation's row: no filter, an inactive point or one behind or
-    /// at the collaborative hand, rows the filter could not take, or a
-    /// point inside its `d_s` (the separation shapes the joint velocity
-    /// bounds instead)
+    /// at the collaborative hand, no Jacobian, rows the filter could not
+    /// take, or a point inside its `d_s` (the separation shapes the joint
+    /// velocity bounds instead)
     None,
-    /// the model refused the point's Jacobian
-    Refused,
     /// a barrier row, and speed and separation monitoring's where it
     /// applies; `separation`: the separation's is the tighter
     Added { separation: bool },
 }
 
-/// Control point `k`'s barrier row in `filter` (none for an obstacle at
-/// the collaborative hand), `d_s` \[m\] for the view's age and the point's
+/// Control point `k`'s barrier row in `filter` (Jacobian `j`; none for an
+/// obstacle at the collaborative hand), `d_s` \[m\] for the view's age and the point's
 /// result `older_s` \[s\] older (fused from an older camera: its age),
 /// the person's approach `measured` \[m/s\] charged as [`barrier_speed`]
 /// says (`separating`: outside a collaboration), the point's approach at
 /// most `allowed` \[m/s\] (speed and separation monitoring's; none: not
 /// monitored) as a row of its own while the point is clear of `d_s`.
-#[allow(clippy::too_many_arguments)]
 fn barrier_row(
     filter: &mut CbfFilter,
-    (model, data): (&Model, &mut Data),
     c: &CartesianRef,
-    (k, frame, xyz): (usize, usize, Vector3<f64>),
+    (k, j): (usize, &Matrix6xX<f64>),
     p: &phri_ipc::PointRepulsion,
     (d_s, older_s): (f64, f64),
     (measured, separating, allowed): (Option<f64>, bool, Option<f64>),
-    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
 ) -> Row {
     if c.collab_hand.is_some_and(|h| at_the_hand(&h, p)) {
         return Row::None;
@@ -826,9 +827,6 @@ fn barrier_row(
         c.collab_touching,
         cfg.collaboration_speed_m_s,
     );
-    let Some(j) = point_jac((model, data), (k, frame, xyz), jacs) else {
-        return Row::Refused;
-    };
     let away = away_from_obstacle(p);
     if !filter.add_point(k, j, &away, p.min_distance, d_s, v_h.unwrap_or(0.0)) {
         return Row::None;
@@ -965,6 +963,30 @@ fn point_jac<'j>(
     }
 }
 
+/// The repulsions' low-pass gain over a period of `dt` \[s\] (1: unfiltered).
+fn repulsion_gain(cfg: &ControlConfig, dt: f64) -> f64 {
+    match cfg.repulsion_filter_s > 0.0 {
+        true => 1.0 - (-dt / cfg.repulsion_filter_s).exp(),
+        false => 1.0,
+    }
+}
+
+/// [`point_jac`] when `needed` (else none), a refusal counted in `faults`.
+fn jacobian_once<'j>(
+    needed: bool,
+    (model, data): (&Model, &mut Data),
+    at: (usize, usize, Vector3<f64>),
+    jacs: (&'j Matrix6xX<f64>, &'j mut Matrix6xX<f64>),
+    faults: &mut Faults,
+) -> Option<&'j Matrix6xX<f64>> {
+    if !needed {
+        return None;
+    }
+    let j = point_jac((model, data), at, jacs);
+    faults.model += u64::from(j.is_none());
+    j
+}
+
 /// One control point's approach to its obstacle under speed and separation
 /// monitoring.
 struct Approach<'a> {
@@ -1022,33 +1044,12 @@ fn separate(
         // the filter's row bounds the approach itself
         Row::Added { separation } => period.limiting |= separation,
         // eq. 20's way: the joint velocity bounds shaped
-        Row::None | Row::Refused => match avoidance.limit_approach(j, &away, allowed) {
+        Row::None => match avoidance.limit_approach(j, &away, allowed) {
             Ok(f) => period.limiting |= f > 0.0,
             Err(_) => faults.avoidance += 1,
         },
     }
     (inside, inside_standard)
-}
-
-/// [`separate`] for control point `a.k` at `xyz` \[m\] of link frame
-/// `frame`, its Jacobian computed first (a refusal counted in `faults`:
-/// then neither inside).
-fn separate_point(
-    m: &mut SsmMonitor,
-    (model, data): (&Model, &mut Data),
-    (frame, xyz): (usize, Vector3<f64>),
-    a: &Approach<'_>,
-    jacs: (&Matrix6xX<f64>, &mut Matrix6xX<f64>),
-    bound: ((f64, Vector3<f64>), Row),
-    (avoidance, period, faults): (&mut Avoidance, &mut SsmPeriod, &mut Faults),
-) -> (bool, bool) {
-    match point_jac((model, data), (a.k, frame, xyz), jacs) {
-        Some(j) => separate(m, a, j, bound, (avoidance, period, faults)),
-        None => {
-            faults.model += 1;
-            (false, false)
-        }
-    }
 }
 
 /// Power and force limiting: the end effector's velocity `task + v_ee`

@@ -236,6 +236,14 @@ impl Ingest {
         self.mask = mask;
     }
 
+    /// Frame `seq` has no joint state within the gap allowed.
+    fn no_joint_state(&self, seq: u64) -> FrameError {
+        FrameError::NoJointState {
+            seq,
+            limit_ms: self.max_state_gap_ns as f64 * 1e-6,
+        }
+    }
+
     /// Frame `seq` captured at `capture_ns` handled at `now_ns` (both [ns,
     /// robot clock]): a state to match it exists, it is not from the future
     /// (5 ms) and not older than the age bound.
@@ -250,10 +258,7 @@ impl Ingest {
         // state's stamp, still 0): no state to match, not a frame from the
         // future
         if states.is_empty() {
-            return Err(FrameError::NoJointState {
-                seq,
-                limit_ms: self.max_state_gap_ns as f64 * 1e-6,
-            });
+            return Err(self.no_joint_state(seq));
         }
         if capture_ns > now_ns + 5_000_000 {
             return Err(FrameError::Future {
@@ -316,15 +321,9 @@ impl Ingest {
         }
         let (stamp, q) = states
             .nearest(header.capture_ns)
-            .ok_or(FrameError::NoJointState {
-                seq,
-                limit_ms: self.max_state_gap_ns as f64 * 1e-6,
-            })?;
+            .ok_or_else(|| self.no_joint_state(seq))?;
         if stamp.abs_diff(header.capture_ns) > self.max_state_gap_ns {
-            return Err(FrameError::NoJointState {
-                seq,
-                limit_ms: self.max_state_gap_ns as f64 * 1e-6,
-            });
+            return Err(self.no_joint_state(seq));
         }
         let out = &mut out[..pixels];
         // filters per camera (rebuilt only when its intrinsics change; a
